@@ -1,0 +1,126 @@
+"""Vector fields of each domain (article Sec. 4.2, Eqs. (4.9)-(4.27)).
+
+All functions are pure functions of ``(t, y, params, ...)`` with ``y = (x1, v1, x2, v2)``.
+The contact terms are switched by the *mode's* flags, never by the state: each domain's field
+is smooth and every switch is a root function watched by the supervisor.
+
+Notation (MODEL.md Sec. 1 and 3): ``A_i`` is the non-friction force per unit mass **without**
+the feedback term; the field of a moving mass with velocity sign ``s`` is
+``F_i = A_i - s (mu_k g + p_i)`` (the article writes F in domains 1-4 and H in 5-8; one formula
+serves both, the contact terms being part of ``A_i``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from oscillator.parameters import Parameters
+from oscillator.phase_space import Mode
+
+__all__ = [
+    "accelerations",
+    "flow_barrier_field",
+    "kinetic_field",
+    "non_friction_force",
+    "non_friction_force_rate",
+    "relative_field",
+    "state_derivative",
+]
+
+
+def non_friction_force(
+    t: float, y: Sequence[float], p: Parameters, left: bool, right: bool
+) -> tuple[float, float]:
+    """``(A1, A2)``: non-friction, non-feedback force per unit mass (3.4)-(3.5), (4.14).
+
+    ``A1 = [Q1 sin(Omega t + phi1) - K1 x1 - K2 x1^3 - C1 v1 - C2 v1^3
+    - L (K3 (x1 - x2 + d) + C3 (v1 - v2)) - R K6 (x1 - d1)] / m1`` and likewise ``A2``.
+    """
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    f1 = p.Q1 * math.sin(p.Omega * t + p.phi1) - p.K1 * x1 - p.K2 * x1**3 - p.C1 * v1 - p.C2 * v1**3
+    f2 = p.Q2 * math.sin(p.Omega * t + p.phi2) - p.K4 * x2 - p.K5 * x2**3 - p.C4 * v2 - p.C5 * v2**3
+    if left:
+        contact = p.K3 * (x1 - x2 + p.d) + p.C3 * (v1 - v2)
+        f1 -= contact
+        f2 += contact
+    if right:
+        f1 -= p.K6 * (x1 - p.d1)
+    return f1 / p.m1, f2 / p.m2
+
+
+def non_friction_force_rate(
+    t: float,
+    y: Sequence[float],
+    p: Parameters,
+    left: bool,
+    right: bool,
+    a1: float,
+    a2: float,
+) -> tuple[float, float]:
+    """``(DA1, DA2)``: total time derivatives of ``A_i`` along a flow with accelerations ``a_i``.
+
+    ``DA1 = [Q1 Omega cos(.) - (K1 + 3 K2 x1^2) v1 - (C1 + 3 C2 v1^2) a1
+    - L (K3 (v1 - v2) + C3 (a1 - a2)) - R K6 v1] / m1`` (MODEL.md Sec. 4); ``a_i`` is the
+    acceleration of the field assumed for mass ``i`` (0 for a resting mass).
+    """
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    r1 = (
+        p.Q1 * p.Omega * math.cos(p.Omega * t + p.phi1)
+        - (p.K1 + 3.0 * p.K2 * x1**2) * v1
+        - (p.C1 + 3.0 * p.C2 * v1**2) * a1
+    )
+    r2 = (
+        p.Q2 * p.Omega * math.cos(p.Omega * t + p.phi2)
+        - (p.K4 + 3.0 * p.K5 * x2**2) * v2
+        - (p.C4 + 3.0 * p.C5 * v2**2) * a2
+    )
+    if left:
+        contact_rate = p.K3 * (v1 - v2) + p.C3 * (a1 - a2)
+        r1 -= contact_rate
+        r2 += contact_rate
+    if right:
+        r1 -= p.K6 * v1
+    return r1 / p.m1, r2 / p.m2
+
+
+def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:
+    """``F_i^(delta) = A_i - s (mu_k g + p_i)``: second component of the field (4.13)-(4.14).
+
+    ``sign`` is the velocity sign ``s`` of domain ``delta``; ``sign = 0`` (at rest) gives the
+    zero field of (4.12).
+    """
+    if sign == 0:
+        return 0.0
+    return force - sign * p.kinetic_threshold(mass)
+
+
+def flow_barrier_field(p: Parameters, mass: int, sign: int, force: float) -> float:
+    """``F_i^(0>0_delta) = A_i - s (mu_s g + p_i)`` at the barrier's edge ``tau_1`` (4.22), (4.24).
+
+    The feedback belongs in it, as the article's (4.22) carries ``b_i`` (MODEL.md Sec. 3).
+    """
+    return force - sign * p.static_threshold(mass)
+
+
+def accelerations(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[float, float]:
+    """``(a1, a2)`` of the mode's fields; a resting mass has zero acceleration (4.12)."""
+    force1, force2 = non_friction_force(t, y, p, mode.left, mode.right)
+    return (
+        kinetic_field(p, 1, mode.sign(1), force1),
+        kinetic_field(p, 2, mode.sign(2), force2),
+    )
+
+
+def state_derivative(
+    t: float, y: Sequence[float], p: Parameters, mode: Mode
+) -> tuple[float, float, float, float]:
+    """``dy/dt = (v1, a1, v2, a2)`` in a mode: the vector fields F/H of (4.9)-(4.10)."""
+    a1, a2 = accelerations(t, y, p, mode)
+    return (y[1], a1, y[3], a2)
+
+
+def relative_field(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[float, float]:
+    """m1's field in relative coordinates, ``K_1`` or ``S_1 = (zdot1, a1 - a2)`` (4.18)-(4.20)."""
+    a1, a2 = accelerations(t, y, p, mode)
+    return (y[1] - y[3], a1 - a2)

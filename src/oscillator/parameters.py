@@ -1,0 +1,251 @@
+"""System parameters, initial state and solver settings (Sec. 3.1 and 6 of the article).
+
+The names are the article's, in ASCII: ``m1 m2 C1..C5 K1..K6 mu_k mu_s d d1 Q1 Q2 phi1 phi2 P1
+P2 Omega g``.  Every object here is a frozen dataclass validated in ``__post_init__``; a bad value
+raises :class:`~oscillator.OscillatorError` naming the field and the fix.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from oscillator._errors import OscillatorError
+
+__all__ = ["InitialState", "Parameters", "SolverOptions"]
+
+
+def _require_finite(owner: str, name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise OscillatorError(
+            f"{owner}.{name} must be a number, got {value!r} ({type(value).__name__}); "
+            f"write it as a plain number such as 1.0",
+            field=name,
+        )
+    value = float(value)
+    if not math.isfinite(value):
+        raise OscillatorError(
+            f"{owner}.{name} must be finite, got {value!r}; give a finite number", field=name
+        )
+    return value
+
+
+def _coerce_all(obj: Any) -> None:
+    """Check every field is a finite number and store it as ``float``."""
+    owner = type(obj).__name__
+    for f in fields(obj):
+        object.__setattr__(obj, f.name, _require_finite(owner, f.name, getattr(obj, f.name)))
+
+
+@dataclass(frozen=True, slots=True)
+class Parameters:
+    """Physical parameters of the two-mass oscillator (article Sec. 3.1, Table 1).
+
+    Units are SI.  ``phi1 = phi2 = 0``, ``P1 = P2 = 0`` (no feedback) and ``g = 9.8`` are the only
+    defaults; every other parameter must be given.
+
+    Parameters
+    ----------
+    m1, m2 : float
+        Masses (kg), ``> 0``.
+    C1, C2 : float
+        m1's linear (N s/m) and cubic (N s^3/m^3) damper to its wall, ``>= 0``.
+    C3 : float
+        Damper of the elastic stop on m2 that m1 touches (left contact), ``>= 0``.
+    C4, C5 : float
+        m2's linear and cubic damper to its wall, ``>= 0``.
+    K1, K2 : float
+        m1's linear (N/m) and cubic (N/m^3) spring, ``>= 0``.
+    K3 : float
+        Spring of the left stop, ``>= 0``.
+    K4, K5 : float
+        m2's linear and cubic spring, ``>= 0``.
+    K6 : float
+        Right stop spring at ``x1 = d1`` (no damper), ``>= 0``.
+    mu_k, mu_s : float
+        Kinetic and static friction coefficients, ``0 <= mu_k <= mu_s``.
+    d : float
+        Gap of the left contact: contact iff ``x1 - x2 <= -d``.
+    d1 : float
+        Position of the right stop: contact iff ``x1 >= d1``.
+    Q1, Q2, phi1, phi2, Omega : float
+        Forcing ``Q_i sin(Omega t + phi_i)``; ``Omega > 0`` (rad/s).
+    P1, P2 : float
+        Feedback ``B_i = -P_i sign(v_i)`` (3.1), ``>= 0``.
+    g : float
+        Gravity (m/s^2), ``> 0``; the normal force is ``m_i g``.
+    """
+
+    m1: float
+    m2: float
+    C1: float
+    C2: float
+    C3: float
+    C4: float
+    C5: float
+    K1: float
+    K2: float
+    K3: float
+    K4: float
+    K5: float
+    K6: float
+    mu_k: float
+    mu_s: float
+    d: float
+    d1: float
+    Q1: float
+    Q2: float
+    Omega: float
+    phi1: float = 0.0
+    phi2: float = 0.0
+    P1: float = 0.0
+    P2: float = 0.0
+    g: float = 9.8
+
+    def __post_init__(self) -> None:
+        _coerce_all(self)
+        for name in ("m1", "m2", "Omega", "g"):
+            if getattr(self, name) <= 0:
+                raise OscillatorError(
+                    f"Parameters.{name} must be > 0, got {getattr(self, name)!r}; give a positive value",
+                    field=name,
+                )
+        nonnegative = ("C1", "C2", "C3", "C4", "C5", "K1", "K2", "K3", "K4", "K5", "K6")
+        for name in (*nonnegative, "mu_k", "P1", "P2"):
+            if getattr(self, name) < 0:
+                raise OscillatorError(
+                    f"Parameters.{name} must be >= 0, got {getattr(self, name)!r}; "
+                    f"springs, dampers, friction and feedback cannot be negative",
+                    field=name,
+                )
+        if self.mu_s < self.mu_k:
+            raise OscillatorError(
+                f"Parameters.mu_s must be >= mu_k (static friction is at least kinetic), "
+                f"got mu_s={self.mu_s!r} < mu_k={self.mu_k!r}; raise mu_s or lower mu_k",
+                field="mu_s",
+            )
+
+    @property
+    def period(self) -> float:
+        """Forcing period ``2 pi / Omega`` (s)."""
+        return 2.0 * math.pi / self.Omega
+
+    def mass(self, i: int) -> float:
+        """Mass ``m_i``."""
+        return self.m1 if i == 1 else self.m2
+
+    def feedback(self, i: int) -> float:
+        """Feedback per unit mass ``p_i = P_i / m_i`` (3.3)."""
+        return (self.P1 / self.m1) if i == 1 else (self.P2 / self.m2)
+
+    def kinetic_threshold(self, i: int) -> float:
+        """``mu_k g + p_i``: kinetic friction plus feedback per unit mass (4.13)-(4.14)."""
+        return self.mu_k * self.g + self.feedback(i)
+
+    def static_threshold(self, i: int) -> float:
+        """``mu_s g + p_i``: the flow barrier's edge ``tau_1`` per unit mass (4.22), (4.24)."""
+        return self.mu_s * self.g + self.feedback(i)
+
+    def replace(self, **changes: float) -> Parameters:
+        """A copy with some parameters changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """Every parameter name, in declaration order."""
+        return tuple(f.name for f in fields(cls))
+
+
+@dataclass(frozen=True, slots=True)
+class InitialState:
+    """Start of a run: time ``t0`` and ``(x1, v1, x2, v2)``.
+
+    A mass given ``v_i = 0`` starts at rest on its velocity boundary (MODEL.md rule 8).
+    """
+
+    t0: float
+    x1: float
+    v1: float
+    x2: float
+    v2: float
+
+    def __post_init__(self) -> None:
+        _coerce_all(self)
+
+    @property
+    def y(self) -> tuple[float, float, float, float]:
+        """The state vector ``(x1, v1, x2, v2)``."""
+        return (self.x1, self.v1, self.x2, self.v2)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+
+@dataclass(frozen=True, slots=True)
+class SolverOptions:
+    """Integration and event-reporting settings.
+
+    Parameters
+    ----------
+    rtol, atol : float
+        CVODE's relative and absolute tolerances.  The defaults keep switching times within
+        1e-8 s of a 1e-13 run on the article's instances (see ``tests/test_convergence.py``).
+    max_step_fraction : float
+        Largest step as a fraction of the forcing period, so that two sign changes of a root
+        function cannot hide inside one step.
+    grazing_velocity_tolerance : float
+        A velocity extremum (root of ``G^(0)``) with ``|v_i|`` at most this is reported as
+        grazing of the velocity boundary (Thm 5.5), with the distance ``|v_i|`` (m/s).
+    grazing_displacement_tolerance : float
+        A zero of ``v1`` within this distance of ``x1 = d1``, or of ``zdot1`` within this distance
+        of ``z1 = -d``, is reported as grazing of that displacement boundary (m).
+    max_events : int
+        Stop with an error after this many switching events (guards against chattering).
+    max_num_steps : int
+        CVODE's step limit between two outputs.
+    """
+
+    rtol: float = 1e-11
+    atol: float = 1e-11
+    max_step_fraction: float = 0.02
+    grazing_velocity_tolerance: float = 1e-3
+    grazing_displacement_tolerance: float = 1e-3
+    max_events: int = 1_000_000
+    max_num_steps: int = 100_000
+
+    def __post_init__(self) -> None:
+        owner = "SolverOptions"
+        for name in ("rtol", "atol", "max_step_fraction"):
+            value = _require_finite(owner, name, getattr(self, name))
+            if value <= 0:
+                raise OscillatorError(
+                    f"{owner}.{name} must be > 0, got {value!r}; give a small positive number",
+                    field=name,
+                )
+            object.__setattr__(self, name, value)
+        if not 1e-15 <= self.rtol <= 1e-3:
+            raise OscillatorError(f"{owner}.rtol must lie in [1e-15, 1e-3], got {self.rtol!r}", field="rtol")
+        if self.max_step_fraction > 1:
+            raise OscillatorError(
+                f"{owner}.max_step_fraction must be <= 1 (a fraction of the forcing period), "
+                f"got {self.max_step_fraction!r}",
+                field="max_step_fraction",
+            )
+        for name in ("grazing_velocity_tolerance", "grazing_displacement_tolerance"):
+            value = _require_finite(owner, name, getattr(self, name))
+            if value < 0:
+                raise OscillatorError(f"{owner}.{name} must be >= 0, got {value!r}", field=name)
+            object.__setattr__(self, name, value)
+        for name in ("max_events", "max_num_steps"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise OscillatorError(
+                    f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name
+                )
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))

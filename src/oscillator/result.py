@@ -1,0 +1,98 @@
+"""Results as pandas tables: switching events, trajectory and the energy audit."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.cases import Case
+from oscillator.energy import POWER_NAMES, mechanical_energy
+from oscillator.events import Event
+from oscillator.supervisor import RunRecord
+
+__all__ = ["Result", "events_frame", "trajectory_frame"]
+
+TRAJECTORY_COLUMNS = ("t", "x1", "v1", "x2", "v2", "domain1", "domain2", "system_state")
+
+
+def events_frame(events: list[Event]) -> pd.DataFrame:
+    """``Result.events``: one row per event and mass, columns :meth:`Event.columns`."""
+    columns = Event.columns()
+    rows = [dataclasses.astuple(e) for e in events]
+    frame = pd.DataFrame(rows, columns=list(columns))
+    frame["kind"] = frame["kind"].astype(str)
+    return frame.astype({"t": float, "mass": int, "from_domain": int, "to_domain": int})
+
+
+def trajectory_frame(record: RunRecord) -> pd.DataFrame:
+    """``Result.trajectory``: ``t, x1, v1, x2, v2, domain1, domain2, system_state``."""
+    y = np.array(record.y, dtype=float).reshape(-1, 4)
+    return pd.DataFrame(
+        {
+            "t": np.array(record.t, dtype=float),
+            "x1": y[:, 0],
+            "v1": y[:, 1],
+            "x2": y[:, 2],
+            "v2": y[:, 3],
+            "domain1": np.array([m.domain1 for m in record.modes], dtype=int),
+            "domain2": np.array([m.domain2 for m in record.modes], dtype=int),
+            "system_state": [m.system_state for m in record.modes],
+        },
+        columns=list(TRAJECTORY_COLUMNS),
+    )
+
+
+@dataclass(frozen=True)
+class Result:
+    """The outcome of :func:`oscillator.simulate`.
+
+    Attributes
+    ----------
+    case : Case
+        The fully resolved case that was run (overrides applied).
+    events : pandas.DataFrame
+        Switching events, columns ``t, mass, kind, boundary, from_domain, to_domain, theorem,
+        equation, x1, v1, x2, v2, G0_alpha, G1_alpha, G0_beta, G1_beta, G_alpha, G_beta,
+        distance, state_from, state_to`` (see :class:`oscillator.events.Event`).
+    trajectory : pandas.DataFrame
+        ``t, x1, v1, x2, v2, domain1, domain2, system_state`` at CVODE's steps (an event time
+        appears twice, before and after the switch) or on the requested grid.
+    energy : dict
+        The work-energy audit: ``E0, E1``, the works ``forcing, feedback, damping, friction``
+        and ``residual = E1 - E0 - (forcing + feedback - damping - friction)``.
+    stats : dict
+        ``steps, rhs_evaluations, restarts, root_returns, events, wall_time``.
+    final_state : tuple
+        ``(t, x1, v1, x2, v2)`` at the end.
+    """
+
+    case: Case
+    events: pd.DataFrame
+    trajectory: pd.DataFrame
+    energy: dict
+    stats: dict
+    final_state: tuple
+
+    @classmethod
+    def from_record(cls, case: Case, record: RunRecord) -> Result:
+        p = case.parameters
+        y0 = case.initial.y
+        start, end = record.mode_initial, record.mode_final
+        work = dict(zip(POWER_NAMES, (float(w) for w in record.y_final[4:8]), strict=True))
+        e0 = mechanical_energy(y0, p, start.left, start.right)
+        e1 = mechanical_energy(record.y_final[:4], p, end.left, end.right)
+        supplied = work["forcing"] + work["feedback"] - work["damping"] - work["friction"]
+        energy = {"E0": e0, "E1": e1, **work, "residual": e1 - e0 - supplied}
+        stats = {
+            "steps": record.steps,
+            "rhs_evaluations": record.rhs_evaluations,
+            "restarts": record.restarts,
+            "root_returns": record.root_returns,
+            "events": len(record.events),
+            "wall_time": record.wall_time,
+        }
+        final = (record.t_final, *(float(v) for v in record.y_final[:4]))
+        return cls(case, events_frame(record.events), trajectory_frame(record), energy, stats, final)

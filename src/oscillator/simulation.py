@@ -1,0 +1,95 @@
+"""The one entry point: :func:`simulate`."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from oscillator._errors import OscillatorError
+from oscillator.cases import Case, _suggest, load_case
+from oscillator.parameters import InitialState, Parameters, SolverOptions
+from oscillator.result import Result
+from oscillator.supervisor import Supervisor
+
+__all__ = ["resolve_case", "simulate"]
+
+
+def resolve_case(case: Case | str | Path, *, t_end: float | None = None, **overrides: float) -> Case:
+    """The case with overrides applied: parameter, initial-state and solver-option names."""
+    if not isinstance(case, Case):
+        case = load_case(case)
+    groups: dict[str, dict] = {"parameters": {}, "initial": {}, "options": {}}
+    owners = (
+        ("parameters", Parameters.names()),
+        ("initial", InitialState.names()),
+        ("options", SolverOptions.names()),
+    )
+    known = [name for _, names in owners for name in names]
+    for key, value in overrides.items():
+        for group, names in owners:
+            if key in names:
+                groups[group][key] = value
+                break
+        else:
+            raise OscillatorError(
+                f"unknown setting {key!r}{_suggest(key, known)} (parameters, initial state "
+                f"t0 x1 v1 x2 v2, or solver options {', '.join(SolverOptions.names())})",
+                field=key,
+            )
+    return dataclasses.replace(
+        case,
+        parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
+        initial=dataclasses.replace(case.initial, **groups["initial"]),
+        options=dataclasses.replace(case.options, **groups["options"]),
+        t_end=case.t_end if t_end is None else t_end,
+    )
+
+
+def simulate(
+    case: Case | str | Path,
+    *,
+    t_end: float | None = None,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    record_trajectory: bool = True,
+    **overrides: float,
+) -> Result:
+    """Simulate a case from its start to ``t_end``.
+
+    Parameters
+    ----------
+    case : Case, str or Path
+        A :class:`Case`, a shipped case's name (``"instance-1"``) or a case file's path.
+    t_end : float, optional
+        End time (s); the case's by default.
+    t_eval : array_like, optional
+        Record the trajectory on this grid instead of at CVODE's steps.
+    record_trajectory : bool
+        Keep trajectory rows (events and the energy audit are always kept).
+    **overrides
+        Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
+        (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).
+
+    Returns
+    -------
+    Result
+        Events, trajectory, energy audit and solver statistics.
+
+    Raises
+    ------
+    OscillatorError
+        Bad input, or a solver failure (with the time, domains and state).
+
+    Examples
+    --------
+    >>> from oscillator import simulate
+    >>> result = simulate("instance-1")
+    >>> result.events[["t", "mass", "kind", "to_domain"]].round(4).values.tolist()
+    [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
+    """
+    case = resolve_case(case, t_end=t_end, **overrides)
+    supervisor = Supervisor(case.parameters, case.options, t_eval=t_eval, record_trajectory=record_trajectory)
+    record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
+    return Result.from_record(case, record)

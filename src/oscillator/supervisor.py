@@ -1,0 +1,232 @@
+"""The supervisor: integrates each mode with CVODE and restarts it at every switch.
+
+This is the only stateful part of the package.  Each mode (both masses' domains plus the contact
+flags) maps to one CVODE problem (scikit-sundae), created once and re-initialised at every
+restart; its root functions and their directions are those of :mod:`oscillator.detection`.  At
+each root the supervisor hands the instant to :func:`oscillator.switching.resolve`, records the
+events it returns, and restarts CVODE with the next mode's fields.
+
+The state carries four quadratures besides ``(x1, v1, x2, v2)``: the work of the forcing and of
+the feedback and the losses in the dampers and to friction (:mod:`oscillator.energy`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from sksundae.cvode import CVODE
+
+from oscillator._errors import OscillatorError
+from oscillator.detection import NUM_ROOTS, Root, root_directions, root_values
+from oscillator.energy import powers
+from oscillator.events import Event
+from oscillator.fields import accelerations
+from oscillator.parameters import Parameters, SolverOptions
+from oscillator.phase_space import Mode
+from oscillator.switching import initial_mode, resolve
+
+__all__ = ["RunRecord", "Supervisor"]
+
+#: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
+_ROOT_RETURN = 2
+#: Root returns at one instant without a switch before the supervisor declares a stall.
+_MAX_IDLE_ROOTS = 100
+
+
+@dataclass
+class RunRecord:
+    """What a run produced, as plain records (tables are built at the user-facing edge)."""
+
+    events: list[Event] = field(default_factory=list)
+    t: list[float] = field(default_factory=list)
+    y: list[np.ndarray] = field(default_factory=list)
+    modes: list[Mode] = field(default_factory=list)
+    t_final: float = float("nan")
+    y_final: np.ndarray | None = None
+    mode_final: Mode | None = None
+    mode_initial: Mode | None = None
+    steps: int = 0
+    rhs_evaluations: int = 0
+    restarts: int = 0
+    root_returns: int = 0
+    wall_time: float = 0.0
+
+
+class Supervisor:
+    """Event-driven hybrid integration of the oscillator.
+
+    Parameters
+    ----------
+    params : Parameters
+    options : SolverOptions
+    t_eval : array_like or None, keyword-only
+        Record the trajectory on this grid instead of at CVODE's steps.
+    record_trajectory : bool, keyword-only
+        Keep trajectory rows at all (events are always kept).
+    """
+
+    def __init__(
+        self,
+        params: Parameters,
+        options: SolverOptions,
+        *,
+        t_eval: np.ndarray | None = None,
+        record_trajectory: bool = True,
+    ) -> None:
+        self.params = params
+        self.options = options
+        self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
+        self.record_trajectory = record_trajectory
+        self._solvers: dict[Mode, tuple[CVODE, object]] = {}
+
+    # ----------------------------------------------------------------- CVODE problems per mode
+
+    def _problem(self, mode: Mode) -> tuple[CVODE, object]:
+        """The CVODE problem of a mode, created on first use."""
+        if mode in self._solvers:
+            return self._solvers[mode]
+        p = self.params
+
+        def rhs(t: float, y: np.ndarray, yp: np.ndarray) -> None:
+            a1, a2 = accelerations(t, y, p, mode)
+            yp[0] = y[1]
+            yp[1] = a1
+            yp[2] = y[3]
+            yp[3] = a2
+            yp[4:8] = powers(t, y, p, mode)
+
+        def roots(t: float, y: np.ndarray, g: np.ndarray) -> None:
+            root_values(t, y, p, mode, out=g)
+
+        roots.direction = root_directions(mode)
+        roots.terminal = [True] * NUM_ROOTS
+        solver = CVODE(
+            rhs,
+            method="Adams",
+            rtol=self.options.rtol,
+            atol=self.options.atol,
+            max_step=self.options.max_step_fraction * p.period,
+            max_num_steps=self.options.max_num_steps,
+            eventsfn=roots,
+            num_events=NUM_ROOTS,
+        )
+        self._solvers[mode] = (solver, roots)
+        return solver, roots
+
+    # ----------------------------------------------------------------- the run
+
+    def run(self, t0: float, y0: tuple[float, float, float, float], t_end: float) -> RunRecord:
+        """Integrate from ``t0`` to ``t_end``; raise :class:`OscillatorError` on failure.
+
+        The partial record is attached to the error as ``error.partial``.
+        """
+        record = RunRecord()
+        started = time.perf_counter()
+        try:
+            self._run(record, t0, y0, t_end)
+        except OscillatorError as error:
+            error.partial = record  # type: ignore[attr-defined]
+            raise
+        finally:
+            record.wall_time = time.perf_counter() - started
+        return record
+
+    def _record(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
+        if self.record_trajectory:
+            record.t.append(t)
+            record.y.append(y[:4].copy())
+            record.modes.append(mode)
+
+    def _run(self, record: RunRecord, t0: float, y0, t_end: float) -> None:
+        p, options = self.params, self.options
+        start = initial_mode(t0, y0, p)
+        mode = start.mode
+        record.mode_initial = mode
+        record.events.extend(start.events)
+        y = np.zeros(8)
+        y[:4] = start.y
+        t = t0
+
+        grid = self.t_eval
+        grid_index = 0
+        if grid is not None:
+            grid = grid[(grid >= t0) & (grid <= t_end)]
+            if grid.size and grid[0] == t0:
+                self._record(record, t0, y, mode)
+                grid_index = 1
+        else:
+            self._record(record, t0, y, mode)
+
+        while t < t_end:
+            solver, roots = self._problem(mode)
+            solver.init_step(t, y)
+            record.restarts += 1
+            idle_roots = 0
+            while True:
+                on_grid = grid is not None and grid_index < grid.size
+                target = grid[grid_index] if on_grid else t_end
+                method = "normal" if grid is not None else "onestep"
+                out = solver.step(target, method=method, tstop=t_end)
+                if out.status < 0:
+                    record.rhs_evaluations += out.nfev
+                    raise self._failure(out, mode)
+                t = float(out.t)
+                y = np.array(out.y, dtype=float)
+                record.steps += 1
+                if grid is None:
+                    self._record(record, t, y, mode)
+                elif on_grid and out.status != _ROOT_RETURN and t == target:
+                    self._record(record, t, y, mode)
+                    grid_index += 1
+
+                if out.status == _ROOT_RETURN:
+                    record.root_returns += 1
+                    fired = [Root(i) for i in np.flatnonzero(out.i_events[-1])]
+                    # scikit-sundae keeps every root in Python lists for the solver's lifetime;
+                    # empty them so that memory stays flat in the length of the run.
+                    roots._i.clear()  # type: ignore[attr-defined]
+                    roots._t.clear()  # type: ignore[attr-defined]
+                    roots._y.clear()  # type: ignore[attr-defined]
+                    resolution = resolve(t, y, p, mode, fired, options)
+                    record.events.extend(resolution.events)
+                    if len(record.events) > options.max_events:
+                        last = record.events[-1]
+                        raise OscillatorError(
+                            f"more than max_events = {options.max_events} switching events by "
+                            f"t = {t:.10g} s (last: mass {last.mass} {last.kind} on "
+                            f"{last.boundary}); raise max_events or shorten t_end",
+                            field="max_events",
+                        )
+                    if resolution.mode != mode:
+                        y[:4] = resolution.y
+                        mode = resolution.mode
+                        if grid is None:
+                            self._record(record, t, y, mode)
+                        record.rhs_evaluations += out.nfev
+                        break
+                    idle_roots = idle_roots + 1 if resolution.events == () else 0
+                    if idle_roots > _MAX_IDLE_ROOTS:
+                        raise OscillatorError(
+                            f"the solver keeps stopping at roots near t = {t:.10g} s without a "
+                            f"switch (mode {mode}); tighten rtol/atol",
+                            field="rtol",
+                        )
+                if t >= t_end:
+                    record.rhs_evaluations += out.nfev
+                    break
+
+        record.t_final = t
+        record.y_final = y
+        record.mode_final = mode
+
+    def _failure(self, out, mode: Mode) -> OscillatorError:
+        x1, v1, x2, v2 = (float(v) for v in out.y[:4])
+        return OscillatorError(
+            f"CVODE failed at t = {float(out.t):.10g} s with flag {out.status} "
+            f"({out.message}) in domains m1: {mode.domain1}, m2: {mode.domain2} "
+            f"(state {mode.system_state}; x1={x1:.6g}, v1={v1:.6g}, x2={x2:.6g}, v2={v2:.6g}); "
+            f"loosen rtol/atol or raise max_num_steps",
+            field="rtol",
+        )
