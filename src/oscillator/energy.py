@@ -50,7 +50,7 @@ def powers(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[flo
     Feedback ``-P_i s_i v_i`` and friction loss ``mu_k m_i g s_i v_i`` use the mode's velocity
     signs ``s_i``; both vanish for a resting mass.
     """
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    v1, v2 = y[1], y[3]
     s1, s2 = mode.sign(1), mode.sign(2)
     forcing = p.Q1 * math.sin(p.Omega * t + p.phi1) * v1 + p.Q2 * math.sin(p.Omega * t + p.phi2) * v2
     feedback = -(p.P1 * s1 * v1 + p.P2 * s2 * v2)
