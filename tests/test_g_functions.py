@@ -60,7 +60,9 @@ def test_velocity_g1_is_the_derivative_of_g0(mode):
         if not s:
             continue
         g0, g1 = velocity_g(t, y, PARAMS, mode, mass, s)
-        numeric = central_difference(lambda tt, yy: velocity_g(tt, yy, PARAMS, mode, mass, s)[0], mode, t, y)
+        numeric = central_difference(
+            lambda tt, yy, mass=mass, s=s: velocity_g(tt, yy, PARAMS, mode, mass, s)[0], mode, t, y
+        )
         assert g1 == pytest.approx(numeric, rel=1e-8, abs=1e-8)
         assert g0 == pytest.approx(state_derivative(t, y, PARAMS, mode)[2 * mass - 1])
 
@@ -73,9 +75,9 @@ def test_flow_barrier_g1_is_the_derivative_of_g0(mode):
         if not mode.resting(mass):
             continue
         for side in (1, -1):
-            g0, g1 = flow_barrier_g(t, y, PARAMS, mode, mass, side)
+            _, g1 = flow_barrier_g(t, y, PARAMS, mode, mass, side)
             numeric = central_difference(
-                lambda tt, yy, side=side: flow_barrier_g(tt, yy, PARAMS, mode, mass, side)[0], mode, t, y
+                lambda tt, yy, mass=mass, side=side: flow_barrier_g(tt, yy, PARAMS, mode, mass, side)[0], mode, t, y
             )
             assert g1 == pytest.approx(numeric, rel=1e-8, abs=1e-8)
             # the two sides differ by twice the static threshold
@@ -91,9 +93,9 @@ def test_displacement_g1_is_the_derivative_of_g0(mode):
     rng = np.random.default_rng(11)
     t, y = rng.uniform(0, 5), state_for(mode, rng)
     for boundary in ("right", "left"):
-        g0, g1 = displacement_g(t, y, PARAMS, mode, boundary)
+        _, g1 = displacement_g(t, y, PARAMS, mode, boundary)
         numeric = central_difference(
-            lambda tt, yy: displacement_g(tt, yy, PARAMS, mode, boundary)[0], mode, t, y
+            lambda tt, yy, boundary=boundary: displacement_g(tt, yy, PARAMS, mode, boundary)[0], mode, t, y
         )
         assert g1 == pytest.approx(numeric, rel=1e-8, abs=1e-8)
 

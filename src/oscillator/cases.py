@@ -48,11 +48,7 @@ def parse_value(value: Any, *, field: str) -> Any:
     def evaluate(node: ast.AST) -> float:
         if isinstance(node, ast.Expression):
             return evaluate(node.body)
-        if (
-            isinstance(node, ast.Constant)
-            and isinstance(node.value, (int, float))
-            and not isinstance(node.value, bool)
-        ):
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
             return float(node.value)
         if isinstance(node, ast.Name) and node.id == "pi":
             return math.pi
@@ -66,8 +62,7 @@ def parse_value(value: Any, *, field: str) -> Any:
         result = evaluate(ast.parse(value.strip(), mode="eval"))
     except (SyntaxError, ValueError, TypeError, ZeroDivisionError, OverflowError, RecursionError) as exc:
         raise OscillatorError(
-            f"{field} = {value!r} is not a number; write a number or an expression of numbers "
-            f'and pi such as "pi/8"',
+            f'{field} = {value!r} is not a number; write a number or an expression of numbers and pi such as "pi/8"',
             field=field,
         ) from exc
     return result
@@ -205,17 +200,13 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
     known = {"title", "description", "parameters", "initial", "run", "expected"}
     for key in data:
         if key not in known:
-            raise OscillatorError(
-                f"{source}: unknown top-level key {key!r}{_suggest(key, sorted(known))}", field=key
-            )
+            raise OscillatorError(f"{source}: unknown top-level key {key!r}{_suggest(key, sorted(known))}", field=key)
     params = _build(Parameters, _table(data, "parameters", source), "parameters", source)
     initial = _build(InitialState, _table(data, "initial", source), "initial", source)
     run = dict(_table(data, "run", source))
     for key in run:
         if key not in _RUN_KEYS:
-            raise OscillatorError(
-                f"{source}: unknown run setting {key!r}{_suggest(key, _RUN_KEYS)}", field=key
-            )
+            raise OscillatorError(f"{source}: unknown run setting {key!r}{_suggest(key, _RUN_KEYS)}", field=key)
     if "t_end" not in run:
         raise OscillatorError(f"{source}: [run] needs t_end = <end time in s>", field="t_end")
     t_end = parse_value(run.pop("t_end"), field="run.t_end")

@@ -74,9 +74,7 @@ def root_directions(mode: Mode) -> list[int]:
     return directions
 
 
-def root_values(
-    t: float, y: Sequence[float], p: Parameters, mode: Mode, out: list[float] | None = None
-) -> list[float]:
+def root_values(t: float, y: Sequence[float], p: Parameters, mode: Mode, out: list[float] | None = None) -> list[float]:
     """Evaluate every root function of the layout at ``(t, y)`` in ``mode``."""
     g = out if out is not None else [1.0] * NUM_ROOTS
     forces = non_friction_force(t, y, p, mode.left, mode.right)

@@ -29,9 +29,7 @@ __all__ = [
 ]
 
 
-def non_friction_force(
-    t: float, y: Sequence[float], p: Parameters, left: bool, right: bool
-) -> tuple[float, float]:
+def non_friction_force(t: float, y: Sequence[float], p: Parameters, left: bool, right: bool) -> tuple[float, float]:
     """``(A1, A2)``: non-friction, non-feedback force per unit mass (3.4)-(3.5), (4.14).
 
     ``A1 = [Q1 sin(Omega t + phi1) - K1 x1 - K2 x1^3 - C1 v1 - C2 v1^3
@@ -112,9 +110,7 @@ def accelerations(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tu
     )
 
 
-def state_derivative(
-    t: float, y: Sequence[float], p: Parameters, mode: Mode
-) -> tuple[float, float, float, float]:
+def state_derivative(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[float, float, float, float]:
     """``dy/dt = (v1, a1, v2, a2)`` in a mode: the vector fields F/H of (4.9)-(4.10)."""
     a1, a2 = accelerations(t, y, p, mode)
     return (y[1], a1, y[3], a2)

@@ -40,9 +40,7 @@ def _rate_of_force(
     return rates[mass - 1]
 
 
-def velocity_g(
-    t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, sign: int
-) -> tuple[float, float]:
+def velocity_g(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, sign: int) -> tuple[float, float]:
     """``G^(0,delta)``, ``G^(1,delta)`` on m_i's velocity boundary, side ``s`` (5.4)-(5.5).
 
     ``G^(0,delta) = F_i^(delta)`` (or ``H_i^(delta)`` under left contact) and
@@ -67,9 +65,7 @@ def flow_barrier_g(
     return flow_barrier_field(p, mass, sign, force), _rate_of_force(t, y, p, mode, mass, 0.0)
 
 
-def displacement_g(
-    t: float, y: Sequence[float], p: Parameters, mode: Mode, boundary: str
-) -> tuple[float, float]:
+def displacement_g(t: float, y: Sequence[float], p: Parameters, mode: Mode, boundary: str) -> tuple[float, float]:
     """G-functions on a displacement boundary under the mode's field (5.6)-(5.7), (5.10)-(5.11).
 
     ``boundary = "right"`` (``x1 = d1``, absolute coordinates): ``(v1, a1)``.

@@ -26,9 +26,7 @@ def _require_finite(owner: str, name: str, value: Any) -> float:
         )
     value = float(value)
     if not math.isfinite(value):
-        raise OscillatorError(
-            f"{owner}.{name} must be finite, got {value!r}; give a finite number", field=name
-        )
+        raise OscillatorError(f"{owner}.{name} must be finite, got {value!r}; give a finite number", field=name)
     return value
 
 
@@ -242,9 +240,7 @@ class SolverOptions:
         for name in ("max_events", "max_num_steps"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise OscillatorError(
-                    f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name
-                )
+                raise OscillatorError(f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name)
 
     @classmethod
     def names(cls) -> tuple[str, ...]:

@@ -150,8 +150,7 @@ class Mode:
         flags = contact_flags(self.domain1)
         if flags is not None and flags != (self.left, self.right):
             raise OscillatorError(
-                f"Mode: m1's domain {self.domain1} means contacts {flags}, "
-                f"but left={self.left}, right={self.right}",
+                f"Mode: m1's domain {self.domain1} means contacts {flags}, but left={self.left}, right={self.right}",
                 field="domain1",
             )
         if self.domain2 != 0 and (self.domain2 >= 5) != self.left:

@@ -164,35 +164,25 @@ def _arrive(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, 
     passable = theorem_5_1_passable(mass, alpha, beta, g_alpha[0], g_beta[0])
     if passable:
         after = mode.with_sign(mass, -s)
-        events.append(
-            _event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, passable, g_alpha, g_beta, names)
-        )
+        events.append(_event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, passable, g_alpha, g_beta, names))
         return after
 
     pair = (min(alpha, beta), max(alpha, beta))
     g_odd, g_even = (g_alpha[0], g_beta[0]) if alpha % 2 else (g_beta[0], g_alpha[0])
     decision = theorem_5_2_sliding_exists(mass, pair, g_odd, g_even)
     if not decision:
-        decision = theorem_5_3_sliding_appears(
-            mass, alpha, beta, g_alpha[0], g_beta[0], g_beta[1], tolerance=tol
-        )
+        decision = theorem_5_3_sliding_appears(mass, alpha, beta, g_alpha[0], g_beta[0], g_beta[1], tolerance=tol)
     if not decision and is_zero(g_beta[0], tol) and -s * g_beta[1] > 0:
         # The field across vanishes and turns outward: the flow passes (Thm 5.3 fails).
         after = mode.with_sign(mass, -s)
-        events.append(
-            _event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, decision, g_alpha, g_beta, names)
-        )
+        events.append(_event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, decision, g_alpha, g_beta, names))
         return after
     after = mode.with_sign(mass, 0)
-    events.append(
-        _event(t, y, mass, EventKind.SLIDING_ONSET, boundary, mode, after, decision, g_alpha, g_beta, names)
-    )
+    events.append(_event(t, y, mass, EventKind.SLIDING_ONSET, boundary, mode, after, decision, g_alpha, g_beta, names))
     return after
 
 
-def _leave_rest(
-    t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, s: int, events: list
-) -> Mode:
+def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, s: int, events: list) -> Mode:
     """A resting mass leaves into the side ``s`` if Theorem 5.4 holds."""
     delta = domain_of(mass, s, left=mode.left, right=mode.right)
     barrier = flow_barrier_g(t, y, p, mode, mass, s)

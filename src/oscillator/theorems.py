@@ -141,9 +141,7 @@ def theorem_5_4_sliding_vanishes(
     return Decision(holds, "5.4", _sliding_vanishes_equation(mass, delta))
 
 
-def theorem_5_5_grazing(
-    mass: int, alpha: int, g_alpha: float, dg_alpha: float, *, tolerance: float
-) -> Decision:
+def theorem_5_5_grazing(mass: int, alpha: int, g_alpha: float, dg_alpha: float, *, tolerance: float) -> Decision:
     """Grazing of a velocity boundary inside ``Omega_alpha``.
 
     (5.37), (5.38): ``F_i^(alpha)(t_m) = 0`` and ``(-1)^(i+alpha) D F_i^(alpha) > 0``: the
