@@ -27,3 +27,27 @@ def make_case(t_end, *, initial, name="constructed", options=None, **params):
 @pytest.fixture
 def build():
     return make_case
+
+
+def random_case(seed, t_end=12.0):
+    """A random valid system with stops close by, so that contacts, rest and re-sticking occur."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    p = dict(
+        m1=rng.uniform(0.5, 2), m2=rng.uniform(0.5, 2), C1=rng.uniform(0, 0.3), C2=rng.uniform(0, 0.1),
+        C3=rng.uniform(0, 1.5), C4=rng.uniform(0, 0.3), C5=rng.uniform(0, 0.1), K1=rng.uniform(0.2, 3),
+        K2=rng.uniform(0, 1), K3=rng.uniform(0.5, 5), K4=rng.uniform(0.2, 3), K5=rng.uniform(0, 1),
+        K6=rng.uniform(0.5, 5), mu_k=rng.uniform(0.05, 0.3),
+    )  # fmt: skip
+    p["mu_s"] = p["mu_k"] * rng.uniform(1, 1.8)
+    p.update(
+        d=rng.uniform(0.2, 2), d1=rng.uniform(0.2, 2), Q1=rng.uniform(0, 15), Q2=rng.uniform(0, 15),
+        Omega=rng.uniform(0.8, 3), phi1=rng.uniform(0, 6.3), phi2=rng.uniform(0, 6.3),
+        P1=rng.uniform(0, 0.5), P2=rng.uniform(0, 0.5),
+    )  # fmt: skip
+    x1 = rng.uniform(-1, 1)
+    x2 = x1 + rng.uniform(-0.5, 2.5)
+    v1 = rng.choice([0.0, rng.uniform(-2, 2)])
+    v2 = rng.choice([0.0, rng.uniform(-2, 2)])
+    return make_case(t_end, initial=(0.0, x1, v1, x2, v2), name=f"random-{seed}", **p)

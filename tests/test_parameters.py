@@ -69,7 +69,7 @@ def test_solver_options_are_checked():
     with pytest.raises(OscillatorError, match="max_events"):
         SolverOptions(max_events=0)
     with pytest.raises(OscillatorError, match="max_step_fraction"):
-        SolverOptions(max_step_fraction=2.0)
+        SolverOptions(max_step_fraction=0.5)
 
 
 @pytest.mark.parametrize(

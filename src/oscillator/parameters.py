@@ -192,8 +192,9 @@ class SolverOptions:
         CVODE's relative and absolute tolerances.  The defaults keep switching times within
         1e-8 s of a 1e-13 run on the article's instances (see ``tests/test_convergence.py``).
     max_step_fraction : float
-        Largest step as a fraction of the forcing period, so that two sign changes of a root
-        function cannot hide inside one step.
+        Largest step as a fraction of the forcing period, at most 0.25.  A resting mass's force
+        turns twice per period; a step shorter than half a period cannot hide both turns, so
+        the watched extrema always reveal two crossings hidden in one step.
     grazing_velocity_tolerance : float
         A velocity extremum (root of ``G^(0)``) with ``|v_i|`` at most this is reported as
         grazing of the velocity boundary (Thm 5.5), with the distance ``|v_i|`` (m/s).
@@ -226,10 +227,10 @@ class SolverOptions:
             object.__setattr__(self, name, value)
         if not 1e-15 <= self.rtol <= 1e-3:
             raise OscillatorError(f"{owner}.rtol must lie in [1e-15, 1e-3], got {self.rtol!r}", field="rtol")
-        if self.max_step_fraction > 1:
+        if self.max_step_fraction > 0.25:
             raise OscillatorError(
-                f"{owner}.max_step_fraction must be <= 1 (a fraction of the forcing period), "
-                f"got {self.max_step_fraction!r}",
+                f"{owner}.max_step_fraction must be <= 0.25 (a fraction of the forcing period: a "
+                f"longer step can hide the turns of the forcing), got {self.max_step_fraction!r}",
                 field="max_step_fraction",
             )
         for name in ("grazing_velocity_tolerance", "grazing_displacement_tolerance"):

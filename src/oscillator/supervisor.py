@@ -19,7 +19,7 @@ import numpy as np
 from sksundae.cvode import CVODE
 
 from oscillator._errors import OscillatorError
-from oscillator.detection import NUM_ROOTS, Root, root_directions, root_values
+from oscillator.detection import NUM_ROOTS, Root, mode_violation, root_directions, root_values
 from oscillator.energy import powers
 from oscillator.events import Event
 from oscillator.fields import accelerations
@@ -33,6 +33,8 @@ __all__ = ["RunRecord", "Supervisor"]
 _ROOT_RETURN = 2
 #: Root returns at one instant without a switch before the supervisor declares a stall.
 _MAX_IDLE_ROOTS = 100
+#: How far (relative) the state may stand on the wrong side of a boundary of its mode at a root.
+_CONSISTENCY = 1e-9
 
 
 @dataclass
@@ -172,9 +174,9 @@ class Supervisor:
                 if out.status < 0:
                     record.rhs_evaluations += out.nfev
                     raise self._failure(out, mode)
+                record.steps += 1
                 t = float(out.t)
                 y = np.array(out.y, dtype=float)
-                record.steps += 1
                 if grid is None:
                     self._record(record, t, y, mode)
                 elif on_grid and out.status != _ROOT_RETURN and t == target:
@@ -183,6 +185,13 @@ class Supervisor:
 
                 if out.status == _ROOT_RETURN:
                     record.root_returns += 1
+                    violation = mode_violation(t, y, p, mode, _CONSISTENCY)
+                    if violation is not None:
+                        raise OscillatorError(
+                            f"the state crossed {violation} unseen before t = {t:.10g} s in mode "
+                            f"{mode}; lower max_step_fraction or tighten rtol/atol",
+                            field="max_step_fraction",
+                        )
                     fired = [Root(i) for i in np.flatnonzero(out.i_events[-1])]
                     # scikit-sundae keeps every root in Python lists for the solver's lifetime;
                     # empty them so that memory stays flat in the length of the run.

@@ -44,7 +44,7 @@ _NAN = math.nan
 #: Rounds of re-checking at one instant before the instant is declared an event storm.
 MAX_ROUNDS = 8
 _VELOCITY = {1: Root.VELOCITY_1, 2: Root.VELOCITY_2}
-_GRAZING = {1: Root.GRAZING_1, 2: Root.GRAZING_2}
+_EXTREMUM = {1: Root.EXTREMUM_1, 2: Root.EXTREMUM_2}
 _BARRIERS = {
     1: ((Root.BARRIER_1_POSITIVE, 1), (Root.BARRIER_1_NEGATIVE, -1)),
     2: ((Root.BARRIER_2_POSITIVE, 1), (Root.BARRIER_2_NEGATIVE, -1)),
@@ -259,7 +259,7 @@ def _grazing_reports(
 ) -> None:
     for mass in (1, 2):
         s = mode.sign(mass)
-        if _GRAZING[mass] in fired and s and before.domain(mass) == mode.domain(mass):
+        if _EXTREMUM[mass] in fired and s and before.domain(mass) == mode.domain(mass):
             alpha = mode.domain(mass)
             g = velocity_g(t, y, p, mode, mass, s)
             decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=zero_tolerance(p, mass))
