@@ -1,8 +1,19 @@
-"""Shared builders for constructed cases."""
+"""Shared builders for constructed cases, and hypothesis profiles.
+
+``HYPOTHESIS_PROFILE=thorough pytest tests/test_properties.py`` runs 1500 examples per property
+instead of the default 100.
+"""
+
+import os
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from oscillator import Case, InitialState, Parameters, SolverOptions
+
+settings.register_profile("default", max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("thorough", max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
 #: A system with every nonlinear and contact term off; stops far away.
 LINEAR = dict(

@@ -14,6 +14,13 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 
+def _watched(function, direction):
+    """A terminal ``solve_ivp`` event watching one crossing direction."""
+    function.direction = direction
+    function.terminal = True
+    return function
+
+
 def run(p: dict, t0: float, y0, t_end: float, *, rtol: float = 1e-12, atol: float = 1e-12, max_step: float = 0.002):
     """Switching events ``(t, mass, kind, to_sign)``; steps capped at ``max_step`` forcing periods.
 
@@ -68,30 +75,23 @@ def run(p: dict, t0: float, y0, t_end: float, *, rtol: float = 1e-12, atol: floa
             acc = {i: (a[i] - s[i] * kin[i]) if s[i] else 0.0 for i in (1, 2)}
             return [yy[1], acc[1], yy[3], acc[2]]
 
-        events = []
-        meaning = []
+        events, meaning = [], []
+
         for i in (1, 2):
             if s[i]:
-                ev = lambda tt, yy, i=i: yy[2 * i - 1]
-                ev.direction = -s[i]
-                events.append(ev)
+                events.append(_watched(lambda tt, yy, i=i: yy[2 * i - 1], -s[i]))
                 meaning.append(("velocity", i))
             else:
                 for side in (1, -1):
-                    ev = lambda tt, yy, i=i, side=side, L=L, R=R: forces(tt, yy, L, R)[i] - side * sta[i]
-                    ev.direction = side
-                    events.append(ev)
+                    barrier = _watched(
+                        lambda tt, yy, i=i, side=side, L=L, R=R: forces(tt, yy, L, R)[i] - side * sta[i], side
+                    )
+                    events.append(barrier)
                     meaning.append(("barrier", i, side))
-        ev = lambda tt, yy: yy[0] - p["d1"]
-        ev.direction = -1 if R else 1
-        events.append(ev)
+        events.append(_watched(lambda tt, yy: yy[0] - p["d1"], -1 if R else 1))
         meaning.append(("right",))
-        ev = lambda tt, yy: yy[0] - yy[2] + p["d"]
-        ev.direction = 1 if L else -1
-        events.append(ev)
+        events.append(_watched(lambda tt, yy: yy[0] - yy[2] + p["d"], 1 if L else -1))
         meaning.append(("left",))
-        for ev in events:
-            ev.terminal = True
 
         sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=rtol, atol=atol, events=events,
                         max_step=max_step * 2 * math.pi / p["Omega"])  # fmt: skip

@@ -1,7 +1,7 @@
 """Invariants on random valid systems (hypothesis): labels, rest intervals, time order."""
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import make_case
@@ -36,7 +36,6 @@ def systems(draw):
     return make_case(t_end, initial=(0.0, x1, v1, x2, v2), **p)
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(systems())
 def test_invariants_hold_on_random_systems(case):
     result = simulate(case)

@@ -29,8 +29,12 @@ from oscillator.switching import initial_mode, resolve
 
 __all__ = ["RunRecord", "Supervisor"]
 
-#: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
+#: CVODE's return flag (scikit-sundae ``status``) for a root.
 _ROOT_RETURN = 2
+#: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" when a root function is
+#: exactly 0.0 at the root it just returned and still 0.0 a rounding step later (a difference of
+#: two O(1) velocities that change by less than an ulp); a restart at the root clears it.
+_CLOSE_ROOTS = -22
 #: Root returns at one instant without a switch before the supervisor declares a stall.
 _MAX_IDLE_ROOTS = 100
 #: How far (relative) the state may stand on the wrong side of a boundary of its mode at a root.
@@ -166,11 +170,17 @@ class Supervisor:
             solver.init_step(t, y)
             record.restarts += 1
             idle_roots = 0
+            after_root = False
             while True:
                 on_grid = grid is not None and grid_index < grid.size
                 target = grid[grid_index] if on_grid else t_end
                 method = "normal" if grid is not None else "onestep"
                 out = solver.step(target, method=method, tstop=t_end)
+                if out.status == _CLOSE_ROOTS and after_root:
+                    solver.init_step(t, y)
+                    record.restarts += 1
+                    after_root = False
+                    continue
                 if out.status < 0:
                     record.rhs_evaluations += out.nfev
                     raise self._failure(out, mode)
@@ -183,7 +193,8 @@ class Supervisor:
                     self._record(record, t, y, mode)
                     grid_index += 1
 
-                if out.status == _ROOT_RETURN:
+                after_root = out.status == _ROOT_RETURN
+                if after_root:
                     record.root_returns += 1
                     violation = mode_violation(t, y, p, mode, _CONSISTENCY)
                     if violation is not None:

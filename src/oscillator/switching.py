@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from oscillator._errors import OscillatorError
 from oscillator.detection import Root
 from oscillator.events import Event, EventKind
-from oscillator.fields import non_friction_force
 from oscillator.g_functions import displacement_g, flow_barrier_g, velocity_g
 from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode, displacement_boundary_label, domain_of
@@ -215,22 +214,26 @@ def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: i
 def settle(t: float, y: Sequence[float], p: Parameters, mode: Mode, events: list) -> Mode:
     """Re-check every mass at one instant until the domains are consistent (MODEL.md rule 7).
 
-    A resting mass whose force is past its flow barrier leaves (Thm 5.4); a mass standing on its
-    velocity boundary (``v_i = 0``) whose field points back at it is decided as an arrival.
+    A resting mass leaves if Theorem 5.4 holds on either side: its force is past the flow
+    barrier (after a contact made it jump, or at the start), or on it and turning outward (a
+    root exactly at a restart, which the integrator does not report).  A moving mass standing
+    on its velocity boundary (``v_i = 0``) whose field points back at it is decided as an
+    arrival (Thm 5.1-5.3).
     """
     for _ in range(MAX_ROUNDS):
         changed = False
-        forces = non_friction_force(t, y, p, mode.left, mode.right)
         for mass in (1, 2):
             if mode.resting(mass):
-                force = forces[mass - 1]
-                if abs(force) > p.static_threshold(mass) + zero_tolerance(p, mass):
-                    new = _leave_rest(t, y, p, mode, mass, 1 if force > 0 else -1, events)
-                    changed |= new != mode
-                    mode = new
+                for side in (1, -1):
+                    new = _leave_rest(t, y, p, mode, mass, side, events)
+                    if new != mode:
+                        mode, changed = new, True
+                        break
             elif y[2 * mass - 1] == 0.0:
                 s = mode.sign(mass)
-                if s * velocity_g(t, y, p, mode, mass, s)[0] < -zero_tolerance(p, mass):
+                g0, g1 = velocity_g(t, y, p, mode, mass, s)
+                tol = zero_tolerance(p, mass)
+                if s * g0 < -tol or (is_zero(g0, tol) and s * g1 < 0):
                     new = _arrive(t, y, p, mode, mass, events)
                     changed |= new != mode
                     mode = new
@@ -365,17 +368,25 @@ def resolve(
 def initial_mode(t0: float, y: Sequence[float], p: Parameters) -> Resolution:
     """The mode at the start, and the masses that leave rest at once (MODEL.md rule 8).
 
-    A mass given ``v_i = 0`` is at rest; it leaves at ``t0`` only if ``|A_i| > mu_s g + p_i``.
-    Contacts follow ``z1 <= -d`` and ``x1 >= d1``; on a stop exactly, the contact counts only if
-    the velocity does not point out of it.
+    A mass given ``v_i = 0`` is at rest; it leaves at ``t0`` only if Theorem 5.4 holds.
+    Contacts follow ``z1 <= -d`` and ``x1 >= d1``.  Exactly on a stop, the contact counts if the
+    velocity points into it; with zero velocity there the contact force vanishes, so both
+    choices give the same field at ``t0`` and the acceleration decides (the integrator never
+    reports a crossing that starts exactly at its initial time).
     """
     x1, v1, x2, v2 = (float(v) for v in y[:4])
+    state = (x1, v1, x2, v2)
     z1, zdot1 = x1 - x2, v1 - v2
-    left = z1 < -p.d or (z1 == -p.d and zdot1 <= 0)
-    right = x1 > p.d1 or (x1 == p.d1 and v1 >= 0)
+    left = z1 < -p.d or (z1 == -p.d and zdot1 < 0)
+    right = x1 > p.d1 or (x1 == p.d1 and v1 > 0)
     signs = [int(math.copysign(1, v)) if v != 0 else 0 for v in (v1, v2)]
     mode = Mode.from_signs(signs[0], signs[1], left=left, right=right)
     events: list[Event] = []
-    state = (x1, v1, x2, v2)
     mode = settle(t0, state, p, mode, events)
+    on_left, on_right = z1 == -p.d and zdot1 == 0, x1 == p.d1 and v1 == 0
+    if on_left or on_right:
+        rel, a1 = displacement_g(t0, state, p, mode, "left")[1], displacement_g(t0, state, p, mode, "right")[1]
+        contacts = {"left": (rel < 0) if on_left else mode.left, "right": (a1 > 0) if on_right else mode.right}
+        if (contacts["left"], contacts["right"]) != (mode.left, mode.right):
+            mode = settle(t0, state, p, mode.with_contacts(**contacts), events)
     return Resolution(mode, tuple(events), state)
