@@ -30,3 +30,19 @@ def test_readme_python_example_runs_and_prints_what_it_says(capsys):
     out = capsys.readouterr().out
     assert "1.174583     2  sliding_vanish  ∂Ω12(2)          1     5.4   (5.28)" in out
     assert "1.289000     1  sliding_vanish  ∂Ω12(1)          2     5.4   (5.28)" in out
+
+
+def test_docstring_examples_run():
+    """The examples in the installed package's docstrings (doctest), e.g. ``simulate``."""
+    import doctest
+    import importlib
+    import pkgutil
+
+    import oscillator
+
+    failed = tested = 0
+    for info in pkgutil.iter_modules(oscillator.__path__, "oscillator."):
+        module = importlib.import_module(info.name)
+        outcome = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+        failed, tested = failed + outcome.failed, tested + outcome.attempted
+    assert tested >= 2 and failed == 0

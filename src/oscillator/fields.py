@@ -21,6 +21,7 @@ from oscillator.phase_space import Mode
 __all__ = [
     "accelerations",
     "flow_barrier_field",
+    "force_scale",
     "kinetic_field",
     "non_friction_force",
     "non_friction_force_rate",
@@ -80,6 +81,24 @@ def non_friction_force_rate(
     if right:
         r1 -= p.K6 * v1
     return r1 / p.m1, r2 / p.m2
+
+
+def force_scale(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int) -> float:
+    """The size of the terms that make up ``A_i``, plus the static threshold (per unit mass).
+
+    A force-like G-function counts as zero when it is small against this (rounding and the
+    solver's tolerance act on each term), whatever the units and magnitudes of the case.
+    """
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    if mass == 1:
+        terms = abs(p.Q1) + p.K1 * abs(x1) + p.K2 * abs(x1) ** 3 + p.C1 * abs(v1) + p.C2 * abs(v1) ** 3
+        if mode.right:
+            terms += p.K6 * abs(x1 - p.d1)
+    else:
+        terms = abs(p.Q2) + p.K4 * abs(x2) + p.K5 * abs(x2) ** 3 + p.C4 * abs(v2) + p.C5 * abs(v2) ** 3
+    if mode.left:
+        terms += p.K3 * abs(x1 - x2 + p.d) + p.C3 * abs(v1 - v2)
+    return terms / p.mass(mass) + p.static_threshold(mass)
 
 
 def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from oscillator._errors import OscillatorError
 from oscillator.detection import Root
 from oscillator.events import Event, EventKind
+from oscillator.fields import force_scale
 from oscillator.g_functions import displacement_g, flow_barrier_g, velocity_g
 from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode, displacement_boundary_label, domain_of
@@ -59,9 +60,14 @@ class Resolution:
     y: tuple[float, float, float, float]
 
 
-def zero_tolerance(p: Parameters, mass: int) -> float:
-    """How close to zero a force-like G-function counts as zero at a located root."""
-    return 1e-9 * (1.0 + p.static_threshold(mass))
+#: Relative size, against :func:`~oscillator.fields.force_scale`, below which a force-like
+#: G-function counts as zero: a root located by CVODE leaves about ``rtol`` of the scale.
+ZERO = 1e-9
+
+
+def zero_tolerance(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int) -> float:
+    """How close to zero a force-like G-function of mass ``mass`` counts as zero at ``(t, y)``."""
+    return ZERO * force_scale(t, y, p, mode, mass)
 
 
 def _field_name(mass: int, domain: int, barrier_side: int | None = None) -> str:
@@ -156,7 +162,7 @@ def _arrive(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, 
     beta = domain_of(mass, -s, left=mode.left, right=mode.right)
     g_alpha = velocity_g(t, y, p, mode, mass, s)
     g_beta = velocity_g(t, y, p, mode, mass, -s)
-    tol = zero_tolerance(p, mass)
+    tol = zero_tolerance(t, y, p, mode, mass)
     names = (_field_name(mass, alpha), _field_name(mass, beta))
     boundary = mode.boundary_label(mass)
 
@@ -187,7 +193,7 @@ def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: i
     barrier = flow_barrier_g(t, y, p, mode, mass, s)
     field = velocity_g(t, y, p, mode, mass, s)
     decision = theorem_5_4_sliding_vanishes(
-        mass, delta, barrier[0], barrier[1], field[0], tolerance=zero_tolerance(p, mass)
+        mass, delta, barrier[0], barrier[1], field[0], tolerance=zero_tolerance(t, y, p, mode, mass)
     )
     if not decision:
         return mode
@@ -232,7 +238,7 @@ def settle(t: float, y: Sequence[float], p: Parameters, mode: Mode, events: list
             elif y[2 * mass - 1] == 0.0:
                 s = mode.sign(mass)
                 g0, g1 = velocity_g(t, y, p, mode, mass, s)
-                tol = zero_tolerance(p, mass)
+                tol = zero_tolerance(t, y, p, mode, mass)
                 if s * g0 < -tol or (is_zero(g0, tol) and s * g1 < 0):
                     new = _arrive(t, y, p, mode, mass, events)
                     changed |= new != mode
@@ -265,7 +271,7 @@ def _grazing_reports(
         if _EXTREMUM[mass] in fired and s and before.domain(mass) == mode.domain(mass):
             alpha = mode.domain(mass)
             g = velocity_g(t, y, p, mode, mass, s)
-            decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=zero_tolerance(p, mass))
+            decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=zero_tolerance(t, y, p, mode, mass))
             speed = abs(y[2 * mass - 1])
             if decision and speed <= options.grazing_velocity_tolerance:
                 events.append(
