@@ -12,6 +12,7 @@ the feedback and the losses in the dampers and to friction (:mod:`oscillator.ene
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -25,7 +26,7 @@ from oscillator.events import Event
 from oscillator.fields import accelerations
 from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode
-from oscillator.switching import initial_mode, resolve
+from oscillator.switching import Resolution, initial_mode, resolve
 
 __all__ = ["RunRecord", "Supervisor"]
 
@@ -36,7 +37,9 @@ _ROOT_RETURN = 2
 #: two O(1) velocities that change by less than an ulp); a restart at the root clears it.
 _CLOSE_ROOTS = -22
 #: Root returns at one instant without a switch before the supervisor declares a stall.
-_MAX_IDLE_ROOTS = 100
+_MAX_STALLS = 100
+#: Two root returns closer than this (relative to the time) are at one instant.
+_SAME_INSTANT = 1e-12
 #: How far (relative) the state may stand on the wrong side of a boundary of its mode at a root.
 _CONSISTENCY = 1e-9
 
@@ -146,7 +149,7 @@ class Supervisor:
             record.modes.append(mode)
 
     def _run(self, record: RunRecord, t0: float, y0, t_end: float) -> None:
-        p, options = self.params, self.options
+        p = self.params
         start = initial_mode(t0, y0, p)
         mode = start.mode
         record.mode_initial = mode
@@ -169,13 +172,11 @@ class Supervisor:
             solver, roots = self._problem(mode)
             solver.init_step(t, y)
             record.restarts += 1
-            idle_roots = 0
-            after_root = False
+            after_root, stalls, last_root = False, 0, -math.inf
             while True:
                 on_grid = grid is not None and grid_index < grid.size
                 target = grid[grid_index] if on_grid else t_end
-                method = "normal" if grid is not None else "onestep"
-                out = solver.step(target, method=method, tstop=t_end)
+                out = solver.step(target, method="onestep" if grid is None else "normal", tstop=t_end)
                 if out.status == _CLOSE_ROOTS and after_root:
                     solver.init_step(t, y)
                     record.restarts += 1
@@ -183,7 +184,7 @@ class Supervisor:
                     continue
                 if out.status < 0:
                     record.rhs_evaluations += out.nfev
-                    raise self._failure(out, mode)
+                    raise self._failure(out, t, y, mode)
                 record.steps += 1
                 t = float(out.t)
                 y = np.array(out.y, dtype=float)
@@ -196,29 +197,7 @@ class Supervisor:
                 after_root = out.status == _ROOT_RETURN
                 if after_root:
                     record.root_returns += 1
-                    violation = mode_violation(t, y, p, mode, _CONSISTENCY)
-                    if violation is not None:
-                        raise OscillatorError(
-                            f"the state crossed {violation} unseen before t = {t:.10g} s in mode "
-                            f"{mode}; lower max_step_fraction or tighten rtol/atol",
-                            field="max_step_fraction",
-                        )
-                    fired = [Root(i) for i in np.flatnonzero(out.i_events[-1])]
-                    # scikit-sundae keeps every root in Python lists for the solver's lifetime;
-                    # empty them so that memory stays flat in the length of the run.
-                    roots._i.clear()  # type: ignore[attr-defined]
-                    roots._t.clear()  # type: ignore[attr-defined]
-                    roots._y.clear()  # type: ignore[attr-defined]
-                    resolution = resolve(t, y, p, mode, fired, options)
-                    record.events.extend(resolution.events)
-                    if len(record.events) > options.max_events:
-                        last = record.events[-1]
-                        raise OscillatorError(
-                            f"more than max_events = {options.max_events} switching events by "
-                            f"t = {t:.10g} s (last: mass {last.mass} {last.kind} on "
-                            f"{last.boundary}); raise max_events or shorten t_end",
-                            field="max_events",
-                        )
+                    resolution = self._resolve_root(record, t, y, mode, out, roots)
                     if resolution.mode != mode:
                         y[:4] = resolution.y
                         mode = resolution.mode
@@ -226,10 +205,12 @@ class Supervisor:
                             self._record(record, t, y, mode)
                         record.rhs_evaluations += out.nfev
                         break
-                    idle_roots = idle_roots + 1 if resolution.events == () else 0
-                    if idle_roots > _MAX_IDLE_ROOTS:
+                    same_instant = t - last_root <= _SAME_INSTANT * (1.0 + abs(t))
+                    stalls = stalls + 1 if same_instant and not resolution.events else 0
+                    last_root = t
+                    if stalls > _MAX_STALLS:
                         raise OscillatorError(
-                            f"the solver keeps stopping at roots near t = {t:.10g} s without a "
+                            f"the solver keeps stopping at roots at t = {t:.10g} s without a "
                             f"switch (mode {mode}); tighten rtol/atol",
                             field="rtol",
                         )
@@ -241,10 +222,38 @@ class Supervisor:
         record.y_final = y
         record.mode_final = mode
 
-    def _failure(self, out, mode: Mode) -> OscillatorError:
-        x1, v1, x2, v2 = (float(v) for v in out.y[:4])
+    def _resolve_root(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode, out, roots) -> Resolution:
+        """Hand the roots that fired at ``t`` to :func:`switching.resolve` and record the events."""
+        violation = mode_violation(t, y, self.params, mode, _CONSISTENCY)
+        if violation is not None:
+            raise OscillatorError(
+                f"the state crossed {violation} unseen before t = {t:.10g} s in mode {mode}; "
+                f"lower max_step_fraction or tighten rtol/atol",
+                field="max_step_fraction",
+            )
+        fired = [Root(i) for i in np.flatnonzero(out.i_events[-1])]
+        # scikit-sundae keeps every root in Python lists for the solver's lifetime; empty them
+        # so that memory stays flat in the length of the run.
+        roots._i.clear()
+        roots._t.clear()
+        roots._y.clear()
+        resolution = resolve(t, y, self.params, mode, fired, self.options)
+        record.events.extend(resolution.events)
+        if len(record.events) > self.options.max_events:
+            last = record.events[-1]
+            raise OscillatorError(
+                f"more than max_events = {self.options.max_events} switching events by "
+                f"t = {t:.10g} s (last: mass {last.mass} {last.kind} on {last.boundary}); "
+                f"raise max_events or shorten t_end",
+                field="max_events",
+            )
+        return resolution
+
+    def _failure(self, out, t: float, y: np.ndarray, mode: Mode) -> OscillatorError:
+        """CVODE's failure, told with the last point it reached (its output is undefined then)."""
+        x1, v1, x2, v2 = (float(v) for v in y[:4])
         return OscillatorError(
-            f"CVODE failed at t = {float(out.t):.10g} s with flag {out.status} "
+            f"CVODE failed after t = {t:.10g} s with flag {out.status} "
             f"({out.message}) in domains m1: {mode.domain1}, m2: {mode.domain2} "
             f"(state {mode.system_state}; x1={x1:.6g}, v1={v1:.6g}, x2={x2:.6g}, v2={v2:.6g}); "
             f"loosen rtol/atol or raise max_num_steps",

@@ -1,0 +1,68 @@
+"""Result tables: columns, the trajectory on CVODE's steps or on a grid, and failures."""
+
+import numpy as np
+import pytest
+
+from oscillator import OscillatorError, simulate
+
+REQUIRED_EVENT_COLUMNS = ["t", "mass", "kind", "boundary", "from_domain", "to_domain", "theorem", "equation",
+                          "x1", "v1", "x2", "v2"]  # fmt: skip
+
+
+def test_event_columns_and_kinds():
+    events = simulate("instance-5").events
+    assert list(events.columns[:12]) == REQUIRED_EVENT_COLUMNS
+    assert {"G0_alpha", "G1_alpha", "G0_beta", "G1_beta", "G_alpha", "G_beta", "distance"} <= set(events.columns)
+    assert events.G_alpha.tolist()[:2] == ["F1^(0>0_1)", "F2^(0>0_1)"]
+
+
+def test_trajectory_on_a_grid_matches_the_step_trajectory():
+    grid = np.linspace(1.5, 4.0, 26)
+    on_grid = simulate("instance-3", t_eval=grid).trajectory
+    assert np.array_equal(on_grid.t.to_numpy(), grid)
+    steps = simulate("instance-3").trajectory.drop_duplicates("t", keep="last")
+    # CVODE's interpolant on the grid agrees with a cubic fit through its own steps
+    for column in ("x1", "x2"):
+        assert np.interp(grid, steps.t, steps[column]) == pytest.approx(on_grid[column].to_numpy(), abs=2e-3)
+    # domains on the grid follow the events: left contact between 3.0214 and 3.7780
+    inside = on_grid[(on_grid.t > 3.03) & (on_grid.t < 3.77)]
+    assert set(inside.system_state) <= {"III-a"} and len(inside) > 0
+
+
+def test_event_rows_appear_twice_in_the_step_trajectory():
+    result = simulate("instance-1")
+    trajectory = result.trajectory
+    for t in result.events.t[result.events.t > 1.0]:
+        rows = trajectory[trajectory.t == t]
+        assert len(rows) == 2 and rows.domain1.nunique() + rows.domain2.nunique() == 3
+
+
+def test_trajectory_can_be_left_out():
+    result = simulate("instance-3", record_trajectory=False)
+    assert result.trajectory.empty and list(result.trajectory.columns)[:5] == ["t", "x1", "v1", "x2", "v2"]
+    assert len(result.events) == 8
+
+
+def test_solver_failure_names_time_domains_and_fix():
+    # too few steps allowed between two outputs: CVODE gives up
+    with pytest.raises(
+        OscillatorError, match=r"CVODE failed after t = 1.5 s .* in domains m1: \d, m2: \d.*max_num_steps"
+    ):
+        simulate("instance-3", max_num_steps=1, t_eval=[1.5, 4.0])
+
+
+def test_event_count_guard_names_the_last_event():
+    with pytest.raises(OscillatorError, match=r"more than max_events = 3 .* mass \d") as info:
+        simulate("instance-3", max_events=3)
+    # the partial record travels with the error; the instant that tripped it is kept whole
+    assert [e.kind for e in info.value.partial.events[-2:]] == ["left_contact_onset"] * 2
+    assert len(info.value.partial.events) == 5
+
+
+def test_a_long_rest_under_forcing_is_not_a_stall(build):
+    """A forced mass below its static threshold rests for 200 periods; its force extremum fires
+    twice a period without a switch, which is no stall."""
+    case = build(200 * 2 * np.pi, initial=(0.0, 0.0, 0.0, 0.0, 0.0), Q1=1.0, Q2=1.0)
+    result = simulate(case, record_trajectory=False)
+    assert result.events.empty
+    assert result.stats["root_returns"] >= 399
