@@ -83,3 +83,23 @@ def test_forced_leave_rest_and_velocity_zero_have_closed_forms(build):
     assert m1.loc[1, "t"] == pytest.approx(t_zero, abs=1e-9)
     x_zero = forced_position(t_zero, t_leave, x0, 0.0, 1, 2.0, q, 1.0, 0.98)[0]
     assert m1.loc[1, "x1"] == pytest.approx(x_zero, abs=1e-9)
+
+
+def test_turning_short_of_the_right_stop_is_reported_as_grazing(build):
+    """x'' = -4 x - mu_k g from x = 0 with v0 chosen so that the turning point is 0.5 mm short of
+    x1 = d1 = 1: rule 6 reports grazing of ∂Ω13(1) at the velocity zero, t = atan2(...)/w."""
+    w, c, gap = 2.0, 0.1 * 9.8 / 4.0, 5e-4
+    amplitude = 1.0 + c - gap
+    v0 = w * math.sqrt(amplitude**2 - c**2)
+    case = build(1.0, initial=(0.0, 0.0, v0, -5.0, 0.0), d1=1.0, d=100.0)
+    events = simulate(case).events.query("mass == 1")
+    t_turn = math.atan2(v0 / w, c) / w  # x = -c + c cos(w t) + (v0/w) sin(w t) peaks here
+    grazing = events[events.kind == "grazing"]
+    assert len(grazing) == 1
+    row = grazing.iloc[0]
+    assert row.boundary == "∂Ω13(1)" and row.theorem == "Def. 5.2" and row.equation == "(5.6)"
+    assert row.t == pytest.approx(t_turn, abs=1e-9)
+    assert row.distance == pytest.approx(gap, abs=1e-9)
+    assert "right_contact_onset" not in set(events.kind)
+    # and with a smaller reporting distance it is not called grazing
+    assert "grazing" not in set(simulate(case, grazing_displacement_tolerance=1e-4).events.kind)
