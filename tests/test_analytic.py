@@ -98,6 +98,7 @@ def test_turning_short_of_the_right_stop_is_reported_as_grazing(build):
     assert len(grazing) == 1
     row = grazing.iloc[0]
     assert row.boundary == "∂Ω13(1)" and row.theorem == "Def. 5.2" and row.equation == "(5.6)"
+    assert row.from_domain == row.to_domain == 1  # touched in Omega_1, as it reached v1 = 0
     assert row.t == pytest.approx(t_turn, abs=1e-9)
     assert row.distance == pytest.approx(gap, abs=1e-9)
     assert "right_contact_onset" not in set(events.kind)

@@ -291,47 +291,23 @@ def _grazing_reports(
                 )
     tol = options.grazing_displacement_tolerance
     if _VELOCITY[1] in fired and abs(y[0] - p.d1) <= tol:
-        g = displacement_g(t, y, p, mode, "right")
-        other = domain_of(1, before.sign(1), left=mode.left, right=not mode.right)
-        boundary = displacement_boundary_label(1, before.domain1, other)
-        decision = Decision(True, "Def. 5.2", "(5.6)" if not mode.left else "(5.7)")
-        events.append(
-            _event(
-                t,
-                y,
-                1,
-                EventKind.GRAZING,
-                boundary,
-                mode,
-                mode,
-                decision,
-                g,
-                names=("v1", ""),
-                distance=abs(y[0] - p.d1),
-            )
-        )
+        # v1 = 0 within tol of x1 = d1: the flow touched the right stop in m1's domain before.
+        _stop_grazing(t, y, p, before, "right", Decision(True, "Def. 5.2", "(5.7)" if mode.left else "(5.6)"), events)
     if Root.RELATIVE_VELOCITY in fired and abs(y[0] - y[2] + p.d) <= tol:
-        g = displacement_g(t, y, p, mode, "left")
-        decision = Decision(True, "Def. 5.4", "(5.11)" if mode.left else "(5.10)")
-        boundary = "z1 = -d"
-        if mode.sign(1):
-            other = domain_of(1, mode.sign(1), left=not mode.left, right=mode.right)
-            boundary = displacement_boundary_label(1, mode.domain1, other)
-        events.append(
-            _event(
-                t,
-                y,
-                1,
-                EventKind.GRAZING,
-                boundary,
-                mode,
-                mode,
-                decision,
-                g,
-                names=("zdot1", ""),
-                distance=abs(y[0] - y[2] + p.d),
-            )
-        )
+        _stop_grazing(t, y, p, mode, "left", Decision(True, "Def. 5.4", "(5.11)" if mode.left else "(5.10)"), events)
+
+
+def _stop_grazing(t: float, y: Sequence[float], p: Parameters, mode: Mode, stop: str, decision: Decision, events: list):
+    """Report grazing of a stop (MODEL.md rule 6): ``G^(0)`` (``v1`` or ``zdot1``) is zero on it."""
+    g = displacement_g(t, y, p, mode, stop)
+    distance = abs(y[0] - p.d1) if stop == "right" else abs(y[0] - y[2] + p.d)
+    boundary = "x1 = d1" if stop == "right" else "z1 = -d"
+    if mode.sign(1):
+        flags = {"left": mode.left, "right": mode.right}
+        flags[stop] = not flags[stop]
+        boundary = displacement_boundary_label(1, mode.domain1, domain_of(1, mode.sign(1), **flags))
+    names = ("v1" if stop == "right" else "zdot1", "")
+    events.append(_event(t, y, 1, EventKind.GRAZING, boundary, mode, mode, decision, g, names=names, distance=distance))
 
 
 # --------------------------------------------------------------------------- entry points
