@@ -70,10 +70,9 @@ def zero_tolerance(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass
     return ZERO * force_scale(t, y, p, mode, mass)
 
 
-def _field_name(mass: int, domain: int, barrier_side: int | None = None) -> str:
-    if barrier_side is not None:
-        return f"F{mass}^(0>0_{domain})"
-    return f"F{mass}^({domain})"
+def _field_name(mass: int, domain: int, *, barrier: bool = False) -> str:
+    """``F2^(1)``, or ``F2^(0>0_1)`` for the flow barrier on the side of domain 1."""
+    return f"F{mass}^(0>0_{domain})" if barrier else f"F{mass}^({domain})"
 
 
 def _event(
@@ -198,7 +197,7 @@ def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: i
     if not decision:
         return mode
     after = mode.with_sign(mass, s)
-    names = (_field_name(mass, delta, barrier_side=s), _field_name(mass, delta))
+    names = (_field_name(mass, delta, barrier=True), _field_name(mass, delta))
     events.append(
         _event(
             t,
