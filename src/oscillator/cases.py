@@ -24,7 +24,7 @@ from oscillator._errors import OscillatorError
 from oscillator.events import EventKind
 from oscillator.parameters import InitialState, Parameters, SolverOptions
 
-__all__ = ["Case", "ExpectedEvent", "case_names", "load_case", "parse_value"]
+__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "parse_value"]
 
 _OPERATORS = {
     ast.Add: operator.add,
@@ -290,3 +290,27 @@ def load_case(name_or_path: str | Path) -> Case:
     except tomllib.TOMLDecodeError as exc:
         raise OscillatorError(f"{path}: malformed TOML: {exc}", field="case") from exc
     return case_from_dict(data, name=path.stem, source=str(path), path=path)
+
+
+def case_to_toml(case: Case) -> str:
+    """The case as a TOML file that :func:`load_case` reads back to an equal case.
+
+    Every parameter and setting is written out, defaults included, so that a run can be
+    repeated exactly.
+    """
+    import tomli_w
+
+    data: dict[str, Any] = {"title": case.title}
+    if case.description:
+        data["description"] = case.description
+    data["parameters"] = dataclasses.asdict(case.parameters)
+    data["initial"] = dataclasses.asdict(case.initial)
+    data["run"] = {"t_end": case.t_end, **dataclasses.asdict(case.options)}
+    expected = []
+    for item in case.expected:
+        entry = {k: v for k, v in dataclasses.asdict(item).items() if v is not None and v != ""}
+        entry["kind"] = str(item.kind)
+        expected.append(entry)
+    if expected:
+        data["expected"] = expected
+    return tomli_w.dumps(data, multiline_strings=True)

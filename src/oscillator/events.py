@@ -89,3 +89,8 @@ class Event:
     def columns(cls) -> tuple[str, ...]:
         """Column names of ``Result.events``, in order."""
         return tuple(f.name for f in fields(cls))
+
+    @classmethod
+    def text_columns(cls) -> tuple[str, ...]:
+        """The columns that hold text (``"5.1"`` is a theorem, not a number)."""
+        return tuple(f.name for f in fields(cls) if f.type in ("str", "EventKind"))

@@ -21,6 +21,7 @@ __all__ = [
     "Mode",
     "constraint_functions",
     "contact_flags",
+    "contacts_of_state",
     "displacement_boundary_label",
     "domain_label",
     "domain_of",
@@ -122,9 +123,17 @@ def system_state(left: bool, right: bool, resting1: bool, resting2: bool) -> str
     Region I no contact, II right contact only, III left contact only, IV both; letter a both
     moving, b m1 at rest, c m2 at rest, d both at rest.
     """
-    region = {(False, False): "I", (False, True): "II", (True, False): "III", (True, True): "IV"}
+    region = {flags: name for name, flags in _REGIONS.items()}
     letter = {(False, False): "a", (True, False): "b", (False, True): "c", (True, True): "d"}
     return f"{region[(left, right)]}-{letter[(resting1, resting2)]}"
+
+
+_REGIONS = {"I": (False, False), "II": (False, True), "III": (True, False), "IV": (True, True)}
+
+
+def contacts_of_state(label: str) -> tuple[bool, bool]:
+    """``(left, right)`` of a system-state label such as ``III-b``."""
+    return _REGIONS[label.split("-")[0]]
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,6 +167,12 @@ class Mode:
                 f"Mode: m2's domain {self.domain2} disagrees with left={self.left}",
                 field="domain2",
             )
+
+    @classmethod
+    def from_state(cls, domain1: int, domain2: int, state: str) -> Mode:
+        """The mode of a trajectory row: its domains and its system-state label."""
+        left, right = contacts_of_state(state)
+        return cls(domain1, domain2, left, right)
 
     @classmethod
     def from_signs(cls, s1: int, s2: int, *, left: bool, right: bool) -> Mode:

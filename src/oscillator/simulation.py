@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +54,7 @@ def simulate(
     t_end: float | None = None,
     t_eval: Sequence[float] | np.ndarray | None = None,
     record_trajectory: bool = True,
+    progress: Callable[[float], None] | None = None,
     **overrides: float,
 ) -> Result:
     """Simulate a case from its start to ``t_end``.
@@ -68,6 +69,8 @@ def simulate(
         Record the trajectory on this grid instead of at CVODE's steps.
     record_trajectory : bool
         Keep trajectory rows (events and the energy audit are always kept).
+    progress : callable, optional
+        Called with the current time after every solver step (keep it cheap).
     **overrides
         Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
         (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).

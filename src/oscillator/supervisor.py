@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -74,6 +75,8 @@ class Supervisor:
         Record the trajectory on this grid instead of at CVODE's steps.
     record_trajectory : bool, keyword-only
         Keep trajectory rows at all (events are always kept).
+    progress : callable, keyword-only
+        Called with the time after every solver step.
     """
 
     def __init__(
@@ -83,11 +86,13 @@ class Supervisor:
         *,
         t_eval: np.ndarray | None = None,
         record_trajectory: bool = True,
+        progress: Callable[[float], None] | None = None,
     ) -> None:
         self.params = params
         self.options = options
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
         self.record_trajectory = record_trajectory
+        self.progress = progress
         self._solvers: dict[Mode, tuple[CVODE, object]] = {}
 
     # ----------------------------------------------------------------- CVODE problems per mode
@@ -188,6 +193,8 @@ class Supervisor:
                 record.steps += 1
                 t = float(out.t)
                 y = np.array(out.y, dtype=float)
+                if self.progress is not None:
+                    self.progress(t)
                 if grid is None:
                     self._record(record, t, y, mode)
                 elif on_grid and out.status != _ROOT_RETURN and t == target:

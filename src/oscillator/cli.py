@@ -1,0 +1,315 @@
+"""The ``oscillator`` command: list, show, run, check and report cases.
+
+Every refusal (unknown case or parameter, bad value, malformed file, unwritable folder) is one
+line naming the field and the fix, with exit code 2 and nothing written.  ``check`` exits 1
+when a time is outside its tolerance.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+from oscillator import OscillatorError, __version__, case_names, load_case
+from oscillator.cases import Case, parse_value
+from oscillator.output import FORMATS, check_output_folder, default_output_folder, read_run, replace_file, write_run
+from oscillator.parameters import SolverOptions
+from oscillator.plotting import write_figures
+from oscillator.report import render_html, render_markdown
+from oscillator.reproduction import compare
+from oscillator.simulation import resolve_case, simulate
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="oscillator",
+    help="Simulate the 2-DOF frictional oscillator with elastic stops of the article, "
+    "and explain every switch by its theorem.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode="markdown",
+)
+out = Console(highlight=False)
+err = Console(stderr=True, highlight=False)
+_INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
+
+
+class BadInput(Exception):
+    """Raised inside commands for refusals that are not the library's own."""
+
+
+def _fail(message: str, code: int = 2) -> typer.Exit:
+    err.print(f"[bold red]error:[/] {escape(message)}", soft_wrap=True)
+    return typer.Exit(code)
+
+
+def _overrides(assignments: list[str]) -> dict:
+    """``NAME=VALUE`` strings to overrides, values as numbers or expressions of pi."""
+    values = {}
+    for item in assignments:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise OscillatorError(f"--set {item!r}: write NAME=VALUE, e.g. --set Omega=1.7", field="--set")
+        value = parse_value(text.strip(), field=f"--set {name}")
+        if name in _INTEGER_OPTIONS:
+            if not float(value).is_integer():
+                raise OscillatorError(f"--set {name}={text}: {name} is a whole number", field=name)
+            value = int(value)
+        values[name] = value
+    return values
+
+
+def _case(case: str, t_end: float | None = None, assignments: list[str] | None = None) -> Case:
+    return resolve_case(load_case(case), t_end=t_end, **_overrides(assignments or []))
+
+
+def _events_table(events, limit: int = 40) -> Table:
+    table = Table(title="switching events", title_justify="left", header_style="bold")
+    for column in ("t (s)", "mass", "kind", "boundary", "domain", "theorem", "eq."):
+        table.add_column(column, justify="right" if column in ("t (s)", "mass") else "left", no_wrap=column == "kind")
+    rows = list(events.itertuples(index=False))
+    shown = rows if len(rows) <= limit else [*rows[: limit // 2], None, *rows[-limit // 2 :]]
+    for row in shown:
+        if row is None:
+            table.add_row("…", "", f"{len(rows) - limit} more", "", "", "", "")
+            continue
+        table.add_row(
+            f"{row.t:.6f}", str(row.mass), row.kind, row.boundary, f"{row.from_domain} → {row.to_domain}",
+            row.theorem, row.equation,
+        )  # fmt: skip
+    return table
+
+
+def _simulate_with_progress(case: Case, quiet: bool):
+    if quiet:
+        return simulate(case)
+    span = case.t_end - case.initial.t0
+    columns = (TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
+               TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+    with Progress(*columns, console=err, transient=True) as progress:
+        task = progress.add_task(case.name, total=span, t=case.initial.t0)
+        last = [0.0]
+
+        def report(t: float) -> None:
+            now = time.monotonic()
+            if now - last[0] > 0.1:
+                last[0] = now
+                progress.update(task, completed=t - case.initial.t0, t=t)
+
+        return simulate(case, progress=report)
+
+
+@app.command("list")
+def list_cases() -> None:
+    """List the named cases with their titles."""
+    table = Table(header_style="bold")
+    table.add_column("case")
+    table.add_column("title")
+    for name in case_names():
+        table.add_row(name, load_case(name).title)
+    out.print(table)
+
+
+@app.command()
+def show(case: Annotated[str, typer.Argument(help="A named case or the path of a case file.")]) -> None:
+    """Show a case: its parameters, start, run settings and expected events.
+
+    Example: `oscillator show instance-2`
+    """
+    try:
+        c = load_case(case)
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    out.print(f"[bold]{c.name}[/]: {c.title}")
+    if c.description:
+        out.print(" ".join(c.description.split()))
+    params = Table(title="parameters", title_justify="left", header_style="bold")
+    for column in ("name", "value", "name ", "value "):
+        params.add_column(column, justify="right" if "value" in column else "left")
+    items = [(name, f"{getattr(c.parameters, name):.10g}") for name in c.parameters.names()]
+    half = (len(items) + 1) // 2
+    for left, right in zip(items[:half], [*items[half:], ("", "")], strict=False):
+        params.add_row(*left, *right)
+    out.print(params)
+    initial = c.initial
+    out.print(
+        f"start: t0 = {initial.t0} s, x1 = {initial.x1} m, v1 = {initial.v1} m/s, x2 = {initial.x2} m, "
+        f"v2 = {initial.v2} m/s; end: t_end = {c.t_end} s"
+    )
+    options = ", ".join(f"{name} = {getattr(c.options, name)}" for name in c.options.names())
+    out.print(f"solver: {options}")
+    if c.expected:
+        table = Table(title="expected events", title_justify="left", header_style="bold")
+        for column in ("event", "mass", "kind", "domain", "article (s)", "reference (s)", "tolerance (s)"):
+            table.add_column(column)
+        for e in c.expected:
+            table.add_row(e.label, str(e.mass), str(e.kind), "" if e.to_domain is None else str(e.to_domain),
+                          "—" if e.t is None else f"{e.t}", "—" if e.reference is None else f"{e.reference}",
+                          f"{e.tolerance:g}")  # fmt: skip
+        out.print(table)
+
+
+@app.command()
+def run(
+    case: Annotated[str, typer.Argument(help="A named case (see `oscillator list`) or a case file (.toml).")],
+    t_end: Annotated[float | None, typer.Option("--t-end", help="End time in s (default: the case's).")] = None,
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="Override a parameter, initial value or solver option: NAME=VALUE (repeatable)."),
+    ] = None,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", help="Output folder (default: runs/<case>-<timestamp>/); must not exist.")
+    ] = None,
+    fmt: Annotated[str, typer.Option("--format", help="Event table format: csv, parquet or both.")] = "both",
+    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the figures.")] = False,
+    no_report: Annotated[bool, typer.Option("--no-report", help="Skip the Markdown/HTML report.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
+) -> None:
+    """Run a case, print its switching events and write tables, figures and a report.
+
+    Examples:
+
+    * `oscillator run instance-3`
+    * `oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7`
+    * `oscillator run my-case.toml --format parquet --no-plots --quiet`
+    """
+    try:
+        if fmt not in FORMATS:
+            raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}", field="--format")
+        resolved = _case(case, t_end, set_)
+        folder = out_dir if out_dir is not None else default_output_folder(resolved.name)
+        check_output_folder(folder)
+        result = _simulate_with_progress(resolved, quiet)
+        comparison = compare(resolved, result) if resolved.expected else None
+
+        def extras(tmp: Path, info: dict) -> None:
+            if not no_plots:
+                start = (resolved.initial.t0, *resolved.initial.y)
+                write_figures(result.trajectory, result.events, resolved.parameters, start, tmp / "figures",
+                              title=resolved.name)  # fmt: skip
+            if comparison is not None:
+                info["check"] = {
+                    "expected": len(comparison),
+                    "within_tolerance": int((comparison.within_article & comparison.within_reference).sum()),
+                }
+            if not no_report:
+                text = render_markdown(resolved, result.events, info, comparison=comparison, figures=not no_plots)
+                (tmp / "report.md").write_text(text, encoding="utf-8")
+                (tmp / "report.html").write_text(render_html(text, tmp), encoding="utf-8")
+
+        write_run(result, folder, formats=fmt, extras=extras, command=["oscillator", *sys.argv[1:]])
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    except KeyboardInterrupt:
+        raise _fail("interrupted; nothing was written", code=130) from None
+    if quiet:
+        out.print(str(folder))
+        return
+    out.print(f"[bold]{resolved.name}[/]: {resolved.title}")
+    out.print(_events_table(result.events) if len(result.events) else "no switching events")
+    energy = result.energy
+    out.print(
+        f"energy audit residual {energy['residual']:.2e} J (E0 = {energy['E0']:.4f} J, E1 = {energy['E1']:.4f} J)"
+    )
+    if comparison is not None:
+        ok = int((comparison.within_article & comparison.within_reference).sum())
+        out.print(f"expected events within tolerance: {ok}/{len(comparison)}")
+    out.print(f"written to [bold]{folder}[/]")
+
+
+@app.command()
+def check(
+    case: Annotated[str, typer.Argument(help="A case with [[expected]] events.")],
+    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+) -> None:
+    """Compare a case's switching times with the article's; exit 1 if one is out of tolerance.
+
+    Example: `oscillator check instance-5`
+    """
+    try:
+        resolved = _case(case, None, set_)
+        if not resolved.expected:
+            raise OscillatorError(f"case {resolved.name!r} has no [[expected]] events to check against", field="case")
+        table = compare(resolved, simulate(resolved, record_trajectory=False))
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    view = Table(title=f"{resolved.name}: expected switching times", title_justify="left", header_style="bold")
+    for column in ("event", "article", "reference", "ours", "ours − article", "ours − reference", "ok"):
+        view.add_column(column)
+    for row in table.itertuples(index=False):
+        ok = row.within_article and row.within_reference
+        view.add_row(
+            row.label, _time(row.article), _time(row.reference), _time(row.ours, 6),
+            _delta(row.ours_minus_article), _delta(row.ours_minus_reference), "✓" if ok else "[red]✗[/]",
+        )  # fmt: skip
+    out.print(view)
+    for row in table.itertuples(index=False):
+        if row.note:
+            out.print(f"[dim]{row.label}: {row.note}[/]")
+    failed = int((~(table.within_article & table.within_reference)).sum())
+    if failed:
+        err.print(f"[bold red]{failed} expected time(s) out of tolerance[/]")
+        raise typer.Exit(1)
+    out.print(f"all {len(table)} expected times within tolerance")
+
+
+def _time(value: float, digits: int = 4) -> str:
+    return "—" if value != value else f"{value:.{digits}f}"
+
+
+def _delta(value: float) -> str:
+    return "—" if value != value else f"{value:+.1e}"
+
+
+@app.command()
+def report(folder: Annotated[Path, typer.Argument(help="A folder written by `oscillator run`.")]) -> None:
+    """Rebuild the report (and any missing figures) of a run folder.
+
+    Example: `oscillator report runs/instance-3-20261121-101500`
+    """
+    try:
+        run_folder = read_run(folder)
+        case = run_folder.case
+        figures = folder / "figures"
+        if not figures.is_dir() and not run_folder.trajectory.empty:
+            start = (case.initial.t0, *case.initial.y)
+            write_figures(run_folder.trajectory, run_folder.events, case.parameters, start, figures, title=case.name)
+        comparison = None
+        if case.expected:
+            from oscillator.result import Result
+
+            result = Result(case, run_folder.events, run_folder.trajectory, run_folder.run.get("energy", {}), {}, ())
+            comparison = compare(case, result)
+        text = render_markdown(case, run_folder.events, run_folder.run, comparison=comparison,
+                               figures=figures.is_dir())  # fmt: skip
+        replace_file(folder / "report.md", text)
+        replace_file(folder / "report.html", render_html(text, folder))
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    except OSError as error:
+        raise _fail(f"{folder}: {error.strerror}; give a run folder you can write to") from None
+    out.print(f"report rebuilt: {folder / 'report.md'}, {folder / 'report.html'}")
+
+
+@app.callback(invoke_without_command=True)
+def _version(
+    version: Annotated[bool, typer.Option("--version", help="Print the version and exit.")] = False,
+) -> None:
+    if version:
+        out.print(f"oscillator {__version__}")
+        raise typer.Exit(0)
+
+
+def main() -> None:
+    """Entry point of the ``oscillator`` command."""
+    app()

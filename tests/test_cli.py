@@ -1,0 +1,273 @@
+"""The ``oscillator`` command, driven through typer's CliRunner: every command, every bad input."""
+
+import json
+import os
+import textwrap
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from oscillator import Event, load_case, simulate
+from oscillator.cli import app
+from oscillator.output import read_events_csv
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def instance_3_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("runs") / "i3"
+    result = invoke("run", "instance-3", "--out", folder)
+    assert result.exit_code == 0, result.stderr
+    return folder, result
+
+
+def assert_refused(result, *fragments, folder=None):
+    """Exit 2, one line on stderr naming the field, no traceback, nothing written."""
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    message = result.stderr.strip()
+    assert message.startswith("error:") and "\n" not in message, message
+    assert "Traceback" not in result.stdout + result.stderr
+    for fragment in fragments:
+        assert fragment in message, message
+    if folder is not None:
+        assert not folder.exists()
+        assert not [p for p in folder.parent.iterdir() if p.name.startswith(f".{folder.name}")]
+
+
+# ----------------------------------------------------------------------------- commands
+
+
+def test_list_names_every_case_with_its_title():
+    result = invoke("list")
+    assert result.exit_code == 0
+    for i in range(1, 6):
+        assert f"instance-{i}" in result.stdout
+    assert "grazes" in result.stdout
+
+
+def test_show_prints_parameters_start_and_expected_events():
+    result = invoke("show", "instance-2")
+    assert result.exit_code == 0
+    assert "mu_k" in result.stdout and "0.15" in result.stdout
+    assert "t0 = 3.0 s" in result.stdout and "expected events" in result.stdout and "3.813" in result.stdout
+
+
+def test_run_writes_every_file(instance_3_run):
+    folder, result = instance_3_run
+    names = {p.name for p in folder.iterdir()}
+    assert {"events.csv", "events.parquet", "trajectory.parquet", "case.toml", "run.json", "figures",
+            "report.md", "report.html"} <= names  # fmt: skip
+    figures = {p.name for p in (folder / "figures").iterdir()}
+    for panel in ("a-displacement", "b-velocity", "c-phase", "d-forces"):
+        assert {f"fig-{panel}.png", f"fig-{panel}.svg"} <= figures
+    assert "left_contact_onset" in result.stdout and "6/6" in result.stdout
+
+
+def test_written_tables_read_back_equal_to_the_result(instance_3_run):
+    folder, _ = instance_3_run
+    expected = simulate("instance-3").events
+    from_parquet = pd.read_parquet(folder / "events.parquet")
+    pd.testing.assert_frame_equal(from_parquet, expected)
+    from_csv = read_events_csv(folder / "events.csv")
+    assert list(from_csv.columns) == list(expected.columns)
+    numeric = expected.select_dtypes("number").columns
+    np.testing.assert_array_equal(from_csv[numeric].to_numpy(), expected[numeric].to_numpy())  # exact round trip
+    for column in Event.text_columns():
+        assert from_csv[column].tolist() == expected[column].tolist(), column
+    trajectory = pd.read_parquet(folder / "trajectory.parquet")
+    pd.testing.assert_frame_equal(trajectory, simulate("instance-3").trajectory)
+
+
+def test_case_toml_repeats_the_run_exactly(instance_3_run, tmp_path):
+    folder, _ = instance_3_run
+    again = simulate(folder / "case.toml")
+    pd.testing.assert_frame_equal(again.events, pd.read_parquet(folder / "events.parquet"))
+    assert load_case(folder / "case.toml").expected == load_case("instance-3").expected
+
+
+def test_run_json_records_versions_settings_and_audit(instance_3_run):
+    folder, _ = instance_3_run
+    info = json.loads((folder / "run.json").read_text())
+    assert info["status"] == "complete" and info["case"] == "instance-3"
+    assert info["versions"]["scikit-sundae"] and info["versions"]["oscillator"]
+    assert info["solver"]["rtol"] == 1e-11 and info["counts"]["events"] == 8
+    assert abs(info["energy"]["residual"]) < 1e-6 and info["wall_time"] > 0
+    assert info["check"] == {"expected": 6, "within_tolerance": 6}
+
+
+def test_report_tells_the_run_as_a_transition_log(instance_3_run):
+    folder, _ = instance_3_run
+    text = (folder / "report.md").read_text()
+    assert "t = 3.0214 s — left contact starts on ∂Ω15(1)" in text and "(Theorem 5.8, Eq. 5.50)" in text
+    assert "## Time in each domain" in text and "## Energy audit" in text and "## Comparison with the article" in text
+    html = (folder / "report.html").read_text()
+    assert html.count("data:image/png;base64,") == 4 and "<table>" in html and "figures/" not in html
+
+
+def test_run_options(tmp_path):
+    folder = tmp_path / "quiet"
+    result = invoke("run", "instance-1", "--out", folder, "--format", "csv", "--no-plots", "--no-report", "--quiet",
+                    "--t-end", "1.5", "--set", "Omega=1.7", "--set", "P1=pi/8")  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.strip() == str(folder)
+    assert {p.name for p in folder.iterdir()} == {"events.csv", "trajectory.parquet", "case.toml", "run.json"}
+    case = load_case(folder / "case.toml")
+    assert case.parameters.Omega == 1.7 and case.t_end == 1.5
+
+
+def test_default_output_folder_is_under_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke("run", "instance-1", "--no-plots", "--no-report", "--quiet")
+    assert result.exit_code == 0
+    (folder,) = (tmp_path / "runs").iterdir()
+    assert folder.name.startswith("instance-1-") and (folder / "events.parquet").exists()
+
+
+@pytest.mark.parametrize("name", [f"instance-{i}" for i in range(1, 6)])
+def test_check_passes_for_the_instances(name):
+    result = invoke("check", name)
+    assert result.exit_code == 0, result.stdout + result.stderr
+    assert "within tolerance" in result.stdout
+
+
+def test_check_fails_when_a_time_is_out_of_tolerance():
+    result = invoke("check", "instance-3", "--set", "x1=3.6")
+    assert result.exit_code == 1
+    assert "out of tolerance" in result.stderr
+
+
+def test_report_rebuilds_from_the_folder(instance_3_run):
+    folder, _ = instance_3_run
+    before = (folder / "report.md").read_text()
+    (folder / "report.md").unlink()
+    (folder / "report.html").unlink()
+    result = invoke("report", folder)
+    assert result.exit_code == 0, result.stderr
+    assert (folder / "report.md").read_text() == before and (folder / "report.html").exists()
+
+
+def test_report_of_a_csv_only_run_without_figures(tmp_path):
+    folder = tmp_path / "csv"
+    assert invoke("run", "instance-2", "--out", folder, "--format", "csv", "--no-plots", "--quiet").exit_code == 0
+    result = invoke("report", folder)
+    assert result.exit_code == 0, result.stderr
+    assert "m2 grazes ∂Ω12(2) in Ω1(2)" in (folder / "report.md").read_text()
+    assert (folder / "figures").is_dir()  # missing figures are drawn from the trajectory
+
+
+def test_help_has_examples():
+    result = invoke("run", "--help")
+    assert result.exit_code == 0 and "oscillator run instance-3" in result.stdout
+
+
+# ----------------------------------------------------------------------------- bad input
+
+
+def test_unknown_case_suggests_the_closest(tmp_path):
+    assert_refused(invoke("run", "instanse-3", "--out", tmp_path / "x"), "did you mean 'instance-3'",
+                   folder=tmp_path / "x")  # fmt: skip
+
+
+def test_unknown_parameter_in_set_suggests(tmp_path):
+    assert_refused(invoke("run", "instance-1", "--set", "Omgea=1.7", "--out", tmp_path / "x"),
+                   "'Omgea'", "did you mean 'Omega'", folder=tmp_path / "x")  # fmt: skip
+
+
+def test_unknown_parameter_in_a_file_suggests(tmp_path):
+    text = (load_case("instance-1").source).read_text().replace("mu_k = 0.1", "mu_kk = 0.1")
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert_refused(invoke("run", path, "--out", tmp_path / "x"), "mu_kk", "did you mean 'mu_k'", folder=tmp_path / "x")
+
+
+@pytest.mark.parametrize(
+    ("assignment", "fragments"),
+    [
+        ("m1=abc", ["m1", "not a number"]),  # wrong type
+        ("m1=inf", ["m1", "not a number"]),  # non-finite
+        ("K1=1e999", ["K1", "finite"]),  # overflows to inf
+        ("m1=0", ["m1 must be > 0"]),  # out of range
+        ("mu_s=0.01", ["mu_s must be >= mu_k"]),
+        ("max_events=2.5", ["max_events", "whole number"]),
+        ("Omega", ["NAME=VALUE"]),
+    ],
+)
+def test_bad_values_are_refused(tmp_path, assignment, fragments):
+    folder = tmp_path / "x"
+    assert_refused(invoke("run", "instance-1", "--set", assignment, "--out", folder), *fragments, folder=folder)
+
+
+def test_end_before_start_is_refused(tmp_path):
+    assert_refused(invoke("run", "instance-1", "--t-end", "0.5", "--out", tmp_path / "x"), "t_end",
+                   folder=tmp_path / "x")  # fmt: skip
+
+
+def test_malformed_toml_gives_line_and_column(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text(
+        textwrap.dedent("""\
+        [parameters]
+        m1 = 1.0
+        m2 = = 2
+    """)
+    )
+    assert_refused(invoke("run", path, "--out", tmp_path / "x"), "malformed TOML", "line 3", "column",
+                   folder=tmp_path / "x")  # fmt: skip
+
+
+def test_unwritable_output_folder_is_refused_before_running(tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    os.chmod(locked, 0o500)
+    try:
+        if os.access(locked, os.W_OK):  # root ignores permissions: use a path under a file instead
+            target = tmp_path / "a-file" / "x"
+            (tmp_path / "a-file").write_text("")
+        else:
+            target = locked / "x"
+        assert_refused(invoke("run", "instance-1", "--out", target), "--out", "choose a writable folder")
+        assert not target.exists()
+    finally:
+        os.chmod(locked, 0o700)
+
+
+def test_existing_output_folder_is_never_overwritten(tmp_path):
+    (tmp_path / "x").mkdir()
+    (tmp_path / "x" / "keep.txt").write_text("precious")
+    result = invoke("run", "instance-1", "--out", tmp_path / "x")
+    assert result.exit_code == 2 and "exists already" in result.stderr
+    assert (tmp_path / "x" / "keep.txt").read_text() == "precious"
+
+
+def test_bad_format_is_refused(tmp_path):
+    assert_refused(invoke("run", "instance-1", "--format", "xlsx", "--out", tmp_path / "x"), "--format",
+                   folder=tmp_path / "x")  # fmt: skip
+
+
+def test_a_failure_while_writing_leaves_no_half_written_folder(tmp_path, monkeypatch):
+    def broken(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("oscillator.output.case_to_toml", broken)
+    folder = tmp_path / "x"
+    with pytest.raises(OSError):
+        runner.invoke(app, ["run", "instance-1", "--out", str(folder), "--no-plots"], catch_exceptions=False)
+    assert not folder.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_report_of_a_folder_that_is_no_run(tmp_path):
+    assert_refused(invoke("report", tmp_path), "not a run folder")
+
+
+def test_check_without_expected_events(tmp_path):
+    path = tmp_path / "plain.toml"
+    text = load_case("instance-1").source.read_text()
+    path.write_text(text[: text.index("[[expected]]")])
+    assert_refused(invoke("check", path), "no [[expected]] events")
