@@ -46,3 +46,27 @@ def test_docstring_examples_run():
         outcome = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         failed, tested = failed + outcome.failed, tested + outcome.attempted
     assert tested >= 2 and failed == 0
+
+
+def test_the_case_file_example_loads_and_runs(tmp_path):
+    from oscillator import load_case, simulate
+
+    text = (ROOT / "docs" / "cases.md").read_text(encoding="utf-8")
+    block = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    path = tmp_path / "example.toml"
+    path.write_text(block, encoding="utf-8")
+    case = load_case(path)
+    assert case.parameters.phi2 == __import__("math").pi / 4 and case.expected[0].kind == "sliding_vanish"
+    assert len(simulate(case, t_end=2.0).events) >= 1
+
+
+def test_error_lines_quoted_in_the_cli_guide_are_what_the_command_prints():
+    from typer.testing import CliRunner
+
+    from oscillator.cli import app
+
+    guide = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    for args in (["run", "instance-1", "--set", "Omgea=1.7"], ["run", "instance-1", "--set", "mu_s=0.01"]):
+        printed = CliRunner().invoke(app, args).stderr.strip()
+        quoted = printed.split(" (")[0] if "Omgea" in printed else printed
+        assert quoted in guide, printed
