@@ -66,3 +66,9 @@ def test_a_long_rest_under_forcing_is_not_a_stall(build):
     result = simulate(case, record_trajectory=False)
     assert result.events.empty
     assert result.stats["root_returns"] >= 399
+
+
+def test_progress_is_reported_with_increasing_times():
+    seen = []
+    simulate("instance-3", progress=seen.append)
+    assert len(seen) > 100 and seen == sorted(seen) and seen[-1] == 4.0
