@@ -93,6 +93,8 @@ def simulate(
     [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
     """
     case = resolve_case(case, t_end=t_end, **overrides)
-    supervisor = Supervisor(case.parameters, case.options, t_eval=t_eval, record_trajectory=record_trajectory)
+    supervisor = Supervisor(
+        case.parameters, case.options, t_eval=t_eval, record_trajectory=record_trajectory, progress=progress
+    )
     record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
     return Result.from_record(case, record)
