@@ -32,8 +32,8 @@ def test_without_the_extremum_roots_it_would_be_missed(brief_excursion, monkeypa
     case, leave = brief_excursion
     original = detection.root_values
 
-    def without_extrema(t, y, p, mode, out=None):
-        g = original(t, y, p, mode, out)
+    def without_extrema(t, y, p, mode, out=None, **options):
+        g = original(t, y, p, mode, out, **options)
         g[detection.Root.EXTREMUM_1] = 1.0
         return g
 

@@ -8,10 +8,17 @@ events it returns, and restarts CVODE with the next mode's fields.
 
 The state carries four quadratures besides ``(x1, v1, x2, v2)``: the work of the forcing and of
 the feedback and the losses in the dampers and to friction (:mod:`oscillator.energy`).
+
+CVODE integrates in a local time ``tau = t - t_ref`` with ``t_ref`` moved to the current time at
+every restart.  CVODE locates a root to about ``100 eps max(|tau|, |h|)``; in absolute time that
+would grow with ``t``, and with it the G-functions' values at their roots (1e-9 m/s in a velocity
+after 940 s of Instance 1).  The fields themselves are evaluated at ``t_ref + tau``.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import time
 from collections.abc import Callable
@@ -31,8 +38,9 @@ from oscillator.switching import Resolution, initial_mode, resolve
 
 __all__ = ["RunRecord", "Supervisor"]
 
-#: CVODE's return flag (scikit-sundae ``status``) for a root.
+#: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
 _ROOT_RETURN = 2
+_TSTOP_RETURN = 1
 #: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" when a root function is
 #: exactly 0.0 at the root it just returned and still 0.0 a rounding step later (a difference of
 #: two O(1) velocities that change by less than an ulp); a restart at the root clears it.
@@ -94,6 +102,10 @@ class Supervisor:
         self.record_trajectory = record_trajectory
         self.progress = progress
         self._solvers: dict[Mode, tuple[CVODE, object]] = {}
+        self._t_ref = 0.0  # CVODE's time is tau = t - _t_ref
+        # scikit-sundae prints CVODE's error messages to stdout; they are caught here and told
+        # in the library's own error when the solver fails.
+        self._solver_output = io.StringIO()
 
     # ----------------------------------------------------------------- CVODE problems per mode
 
@@ -103,7 +115,8 @@ class Supervisor:
             return self._solvers[mode]
         p = self.params
 
-        def rhs(t: float, y: np.ndarray, yp: np.ndarray) -> None:
+        def rhs(tau: float, y: np.ndarray, yp: np.ndarray) -> None:
+            t = self._t_ref + tau
             a1, a2 = accelerations(t, y, p, mode)
             yp[0] = y[1]
             yp[1] = a1
@@ -111,8 +124,11 @@ class Supervisor:
             yp[3] = a2
             yp[4:8] = powers(t, y, p, mode)
 
-        def roots(t: float, y: np.ndarray, g: np.ndarray) -> None:
-            root_values(t, y, p, mode, out=g)
+        step = self.options.max_step_fraction * p.period
+        near = self.options.grazing_displacement_tolerance
+
+        def roots(tau: float, y: np.ndarray, g: np.ndarray) -> None:
+            root_values(self._t_ref + tau, y, p, mode, out=g, step=step, near=near)
 
         roots.direction = root_directions(mode)
         roots.terminal = [True] * NUM_ROOTS
@@ -121,7 +137,7 @@ class Supervisor:
             method="Adams",
             rtol=self.options.rtol,
             atol=self.options.atol,
-            max_step=self.options.max_step_fraction * p.period,
+            max_step=step,
             max_num_steps=self.options.max_num_steps,
             eventsfn=roots,
             num_events=NUM_ROOTS,
@@ -175,15 +191,23 @@ class Supervisor:
 
         while t < t_end:
             solver, roots = self._problem(mode)
-            solver.init_step(t, y)
+            self._t_ref = t
+            self._solver_output.seek(0)
+            self._solver_output.truncate()
+            solver.init_step(0.0, y)
             record.restarts += 1
             after_root, stalls, last_root = False, 0, -math.inf
             while True:
                 on_grid = grid is not None and grid_index < grid.size
                 target = grid[grid_index] if on_grid else t_end
-                out = solver.step(target, method="onestep" if grid is None else "normal", tstop=t_end)
+                method = "onestep" if grid is None else "normal"
+                with contextlib.redirect_stdout(self._solver_output):
+                    out = solver.step(target - self._t_ref, method=method, tstop=t_end - self._t_ref)
                 if out.status == _CLOSE_ROOTS and after_root:
-                    solver.init_step(t, y)
+                    self._solver_output.seek(0)
+                    self._solver_output.truncate()
+                    self._t_ref = t
+                    solver.init_step(0.0, y)
                     record.restarts += 1
                     after_root = False
                     continue
@@ -191,7 +215,8 @@ class Supervisor:
                     record.rhs_evaluations += out.nfev
                     raise self._failure(out, t, y, mode)
                 record.steps += 1
-                t = float(out.t)
+                reached = out.status == _TSTOP_RETURN or (on_grid and out.status == 0)
+                t = (t_end if out.status == _TSTOP_RETURN else target) if reached else self._t_ref + float(out.t)
                 y = np.array(out.y, dtype=float)
                 if self.progress is not None:
                     self.progress(t)
@@ -259,9 +284,11 @@ class Supervisor:
     def _failure(self, out, t: float, y: np.ndarray, mode: Mode) -> OscillatorError:
         """CVODE's failure, told with the last point it reached (its output is undefined then)."""
         x1, v1, x2, v2 = (float(v) for v in y[:4])
+        said = " ".join(self._solver_output.getvalue().split())
+        detail = f"{out.message}; CVODE: {said}" if said else out.message
         return OscillatorError(
             f"CVODE failed after t = {t:.10g} s with flag {out.status} "
-            f"({out.message}) in domains m1: {mode.domain1}, m2: {mode.domain2} "
+            f"({detail}) in domains m1: {mode.domain1}, m2: {mode.domain2} "
             f"(state {mode.system_state}; x1={x1:.6g}, v1={v1:.6g}, x2={x2:.6g}, v2={v2:.6g}); "
             f"loosen rtol/atol or raise max_num_steps",
             field="rtol",
