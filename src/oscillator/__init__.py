@@ -7,7 +7,7 @@ The model, domains, G-functions and switching theorems are those of the article 
 from oscillator._errors import OscillatorError
 from oscillator.cases import Case, ExpectedEvent, case_names, load_case
 from oscillator.events import Event, EventKind
-from oscillator.parameters import InitialState, Parameters, SolverOptions
+from oscillator.parameters import InitialState, Parameters, SolverOptions, SweepSettings
 from oscillator.phase_space import Mode
 from oscillator.result import Result
 from oscillator.simulation import resolve_case, simulate
@@ -23,6 +23,7 @@ __all__ = [
     "Parameters",
     "Result",
     "SolverOptions",
+    "SweepSettings",
     "case_names",
     "load_case",
     "resolve_case",

@@ -22,7 +22,7 @@ from typing import Any
 
 from oscillator._errors import OscillatorError
 from oscillator.events import EventKind
-from oscillator.parameters import InitialState, Parameters, SolverOptions
+from oscillator.parameters import InitialState, Parameters, SolverOptions, SweepSettings
 
 __all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "parse_value"]
 
@@ -116,6 +116,7 @@ class Case:
     title: str = ""
     description: str = ""
     expected: tuple[ExpectedEvent, ...] = ()
+    sweep: SweepSettings | None = None
     source: Path | None = None
 
     def __post_init__(self) -> None:
@@ -197,7 +198,7 @@ _RUN_KEYS = ("t_end", *SolverOptions.names())
 
 def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path | None = None) -> Case:
     """Build a :class:`Case` from the parsed contents of a case file."""
-    known = {"title", "description", "parameters", "initial", "run", "expected"}
+    known = {"title", "description", "parameters", "initial", "run", "expected", "sweep"}
     for key in data:
         if key not in known:
             raise OscillatorError(f"{source}: unknown top-level key {key!r}{_suggest(key, sorted(known))}", field=key)
@@ -216,6 +217,7 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
     except OscillatorError as exc:
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
     expected = tuple(_expected(item, source) for item in data.get("expected", []))
+    sweep = _sweep(_table(data, "sweep", source), source) if "sweep" in data else None
     try:
         return Case(
             name=name,
@@ -226,8 +228,33 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
             title=str(data.get("title", "")),
             description=str(data.get("description", "")),
             expected=expected,
+            sweep=sweep,
             source=path,
         )
+    except OscillatorError as exc:
+        raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
+
+
+#: Case-file keys of ``[sweep]`` and the SweepSettings fields they fill.
+_SWEEP_KEYS = {"from": "start", "to": "stop"} | {n: n for n in SweepSettings.names() if n not in ("start", "stop")}
+
+
+def _sweep(table: dict, source: str) -> SweepSettings:
+    values = {}
+    for key, raw in table.items():
+        if key not in _SWEEP_KEYS:
+            raise OscillatorError(
+                f"{source}: unknown sweep setting {key!r}{_suggest(key, list(_SWEEP_KEYS))}", field=key
+            )
+        values[_SWEEP_KEYS[key]] = raw if key in ("param",) else parse_value(raw, field=f"sweep.{key}")
+    for name in ("steps", "transient", "record", "mass", "max_period"):
+        if name in values and isinstance(values[name], float) and values[name].is_integer():
+            values[name] = int(values[name])
+    missing = [k for k in ("param", "from", "to") if _SWEEP_KEYS[k] not in values]
+    if missing:
+        raise OscillatorError(f"{source}: [sweep] needs {', '.join(missing)}", field="sweep")
+    try:
+        return SweepSettings(**values)
     except OscillatorError as exc:
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
 
@@ -313,4 +340,7 @@ def case_to_toml(case: Case) -> str:
         expected.append(entry)
     if expected:
         data["expected"] = expected
+    if case.sweep is not None:
+        settings = dataclasses.asdict(case.sweep)
+        data["sweep"] = {key: settings[name] for key, name in _SWEEP_KEYS.items()}
     return tomli_w.dumps(data, multiline_strings=True)

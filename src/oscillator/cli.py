@@ -7,6 +7,7 @@ when a time is outside its tolerance.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -15,17 +16,26 @@ from typing import Annotated
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Table
 
 from oscillator import OscillatorError, __version__, case_names, load_case
 from oscillator.cases import Case, parse_value
 from oscillator.output import FORMATS, check_output_folder, default_output_folder, read_run, replace_file, write_run
-from oscillator.parameters import SolverOptions
-from oscillator.plotting import write_figures
+from oscillator.parameters import SolverOptions, SweepSettings
+from oscillator.plotting import write_figures, write_sweep_figures
 from oscillator.report import render_html, render_markdown
 from oscillator.reproduction import compare
 from oscillator.simulation import resolve_case, simulate
+from oscillator.sweep import locate as locate_change
+from oscillator.sweep import read_sweep, run_sweep, sliding_ranges
 
 __all__ = ["app", "main"]
 
@@ -299,6 +309,149 @@ def report(folder: Annotated[Path, typer.Argument(help="A folder written by `osc
     except OSError as error:
         raise _fail(f"{folder}: {error.strerror}; give a run folder you can write to") from None
     out.print(f"report rebuilt: {folder / 'report.md'}, {folder / 'report.html'}")
+
+
+def _sweep_settings(c: Case, param, start, stop, steps, transient, record) -> SweepSettings:
+    """The case's ``[sweep]`` table with the command line's changes."""
+    base = c.sweep
+    if base is None and (param is None or start is None or stop is None):
+        raise OscillatorError(
+            f"case {c.name!r} has no [sweep] table; give --param NAME --from A --to B", field="--param"
+        )
+    changes = {k: v for k, v in dict(param=param, start=start, stop=stop, steps=steps, transient=transient,
+                                     record=record).items() if v is not None}  # fmt: skip
+    if base is None:
+        return SweepSettings(**changes)
+    return dataclasses.replace(base, **changes)
+
+
+@app.command()
+def sweep(
+    case: Annotated[str, typer.Argument(help="A scene with a [sweep] table (bifurcation-omega, ...) or any case.")],
+    param: Annotated[str | None, typer.Option("--param", help="The swept parameter (default: the case's).")] = None,
+    start: Annotated[float | None, typer.Option("--from", help="First value.")] = None,
+    stop: Annotated[float | None, typer.Option("--to", help="Last value.")] = None,
+    steps: Annotated[int | None, typer.Option("--steps", help="Number of values (default 111).")] = None,
+    transient: Annotated[
+        int | None, typer.Option("--transient", help="Forcing periods before recording (100).")
+    ] = None,
+    record: Annotated[int | None, typer.Option("--record", help="Forcing periods recorded (50).")] = None,
+    workers: Annotated[int | None, typer.Option("--workers", help="Local processes (default: every core).")] = None,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler.")
+    ] = None,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", help="Output folder; the same folder again resumes the sweep.")
+    ] = None,
+    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the diagrams.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")] = False,
+) -> None:
+    """Sweep a parameter and tabulate switching points, Poincaré points and a summary per value.
+
+    Writes `switches.parquet`, `poincare.parquet`, `summary.parquet` (each with the swept parameter
+    as a column) and Fig. 14-style diagrams. Interrupted or killed, the same command with the same
+    `--out` resumes where it stopped.
+
+    Examples:
+
+    * `oscillator sweep bifurcation-omega --out runs/omega`
+    * `oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2`
+    * `oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10`
+    * `oscillator sweep bifurcation-omega --scheduler tcp://10.0.0.5:8786 --out runs/omega`
+    """
+    try:
+        resolved = _case(case, None, set_)
+        settings = _sweep_settings(resolved, param, start, stop, steps, transient, record)
+        if workers is not None and workers < 1:
+            raise OscillatorError(f"--workers must be >= 1, got {workers}", field="--workers")
+        folder = out_dir if out_dir is not None else default_output_folder(f"{resolved.name}-sweep")
+        if quiet:
+            outcome = run_sweep(resolved, settings, folder, workers=workers, scheduler=scheduler)
+        else:
+            columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                       TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+            with Progress(*columns, console=err, transient=True) as bar:
+                task = bar.add_task(f"{resolved.name}: {settings.param}", total=settings.steps, rate="")
+                began = time.monotonic()
+                first: list[int] = []
+
+                def report(done: int, total: int) -> None:
+                    first.append(done) if not first else None
+                    new = done - first[0]
+                    rate = f"{new / (time.monotonic() - began):.2f} points/s" if new else ""
+                    bar.update(task, completed=done, total=total, rate=rate)
+
+                outcome = run_sweep(resolved, settings, folder, workers=workers, scheduler=scheduler, progress=report)
+        tables = read_sweep(folder)
+        if not no_plots:
+            write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=resolved.name)
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    except KeyboardInterrupt:
+        raise _fail("interrupted; the points finished so far are kept: run the same command to resume", 130) from None
+    if quiet:
+        out.print(str(folder))
+        return
+    summary = tables["summary"]
+    ranges = sliding_ranges(summary, settings.param)
+    out.print(
+        f"[bold]{resolved.name}[/]: {settings.param} from {settings.start:g} to {settings.stop:g} "
+        f"({settings.steps} values, {settings.transient} + {settings.record} periods); "
+        f"{outcome.computed} computed, {outcome.resumed} resumed, {outcome.failed} failed, {outcome.wall_time:.1f} s"
+    )
+    if ranges:
+        for a, b in ranges:
+            out.print(
+                f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]"
+            )
+    else:
+        out.print(f"m{settings.mass} never slides in this range")
+    periods = summary[summary.status == "ok"].period.value_counts().sort_index()
+    out.print("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
+    out.print(f"written to [bold]{folder}[/]")
+
+
+@app.command()
+def locate(
+    case: Annotated[str, typer.Argument(help="A scene or case (its [sweep] table gives the defaults).")],
+    between: Annotated[
+        tuple[float, float], typer.Option("--between", help="Two parameter values on either side of a change.")
+    ],
+    what: Annotated[str, typer.Option("--what", help="What changes: sliding, grazing or period.")] = "sliding",
+    param: Annotated[str | None, typer.Option("--param", help="The parameter (default: the case's).")] = None,
+    transient: Annotated[int | None, typer.Option("--transient", help="Forcing periods before recording.")] = None,
+    record: Annotated[int | None, typer.Option("--record", help="Forcing periods recorded.")] = None,
+    tolerance: Annotated[float, typer.Option("--tolerance", help="Width of the final bracket.")] = 1e-8,
+    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+) -> None:
+    """Find where the sweep's summary changes between two values, to 1e-8 in the parameter.
+
+    Bisection; prints the bracket and, on both sides, the summary and the switching events that
+    show the change.
+
+    Example: `oscillator locate bifurcation-omega --between 1.53 1.535 --what sliding`
+    """
+    try:
+        resolved = _case(case, None, set_)
+        lo, hi = between
+        settings = _sweep_settings(resolved, param, lo, hi, None, transient, record)
+        found = locate_change(resolved, settings, what, (lo, hi), tolerance=tolerance)
+    except OscillatorError as error:
+        raise _fail(str(error)) from None
+    out.print(
+        f"[bold]{what}[/] changes at {found.param} = {found.value:.10f} "
+        f"(between {found.lower:.10f} and {found.upper:.10f}, width {found.width:.1e}, {found.iterations} bisections)"
+    )
+    for side, summary, events in (("below", found.below, found.evidence_below),
+                                  ("above", found.above, found.evidence_above)):  # fmt: skip
+        row = summary.iloc[0]
+        kinds = ", ".join(f"{k}: {n}" for k, n in events.kind.value_counts().items()) or "none"
+        out.print(
+            f"{side} ({found.param} = {row[found.param]:.10f}): sliding {bool(row.sliding)}, "
+            f"period {int(row.period)}, {row.switches_per_period:g} switches/period, "
+            f"rest {row.rest_time_per_period:.3g} s/period; events: {kinds}"
+        )
 
 
 @app.callback(invoke_without_command=True)

@@ -14,7 +14,7 @@ from typing import Any
 
 from oscillator._errors import OscillatorError
 
-__all__ = ["InitialState", "Parameters", "SolverOptions"]
+__all__ = ["InitialState", "Parameters", "SolverOptions", "SweepSettings"]
 
 
 def _require_finite(owner: str, name: str, value: Any) -> float:
@@ -242,6 +242,73 @@ class SolverOptions:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise OscillatorError(f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+
+@dataclass(frozen=True, slots=True)
+class SweepSettings:
+    """A one-parameter sweep (Sec. 7): the values, the transient and the recorded window.
+
+    Parameters
+    ----------
+    param : str
+        The swept parameter, one of :meth:`Parameters.names`.
+    start, stop : float
+        The first and last value (``from`` and ``to`` in case files).
+    steps : int
+        Number of values, evenly spaced from ``start`` to ``stop`` (111 by default).
+    transient, record : int
+        Forcing periods run before recording (100) and recorded (50).
+    mass : int
+        The mass whose switching points are collected (2: m2's sliding on ∂Ω12(2)).
+    period_tolerance : float
+        Poincaré points closer than this (relative) count as the same point (period-n).
+    max_period : int
+        The largest period n looked for.
+    """
+
+    param: str
+    start: float
+    stop: float
+    steps: int = 111
+    transient: int = 100
+    record: int = 50
+    mass: int = 2
+    period_tolerance: float = 1e-6
+    max_period: int = 16
+
+    def __post_init__(self) -> None:
+        owner = "SweepSettings"
+        if self.param not in Parameters.names():
+            import difflib
+
+            close = difflib.get_close_matches(str(self.param), Parameters.names(), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise OscillatorError(
+                f"{owner}.param: {self.param!r} is not a parameter{hint} (one of {', '.join(Parameters.names())})",
+                field="param",
+            )
+        for name in ("start", "stop", "period_tolerance"):
+            object.__setattr__(self, name, _require_finite(owner, name, getattr(self, name)))
+        if self.period_tolerance <= 0:
+            raise OscillatorError(f"{owner}.period_tolerance must be > 0", field="period_tolerance")
+        for name, low in (("steps", 1), ("transient", 0), ("record", 1), ("max_period", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise OscillatorError(f"{owner}.{name} must be a whole number >= {low}, got {value!r}", field=name)
+        if self.mass not in (1, 2):
+            raise OscillatorError(f"{owner}.mass must be 1 or 2, got {self.mass!r}", field="mass")
+
+    @property
+    def values(self) -> tuple[float, ...]:
+        """The swept values, evenly spaced and including both ends."""
+        if self.steps == 1:
+            return (self.start,)
+        step = (self.stop - self.start) / (self.steps - 1)
+        return (*(self.start + i * step for i in range(self.steps - 1)), self.stop)
 
     @classmethod
     def names(cls) -> tuple[str, ...]:

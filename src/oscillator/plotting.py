@@ -24,7 +24,7 @@ from oscillator.fields import flow_barrier_field, kinetic_field, non_friction_fo
 from oscillator.parameters import Parameters
 from oscillator.phase_space import contacts_of_state, velocity_sign
 
-__all__ = ["FIGURES", "force_histories", "write_figures"]
+__all__ = ["FIGURES", "force_histories", "write_figures", "write_sweep_figures"]
 
 #: Figure files (without suffix) and what each shows.
 FIGURES = {
@@ -241,4 +241,57 @@ def write_figures(
             fig.savefig(path, dpi=110, bbox_inches="tight")
             written.append(path)
         plt.close(fig)
+    return written
+
+
+def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *, title: str = "") -> list[Path]:
+    """Fig. 14-style diagrams of a sweep, PNG and SVG.
+
+    ``fig-14-bifurcation``: the switching displacement and phase of the mass against the
+    parameter, coloured by kind, sliding ranges shaded; ``fig-14-poincare``: the Poincaré points.
+    """
+    directory.mkdir(parents=True, exist_ok=True)
+    switches, summary, poincare = tables["switches"], tables["summary"], tables["poincare"]
+    from oscillator.sweep import sliding_ranges
+
+    values = np.sort(summary[param].to_numpy())
+    half = 0.5 * np.min(np.diff(values)) if len(values) > 1 else 0.0
+    spans = [(a - half, b + half) for a, b in sliding_ranges(summary, param)]
+    written = []
+
+    fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    for ax, column, label in ((axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
+                              (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)")):  # fmt: skip
+        for i, (a, b) in enumerate(spans):
+            ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
+        for kind, rows in switches.groupby("kind"):
+            marker = _KIND_STYLE.get(kind, ("o", "white"))[0]
+            color = {"passable": "tab:blue", "sliding_onset": "tab:red", "sliding_vanish": "tab:green"}.get(
+                kind, "grey"
+            )
+            ax.scatter(rows[param], rows[column], s=6, marker=marker, color=color, label=kind.replace("_", " "))
+        ax.set(ylabel=label)
+        ax.legend(fontsize=8, loc="best", markerscale=2)
+    axes[-1].set(xlabel=f"{param}")
+    fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)")
+    fig.tight_layout()
+    for suffix in (".png", ".svg"):
+        path = directory / f"fig-14-bifurcation{suffix}"
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+        written.append(path)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    for ax, column in zip(axes, (f"x{mass}", f"v{mass}"), strict=True):
+        for a, b in spans:
+            ax.axvspan(a, b, color="tab:orange", alpha=0.15)
+        ax.scatter(poincare[param], poincare[column], s=4, color=_MASS_COLOR[mass])
+        ax.set(xlabel=param, ylabel=f"{column} at t0 + nT")
+    fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)")
+    fig.tight_layout()
+    for suffix in (".png", ".svg"):
+        path = directory / f"fig-14-poincare{suffix}"
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+        written.append(path)
+    plt.close(fig)
     return written
