@@ -11,8 +11,8 @@ import time
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import make_case
 
+from conftest import make_case
 from oscillator import OscillatorError, SweepSettings, load_case
 from oscillator.sweep import TABLES, detect_period, locate, read_sweep, run_point, run_sweep, sliding_ranges
 
