@@ -271,3 +271,45 @@ def test_check_without_expected_events(tmp_path):
     text = load_case("instance-1").source.read_text()
     path.write_text(text[: text.index("[[expected]]")])
     assert_refused(invoke("check", path), "no [[expected]] events")
+
+
+# ----------------------------------------------------------------------------- sweeps
+
+
+def test_sweep_writes_tables_and_diagrams_and_resumes(tmp_path):
+    folder = tmp_path / "sweep"
+    args = ["sweep", "bifurcation-omega", "--steps", "3", "--from", "1.58", "--to", "1.62", "--transient", "3",
+            "--record", "2", "--workers", "1", "--out", folder]  # fmt: skip
+    result = invoke(*args)
+    assert result.exit_code == 0, result.stderr
+    assert "3 computed, 0 resumed, 0 failed" in result.stdout and "m2 slides" in result.stdout
+    for name in ("switches", "poincare", "summary"):
+        assert pd.read_parquet(folder / f"{name}.parquet").columns[0] == "Omega"
+    assert {"fig-14-bifurcation.png", "fig-14-bifurcation.svg", "fig-14-poincare.png"} <= {
+        p.name for p in (folder / "figures").iterdir()
+    }
+    again = invoke(*args)
+    assert again.exit_code == 0 and "0 computed, 3 resumed" in again.stdout
+
+
+def test_sweep_of_a_case_without_a_sweep_table_needs_a_parameter(tmp_path):
+    assert_refused(invoke("sweep", "instance-1", "--out", tmp_path / "x"), "no [sweep] table", "--param")
+
+
+def test_sweep_refuses_bad_settings(tmp_path):
+    assert_refused(invoke("sweep", "bifurcation-q2", "--workers", "0", "--out", tmp_path / "x"), "--workers")
+    assert_refused(invoke("sweep", "instance-1", "--param", "Omgea", "--from", "1", "--to", "2",
+                          "--out", tmp_path / "y"), "did you mean 'Omega'")  # fmt: skip
+    assert_refused(invoke("sweep", "bifurcation-q2", "--steps", "0", "--out", tmp_path / "z"), "steps")
+
+
+def test_locate_prints_the_bracket_and_the_evidence():
+    result = invoke("locate", "bifurcation-omega", "--between", "1.3", "1.6", "--what", "sliding",
+                    "--transient", "3", "--record", "2", "--tolerance", "0.05")  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    assert "sliding changes at Omega = " in result.stdout
+    assert "below" in result.stdout and "above" in result.stdout and "sliding_onset" in result.stdout
+
+
+def test_locate_refuses_an_unknown_indicator():
+    assert_refused(invoke("locate", "bifurcation-omega", "--between", "1.3", "1.6", "--what", "chaos"), "--what")
