@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from oscillator import Event, load_case, simulate
+from oscillator import Event, SolverOptions, load_case, simulate
 from oscillator.cli import app
 from oscillator.output import read_events_csv
 
@@ -97,7 +97,7 @@ def test_run_json_records_versions_settings_and_audit(instance_3_run):
     info = json.loads((folder / "run.json").read_text())
     assert info["status"] == "complete" and info["case"] == "instance-3"
     assert info["versions"]["scikit-sundae"] and info["versions"]["oscillator"]
-    assert info["solver"]["rtol"] == 1e-11 and info["counts"]["events"] == 8
+    assert info["solver"]["rtol"] == SolverOptions().rtol and info["counts"]["events"] == 8
     assert abs(info["energy"]["residual"]) < 1e-6 and info["wall_time"] > 0
     assert info["check"] == {"expected": 6, "within_tolerance": 6}
 

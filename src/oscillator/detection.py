@@ -41,12 +41,14 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 
-from oscillator.fields import flow_barrier_field, kinetic_field, non_friction_force
-from oscillator.g_functions import flow_barrier_g
+import numpy as np
+from numba import njit
+
+from oscillator.fields import D1, Q1, Q2, D, barrier, coefficients, force_rates, forces, kinetic, non_friction_force
 from oscillator.parameters import Parameters
 from oscillator.phase_space import Mode
 
-__all__ = ["NUM_ROOTS", "Root", "mode_violation", "root_directions", "root_values"]
+__all__ = ["NUM_ROOTS", "Root", "mode_violation", "root_directions", "root_kernel", "root_values"]
 
 
 class Root(enum.IntEnum):
@@ -91,50 +93,65 @@ def root_directions(mode: Mode) -> list[int]:
     return directions
 
 
-def root_values(
-    t: float,
-    y: Sequence[float],
-    p: Parameters,
-    mode: Mode,
-    out: list[float] | None = None,
-    *,
-    step: float = 0.0,
-    near: float = 0.0,
-) -> list[float]:
-    """Evaluate every root function of the layout at ``(t, y)`` in ``mode``.
-
-    ``step`` is the largest step and ``near`` the grazing distance that set how close to the
-    left stop its extremum is watched.
-    """
-    g = out if out is not None else [1.0] * NUM_ROOTS
-    forces = non_friction_force(t, y, p, mode.left, mode.right)
-    for mass, base in _OFFSET.items():
-        s = mode.sign(mass)
-        force = forces[mass - 1]
-        if s:
-            g[base] = y[2 * (mass - 1) + 1]
-            g[base + 1] = kinetic_field(p, mass, s, force)
+@njit(cache=True)
+def root_kernel(t, y, g, c, s1, s2, left, right, step, near):  # pragma: no cover - compiled
+    """Fill ``g`` with the root functions of the layout; see :func:`root_values`."""
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    f1, f2 = forces(t, x1, v1, x2, v2, left, right, c)
+    a1 = kinetic(c, 1, s1, f1)
+    a2 = kinetic(c, 2, s2, f2)
+    for mass in (1, 2):
+        base = 0 if mass == 1 else 4
+        s = s1 if mass == 1 else s2
+        force = f1 if mass == 1 else f2
+        if s != 0:
+            g[base] = v1 if mass == 1 else v2
+            g[base + 1] = a1 if mass == 1 else a2
             g[base + 2] = 1.0
             g[base + 3] = 1.0
         else:
             g[base] = 1.0
             # With no forcing on it and no moving partner in contact, the force on a resting
             # mass is constant: its extremum is identically zero, so it is held off.
-            forced = (p.Q1 if mass == 1 else p.Q2) != 0.0
-            coupled = mode.left and not mode.resting(3 - mass)
-            g[base + 1] = flow_barrier_g(t, y, p, mode, mass, 1)[1] if forced or coupled else 1.0
-            g[base + 2] = flow_barrier_field(p, mass, +1, force)
-            g[base + 3] = flow_barrier_field(p, mass, -1, force)
-    g[Root.RIGHT_STOP] = y[0] - p.d1
-    g[Root.LEFT_STOP] = (y[0] - y[2]) + p.d
-    zdot1 = y[1] - y[3]
-    gap = g[Root.LEFT_STOP]
-    watched = not (mode.domain1 == 0 and mode.domain2 == 0)  # zdot1 = 0 identically at rest
+            forced = (c[Q1] if mass == 1 else c[Q2]) != 0.0
+            other_moves = (s2 if mass == 1 else s1) != 0
+            if forced or (left and other_moves):
+                rates = force_rates(t, x1, v1, x2, v2, left, right, a1 if mass == 2 else 0.0,
+                                    a2 if mass == 1 else 0.0, c)  # fmt: skip
+                g[base + 1] = rates[mass - 1]
+            else:
+                g[base + 1] = 1.0
+            g[base + 2] = barrier(c, mass, 1, force)
+            g[base + 3] = barrier(c, mass, -1, force)
+    g[8] = x1 - c[D1]
+    gap = (x1 - x2) + c[D]
+    g[9] = gap
+    zdot1 = v1 - v2
+    watched = not (s1 == 0 and s2 == 0)  # zdot1 = 0 identically while both rest
     if watched and abs(gap) > near:
-        a1 = kinetic_field(p, 1, mode.sign(1), forces[0])
-        a2 = kinetic_field(p, 2, mode.sign(2), forces[1])
         watched = abs(gap) <= near + 4.0 * (abs(zdot1) * step + abs(a1 - a2) * step * step)
-    g[Root.RELATIVE_VELOCITY] = zdot1 if watched else 1.0
+    g[10] = zdot1 if watched else 1.0
+
+
+def root_values(
+    t: float,
+    y: Sequence[float],
+    p: Parameters,
+    mode: Mode,
+    out: np.ndarray | None = None,
+    *,
+    step: float = 0.0,
+    near: float = 0.0,
+) -> np.ndarray:
+    """Evaluate every root function of the layout at ``(t, y)`` in ``mode``.
+
+    ``step`` is the largest step and ``near`` the grazing distance that set how close to the
+    left stop its extremum is watched.
+    """
+    g = out if out is not None else np.empty(NUM_ROOTS)
+    state = np.asarray(y, dtype=np.float64)
+    root_kernel(float(t), state, g, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right,
+                float(step), float(near))  # fmt: skip
     return g
 
 

@@ -17,10 +17,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from numba import njit
+
+from oscillator.fields import C1, C2, C3, C4, C5, M1, M2, MU_K, OMEGA, P1, P2, PHI1, PHI2, Q1, Q2, G, coefficients
 from oscillator.parameters import Parameters
 from oscillator.phase_space import Mode
 
-__all__ = ["POWER_NAMES", "mechanical_energy", "powers"]
+__all__ = ["POWER_NAMES", "mechanical_energy", "power_terms", "powers"]
 
 #: Names of the integrated work terms, in the order :func:`powers` returns them.
 POWER_NAMES = ("forcing", "feedback", "damping", "friction")
@@ -44,18 +47,22 @@ def mechanical_energy(y: Sequence[float], p: Parameters, left: bool, right: bool
     return energy
 
 
+@njit(cache=True)
+def power_terms(t, v1, v2, s1, s2, left, c):  # pragma: no cover - compiled
+    """``(forcing, feedback, damping loss, friction loss)``; see :func:`powers`."""
+    forcing = c[Q1] * math.sin(c[OMEGA] * t + c[PHI1]) * v1 + c[Q2] * math.sin(c[OMEGA] * t + c[PHI2]) * v2
+    feedback = -(c[P1] * s1 * v1 + c[P2] * s2 * v2)
+    damping = c[C1] * v1**2 + c[C2] * v1**4 + c[C4] * v2**2 + c[C5] * v2**4
+    if left:
+        damping += c[C3] * (v1 - v2) ** 2
+    friction = c[MU_K] * c[G] * (c[M1] * s1 * v1 + c[M2] * s2 * v2)
+    return forcing, feedback, damping, friction
+
+
 def powers(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[float, float, float, float]:
     """``(forcing, feedback, damping loss, friction loss)`` power (W) in a mode.
 
     Feedback ``-P_i s_i v_i`` and friction loss ``mu_k m_i g s_i v_i`` use the mode's velocity
     signs ``s_i``; both vanish for a resting mass.
     """
-    v1, v2 = y[1], y[3]
-    s1, s2 = mode.sign(1), mode.sign(2)
-    forcing = p.Q1 * math.sin(p.Omega * t + p.phi1) * v1 + p.Q2 * math.sin(p.Omega * t + p.phi2) * v2
-    feedback = -(p.P1 * s1 * v1 + p.P2 * s2 * v2)
-    damping = p.C1 * v1**2 + p.C2 * v1**4 + p.C4 * v2**2 + p.C5 * v2**4
-    if mode.left:
-        damping += p.C3 * (v1 - v2) ** 2
-    friction = p.mu_k * p.g * (p.m1 * s1 * v1 + p.m2 * s2 * v2)
-    return forcing, feedback, damping, friction
+    return power_terms(float(t), float(y[1]), float(y[3]), mode.sign(1), mode.sign(2), mode.left, coefficients(p))

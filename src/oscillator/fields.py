@@ -12,14 +12,19 @@ serves both, the contact terms being part of ``A_i``).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
 
 from oscillator.parameters import Parameters
 from oscillator.phase_space import Mode
 
 __all__ = [
     "accelerations",
+    "coefficients",
     "flow_barrier_field",
     "force_scale",
     "kinetic_field",
@@ -29,6 +34,72 @@ __all__ = [
     "state_derivative",
 ]
 
+# Each formula is written once, as a compiled (numba) scalar function of a parameter vector; the
+# Python functions below and the CVODE kernels (``oscillator.kernels``) all call these.
+# Positions in the vector: the order of Parameters.names().
+(M1, M2, C1, C2, C3, C4, C5, K1, K2, K3, K4, K5, K6, MU_K, MU_S, D, D1, Q1, Q2, OMEGA, PHI1, PHI2, P1, P2,
+ G) = range(25)  # fmt: skip
+
+
+@functools.lru_cache(maxsize=64)
+def coefficients(p: Parameters) -> np.ndarray:
+    """The parameters as the vector the compiled formulas take (read-only, cached)."""
+    vector = np.array([getattr(p, name) for name in Parameters.names()], dtype=np.float64)
+    vector.setflags(write=False)
+    return vector
+
+
+@njit(cache=True)
+def forces(t, x1, v1, x2, v2, left, right, c):  # pragma: no cover - compiled
+    """``(A1, A2)``, see :func:`non_friction_force`."""
+    f1 = c[Q1] * math.sin(c[OMEGA] * t + c[PHI1]) - c[K1] * x1 - c[K2] * x1**3 - c[C1] * v1 - c[C2] * v1**3
+    f2 = c[Q2] * math.sin(c[OMEGA] * t + c[PHI2]) - c[K4] * x2 - c[K5] * x2**3 - c[C4] * v2 - c[C5] * v2**3
+    if left:
+        contact = c[K3] * (x1 - x2 + c[D]) + c[C3] * (v1 - v2)
+        f1 -= contact
+        f2 += contact
+    if right:
+        f1 -= c[K6] * (x1 - c[D1])
+    return f1 / c[M1], f2 / c[M2]
+
+
+@njit(cache=True)
+def force_rates(t, x1, v1, x2, v2, left, right, a1, a2, c):  # pragma: no cover - compiled
+    """``(DA1, DA2)``, see :func:`non_friction_force_rate`."""
+    r1 = c[Q1] * c[OMEGA] * math.cos(c[OMEGA] * t + c[PHI1]) - (c[K1] + 3.0 * c[K2] * x1**2) * v1
+    r1 -= (c[C1] + 3.0 * c[C2] * v1**2) * a1
+    r2 = c[Q2] * c[OMEGA] * math.cos(c[OMEGA] * t + c[PHI2]) - (c[K4] + 3.0 * c[K5] * x2**2) * v2
+    r2 -= (c[C4] + 3.0 * c[C5] * v2**2) * a2
+    if left:
+        contact_rate = c[K3] * (v1 - v2) + c[C3] * (a1 - a2)
+        r1 -= contact_rate
+        r2 += contact_rate
+    if right:
+        r1 -= c[K6] * v1
+    return r1 / c[M1], r2 / c[M2]
+
+
+@njit(cache=True)
+def threshold(c, mass, static):  # pragma: no cover - compiled
+    """``mu g + p_i`` with ``mu = mu_s`` (static) or ``mu_k``: friction plus feedback per unit mass."""
+    mu = c[MU_S] if static else c[MU_K]
+    feedback = c[P1] / c[M1] if mass == 1 else c[P2] / c[M2]
+    return mu * c[G] + feedback
+
+
+@njit(cache=True)
+def kinetic(c, mass, sign, force):  # pragma: no cover - compiled
+    """``A_i - s (mu_k g + p_i)``, or 0 at rest; see :func:`kinetic_field`."""
+    if sign == 0:
+        return 0.0
+    return force - sign * threshold(c, mass, False)
+
+
+@njit(cache=True)
+def barrier(c, mass, sign, force):  # pragma: no cover - compiled
+    """``A_i - s (mu_s g + p_i)``; see :func:`flow_barrier_field`."""
+    return force - sign * threshold(c, mass, True)
+
 
 def non_friction_force(t: float, y: Sequence[float], p: Parameters, left: bool, right: bool) -> tuple[float, float]:
     """``(A1, A2)``: non-friction, non-feedback force per unit mass (3.4)-(3.5), (4.14).
@@ -36,16 +107,7 @@ def non_friction_force(t: float, y: Sequence[float], p: Parameters, left: bool, 
     ``A1 = [Q1 sin(Omega t + phi1) - K1 x1 - K2 x1^3 - C1 v1 - C2 v1^3
     - L (K3 (x1 - x2 + d) + C3 (v1 - v2)) - R K6 (x1 - d1)] / m1`` and likewise ``A2``.
     """
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
-    f1 = p.Q1 * math.sin(p.Omega * t + p.phi1) - p.K1 * x1 - p.K2 * x1**3 - p.C1 * v1 - p.C2 * v1**3
-    f2 = p.Q2 * math.sin(p.Omega * t + p.phi2) - p.K4 * x2 - p.K5 * x2**3 - p.C4 * v2 - p.C5 * v2**3
-    if left:
-        contact = p.K3 * (x1 - x2 + p.d) + p.C3 * (v1 - v2)
-        f1 -= contact
-        f2 += contact
-    if right:
-        f1 -= p.K6 * (x1 - p.d1)
-    return f1 / p.m1, f2 / p.m2
+    return forces(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), left, right, coefficients(p))
 
 
 def non_friction_force_rate(
@@ -63,24 +125,10 @@ def non_friction_force_rate(
     - L (K3 (v1 - v2) + C3 (a1 - a2)) - R K6 v1] / m1`` (MODEL.md Sec. 4); ``a_i`` is the
     acceleration of the field assumed for mass ``i`` (0 for a resting mass).
     """
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
-    r1 = (
-        p.Q1 * p.Omega * math.cos(p.Omega * t + p.phi1)
-        - (p.K1 + 3.0 * p.K2 * x1**2) * v1
-        - (p.C1 + 3.0 * p.C2 * v1**2) * a1
-    )
-    r2 = (
-        p.Q2 * p.Omega * math.cos(p.Omega * t + p.phi2)
-        - (p.K4 + 3.0 * p.K5 * x2**2) * v2
-        - (p.C4 + 3.0 * p.C5 * v2**2) * a2
-    )
-    if left:
-        contact_rate = p.K3 * (v1 - v2) + p.C3 * (a1 - a2)
-        r1 -= contact_rate
-        r2 += contact_rate
-    if right:
-        r1 -= p.K6 * v1
-    return r1 / p.m1, r2 / p.m2
+    return force_rates(
+        float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), left, right, float(a1), float(a2),
+        coefficients(p),
+    )  # fmt: skip
 
 
 def force_scale(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int) -> float:
@@ -107,9 +155,7 @@ def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:
     ``sign`` is the velocity sign ``s`` of domain ``delta``; ``sign = 0`` (at rest) gives the
     zero field of (4.12).
     """
-    if sign == 0:
-        return 0.0
-    return force - sign * p.kinetic_threshold(mass)
+    return kinetic(coefficients(p), mass, sign, float(force))
 
 
 def flow_barrier_field(p: Parameters, mass: int, sign: int, force: float) -> float:
@@ -117,7 +163,7 @@ def flow_barrier_field(p: Parameters, mass: int, sign: int, force: float) -> flo
 
     The feedback belongs in it, as the article's (4.22) carries ``b_i`` (MODEL.md Sec. 3).
     """
-    return force - sign * p.static_threshold(mass)
+    return barrier(coefficients(p), mass, sign, float(force))
 
 
 def accelerations(t: float, y: Sequence[float], p: Parameters, mode: Mode) -> tuple[float, float]:

@@ -216,7 +216,7 @@ def render_markdown(
             "",
             "## Run",
             "",
-            f"{counts.get('events', 0)} events, {counts.get('steps', 0)} solver steps, "
+            f"{counts.get('events', 0)} events, {counts.get('returns', 0)} solver returns, "
             f"{counts.get('rhs_evaluations', 0)} right-hand-side evaluations, {counts.get('restarts', 0)} restarts; "
             f"wall time {run.get('wall_time', float('nan')):.3f} s; "
             f"oscillator {run.get('versions', {}).get('oscillator', '?')}.",

@@ -64,7 +64,9 @@ class Result:
         The work-energy audit: ``E0, E1``, the works ``forcing, feedback, damping, friction``
         and ``residual = E1 - E0 - (forcing + feedback - damping - friction)``.
     stats : dict
-        ``steps, rhs_evaluations, restarts, root_returns, events, wall_time``.
+        ``returns`` (times CVODE handed back: every internal step when the trajectory is recorded
+        at its steps, else roots, grid times and chunk ends), ``rhs_evaluations, restarts,
+        root_returns, events, wall_time``.
     final_state : tuple
         ``(t, x1, v1, x2, v2)`` at the end.
     """
@@ -87,7 +89,7 @@ class Result:
         supplied = work["forcing"] + work["feedback"] - work["damping"] - work["friction"]
         energy = {"E0": e0, "E1": e1, **work, "residual": e1 - e0 - supplied}
         stats = {
-            "steps": record.steps,
+            "returns": record.returns,
             "rhs_evaluations": record.rhs_evaluations,
             "restarts": record.restarts,
             "root_returns": record.root_returns,

@@ -28,10 +28,10 @@ import numpy as np
 from sksundae.cvode import CVODE
 
 from oscillator._errors import OscillatorError
-from oscillator.detection import NUM_ROOTS, Root, mode_violation, root_directions, root_values
-from oscillator.energy import powers
+from oscillator.detection import NUM_ROOTS, Root, mode_violation, root_directions, root_kernel
 from oscillator.events import Event
-from oscillator.fields import accelerations
+from oscillator.fields import coefficients
+from oscillator.kernels import derivative
 from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode
 from oscillator.switching import Resolution, initial_mode, resolve
@@ -49,6 +49,8 @@ _CLOSE_ROOTS = -22
 _MAX_STALLS = 100
 #: Two root returns closer than this (relative to the time) are at one instant.
 _SAME_INSTANT = 1e-12
+#: Without a trajectory to record, CVODE runs this many forcing periods between returns.
+_CHUNK_PERIODS = 4
 #: How far (relative) the state may stand on the wrong side of a boundary of its mode at a root.
 _CONSISTENCY = 1e-9
 
@@ -65,7 +67,7 @@ class RunRecord:
     y_final: np.ndarray | None = None
     mode_final: Mode | None = None
     mode_initial: Mode | None = None
-    steps: int = 0
+    returns: int = 0
     rhs_evaluations: int = 0
     restarts: int = 0
     root_returns: int = 0
@@ -115,20 +117,16 @@ class Supervisor:
             return self._solvers[mode]
         p = self.params
 
-        def rhs(tau: float, y: np.ndarray, yp: np.ndarray) -> None:
-            t = self._t_ref + tau
-            a1, a2 = accelerations(t, y, p, mode)
-            yp[0] = y[1]
-            yp[1] = a1
-            yp[2] = y[3]
-            yp[3] = a2
-            yp[4:8] = powers(t, y, p, mode)
-
+        c = coefficients(p)
+        s1, s2, left, right = mode.sign(1), mode.sign(2), mode.left, mode.right
         step = self.options.max_step_fraction * p.period
         near = self.options.grazing_displacement_tolerance
 
+        def rhs(tau: float, y: np.ndarray, yp: np.ndarray) -> None:
+            derivative(self._t_ref + tau, y, yp, c, s1, s2, left, right)
+
         def roots(tau: float, y: np.ndarray, g: np.ndarray) -> None:
-            root_values(self._t_ref + tau, y, p, mode, out=g, step=step, near=near)
+            root_kernel(self._t_ref + tau, y, g, c, s1, s2, left, right, step, near)
 
         roots.direction = root_directions(mode)
         roots.terminal = [True] * NUM_ROOTS
@@ -181,6 +179,8 @@ class Supervisor:
 
         grid = self.t_eval
         grid_index = 0
+        every_step = grid is None and self.record_trajectory
+        chunk = _CHUNK_PERIODS * p.period
         if grid is not None:
             grid = grid[(grid >= t0) & (grid <= t_end)]
             if grid.size and grid[0] == t0:
@@ -199,8 +199,12 @@ class Supervisor:
             after_root, stalls, last_root = False, 0, -math.inf
             while True:
                 on_grid = grid is not None and grid_index < grid.size
-                target = grid[grid_index] if on_grid else t_end
-                method = "onestep" if grid is None else "normal"
+                if on_grid:
+                    target, method = grid[grid_index], "normal"
+                elif every_step:
+                    target, method = t_end, "onestep"
+                else:  # nothing to record between roots: let CVODE run, returning now and then
+                    target, method = min(t_end, t + chunk), "normal"
                 with contextlib.redirect_stdout(self._solver_output):
                     out = solver.step(target - self._t_ref, method=method, tstop=t_end - self._t_ref)
                 if out.status == _CLOSE_ROOTS and after_root:
@@ -214,13 +218,13 @@ class Supervisor:
                 if out.status < 0:
                     record.rhs_evaluations += out.nfev
                     raise self._failure(out, t, y, mode)
-                record.steps += 1
-                reached = out.status == _TSTOP_RETURN or (on_grid and out.status == 0)
+                record.returns += 1
+                reached = out.status == _TSTOP_RETURN or (out.status == 0 and method == "normal")
                 t = (t_end if out.status == _TSTOP_RETURN else target) if reached else self._t_ref + float(out.t)
                 y = np.array(out.y, dtype=float)
                 if self.progress is not None:
                     self.progress(t)
-                if grid is None:
+                if every_step:
                     self._record(record, t, y, mode)
                 elif on_grid and out.status != _ROOT_RETURN and t == target:
                     self._record(record, t, y, mode)
@@ -233,7 +237,7 @@ class Supervisor:
                     if resolution.mode != mode:
                         y[:4] = resolution.y
                         mode = resolution.mode
-                        if grid is None:
+                        if every_step:
                             self._record(record, t, y, mode)
                         record.rhs_evaluations += out.nfev
                         break
