@@ -1,6 +1,7 @@
 """Result tables: columns, the trajectory on CVODE's steps or on a grid, and failures."""
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from oscillator import OscillatorError, simulate
@@ -72,3 +73,11 @@ def test_progress_is_reported_with_increasing_times():
     seen = []
     simulate("instance-3", progress=seen.append)
     assert len(seen) > 100 and seen == sorted(seen) and seen[-1] == 4.0
+
+
+def test_events_can_be_kept_from_a_time_on():
+    full = simulate("instance-3", record_trajectory=False)
+    late = simulate("instance-3", record_trajectory=False, keep_events_from=3.0)
+    assert late.stats["events"] == full.stats["events"] == 8
+    pd.testing.assert_frame_equal(late.events.reset_index(drop=True),
+                                  full.events[full.events.t >= 3.0].reset_index(drop=True))  # fmt: skip

@@ -93,7 +93,7 @@ class Result:
             "rhs_evaluations": record.rhs_evaluations,
             "restarts": record.restarts,
             "root_returns": record.root_returns,
-            "events": len(record.events),
+            "events": record.event_count,
             "wall_time": record.wall_time,
         }
         final = (record.t_final, *(float(v) for v in record.y_final[:4]))

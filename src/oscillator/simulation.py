@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -55,6 +56,7 @@ def simulate(
     t_eval: Sequence[float] | np.ndarray | None = None,
     record_trajectory: bool = True,
     progress: Callable[[float], None] | None = None,
+    keep_events_from: float | None = None,
     **overrides: float,
 ) -> Result:
     """Simulate a case from its start to ``t_end``.
@@ -71,6 +73,9 @@ def simulate(
         Keep trajectory rows (events and the energy audit are always kept).
     progress : callable, optional
         Called with the current time after every solver step (keep it cheap).
+    keep_events_from : float, optional
+        Keep only the events at or after this time in ``Result.events`` (``stats["events"]``
+        counts them all). With the trajectory off too, memory stays flat in the run's length.
     **overrides
         Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
         (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).
@@ -94,7 +99,12 @@ def simulate(
     """
     case = resolve_case(case, t_end=t_end, **overrides)
     supervisor = Supervisor(
-        case.parameters, case.options, t_eval=t_eval, record_trajectory=record_trajectory, progress=progress
+        case.parameters,
+        case.options,
+        t_eval=t_eval,
+        record_trajectory=record_trajectory,
+        progress=progress,
+        keep_events_from=-math.inf if keep_events_from is None else keep_events_from,
     )
     record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
     return Result.from_record(case, record)

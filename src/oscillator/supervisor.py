@@ -71,6 +71,7 @@ class RunRecord:
     rhs_evaluations: int = 0
     restarts: int = 0
     root_returns: int = 0
+    event_count: int = 0
     wall_time: float = 0.0
 
 
@@ -87,6 +88,9 @@ class Supervisor:
         Keep trajectory rows at all (events are always kept).
     progress : callable, keyword-only
         Called with the time after every solver step.
+    keep_events_from : float, keyword-only
+        Keep only the events at or after this time (all are counted); memory then stays flat in
+        the length of a run.
     """
 
     def __init__(
@@ -97,12 +101,14 @@ class Supervisor:
         t_eval: np.ndarray | None = None,
         record_trajectory: bool = True,
         progress: Callable[[float], None] | None = None,
+        keep_events_from: float = -math.inf,
     ) -> None:
         self.params = params
         self.options = options
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
         self.record_trajectory = record_trajectory
         self.progress = progress
+        self.keep_events_from = keep_events_from
         self._solvers: dict[Mode, tuple[CVODE, object]] = {}
         self._t_ref = 0.0  # CVODE's time is tau = t - _t_ref
         # scikit-sundae prints CVODE's error messages to stdout; they are caught here and told
@@ -172,7 +178,9 @@ class Supervisor:
         start = initial_mode(t0, y0, p)
         mode = start.mode
         record.mode_initial = mode
-        record.events.extend(start.events)
+        record.event_count += len(start.events)
+        if t0 >= self.keep_events_from:
+            record.events.extend(start.events)
         y = np.zeros(8)
         y[:4] = start.y
         t = t0
@@ -274,9 +282,11 @@ class Supervisor:
         roots._t.clear()
         roots._y.clear()
         resolution = resolve(t, y, self.params, mode, fired, self.options)
-        record.events.extend(resolution.events)
-        if len(record.events) > self.options.max_events:
-            last = record.events[-1]
+        record.event_count += len(resolution.events)
+        if t >= self.keep_events_from:
+            record.events.extend(resolution.events)
+        if record.event_count > self.options.max_events:
+            last = resolution.events[-1]
             raise OscillatorError(
                 f"more than max_events = {self.options.max_events} switching events by "
                 f"t = {t:.10g} s (last: mass {last.mass} {last.kind} on {last.boundary}); "

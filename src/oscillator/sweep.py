@@ -139,7 +139,7 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
         period = point.parameters.period
         t0 = point.initial.t0
         grid = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
-        result = simulate(point, t_end=float(grid[-1]), t_eval=grid)
+        result = simulate(point, t_end=float(grid[-1]), t_eval=grid, keep_events_from=float(grid[0]))
     except OscillatorError as error:
         summary = {param: value, "index": index, "status": "failed", "message": str(error), "period": 0,
                    "periodic": False, "sliding": False, "sliding_periods": 0, "rest_time_per_period": math.nan,
