@@ -127,6 +127,17 @@ def _start(ax, x, y) -> None:
     ax.scatter([x], [y], s=60, color="limegreen", edgecolor="black", zorder=6)
 
 
+def _finish_time_panel(ax, events, t0, y0, quantity: str, ylabel: str, title: str) -> None:
+    """Start points, switching points of both masses (``quantity`` is ``x`` or ``v``), labels."""
+    seen: set = set()
+    offset = 0 if quantity == "x" else 1
+    for mass in (1, 2):
+        _start(ax, t0, y0[2 * mass - 2 + offset])
+        _mark_events(ax, events, mass, f"{quantity}{mass}", seen)
+    ax.set(xlabel="time t (s)", ylabel=ylabel, title=title)
+    ax.legend(fontsize=8, loc="best")
+
+
 def _displacements(trajectory, events, p, t0, y0, title):
     fig, ax = plt.subplots(figsize=(8, 4.5))
     t = trajectory.t
@@ -135,12 +146,7 @@ def _displacements(trajectory, events, p, t0, y0, title):
     ax.axhline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")
     ax.plot(t, trajectory.x2 - p.d, color="tab:pink", ls="--", lw=1,
             label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)")  # fmt: skip
-    seen: set = set()
-    for mass in (1, 2):
-        _start(ax, t0, y0[2 * mass - 2])
-        _mark_events(ax, events, mass, f"x{mass}", seen)
-    ax.set(xlabel="time t (s)", ylabel="displacement (m)", title=f"{title} — (a) displacements")
-    ax.legend(fontsize=8, loc="best")
+    _finish_time_panel(ax, events, t0, y0, "x", "displacement (m)", f"{title} — (a) displacements")
     return fig
 
 
@@ -154,12 +160,7 @@ def _velocities(trajectory, events, p, t0, y0, title):
                 a, b, color=_MASS_COLOR[mass], alpha=0.12, label=f"m{mass} at rest (sliding)" if i == 0 else None
             )
     ax.axhline(0.0, color="black", ls="--", lw=1, label=r"velocity boundary $v = 0$ ($\partial\Omega_{12}$)")
-    seen: set = set()
-    for mass in (1, 2):
-        _start(ax, t0, y0[2 * mass - 1])
-        _mark_events(ax, events, mass, f"v{mass}", seen)
-    ax.set(xlabel="time t (s)", ylabel="velocity (m/s)", title=f"{title} — (b) velocities")
-    ax.legend(fontsize=8, loc="best")
+    _finish_time_panel(ax, events, t0, y0, "v", "velocity (m/s)", f"{title} — (b) velocities")
     return fig
 
 
