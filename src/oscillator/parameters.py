@@ -207,7 +207,8 @@ class SolverOptions:
         A zero of ``v1`` within this distance of ``x1 = d1``, or of ``zdot1`` within this distance
         of ``z1 = -d``, is reported as grazing of that displacement boundary (m).
     max_events : int
-        Stop with an error after this many switching events (guards against chattering).
+        Stop with an error after this many switching events in one run (10^9 by default: a
+        100,000-period run of Instance 1 has 10^6; chattering at one instant has its own guards).
     max_num_steps : int
         CVODE's step limit between two outputs.
     """
@@ -217,7 +218,7 @@ class SolverOptions:
     max_step_fraction: float = 0.02
     grazing_velocity_tolerance: float = 1e-3
     grazing_displacement_tolerance: float = 1e-3
-    max_events: int = 1_000_000
+    max_events: int = 1_000_000_000
     max_num_steps: int = 100_000
 
     def __post_init__(self) -> None:
