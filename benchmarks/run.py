@@ -121,8 +121,11 @@ print(json.dumps({"periods": periods, "wall_s": time.perf_counter() - started, "
 
 
 def memory(periods: int) -> dict:
-    done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(periods)], capture_output=True, text=True,
-                          check=True)  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(periods)], capture_output=True, text=True)
+    if done.returncode != 0:
+        last = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit code {done.returncode}"
+        return {"periods": periods, "wall_s": float("nan"), "peak_rss_mb": float("nan"),
+                "energy_residual": float("nan"), "error": last}  # fmt: skip
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -165,7 +168,8 @@ def main() -> None:
               f"{s['workers']} cores: {s['wall_s']:.1f} s")  # fmt: skip
     print(f"\n{'periods':>10}{'wall (s)':>10}{'peak RSS (MB)':>15}{'energy residual (J)':>21}")
     for row in results["memory"]:
-        print(f"{row['periods']:>10}{row['wall_s']:>10.1f}{row['peak_rss_mb']:>15.1f}{row['energy_residual']:>21.2e}")
+        print(f"{row['periods']:>10}{row['wall_s']:>10.1f}{row['peak_rss_mb']:>15.1f}{row['energy_residual']:>21.2e}"
+              + (f"  failed: {row['error']}" if "error" in row else ""))  # fmt: skip
     args.json.write_text(json.dumps(results, indent=2, default=float) + "\n", encoding="utf-8")
     print(f"\nwritten to {args.json}")
 
