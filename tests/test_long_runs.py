@@ -31,3 +31,15 @@ def test_synchronised_identical_masses_run_silently(capfd):
     assert captured.out == "" and captured.err == ""
     assert set(result.events.kind) == {"passable", "grazing"}
     assert result.stats["root_returns"] < 2 * len(result.events) + 10
+
+
+def test_past_2_to_the_17_seconds_a_resting_mass_is_not_flagged_by_rounding():
+    """At t > 2^17 s the forcing's time is good to 2.9e-11 s only, which moves a resting mass's force
+    by ~3.5e-9 N/kg: the consistency check must not call that a hidden crossing (it stopped a
+    100,000-period run of Instance 1 at t = 131,094 s)."""
+    case = load_case("instance-1")
+    shift = 33_300 * case.parameters.period
+    moved = dataclasses.replace(case, initial=dataclasses.replace(case.initial, t0=case.initial.t0 + shift),
+                                t_end=case.initial.t0 + shift + 300 * case.parameters.period)  # fmt: skip
+    result = simulate(moved, record_trajectory=False, keep_events_from=moved.t_end)
+    assert result.stats["events"] > 2900
