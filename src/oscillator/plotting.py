@@ -214,6 +214,15 @@ def _forces(trajectory, events, p, t0, y0, title):
     return fig
 
 
+def _save(fig, directory: Path, name: str) -> list[Path]:
+    """Save a figure as PNG and SVG and close it; the files written."""
+    paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
+    for path in paths:
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return paths
+
+
 _PANELS = {
     "fig-a-displacement": _displacements,
     "fig-b-velocity": _velocities,
@@ -237,11 +246,7 @@ def write_figures(
     written = []
     for name, panel in _PANELS.items():
         fig = panel(trajectory, events, p, t0, y0, title)
-        for suffix in (".png", ".svg"):
-            path = directory / f"{name}{suffix}"
-            fig.savefig(path, dpi=110, bbox_inches="tight")
-            written.append(path)
-        plt.close(fig)
+        written += _save(fig, directory, name)
     return written
 
 
@@ -276,11 +281,7 @@ def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *,
     axes[-1].set(xlabel=f"{param}")
     fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)")
     fig.tight_layout()
-    for suffix in (".png", ".svg"):
-        path = directory / f"fig-14-bifurcation{suffix}"
-        fig.savefig(path, dpi=110, bbox_inches="tight")
-        written.append(path)
-    plt.close(fig)
+    written += _save(fig, directory, "fig-14-bifurcation")
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     for ax, column in zip(axes, (f"x{mass}", f"v{mass}"), strict=True):
@@ -290,9 +291,5 @@ def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *,
         ax.set(xlabel=param, ylabel=f"{column} at t0 + nT")
     fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)")
     fig.tight_layout()
-    for suffix in (".png", ".svg"):
-        path = directory / f"fig-14-poincare{suffix}"
-        fig.savefig(path, dpi=110, bbox_inches="tight")
-        written.append(path)
-    plt.close(fig)
+    written += _save(fig, directory, "fig-14-poincare")
     return written
