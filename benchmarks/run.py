@@ -6,10 +6,14 @@
 3. the same rules on SciPy's solve_ivp (DOP853, events; benchmarks/scipy_baseline.py) at the
    tolerance whose event times match a 1e-13 reference as closely as ours, and the ratio;
 4. the default bifurcation-omega sweep (111 values x 150 periods) on this machine's cores;
-5. peak memory of long runs with the trajectory off (fresh processes), to show it is flat.
+5. peak memory of long runs with the trajectory off (fresh processes), to show it is flat;
+6. the soak of issue 6: Instances 3 and 5 over N/10 and N forcing periods (fresh processes): wall
+   time, events, peak memory and the energy-audit residual;
+7. the floor of scikit-sundae's callbacks: the cost of one CVODE step of a trivial problem whose
+   right-hand side is a Python function, which bounds the speed of any CVODE-based simulator here.
 
-Usage: python benchmarks/run.py [--quick] [--memory-periods N] [--json PATH]
-  --quick: skip the sweep, and use 2,000 and 20,000 periods for the memory runs.
+Usage: python benchmarks/run.py [--quick] [--memory-periods N] [--soak-periods N] [--json PATH]
+  --quick: skip the sweep, use 2,000 and 20,000 periods for the memory runs and 10,000 for the soak.
 """
 
 from __future__ import annotations
@@ -109,67 +113,126 @@ def sweep() -> dict:
 MEMORY_CHILD = r"""
 import json, resource, sys, time
 from oscillator import load_case, simulate
-periods = int(sys.argv[1])
-case = load_case("instance-1")
+periods, name = int(sys.argv[1]), sys.argv[2]
+case = load_case(name)
 started = time.perf_counter()
 t_end = case.initial.t0 + periods * case.parameters.period
 result = simulate(case, t_end=t_end, record_trajectory=False, keep_events_from=t_end)
-print(json.dumps({"periods": periods, "wall_s": time.perf_counter() - started, "events": result.stats["events"],
+print(json.dumps({"case": name, "periods": periods, "wall_s": time.perf_counter() - started,
+                  "events": result.stats["events"],
                   "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "energy_residual": result.energy["residual"]}))
+                  "energy_residual": result.energy["residual"],
+                  "relative_residual": abs(result.energy["residual"]) / sum(
+                      abs(result.energy[k]) for k in ("forcing", "feedback", "damping", "friction"))}))
 """
 
 
-def memory(periods: int) -> dict:
-    done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(periods)], capture_output=True, text=True)
+def memory(periods: int, name: str = "instance-1") -> dict:
+    """A run of ``periods`` forcing periods of a case in a fresh process, trajectory and events off."""
+    done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(periods), name], capture_output=True, text=True)
     if done.returncode != 0:
         last = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit code {done.returncode}"
-        return {"periods": periods, "wall_s": float("nan"), "peak_rss_mb": float("nan"),
+        return {"case": name, "periods": periods, "wall_s": float("nan"), "events": 0, "peak_rss_mb": float("nan"),
                 "energy_residual": float("nan"), "error": last}  # fmt: skip
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def callback_floor(steps: int = 200_000) -> dict:
+    """Microseconds per CVODE step of x'' = -x with a one-line Python right-hand side."""
+    from sksundae.cvode import CVODE
+
+    def rhs(t, y, yp):
+        yp[0] = y[1]
+        yp[1] = -y[0]
+
+    solver = CVODE(rhs, method="Adams", rtol=1e-10, atol=1e-10, max_step=1e-3, max_num_steps=10 * steps)
+    solver.init_step(0.0, np.array([1.0, 0.0]))
+    started = time.perf_counter()
+    out = solver.step(steps * 1e-3, tstop=steps * 1e-3)
+    wall = time.perf_counter() - started
+    return {"rhs_calls": int(out.nfev), "us_per_call": wall / out.nfev * 1e6}
+
+
+def print_instances(rows: list[dict]) -> None:
+    print(f"{'case':<12}{'wall (s)':>10}{'events':>8}{'CVODE steps':>13}{'RHS calls':>11}")
+    for row in rows:
+        print(
+            f"{row['case']:<12}{row['wall_s']:>10.4f}{row['events']:>8}{row['cvode_steps']:>13}{row['rhs_calls']:>11}"
+        )
+
+
+def print_throughput(rows: list[dict]) -> None:
+    print(f"{'Omega':<8}{'periods/s':>11}{'RHS calls/period':>18}")
+    for row in rows:
+        print(f"{row['omega']:<8}{row['periods_per_s']:>11.1f}{row['rhs_calls_per_period']:>18.0f}")
+
+
+def print_baseline(rows: list[dict]) -> None:
+    print(f"against SciPy solve_ivp (DOP853, events), {WINDOW} periods, event times vs a 1e-13 reference:")
+    print(
+        f"{'Omega':<8}{'ours err':>10}{'ours (s)':>10}{'SciPy rtol':>11}{'SciPy err':>11}{'SciPy (s)':>11}{'ratio':>8}"
+    )
+    for row in rows:
+        print(f"{row['omega']:<8}{row['ours_error_s']:>10.1e}{row['ours_wall_s']:>10.3f}{row['scipy_rtol']:>11.0e}"
+              f"{row['scipy_error_s']:>11.1e}{row['scipy_wall_s']:>11.3f}{row['speedup']:>8.1f}")  # fmt: skip
+
+
+def print_sweep(s: dict) -> None:
+    print(f"bifurcation-omega sweep: {s['points']} values x {s['periods_per_point']} periods on "
+          f"{s['workers']} cores: {s['wall_s']:.1f} s")  # fmt: skip
+
+
+def print_long_runs(rows: list[dict]) -> None:
+    print(f"{'case':<12}{'periods':>9}{'wall (s)':>10}{'events':>10}{'peak RSS (MB)':>15}"
+          f"{'energy residual (J)':>21}{'relative':>10}")  # fmt: skip
+    for row in rows:
+        print(f"{row['case']:<12}{row['periods']:>9}{row['wall_s']:>10.1f}{row['events']:>10}{row['peak_rss_mb']:>15.1f}"
+              f"{row['energy_residual']:>21.2e}{row.get('relative_residual', float('nan')):>10.1e}"
+              + (f"  failed: {row['error']}" if "error" in row else ""))  # fmt: skip
+
+
+def print_floor(floor: dict) -> None:
+    print(f"scikit-sundae floor: {floor['us_per_call']:.2f} us per CVODE step of a 2-equation problem with a "
+          f"Python right-hand side ({floor['rhs_calls']} calls)")  # fmt: skip
+
+
+SECTIONS = ("instances", "throughput", "baseline", "sweep", "memory", "soak", "floor")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--memory-periods", type=int, default=None)
+    parser.add_argument("--soak-periods", type=int, default=None)
+    parser.add_argument("--only", choices=SECTIONS, nargs="+", default=None, help="run only these sections")
     parser.add_argument("--json", type=Path, default=HERE / "results.json")
     args = parser.parse_args()
     long_run = args.memory_periods or (20_000 if args.quick else 100_000)
+    soak = args.soak_periods or (10_000 if args.quick else 100_000)
+    wanted = set(args.only or SECTIONS) - ({"sweep"} if args.quick and not args.only else set())
     simulate("instance-1")  # compile the kernels (numba caches them on disk) before timing
 
-    results = {"machine": {"platform": platform.platform(), "python": platform.python_version(),
-                           "cores": os.cpu_count()}}  # fmt: skip
-    results["instances"] = instances()
-    results["throughput"] = [throughput(1.6, 200), throughput(1.85, 200)]
-    results["baseline"] = [accuracy_and_baseline(1.6), accuracy_and_baseline(1.85)]
-    results["sweep"] = None if args.quick else sweep()
-    results["memory"] = [memory(long_run // 10), memory(long_run)]
-
-    print(f"machine: {results['machine']['platform']}, {results['machine']['cores']} cores\n")
-    print(f"{'case':<12}{'wall (s)':>10}{'events':>8}{'CVODE steps':>13}{'RHS calls':>11}")
-    for row in results["instances"]:
-        print(
-            f"{row['case']:<12}{row['wall_s']:>10.4f}{row['events']:>8}{row['cvode_steps']:>13}{row['rhs_calls']:>11}"
-        )
-    print(f"\n{'Omega':<8}{'periods/s':>11}{'RHS calls/period':>18}")
-    for row in results["throughput"]:
-        print(f"{row['omega']:<8}{row['periods_per_s']:>11.1f}{row['rhs_calls_per_period']:>18.0f}")
-    print(f"\nagainst SciPy solve_ivp (DOP853, events), {WINDOW} periods, event times vs a 1e-13 reference:")
-    print(
-        f"{'Omega':<8}{'ours err':>10}{'ours (s)':>10}{'SciPy rtol':>11}{'SciPy err':>11}{'SciPy (s)':>11}{'ratio':>8}"
-    )
-    for row in results["baseline"]:
-        print(f"{row['omega']:<8}{row['ours_error_s']:>10.1e}{row['ours_wall_s']:>10.3f}{row['scipy_rtol']:>11.0e}"
-              f"{row['scipy_error_s']:>11.1e}{row['scipy_wall_s']:>11.3f}{row['speedup']:>8.1f}")  # fmt: skip
-    if results["sweep"]:
-        s = results["sweep"]
-        print(f"\nbifurcation-omega sweep: {s['points']} values x {s['periods_per_point']} periods on "
-              f"{s['workers']} cores: {s['wall_s']:.1f} s")  # fmt: skip
-    print(f"\n{'periods':>10}{'wall (s)':>10}{'peak RSS (MB)':>15}{'energy residual (J)':>21}")
-    for row in results["memory"]:
-        print(f"{row['periods']:>10}{row['wall_s']:>10.1f}{row['peak_rss_mb']:>15.1f}{row['energy_residual']:>21.2e}"
-              + (f"  failed: {row['error']}" if "error" in row else ""))  # fmt: skip
+    machine = {"platform": platform.platform(), "python": platform.python_version(), "cores": os.cpu_count()}
+    print(f"machine: {machine['platform']}, {machine['cores']} cores")
+    measure = {
+        "instances": (instances, print_instances),
+        "throughput": (lambda: [throughput(1.6, 200), throughput(1.85, 200)], print_throughput),
+        "baseline": (lambda: [accuracy_and_baseline(1.6), accuracy_and_baseline(1.85)], print_baseline),
+        "sweep": (sweep, print_sweep),
+        "memory": (lambda: [memory(long_run // 10), memory(long_run)], print_long_runs),
+        "soak": (
+            lambda: [memory(n, name) for name in ("instance-3", "instance-5") for n in (soak // 10, soak)],
+            print_long_runs,
+        ),
+        "floor": (callback_floor, print_floor),
+    }
+    results = {"machine": machine}
+    for section in SECTIONS:
+        if section in wanted:
+            compute, show = measure[section]
+            results[section] = compute()
+            print(f"\n[{section}]")
+            show(results[section])
     args.json.write_text(json.dumps(results, indent=2, default=float) + "\n", encoding="utf-8")
     print(f"\nwritten to {args.json}")
 
