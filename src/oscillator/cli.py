@@ -27,8 +27,9 @@ from rich.progress import (
 from rich.table import Table
 
 from oscillator import OscillatorError, __version__, case_names, load_case
+from oscillator._files import replace_file
 from oscillator.cases import Case, parse_value
-from oscillator.output import FORMATS, check_output_folder, default_output_folder, read_run, replace_file, write_run
+from oscillator.output import FORMATS, check_output_folder, default_output_folder, read_run, write_run
 from oscillator.parameters import SolverOptions, SweepSettings
 from oscillator.plotting import write_figures, write_sweep_figures
 from oscillator.report import render_html, render_markdown
@@ -169,6 +170,25 @@ def show(case: Annotated[str, typer.Argument(help="A named case or the path of a
         out.print(table)
 
 
+def _keep_partial(error: BaseException, folder: Path | None, fmt: str) -> str:
+    """Write the error's partial result (``error.result``), if any; say where it went, or why not.
+
+    The partial result is written like a complete run (tables, case.toml, and run.json with its
+    status and reason) without figures or report: ``oscillator report`` makes those.
+    """
+    partial = getattr(error, "result", None)
+    if partial is None or folder is None:
+        return "nothing was written"
+    try:
+        write_run(partial, folder, formats=fmt, command=["oscillator", *sys.argv[1:]])
+    except (OscillatorError, OSError, KeyboardInterrupt) as failure:
+        return f"the partial result could not be written: {failure}"
+    return (
+        f"the partial result up to t = {partial.final_state[0]:.10g} s is in {folder} "
+        f'(run.json: "status": "{partial.status}"); `oscillator report {folder}` makes its report'
+    )
+
+
 @app.command()
 def run(
     case: Annotated[str, typer.Argument(help="A named case (see `oscillator list`) or a case file (.toml).")],
@@ -193,6 +213,7 @@ def run(
     * `oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7`
     * `oscillator run my-case.toml --format parquet --no-plots --quiet`
     """
+    folder: Path | None = None
     try:
         if fmt not in FORMATS:
             raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}", field="--format")
@@ -219,9 +240,11 @@ def run(
 
         write_run(result, folder, formats=fmt, extras=extras, command=["oscillator", *sys.argv[1:]])
     except OscillatorError as error:
-        raise _fail(str(error)) from None
-    except KeyboardInterrupt:
-        raise _fail("interrupted; nothing was written", code=130) from None
+        if not hasattr(error, "result"):  # refused before running: exit 2
+            raise _fail(str(error)) from None
+        raise _fail(f"{error}\n{_keep_partial(error, folder, fmt)}", code=1) from None
+    except KeyboardInterrupt as interrupt:
+        raise _fail(f"interrupted; {_keep_partial(interrupt, folder, fmt)}", code=130) from None
     if quiet:
         out.print(str(folder))
         return

@@ -5,7 +5,9 @@ A run folder holds ``events.csv`` and/or ``events.parquet`` (the columns of ``Re
 ``run.json`` (versions, solver settings, wall time, counts, energy audit), ``figures/`` and
 ``report.md`` / ``report.html``.  It is written into a hidden temporary folder next to the
 target and renamed into place at the end, so an interrupted or failed run leaves no
-half-written folder.
+half-written folder.  A run that the solver or a guard stopped, or that was interrupted, is
+written the same way from its partial result, with ``"status": "failed"`` or ``"interrupted"``
+and the reason (``"failure"``) in ``run.json``.
 """
 
 from __future__ import annotations
@@ -13,9 +15,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import json
-import os
 import platform
-import shutil
 import sys
 import tempfile
 from collections.abc import Callable
@@ -25,6 +25,7 @@ from pathlib import Path
 import pandas as pd
 
 from oscillator._errors import OscillatorError
+from oscillator._files import atomic_folder
 from oscillator.cases import Case, case_to_toml, load_case
 from oscillator.events import Event
 from oscillator.result import Result
@@ -100,7 +101,8 @@ def run_info(result: Result, *, command: list[str] | None = None) -> dict:
         "case": case.name,
         "source": str(case.source) if case.source else None,
         "title": case.title,
-        "status": "complete",
+        "status": result.status,
+        "failure": result.failure,
         "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
         "command": command if command is not None else sys.argv,
         "versions": _versions(),
@@ -138,8 +140,7 @@ def write_run(
     if formats not in FORMATS:
         raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {formats!r}", field="--format")
     check_output_folder(folder)
-    temporary = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.partial-"))
-    try:
+    with atomic_folder(folder) as temporary:
         if formats in ("csv", "both"):
             result.events.to_csv(temporary / "events.csv", index=False)
         if formats in ("parquet", "both"):
@@ -150,13 +151,6 @@ def write_run(
         if extras is not None:
             extras(temporary, info)
         (temporary / "run.json").write_text(json.dumps(info, indent=2, default=str) + "\n", encoding="utf-8")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(temporary, 0o777 & ~umask)  # mkdtemp makes it private; a run folder is not
-        os.rename(temporary, folder)
-    except BaseException:
-        shutil.rmtree(temporary, ignore_errors=True)
-        raise
     return folder
 
 
@@ -182,15 +176,3 @@ def read_events_csv(path: Path) -> pd.DataFrame:
     text = Event.text_columns()
     events = pd.read_csv(path, dtype=dict.fromkeys(text, str))
     return events.fillna(dict.fromkeys(text, ""))
-
-
-def replace_file(path: Path, text: str) -> None:
-    """Write a text file atomically (temporary name in the same folder, then rename)."""
-    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(name, path)
-    except BaseException:
-        Path(name).unlink(missing_ok=True)
-        raise

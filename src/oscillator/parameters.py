@@ -219,11 +219,13 @@ class SolverOptions:
     grazing_velocity_tolerance: float = 1e-3
     grazing_displacement_tolerance: float = 1e-3
     max_events: int = 1_000_000_000
+    storm_events: int = 1_000
+    storm_window: float = 1e-3
     max_num_steps: int = 100_000
 
     def __post_init__(self) -> None:
         owner = "SolverOptions"
-        for name in ("rtol", "atol", "max_step_fraction"):
+        for name in ("rtol", "atol", "max_step_fraction", "storm_window"):
             value = _require_finite(owner, name, getattr(self, name))
             if value <= 0:
                 raise OscillatorError(
@@ -244,7 +246,7 @@ class SolverOptions:
             if value < 0:
                 raise OscillatorError(f"{owner}.{name} must be >= 0, got {value!r}", field=name)
             object.__setattr__(self, name, value)
-        for name in ("max_events", "max_num_steps"):
+        for name in ("max_events", "storm_events", "max_num_steps"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise OscillatorError(f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name)

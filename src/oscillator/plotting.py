@@ -20,6 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from oscillator._files import atomic_path
 from oscillator.fields import flow_barrier_field, kinetic_field, non_friction_force
 from oscillator.parameters import Parameters
 from oscillator.phase_space import contacts_of_state, velocity_sign
@@ -215,11 +216,14 @@ def _forces(trajectory, events, p, t0, y0, title):
 
 
 def _save(fig, directory: Path, name: str) -> list[Path]:
-    """Save a figure as PNG and SVG and close it; the files written."""
+    """Save a figure as PNG and SVG, each atomically (temporary name, then rename); close it."""
     paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
-    for path in paths:
-        fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    try:
+        for path in paths:
+            with atomic_path(path) as temporary:
+                fig.savefig(temporary, format=path.suffix[1:], dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
     return paths
 
 

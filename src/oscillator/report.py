@@ -160,6 +160,13 @@ def render_markdown(
     lines = [f"# {case.name}: {case.title}" if case.title else f"# {case.name}", ""]
     if case.description:
         lines += [" ".join(case.description.split()), ""]
+    status = run.get("status", "complete")
+    if status != "complete":
+        lines += [
+            f"**Incomplete run ({status}) at t = {t_final} s, before t_end = {case.t_end} s:** "
+            f"{run.get('failure') or 'no reason recorded'}",
+            "",
+        ]
     lines += [
         f"Start t0 = {start.t0} s at x1 = {start.x1} m, v1 = {start.v1} m/s, x2 = {start.x2} m, v2 = {start.v2} m/s; "
         f"run to {t_final} s. Forcing Q1 = {_f(p.Q1)} N, Q2 = {_f(p.Q2)} N at Ω = {_f(p.Omega)} rad/s "

@@ -68,7 +68,12 @@ class Result:
         at its steps, else roots, grid times and chunk ends), ``rhs_evaluations, restarts,
         root_returns, events, wall_time``.
     final_state : tuple
-        ``(t, x1, v1, x2, v2)`` at the end.
+        ``(t, x1, v1, x2, v2)`` at the end (for a partial result, the last point reached).
+    status : str
+        ``"complete"``; or, for the partial result attached to an error as ``error.result``,
+        ``"failed"`` (the solver or a guard stopped the run) or ``"interrupted"`` (Ctrl-C).
+    failure : str or None
+        Why a partial result stopped: the error's message.
     """
 
     case: Case
@@ -77,9 +82,18 @@ class Result:
     energy: dict
     stats: dict
     final_state: tuple
+    status: str = "complete"
+    failure: str | None = None
+
+    @property
+    def complete(self) -> bool:
+        """Whether the run reached ``t_end``."""
+        return self.status == "complete"
 
     @classmethod
-    def from_record(cls, case: Case, record: RunRecord) -> Result:
+    def from_record(
+        cls, case: Case, record: RunRecord, *, status: str = "complete", failure: str | None = None
+    ) -> Result:
         p = case.parameters
         y0 = case.initial.y
         start, end = record.mode_initial, record.mode_final
@@ -97,4 +111,4 @@ class Result:
             "wall_time": record.wall_time,
         }
         final = (record.t_final, *(float(v) for v in record.y_final[:4]))
-        return cls(case, events_frame(record.events), trajectory_frame(record), energy, stats, final)
+        return cls(case, events_frame(record.events), trajectory_frame(record), energy, stats, final, status, failure)

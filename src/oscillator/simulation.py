@@ -88,7 +88,10 @@ def simulate(
     Raises
     ------
     OscillatorError
-        Bad input, or a solver failure (with the time, domains and state).
+        Bad input, or a solver failure or guard (with the time, domains and state).  When the
+        run had started, ``error.result`` holds the partial :class:`Result` up to the last point
+        reached, with ``status == "failed"``; a ``KeyboardInterrupt`` carries one the same way,
+        with ``status == "interrupted"``.
 
     Examples
     --------
@@ -106,5 +109,13 @@ def simulate(
         progress=progress,
         keep_events_from=-math.inf if keep_events_from is None else keep_events_from,
     )
-    record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
+    try:
+        record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
+    except (OscillatorError, KeyboardInterrupt) as error:
+        partial = getattr(error, "partial", None)
+        if partial is not None and partial.mode_initial is not None and partial.y_final is not None:
+            status = "interrupted" if isinstance(error, KeyboardInterrupt) else "failed"
+            failure = str(error) or "interrupted by the user"
+            error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
+        raise
     return Result.from_record(case, record)

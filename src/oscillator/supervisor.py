@@ -17,11 +17,12 @@ after 940 s of Instance 1).  The fields themselves are evaluated at ``t_ref + ta
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import io
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -111,6 +112,7 @@ class Supervisor:
         self.keep_events_from = keep_events_from
         self._solvers: dict[Mode, tuple[CVODE, object]] = {}
         self._t_ref = 0.0  # CVODE's time is tau = t - _t_ref
+        self._recent: collections.deque[Event] = collections.deque(maxlen=options.storm_events + 1)
         # scikit-sundae prints CVODE's error messages to stdout; they are caught here and told
         # in the library's own error when the solver fails.
         self._solver_output = io.StringIO()
@@ -157,10 +159,11 @@ class Supervisor:
         The partial record is attached to the error as ``error.partial``.
         """
         record = RunRecord()
+        self._recent.clear()
         started = time.perf_counter()
         try:
             self._run(record, t0, y0, t_end)
-        except OscillatorError as error:
+        except (OscillatorError, KeyboardInterrupt) as error:
             error.partial = record  # type: ignore[attr-defined]
             raise
         finally:
@@ -197,6 +200,7 @@ class Supervisor:
         else:
             self._record(record, t0, y, mode)
 
+        record.t_final, record.y_final, record.mode_final = t, y.copy(), mode
         while t < t_end:
             solver, roots = self._problem(mode)
             self._t_ref = t
@@ -230,6 +234,7 @@ class Supervisor:
                 reached = out.status == _TSTOP_RETURN or (out.status == 0 and method == "normal")
                 t = (t_end if out.status == _TSTOP_RETURN else target) if reached else self._t_ref + float(out.t)
                 y = np.array(out.y, dtype=float)
+                record.t_final, record.y_final, record.mode_final = t, y, mode
                 if self.progress is not None:
                     self.progress(t)
                 if every_step:
@@ -244,7 +249,7 @@ class Supervisor:
                     resolution = self._resolve_root(record, t, y, mode, out, roots)
                     if resolution.mode != mode:
                         y[:4] = resolution.y
-                        mode = resolution.mode
+                        mode = record.mode_final = resolution.mode
                         if every_step:
                             self._record(record, t, y, mode)
                         record.rhs_evaluations += out.nfev
@@ -261,10 +266,6 @@ class Supervisor:
                 if t >= t_end:
                     record.rhs_evaluations += out.nfev
                     break
-
-        record.t_final = t
-        record.y_final = y
-        record.mode_final = mode
 
     def _resolve_root(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode, out, roots) -> Resolution:
         """Hand the roots that fired at ``t`` to :func:`switching.resolve` and record the events."""
@@ -285,6 +286,7 @@ class Supervisor:
         record.event_count += len(resolution.events)
         if t >= self.keep_events_from:
             record.events.extend(resolution.events)
+        self._guard_storm(resolution.events)
         if record.event_count > self.options.max_events:
             last = resolution.events[-1]
             raise OscillatorError(
@@ -294,6 +296,22 @@ class Supervisor:
                 field="max_events",
             )
         return resolution
+
+    def _guard_storm(self, events: Iterable[Event]) -> None:
+        """Stop when more than ``storm_events`` events fall within ``storm_window`` seconds."""
+        recent = self._recent
+        recent.extend(events)
+        if len(recent) < recent.maxlen or recent[-1].t - recent[0].t > self.options.storm_window:
+            return
+        tally = collections.Counter((e.mass, e.kind, e.boundary) for e in recent)
+        (mass, kind, boundary), count = tally.most_common(1)[0]
+        raise OscillatorError(
+            f"event storm: {len(recent)} events within {recent[-1].t - recent[0].t:.3g} s up to "
+            f"t = {recent[-1].t:.10g} s, {count} of them mass {mass} {kind} on {boundary}; the motion chatters "
+            f"there. Change the case, or raise storm_events (now {self.options.storm_events}) or lower "
+            f"storm_window (now {self.options.storm_window:g} s) if such a rate is meant",
+            field="storm_events",
+        )
 
     def _failure(self, out, t: float, y: np.ndarray, mode: Mode) -> OscillatorError:
         """CVODE's failure, told with the last point it reached (its output is undefined then)."""

@@ -29,7 +29,6 @@ import json
 import math
 import multiprocessing
 import os
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -40,6 +39,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from oscillator._errors import OscillatorError
+from oscillator._files import atomic_folder, atomic_path, replace_file
 from oscillator.cases import Case, case_to_toml
 from oscillator.parameters import SweepSettings
 from oscillator.simulation import resolve_case, simulate
@@ -211,17 +211,6 @@ def sliding_ranges(summary: pd.DataFrame, param: str) -> list[tuple[float, float
 # --------------------------------------------------------------------------- storage
 
 
-def _atomic_parquet(frame: pd.DataFrame, path: Path) -> None:
-    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    os.close(handle)
-    try:
-        frame.to_parquet(name, index=False)
-        os.replace(name, path)
-    except BaseException:
-        Path(name).unlink(missing_ok=True)
-        raise
-
-
 class _Store:
     """A sweep folder: its identity, the finished points, and the consolidated tables."""
 
@@ -247,54 +236,49 @@ class _Store:
             raise OscillatorError(
                 f"--out {self.folder} exists and is not a sweep folder; give a new folder", field="--out"
             )
-        try:
-            self.parts.mkdir(parents=True, exist_ok=True)
+        try:  # the new folder appears whole (parts/, case.toml, sweep.json) or not at all
+            with atomic_folder(self.folder) as temporary:
+                (temporary / "parts").mkdir()
+                (temporary / "case.toml").write_text(self.identity["case"], encoding="utf-8")
+                (temporary / "sweep.json").write_text(self._status("running", done=0), encoding="utf-8")
         except OSError as exc:
             raise OscillatorError(
                 f"--out {self.folder}: cannot create it ({exc.strerror}); choose a writable folder", field="--out"
             ) from exc
-        (self.folder / "case.toml").write_text(self.identity["case"], encoding="utf-8")
-        self.write_status("running", done=0)
 
-    def write_status(self, status: str, **extra) -> None:
+    def _status(self, status: str, **extra) -> str:
         info = {"identity": self.identity, "status": status, "param": self.settings.param,
                 "points": self.settings.steps, **extra}  # fmt: skip
-        handle, name = tempfile.mkstemp(dir=self.folder, prefix=".sweep.json.")
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            json.dump(info, stream, indent=2, default=str)
-        os.replace(name, self.folder / "sweep.json")
+        return json.dumps(info, indent=2, default=str)
+
+    def write_status(self, status: str, **extra) -> None:
+        replace_file(self.folder / "sweep.json", self._status(status, **extra))
 
     def done(self) -> set[int]:
         return {int(p.name.split(".")[0]) for p in self.parts.glob("*.summary.parquet")}
 
     def write_point(self, point: PointTables) -> None:
         for name in TABLES:  # the summary last: it marks the point done
-            _atomic_parquet(point.table(name), self.parts / f"{point.index:06d}.{name}.parquet")
+            with atomic_path(self.parts / f"{point.index:06d}.{name}.parquet") as temporary:
+                point.table(name).to_parquet(temporary, index=False)
 
     def consolidate(self) -> None:
         """Stream the parts, in parameter order, into one Parquet file per table."""
         for name in TABLES:
-            target = self.folder / f"{name}.parquet"
-            handle, temporary = tempfile.mkstemp(dir=self.folder, prefix=f".{name}.parquet.")
-            os.close(handle)
-            writer = None
-            try:
-                for part in sorted(self.parts.glob(f"*.{name}.parquet")):
-                    table = pq.read_table(part)
+            with atomic_path(self.folder / f"{name}.parquet") as temporary:
+                writer = None
+                try:
+                    for part in sorted(self.parts.glob(f"*.{name}.parquet")):
+                        table = pq.read_table(part)
+                        if writer is None:
+                            writer = pq.ParquetWriter(temporary, table.schema)
+                        writer.write_table(table.cast(writer.schema))
                     if writer is None:
-                        writer = pq.ParquetWriter(temporary, table.schema)
-                    writer.write_table(table.cast(writer.schema))
-                if writer is None:
-                    empty = pa.Table.from_pandas(_frame([], _columns(self.settings.param)[name]), preserve_index=False)
-                    pq.write_table(empty, temporary)
-                else:
-                    writer.close()
-                    writer = None
-                os.replace(temporary, target)
-            finally:
-                if writer is not None:
-                    writer.close()
-                Path(temporary).unlink(missing_ok=True)
+                        columns = _columns(self.settings.param)[name]
+                        pq.write_table(pa.Table.from_pandas(_frame([], columns), preserve_index=False), temporary)
+                finally:
+                    if writer is not None:
+                        writer.close()
 
 
 def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
