@@ -313,3 +313,22 @@ def test_locate_prints_the_bracket_and_the_evidence():
 
 def test_locate_refuses_an_unknown_indicator():
     assert_refused(invoke("locate", "bifurcation-omega", "--between", "1.3", "1.6", "--what", "chaos"), "--what")
+
+
+def test_sample_records_the_trajectory_on_a_grid_with_the_same_events(tmp_path):
+    folder = tmp_path / "sampled"
+    result = invoke("run", "instance-1", "--t-end", "3", "--sample", "0.25", "--no-report", "--quiet", "--out", folder)
+    assert result.exit_code == 0, result.stderr
+    trajectory = pd.read_parquet(folder / "trajectory.parquet")
+    np.testing.assert_allclose(trajectory.t, 1.0 + 0.25 * np.arange(9), rtol=0, atol=1e-12)
+    events = pd.read_parquet(folder / "events.parquet")
+    np.testing.assert_allclose(events.t, simulate("instance-1", t_end=3.0).events.t, rtol=0, atol=1e-8)
+    assert (folder / "figures" / "fig-a-displacement.png").is_file()
+
+
+@pytest.mark.parametrize(
+    ("value", "fragment"), [("0", "positive time step"), ("1e-12", "more than max_trajectory_rows")]
+)
+def test_bad_sample_steps_are_refused(tmp_path, value, fragment):
+    folder = tmp_path / "x"
+    assert_refused(invoke("run", "instance-1", "--sample", value, "--out", folder), "--sample", fragment, folder=folder)

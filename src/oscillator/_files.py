@@ -52,8 +52,7 @@ def replace_file(path: Path, text: str) -> None:
 def atomic_folder(target: Path) -> Iterator[Path]:
     """A hidden temporary folder next to ``target``, renamed to ``target`` when the block ends.
 
-    An existing non-empty ``target`` is replaced whole: it is renamed aside first, so a kill
-    between the two renames leaves the old folder under a hidden name, never a mixture.
+    ``target`` must not exist, or be an empty folder.
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -61,13 +60,7 @@ def atomic_folder(target: Path) -> Iterator[Path]:
     try:
         yield temporary
         os.chmod(temporary, 0o777 & ~_umask())
-        old = None
-        if target.exists() and any(target.iterdir()):
-            old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
-            os.replace(target, old / target.name)
         os.replace(temporary, target)  # allowed onto an empty folder
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
     except BaseException:
         shutil.rmtree(temporary, ignore_errors=True)
         raise

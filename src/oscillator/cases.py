@@ -216,7 +216,7 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
         options = SolverOptions(**option_values)
     except OscillatorError as exc:
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
-    expected = tuple(_expected(item, source) for item in data.get("expected", []))
+    expected = _expected_list(data, source)
     sweep = _sweep(_table(data, "sweep", source), source) if "sweep" in data else None
     try:
         return Case(
@@ -259,33 +259,64 @@ def _sweep(table: dict, source: str) -> SweepSettings:
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
 
 
-def _expected(item: Any, source: str) -> ExpectedEvent:
-    if not isinstance(item, dict):
-        raise OscillatorError(f"{source}: each [[expected]] entry must be a table", field="expected")
-    try:
-        kind = EventKind(item["kind"])
-        return ExpectedEvent(
-            t=float(parse_value(item["t"], field="expected.t")) if "t" in item else None,
-            mass=int(item["mass"]),
-            kind=kind,
-            to_domain=item.get("to_domain"),
-            reference=item.get("reference"),
-            tolerance=float(item.get("tolerance", 1e-3)),
-            reference_tolerance=float(item.get("reference_tolerance", 5e-5)),
-            label=str(item.get("label", "")),
-            note=str(item.get("note", "")),
+_EXPECTED_KEYS = ("label", "t", "reference", "mass", "kind", "to_domain", "tolerance", "reference_tolerance", "note")
+
+
+def _expected_list(data: dict, source: str) -> tuple[ExpectedEvent, ...]:
+    items = data.get("expected", [])
+    if not isinstance(items, list):
+        raise OscillatorError(
+            f"{source}: expected events are [[expected]] tables (an array of tables), got {items!r}",
+            field="expected",
         )
-    except KeyError as exc:
-        raise OscillatorError(
-            f"{source}: an [[expected]] entry lacks {exc.args[0]!r}; give mass and kind",
-            field="expected",
-        ) from exc
-    except ValueError as exc:
-        kinds = ", ".join(k.value for k in EventKind)
-        raise OscillatorError(
-            f"{source}: bad [[expected]] entry {item!r}: {exc}; kind is one of {kinds}",
-            field="expected",
-        ) from exc
+    return tuple(_expected(item, source) for item in items)
+
+
+def _expected(item: Any, source: str) -> ExpectedEvent:
+    """One ``[[expected]]`` table, every field checked."""
+
+    def refuse(what: str) -> OscillatorError:
+        return OscillatorError(f"{source}: [[expected]] {what}", field="expected")
+
+    if not isinstance(item, dict):
+        raise refuse(f"entries must be tables, got {item!r}")
+    for key in item:
+        if key not in _EXPECTED_KEYS:
+            raise refuse(f"unknown key {key!r}{_suggest(key, _EXPECTED_KEYS)} (known: {', '.join(_EXPECTED_KEYS)})")
+    for key in ("mass", "kind"):
+        if key not in item:
+            raise refuse(f"entry lacks {key!r}; give mass and kind")
+    kinds = [k.value for k in EventKind]
+    if item["kind"] not in kinds:
+        raise refuse(f"kind must be one of {', '.join(kinds)}, got {item['kind']!r}")
+    if item["mass"] not in (1, 2) or isinstance(item["mass"], bool):
+        raise refuse(f"mass must be 1 or 2, got {item['mass']!r}")
+    to_domain = item.get("to_domain")
+    if to_domain is not None and (isinstance(to_domain, bool) or to_domain not in range(9)):
+        raise refuse(f"to_domain must be a domain number 0-8, got {to_domain!r}")
+
+    def number(key: str, default: float | None, positive: bool = False) -> float | None:
+        if key not in item:
+            return default
+        value = _finite(f"expected.{key}", parse_value(item[key], field=f"expected.{key}"))
+        if positive and value <= 0:
+            raise refuse(f"{key} must be > 0, got {value!r}")
+        return value
+
+    for key in ("label", "note"):
+        if not isinstance(item.get(key, ""), str):
+            raise refuse(f"{key} must be text, got {item[key]!r}")
+    return ExpectedEvent(
+        t=number("t", None),
+        mass=int(item["mass"]),
+        kind=EventKind(item["kind"]),
+        to_domain=None if to_domain is None else int(to_domain),
+        reference=number("reference", None),
+        tolerance=number("tolerance", 1e-3, positive=True),
+        reference_tolerance=number("reference_tolerance", 5e-5, positive=True),
+        label=item.get("label", ""),
+        note=item.get("note", ""),
+    )
 
 
 def load_case(name_or_path: str | Path) -> Case:

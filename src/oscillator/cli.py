@@ -1,18 +1,21 @@
 """The ``oscillator`` command: list, show, run, check and report cases.
 
 Every refusal (unknown case or parameter, bad value, malformed file, unwritable folder) is one
-line naming the field and the fix, with exit code 2 and nothing written.  ``check`` exits 1
-when a time is outside its tolerance.
+line naming the field and the fix, with exit code 2 and nothing written.  A run that starts and
+then fails (solver error, guard) exits 1, and ``run`` writes its partial result marked
+``failed``; ``check`` exits 1 when a time is outside its tolerance.  Ctrl-C exits 130.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 import time
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
@@ -101,9 +104,26 @@ def _events_table(events, limit: int = 40) -> Table:
     return table
 
 
-def _simulate_with_progress(case: Case, quiet: bool):
+def _sample_grid(case: Case, sample: float | None):
+    """The grid of ``--sample DT``: every DT seconds from t0, and t_end."""
+    if sample is None:
+        return None
+    if not (math.isfinite(sample) and sample > 0):
+        raise OscillatorError(f"--sample must be a positive time step in s, got {sample!r}", field="--sample")
+    rows = (case.t_end - case.initial.t0) / sample
+    if rows > case.options.max_trajectory_rows:
+        raise OscillatorError(
+            f"--sample {sample:g} gives {rows:.3g} rows, more than max_trajectory_rows = "
+            f"{case.options.max_trajectory_rows}; give a longer step",
+            field="--sample",
+        )
+    grid = case.initial.t0 + sample * np.arange(math.floor(rows) + 1)
+    return np.unique(np.append(grid[grid < case.t_end], case.t_end))
+
+
+def _simulate_with_progress(case: Case, quiet: bool, t_eval=None):
     if quiet:
-        return simulate(case)
+        return simulate(case, t_eval=t_eval)
     span = case.t_end - case.initial.t0
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
                TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
@@ -117,7 +137,7 @@ def _simulate_with_progress(case: Case, quiet: bool):
                 last[0] = now
                 progress.update(task, completed=t - case.initial.t0, t=t)
 
-        return simulate(case, progress=report)
+        return simulate(case, t_eval=t_eval, progress=report)
 
 
 @app.command("list")
@@ -203,6 +223,10 @@ def run(
     fmt: Annotated[str, typer.Option("--format", help="Event table format: csv, parquet or both.")] = "both",
     no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the figures.")] = False,
     no_report: Annotated[bool, typer.Option("--no-report", help="Skip the Markdown/HTML report.")] = False,
+    sample: Annotated[
+        float | None,
+        typer.Option("--sample", help="Record the trajectory every DT s, not at every solver step (long runs)."),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
 ) -> None:
     """Run a case, print its switching events and write tables, figures and a report.
@@ -212,6 +236,7 @@ def run(
     * `oscillator run instance-3`
     * `oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7`
     * `oscillator run my-case.toml --format parquet --no-plots --quiet`
+    * `oscillator run instance-1 --t-end 20000 --sample 0.05` (a long run, trajectory every 0.05 s)
     """
     folder: Path | None = None
     try:
@@ -220,7 +245,7 @@ def run(
         resolved = _case(case, t_end, set_)
         folder = out_dir if out_dir is not None else default_output_folder(resolved.name)
         check_output_folder(folder)
-        result = _simulate_with_progress(resolved, quiet)
+        result = _simulate_with_progress(resolved, quiet, _sample_grid(resolved, sample))
         comparison = compare(resolved, result) if resolved.expected else None
 
         def extras(tmp: Path, info: dict) -> None:
@@ -275,7 +300,9 @@ def check(
             raise OscillatorError(f"case {resolved.name!r} has no [[expected]] events to check against", field="case")
         table = compare(resolved, simulate(resolved, record_trajectory=False))
     except OscillatorError as error:
-        raise _fail(str(error)) from None
+        raise _fail(str(error), code=1 if hasattr(error, "result") else 2) from None
+    except KeyboardInterrupt:
+        raise _fail("interrupted", code=130) from None
     view = Table(title=f"{resolved.name}: expected switching times", title_justify="left", header_style="bold")
     for column in ("event", "article", "reference", "ours", "ours − article", "ours − reference", "ok"):
         view.add_column(column)

@@ -17,6 +17,11 @@ from oscillator._errors import OscillatorError
 __all__ = ["InitialState", "Parameters", "SolverOptions", "SweepSettings"]
 
 
+#: The largest magnitude a parameter or initial value may have.  The fields raise states to the
+#: fourth power and multiply them by parameters; past this, forces leave floating point.
+MAX_MAGNITUDE = 1e100
+
+
 def _require_finite(owner: str, name: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise OscillatorError(
@@ -24,7 +29,10 @@ def _require_finite(owner: str, name: str, value: Any) -> float:
             f"write it as a plain number such as 1.0",
             field=name,
         )
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:
+        value = math.inf
     if not math.isfinite(value):
         raise OscillatorError(f"{owner}.{name} must be finite, got {value!r}; give a finite number", field=name)
     return value
@@ -34,7 +42,14 @@ def _coerce_all(obj: Any) -> None:
     """Check every field is a finite number and store it as ``float``."""
     owner = type(obj).__name__
     for f in fields(obj):
-        object.__setattr__(obj, f.name, _require_finite(owner, f.name, getattr(obj, f.name)))
+        value = _require_finite(owner, f.name, getattr(obj, f.name))
+        if abs(value) > MAX_MAGNITUDE:
+            raise OscillatorError(
+                f"{owner}.{f.name} = {value!r} is beyond any physical scale (|{f.name}| <= {MAX_MAGNITUDE:g}); "
+                f"check its units",
+                field=f.name,
+            )
+        object.__setattr__(obj, f.name, value)
 
 
 @dataclass(frozen=True, slots=True)
@@ -197,7 +212,7 @@ class SolverOptions:
         switching times within 1e-8 s of a 1e-13 run, over the article's instances and 20 forcing
         periods of Instance 1 (``tests/test_convergence.py``, ``docs/performance.md``).
     max_step_fraction : float
-        Largest step as a fraction of the forcing period, at most 0.25.  A resting mass's force
+        Largest step as a fraction of the forcing period, from 1e-6 to 0.25.  A resting mass's force
         turns twice per period; a step shorter than half a period cannot hide both turns, so
         the watched extrema always reveal two crossings hidden in one step.
     grazing_velocity_tolerance : float
@@ -209,6 +224,12 @@ class SolverOptions:
     max_events : int
         Stop with an error after this many switching events in one run (10^9 by default: a
         100,000-period run of Instance 1 has 10^6; chattering at one instant has its own guards).
+    max_periods : int
+        Refuse a run longer than this many forcing periods (10^8 by default: days of computing;
+        a run of Instance 1 makes about 100 periods per second).
+    max_trajectory_rows : int
+        Stop with an error when the recorded trajectory passes this many rows (5 x 10^6 by
+        default, about 1 GB): record it on a grid (``t_eval``) or not at all for long runs.
     max_num_steps : int
         CVODE's step limit between two outputs.
     """
@@ -221,6 +242,8 @@ class SolverOptions:
     max_events: int = 1_000_000_000
     storm_events: int = 1_000
     storm_window: float = 1e-3
+    max_periods: int = 100_000_000
+    max_trajectory_rows: int = 5_000_000
     max_num_steps: int = 100_000
 
     def __post_init__(self) -> None:
@@ -241,12 +264,18 @@ class SolverOptions:
                 f"longer step can hide the turns of the forcing), got {self.max_step_fraction!r}",
                 field="max_step_fraction",
             )
+        if self.max_step_fraction < 1e-6:
+            raise OscillatorError(
+                f"{owner}.max_step_fraction must be >= 1e-6 (a million steps per forcing period at "
+                f"most), got {self.max_step_fraction!r}",
+                field="max_step_fraction",
+            )
         for name in ("grazing_velocity_tolerance", "grazing_displacement_tolerance"):
             value = _require_finite(owner, name, getattr(self, name))
             if value < 0:
                 raise OscillatorError(f"{owner}.{name} must be >= 0, got {value!r}", field=name)
             object.__setattr__(self, name, value)
-        for name in ("max_events", "storm_events", "max_num_steps"):
+        for name in ("max_events", "storm_events", "max_periods", "max_trajectory_rows", "max_num_steps"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise OscillatorError(f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name)

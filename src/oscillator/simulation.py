@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
@@ -16,6 +17,11 @@ from oscillator.result import Result
 from oscillator.supervisor import Supervisor
 
 __all__ = ["resolve_case", "simulate"]
+
+
+def _arithmetic() -> np.errstate:
+    """Overflow and invalid arithmetic raise instead of spreading inf and nan through the decisions."""
+    return np.errstate(over="raise", invalid="raise", divide="raise")
 
 
 def resolve_case(case: Case | str | Path, *, t_end: float | None = None, **overrides: float) -> Case:
@@ -47,6 +53,25 @@ def resolve_case(case: Case | str | Path, *, t_end: float | None = None, **overr
         options=dataclasses.replace(case.options, **groups["options"]),
         t_end=case.t_end if t_end is None else t_end,
     )
+
+
+def _time(value: object, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or math.isnan(value):
+        raise OscillatorError(f"{name} must be a time in s (a number), got {value!r}", field=name)
+    return float(value)
+
+
+def _grid(t_eval: object) -> np.ndarray:
+    """``t_eval`` as a 1-D array of finite, increasing times."""
+    try:
+        grid = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise OscillatorError(f"t_eval must be a sequence of times in s, got {t_eval!r}", field="t_eval") from exc
+    if grid.ndim != 1 or not np.isfinite(grid).all() or np.any(np.diff(grid) <= 0):
+        raise OscillatorError(
+            "t_eval must be a one-dimensional sequence of finite, strictly increasing times in s", field="t_eval"
+        )
+    return grid
 
 
 def simulate(
@@ -104,10 +129,10 @@ def simulate(
     supervisor = Supervisor(
         case.parameters,
         case.options,
-        t_eval=t_eval,
-        record_trajectory=record_trajectory,
+        t_eval=None if t_eval is None else _grid(t_eval),
+        record_trajectory=bool(record_trajectory),
         progress=progress,
-        keep_events_from=-math.inf if keep_events_from is None else keep_events_from,
+        keep_events_from=-math.inf if keep_events_from is None else _time(keep_events_from, "keep_events_from"),
     )
     try:
         record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
@@ -116,6 +141,14 @@ def simulate(
         if partial is not None and partial.mode_initial is not None and partial.y_final is not None:
             status = "interrupted" if isinstance(error, KeyboardInterrupt) else "failed"
             failure = str(error) or "interrupted by the user"
-            error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
+            with contextlib.suppress(FloatingPointError, OverflowError, ZeroDivisionError), _arithmetic():
+                error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
         raise
-    return Result.from_record(case, record)
+    try:
+        with _arithmetic():
+            return Result.from_record(case, record)
+    except (FloatingPointError, OverflowError, ZeroDivisionError) as exc:
+        raise OscillatorError(
+            f"the energy audit left floating point ({exc}); give parameters and a start of physical size",
+            field="parameters",
+        ) from exc

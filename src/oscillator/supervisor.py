@@ -158,11 +158,27 @@ class Supervisor:
 
         The partial record is attached to the error as ``error.partial``.
         """
+        periods = (t_end - t0) / self.params.period
+        if periods > self.options.max_periods:
+            raise OscillatorError(
+                f"t_end - t0 = {t_end - t0:.6g} s is {periods:.3g} forcing periods, more than max_periods = "
+                f"{self.options.max_periods}; shorten t_end (or check Omega), or raise max_periods",
+                field="max_periods",
+            )
         record = RunRecord()
         self._recent.clear()
         started = time.perf_counter()
         try:
-            self._run(record, t0, y0, t_end)
+            with np.errstate(over="raise", invalid="raise", divide="raise"):  # no inf or nan in decisions
+                self._run(record, t0, y0, t_end)
+        except (FloatingPointError, OverflowError, ZeroDivisionError) as exc:
+            error = OscillatorError(
+                f"arithmetic failed after t = {record.t_final:.10g} s ({exc}): the forces leave floating point; "
+                f"give parameters and a start of physical size",
+                field="parameters",
+            )
+            error.partial = record  # type: ignore[attr-defined]
+            raise error from exc
         except (OscillatorError, KeyboardInterrupt) as error:
             error.partial = record  # type: ignore[attr-defined]
             raise
@@ -172,6 +188,13 @@ class Supervisor:
 
     def _record(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         if self.record_trajectory:
+            if len(record.t) >= self.options.max_trajectory_rows:
+                raise OscillatorError(
+                    f"the trajectory passed max_trajectory_rows = {self.options.max_trajectory_rows} rows at "
+                    f"t = {t:.10g} s; record it on a grid (t_eval; --sample DT on the command line) or not at "
+                    f"all, shorten t_end, or raise max_trajectory_rows",
+                    field="max_trajectory_rows",
+                )
             record.t.append(t)
             record.y.append(y[:4].copy())
             record.modes.append(mode)
