@@ -70,3 +70,17 @@ def test_error_lines_quoted_in_the_cli_guide_are_what_the_command_prints():
         printed = CliRunner().invoke(app, args).stderr.strip()
         quoted = printed.split(" (")[0] if "Omgea" in printed else printed
         assert quoted in guide, printed
+
+
+def test_the_solver_settings_listed_in_the_case_guide_are_every_option_with_its_default():
+    from oscillator import SolverOptions
+
+    text = (ROOT / "docs" / "cases.md").read_text(encoding="utf-8")
+    listed = text.split("# optional solver settings, with their defaults:\n", 1)[1].split("\n\n", 1)[0]
+    defaults = {}
+    for line in listed.splitlines():
+        name, _, value = line.lstrip("# ").partition(" = ")
+        defaults[name.strip()] = float(value.split("#")[0])
+    assert set(defaults) == set(SolverOptions.names())
+    for name, value in defaults.items():
+        assert getattr(SolverOptions(), name) == value, name

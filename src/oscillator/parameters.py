@@ -277,8 +277,10 @@ class SolverOptions:
             object.__setattr__(self, name, value)
         for name in ("max_events", "storm_events", "max_periods", "max_trajectory_rows", "max_num_steps"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise OscillatorError(f"{owner}.{name} must be a whole number >= 1, got {value!r}", field=name)
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 10**12:
+                raise OscillatorError(
+                    f"{owner}.{name} must be a whole number from 1 to 10^12, got {value!r}", field=name
+                )
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
