@@ -159,7 +159,8 @@ def test_a_failed_run_writes_its_partial_result_marked_failed(tmp_path):
     assert result.stderr.strip().startswith("error: event storm") and "Traceback" not in result.stderr
     assert f"is in {folder}" in result.stderr and '"status": "failed"' in result.stderr
     info = json.loads((folder / "run.json").read_text(encoding="utf-8"))
-    assert info["status"] == "failed" and info["failure"].startswith("event storm: 1001 events")
+    assert info["complete"] is False and info["status"] == "failed"
+    assert info["failure"].startswith("event storm: 1001 events")
     events = read_events_csv(folder / "events.csv")
     assert len(events) == 1001 and info["t_final"] == events.t.iloc[-1]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
@@ -173,7 +174,7 @@ def test_a_complete_run_says_so(tmp_path):
     folder = tmp_path / "run"
     assert invoke("run", "instance-1", "--no-plots", "--no-report", "--quiet", "--out", folder).exit_code == 0
     info = json.loads((folder / "run.json").read_text(encoding="utf-8"))
-    assert info["status"] == "complete" and info["failure"] is None
+    assert info["complete"] is True and info["status"] == "complete" and info["failure"] is None
 
 
 def _start(command: list[str]) -> subprocess.Popen:

@@ -101,6 +101,7 @@ def run_info(result: Result, *, command: list[str] | None = None) -> dict:
         "case": case.name,
         "source": str(case.source) if case.source else None,
         "title": case.title,
+        "complete": result.complete,
         "status": result.status,
         "failure": result.failure,
         "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
