@@ -35,6 +35,18 @@ def make_case(t_end, *, initial, name="constructed", options=None, **params):
     )
 
 
+def assert_same_tables(a, b):
+    """Two sweeps' tables (``read_sweep``) are equal, but for wall times."""
+    import pandas as pd
+
+    from oscillator.sweep import TABLES
+
+    for name in TABLES:
+        left = a[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
+        right = b[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
+        pd.testing.assert_frame_equal(left, right)
+
+
 @pytest.fixture
 def build():
     return make_case

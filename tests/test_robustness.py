@@ -21,11 +21,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from conftest import make_case
+from conftest import assert_same_tables, make_case
 from oscillator import OscillatorError, Parameters, SolverOptions, load_case, simulate
 from oscillator.cases import case_to_toml
 from oscillator.cli import app
 from oscillator.output import read_events_csv, read_run
+from oscillator.sweep import read_sweep
 
 runner = CliRunner()
 
@@ -286,13 +287,7 @@ def test_a_sweep_interrupted_with_sigint_resumes_to_the_same_tables(tmp_path):
     assert json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["status"] != "complete"
     resumed = invoke("sweep", "bifurcation-omega", *arguments, "--out", folder)
     assert resumed.exit_code == 0, resumed.stderr
-    from oscillator.sweep import read_sweep
-
-    for name, table in read_sweep(tmp_path / "reference").items():
-        other = read_sweep(folder)[name]
-        left = table.drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
-        right = other.drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
-        assert left.equals(right), name
+    assert_same_tables(read_sweep(tmp_path / "reference"), read_sweep(folder))
 
 
 # ----------------------------------------------------------------------------- fuzzing

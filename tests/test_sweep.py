@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import make_case
+from conftest import assert_same_tables, make_case
 from oscillator import OscillatorError, SweepSettings, load_case
 from oscillator.sweep import TABLES, detect_period, locate, read_sweep, run_point, run_sweep, sliding_ranges
 
@@ -29,13 +29,6 @@ def serial(case, tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweeps") / "serial"
     run_sweep(case, SweepSettings(**SMALL), folder, workers=1)
     return read_sweep(folder)
-
-
-def assert_same_tables(a, b):
-    for name in TABLES:
-        left = a[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
-        right = b[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)
-        pd.testing.assert_frame_equal(left, right)
 
 
 def test_tables_carry_the_swept_parameter_and_a_sliding_flag(serial):

@@ -14,14 +14,9 @@ from oscillator._errors import OscillatorError
 from oscillator.cases import Case, _suggest, load_case
 from oscillator.parameters import InitialState, Parameters, SolverOptions
 from oscillator.result import Result
-from oscillator.supervisor import Supervisor
+from oscillator.supervisor import ARITHMETIC_ERRORS, Supervisor, strict_arithmetic
 
 __all__ = ["resolve_case", "simulate"]
-
-
-def _arithmetic() -> np.errstate:
-    """Overflow and invalid arithmetic raise instead of spreading inf and nan through the decisions."""
-    return np.errstate(over="raise", invalid="raise", divide="raise")
 
 
 def resolve_case(case: Case | str | Path, *, t_end: float | None = None, **overrides: float) -> Case:
@@ -141,13 +136,13 @@ def simulate(
         if partial is not None and partial.mode_initial is not None and partial.y_final is not None:
             status = "interrupted" if isinstance(error, KeyboardInterrupt) else "failed"
             failure = str(error) or "interrupted by the user"
-            with contextlib.suppress(FloatingPointError, OverflowError, ZeroDivisionError), _arithmetic():
+            with contextlib.suppress(*ARITHMETIC_ERRORS), strict_arithmetic():
                 error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
         raise
     try:
-        with _arithmetic():
+        with strict_arithmetic():
             return Result.from_record(case, record)
-    except (FloatingPointError, OverflowError, ZeroDivisionError) as exc:
+    except ARITHMETIC_ERRORS as exc:
         raise OscillatorError(
             f"the energy audit left floating point ({exc}); give parameters and a start of physical size",
             field="parameters",

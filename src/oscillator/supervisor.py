@@ -37,7 +37,17 @@ from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode
 from oscillator.switching import Resolution, initial_mode, resolve
 
-__all__ = ["RunRecord", "Supervisor"]
+__all__ = ["ARITHMETIC_ERRORS", "RunRecord", "Supervisor", "strict_arithmetic"]
+
+#: What :func:`strict_arithmetic` and Python's own float arithmetic raise when numbers leave
+#: floating point.
+ARITHMETIC_ERRORS = (FloatingPointError, OverflowError, ZeroDivisionError)
+
+
+def strict_arithmetic() -> np.errstate:
+    """Overflow and invalid arithmetic raise instead of spreading inf and nan through the decisions."""
+    return np.errstate(over="raise", invalid="raise", divide="raise")
+
 
 #: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
 _ROOT_RETURN = 2
@@ -169,9 +179,9 @@ class Supervisor:
         self._recent.clear()
         started = time.perf_counter()
         try:
-            with np.errstate(over="raise", invalid="raise", divide="raise"):  # no inf or nan in decisions
+            with strict_arithmetic():
                 self._run(record, t0, y0, t_end)
-        except (FloatingPointError, OverflowError, ZeroDivisionError) as exc:
+        except ARITHMETIC_ERRORS as exc:
             error = OscillatorError(
                 f"arithmetic failed after t = {record.t_final:.10g} s ({exc}): the forces leave floating point; "
                 f"give parameters and a start of physical size",
