@@ -257,8 +257,9 @@ def test_a_failure_while_writing_leaves_no_half_written_folder(tmp_path, monkeyp
 
     monkeypatch.setattr("oscillator.output.case_to_toml", broken)
     folder = tmp_path / "x"
-    with pytest.raises(OSError):
-        runner.invoke(app, ["run", "instance-1", "--out", str(folder), "--no-plots"], catch_exceptions=False)
+    result = runner.invoke(app, ["run", "instance-1", "--out", str(folder), "--no-plots"], catch_exceptions=False)
+    assert result.exit_code == 1 and "Traceback" not in result.stderr
+    assert result.stderr.startswith(f"error: cannot write the run to {folder}: No space left on device")
     assert not folder.exists() and list(tmp_path.iterdir()) == []
 
 
@@ -332,3 +333,16 @@ def test_sample_records_the_trajectory_on_a_grid_with_the_same_events(tmp_path):
 def test_bad_sample_steps_are_refused(tmp_path, value, fragment):
     folder = tmp_path / "x"
     assert_refused(invoke("run", "instance-1", "--sample", value, "--out", folder), "--sample", fragment, folder=folder)
+
+
+def test_a_run_without_events_writes_typed_tables_and_reports(tmp_path):
+    """mu_s = 10: no force reaches a flow barrier (mu_s g = 98 N/kg; the forces stay below 70 N/kg)."""
+    folder = tmp_path / "still"
+    result = invoke("run", "instance-1", "--set", "mu_s=10", "--no-plots", "--out", folder)
+    assert result.exit_code == 0, result.stderr
+    assert "no switching events" in result.stdout
+    events = pd.read_parquet(folder / "events.parquet")
+    assert events.empty and events.t.dtype == float and events.mass.dtype == "int64"
+    rebuilt = invoke("report", folder)
+    assert rebuilt.exit_code == 0, rebuilt.stderr
+    assert "No switching event: each mass stays in its domain." in (folder / "report.md").read_text()

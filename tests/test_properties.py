@@ -11,7 +11,8 @@ from oscillator.phase_space import contacts_of_state, velocity_sign
 
 
 def positive(lo, hi):
-    return st.floats(lo, hi, allow_nan=False, allow_infinity=False)
+    """A float in [lo, hi]; magnitudes below 1e-100 (refused as below any physical scale) as 0."""
+    return st.floats(lo, hi, allow_nan=False, allow_infinity=False).map(lambda v: 0.0 if abs(v) < 1e-100 else v)
 
 
 @st.composite

@@ -226,15 +226,19 @@ KILLED_WHILE_WRITING = textwrap.dedent(
     import sys, time
     from pathlib import Path
     from oscillator import simulate
-    from oscillator.output import write_run
+    from oscillator import output
 
     result = simulate("instance-3")
+    claim = output.claim_output(Path(sys.argv[1]), "instance-3")
+    to_toml = output.case_to_toml
 
-    def extras(tmp, info):
+    def slow(case):  # the tables are written by now, case.toml and run.json not yet
         print("writing", flush=True)
         time.sleep(60)
+        return to_toml(case)
 
-    write_run(result, Path(sys.argv[1]), extras=extras)
+    output.case_to_toml = slow
+    output.write_run(result, claim)
     """
 )
 
@@ -431,3 +435,77 @@ def test_fuzzed_keywords_of_simulate_run_or_are_refused(t_end, t_eval, keep):
         assert str(error) and error.field is not None
         return
     assert result.complete
+
+
+# ----------------------------------------------------------------------------- the library's own input
+
+
+def test_a_progress_that_is_not_a_function_is_refused():
+    with pytest.raises(OscillatorError, match="progress must be a function") as caught:
+        simulate("instance-1", progress="x")
+    assert caught.value.field == "progress"
+
+
+def test_an_exception_of_the_progress_callback_reaches_the_caller_unchanged():
+    def progress(t):
+        raise ZeroDivisionError("the caller's own bug")
+
+    with pytest.raises(ZeroDivisionError, match="the caller's own bug"):
+        simulate("instance-1", progress=progress)
+
+
+def test_numpy_numbers_are_numbers():
+    plain = simulate("instance-1", Omega=1.5, max_events=10**6, record_trajectory=False)
+    numpy = simulate("instance-1", Omega=np.float32(1.5), max_events=np.int64(10**6), record_trajectory=False)
+    np.testing.assert_array_equal(plain.events.t, numpy.events.t)
+    with pytest.raises(OscillatorError, match="must be a number"):
+        simulate("instance-1", Omega=np.bool_(True))
+
+
+def test_grid_times_outside_the_run_are_refused_not_dropped():
+    with pytest.raises(OscillatorError, match=r"t_eval holds t = 0.5 s, outside the run \[t0, t_end\] = \[1.0, 1.9\]"):
+        simulate("instance-1", t_eval=[0.5, 1.2])
+    with pytest.raises(OscillatorError, match=r"t = 2\.0 s, outside"):
+        simulate("instance-1", t_eval=[1.2, 2.0])
+
+
+def test_the_step_limit_holds_when_every_step_is_recorded():
+    with pytest.raises(OscillatorError, match="more than max_num_steps = 5 steps without a switch") as caught:
+        simulate("instance-1", max_num_steps=5)
+    partial = caught.value.result
+    assert caught.value.field == "max_num_steps" and partial.status == "failed"
+    after_last_switch = partial.trajectory.t > partial.events.t.iloc[-1]
+    assert after_last_switch.sum() == 6  # five steps allowed, the sixth stops the run
+
+
+@pytest.mark.parametrize(("name", "value"), [("Omega", 5e-324), ("m1", 1e-200), ("g", 1e-101)])
+def test_positive_parameters_below_any_physical_scale_are_refused(name, value):
+    with pytest.raises(OscillatorError, match="below any physical scale") as caught:
+        simulate("instance-1", **{name: value})
+    assert caught.value.field == name
+
+
+def test_run_json_is_strict_json_even_with_infinite_values():
+    import json
+
+    from oscillator.output import json_text
+
+    text = json_text({"energy": {"E0": math.inf, "residual": math.nan, "E1": np.float64(2.5)}, "n": np.int64(3)})
+    assert json.loads(text) == {"energy": {"E0": None, "residual": None, "E1": 2.5}, "n": 3}
+    assert "Infinity" not in text and "NaN" not in text
+
+
+@pytest.mark.parametrize(
+    ("changes", "fragment"),
+    [
+        ({"mass": True}, "mass must be 1 or 2"),
+        ({"steps": 10**12}, "steps must be a whole number from 1 to 100,000"),
+        ({"record": 10**12}, "record must be a whole number from 1 to 100,000"),
+        ({"transient": 2.5}, "transient must be a whole number"),
+    ],
+)
+def test_sweep_settings_that_could_not_finish_are_refused(changes, fragment):
+    from oscillator import SweepSettings
+
+    with pytest.raises(OscillatorError, match=re.escape(fragment)):
+        SweepSettings(**{"param": "Omega", "start": 1.5, "stop": 1.7, **changes})

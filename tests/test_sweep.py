@@ -94,12 +94,6 @@ def test_a_folder_of_another_sweep_is_refused(case, tmp_path):
         run_sweep(case, SweepSettings(**{**SMALL, "steps": 1, "record": 4}), tmp_path / "s", workers=1)
 
 
-def test_an_unreachable_scheduler_is_a_clear_error(case, tmp_path):
-    pytest.importorskip("distributed")
-    with pytest.raises(OscillatorError, match="cannot reach the Dask scheduler"):
-        run_sweep(case, SweepSettings(**{**SMALL, "steps": 1}), tmp_path / "s", scheduler="tcp://127.0.0.1:9")
-
-
 def test_a_refused_value_is_a_failed_row_not_a_crash(case):
     point = run_point(case, SweepSettings(param="mu_s", start=0.05, stop=0.2, steps=2), 0, 0.05)
     row = point.summary.iloc[0]

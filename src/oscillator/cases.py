@@ -14,6 +14,7 @@ import dataclasses
 import difflib
 import math
 import operator
+import os
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -21,10 +22,19 @@ from pathlib import Path
 from typing import Any
 
 from oscillator._errors import OscillatorError
+from oscillator._files import read_untrusted
+from oscillator._text import printable, shown, unsafe_characters
 from oscillator.events import EventKind
-from oscillator.parameters import InitialState, Parameters, SolverOptions, SweepSettings
+from oscillator.parameters import InitialState, Parameters, SolverOptions, SweepSettings, is_number
 
-__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "parse_value"]
+__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "parse_value", "resolve_case"]
+
+#: The largest case file read (bytes); the article's cases are about 2 kB.
+MAX_CASE_BYTES = 1 << 20
+#: The longest expression evaluated, in characters (``"2*pi/3"`` is 6).
+MAX_EXPRESSION = 200
+#: The longest texts a case may carry, in characters.
+MAX_TEXT = {"title": 300, "description": 10_000, "label": 300, "note": 2_000}
 
 _OPERATORS = {
     ast.Add: operator.add,
@@ -40,10 +50,17 @@ _OPERATORS = {
 def parse_value(value: Any, *, field: str) -> Any:
     """A number from a case file: a TOML number, or a string such as ``"pi/8"``.
 
-    Only numbers, ``pi``, ``+ - * / **`` and parentheses are allowed in strings.
+    Only numbers, ``pi``, ``+ - * / **`` and parentheses are allowed in strings, at most
+    :data:`MAX_EXPRESSION` characters.
     """
     if not isinstance(value, str):
         return value
+    if len(value) > MAX_EXPRESSION:
+        raise OscillatorError(
+            f"{field} is an expression of {len(value):,} characters; at most {MAX_EXPRESSION} are read. "
+            f'Write a number or a short expression such as "pi/8"',
+            field=field,
+        )
 
     def evaluate(node: ast.AST) -> float:
         if isinstance(node, ast.Expression):
@@ -60,9 +77,10 @@ def parse_value(value: Any, *, field: str) -> Any:
 
     try:
         result = evaluate(ast.parse(value.strip(), mode="eval"))
-    except (SyntaxError, ValueError, TypeError, ZeroDivisionError, OverflowError, RecursionError) as exc:
+    except (SyntaxError, ValueError, TypeError, ArithmeticError, RecursionError, MemoryError) as exc:
         raise OscillatorError(
-            f'{field} = {value!r} is not a number; write a number or an expression of numbers and pi such as "pi/8"',
+            f"{field} = {printable(repr(value))} is not a number; write a number or an expression of numbers "
+            f'and pi such as "pi/8"',
             field=field,
         ) from exc
     return result
@@ -131,9 +149,13 @@ class Case:
 
 
 def _finite(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise OscillatorError(f"{name} must be a finite number, got {value!r}", field=name)
-    return float(value)
+    try:
+        number = float(value) if is_number(value) else math.nan
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise OscillatorError(f"{name} must be a finite number, got {shown(value)}", field=name)
+    return number
 
 
 def _cases_dir() -> Path:
@@ -151,6 +173,8 @@ def case_names() -> list[str]:
 
 
 def _suggest(word: str, choices: list[str] | tuple[str, ...]) -> str:
+    if not isinstance(word, str) or len(word) > 64:
+        return ""
     close = difflib.get_close_matches(word, list(choices), n=3, cutoff=0.5)
     return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
 
@@ -168,7 +192,7 @@ def _build(cls: type, table: dict, section: str, source: str, defaults: dict | N
     for key, raw in table.items():
         if key not in names:
             raise OscillatorError(
-                f"{source}: unknown {section} {key!r}{_suggest(key, names)} (known: {', '.join(names)})",
+                f"{source}: unknown {section} {shown(key)}{_suggest(key, names)} (known: {', '.join(names)})",
                 field=key,
             )
         values[key] = parse_value(raw, field=f"{section}.{key}")
@@ -201,13 +225,14 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
     known = {"title", "description", "parameters", "initial", "run", "expected", "sweep"}
     for key in data:
         if key not in known:
-            raise OscillatorError(f"{source}: unknown top-level key {key!r}{_suggest(key, sorted(known))}", field=key)
+            hint = _suggest(key, sorted(known))
+            raise OscillatorError(f"{source}: unknown top-level key {shown(key)}{hint}", field=str(key))
     params = _build(Parameters, _table(data, "parameters", source), "parameters", source)
     initial = _build(InitialState, _table(data, "initial", source), "initial", source)
     run = dict(_table(data, "run", source))
     for key in run:
         if key not in _RUN_KEYS:
-            raise OscillatorError(f"{source}: unknown run setting {key!r}{_suggest(key, _RUN_KEYS)}", field=key)
+            raise OscillatorError(f"{source}: unknown run setting {shown(key)}{_suggest(key, _RUN_KEYS)}", field=key)
     if "t_end" not in run:
         raise OscillatorError(f"{source}: [run] needs t_end = <end time in s>", field="t_end")
     t_end = parse_value(run.pop("t_end"), field="run.t_end")
@@ -218,6 +243,7 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
     expected = _expected_list(data, source)
     sweep = _sweep(_table(data, "sweep", source), source) if "sweep" in data else None
+    title, description = _text(data, "title", source), _text(data, "description", source)
     try:
         return Case(
             name=name,
@@ -225,14 +251,34 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
             initial=initial,
             t_end=t_end,
             options=options,
-            title=str(data.get("title", "")),
-            description=str(data.get("description", "")),
+            title=title,
+            description=description,
             expected=expected,
             sweep=sweep,
             source=path,
         )
     except OscillatorError as exc:
         raise OscillatorError(f"{source}: {exc}", field=exc.field) from exc
+
+
+def _text(table: dict, key: str, source: str, *, where: str = "") -> str:
+    """A text of the case (title, description, label, note): a string of bounded length,
+    without control characters (descriptions and notes may hold line breaks and tabs)."""
+    value = table.get(key, "")
+    name = f"{where}{key}"
+    if not isinstance(value, str):
+        raise OscillatorError(f"{source}: {name} must be text in quotes, got {printable(repr(value))[:80]}",
+                              field=name)  # fmt: skip
+    if len(value) > MAX_TEXT[key]:
+        raise OscillatorError(
+            f"{source}: {name} is {len(value):,} characters long; at most {MAX_TEXT[key]:,} are allowed", field=name
+        )
+    bad = unsafe_characters(value, allow="\n\t\r" if key in ("description", "note") else "")
+    if bad:
+        raise OscillatorError(
+            f"{source}: {name} holds the control character {printable(bad[0])!s}; remove it", field=name
+        )
+    return value
 
 
 #: Case-file keys of ``[sweep]`` and the SweepSettings fields they fill.
@@ -244,7 +290,7 @@ def _sweep(table: dict, source: str) -> SweepSettings:
     for key, raw in table.items():
         if key not in _SWEEP_KEYS:
             raise OscillatorError(
-                f"{source}: unknown sweep setting {key!r}{_suggest(key, list(_SWEEP_KEYS))}", field=key
+                f"{source}: unknown sweep setting {shown(key)}{_suggest(key, list(_SWEEP_KEYS))}", field=key
             )
         values[_SWEEP_KEYS[key]] = raw if key in ("param",) else parse_value(raw, field=f"sweep.{key}")
     for name in ("steps", "transient", "record", "mass", "max_period"):
@@ -266,7 +312,7 @@ def _expected_list(data: dict, source: str) -> tuple[ExpectedEvent, ...]:
     items = data.get("expected", [])
     if not isinstance(items, list):
         raise OscillatorError(
-            f"{source}: expected events are [[expected]] tables (an array of tables), got {items!r}",
+            f"{source}: expected events are [[expected]] tables (an array of tables), got {shown(items)}",
             field="expected",
         )
     return tuple(_expected(item, source) for item in items)
@@ -279,21 +325,22 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
         return OscillatorError(f"{source}: [[expected]] {what}", field="expected")
 
     if not isinstance(item, dict):
-        raise refuse(f"entries must be tables, got {item!r}")
+        raise refuse(f"entries must be tables, got {shown(item)}")
     for key in item:
         if key not in _EXPECTED_KEYS:
-            raise refuse(f"unknown key {key!r}{_suggest(key, _EXPECTED_KEYS)} (known: {', '.join(_EXPECTED_KEYS)})")
+            hint = _suggest(key, _EXPECTED_KEYS)
+            raise refuse(f"unknown key {shown(key)}{hint} (known: {', '.join(_EXPECTED_KEYS)})")
     for key in ("mass", "kind"):
         if key not in item:
             raise refuse(f"entry lacks {key!r}; give mass and kind")
     kinds = [k.value for k in EventKind]
     if item["kind"] not in kinds:
-        raise refuse(f"kind must be one of {', '.join(kinds)}, got {item['kind']!r}")
+        raise refuse(f"kind must be one of {', '.join(kinds)}, got {shown(item['kind'])}")
     if item["mass"] not in (1, 2) or isinstance(item["mass"], bool):
-        raise refuse(f"mass must be 1 or 2, got {item['mass']!r}")
+        raise refuse(f"mass must be 1 or 2, got {shown(item['mass'])}")
     to_domain = item.get("to_domain")
     if to_domain is not None and (isinstance(to_domain, bool) or to_domain not in range(9)):
-        raise refuse(f"to_domain must be a domain number 0-8, got {to_domain!r}")
+        raise refuse(f"to_domain must be a domain number 0-8, got {shown(to_domain)}")
 
     def number(key: str, default: float | None, positive: bool = False) -> float | None:
         if key not in item:
@@ -303,9 +350,7 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
             raise refuse(f"{key} must be > 0, got {value!r}")
         return value
 
-    for key in ("label", "note"):
-        if not isinstance(item.get(key, ""), str):
-            raise refuse(f"{key} must be text, got {item[key]!r}")
+    label, note = (_text(item, key, source, where="[[expected]] ") for key in ("label", "note"))
     return ExpectedEvent(
         t=number("t", None),
         mass=int(item["mass"]),
@@ -314,13 +359,16 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
         reference=number("reference", None),
         tolerance=number("tolerance", 1e-3, positive=True),
         reference_tolerance=number("reference_tolerance", 5e-5, positive=True),
-        label=item.get("label", ""),
-        note=item.get("note", ""),
+        label=label,
+        note=note,
     )
 
 
 def load_case(name_or_path: str | Path) -> Case:
     """Load a shipped case by name (``"instance-3"``) or a case file by path.
+
+    A case file is read as untrusted text: it must be a regular UTF-8 file of at most
+    :data:`MAX_CASE_BYTES` (a FIFO, device or folder is refused without being read).
 
     Raises
     ------
@@ -330,24 +378,67 @@ def load_case(name_or_path: str | Path) -> Case:
     """
     text_name = str(name_or_path)
     path = Path(text_name)
-    if not (path.suffix == ".toml" or path.exists()):
+    if not (path.suffix == ".toml" or os.path.lexists(path)):
         path = _cases_dir() / f"{text_name}.toml"
         if not path.is_file():
             names = case_names()
             raise OscillatorError(
-                f"unknown case {text_name!r}{_suggest(text_name, names)} "
+                f"unknown case {printable(repr(text_name))}{_suggest(text_name, names)} "
                 f"(named cases: {', '.join(names)}; or give the path of a .toml file)",
                 field="case",
             )
+    shown = printable(str(path))
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise OscillatorError(f"cannot read case file {path}: {exc.strerror}", field="case") from exc
+        text_name.encode("utf-8")
+    except UnicodeEncodeError:
+        raise OscillatorError(f"case file {shown}: its name is not UTF-8 text; rename the file", field="case") from None
+    text = read_untrusted(path, what="case file", field="case", limit=MAX_CASE_BYTES)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise OscillatorError(f"{path}: malformed TOML: {exc}", field="case") from exc
-    return case_from_dict(data, name=path.stem, source=str(path), path=path)
+        raise OscillatorError(f"{shown}: malformed TOML: {exc}", field="case") from exc
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise OscillatorError(f"{shown}: malformed TOML: an integer has more than 4300 digits", field="case") from exc
+    except (RecursionError, MemoryError) as exc:
+        raise OscillatorError(f"{shown}: malformed TOML: arrays or tables nested too deeply", field="case") from exc
+    return case_from_dict(data, name=path.stem, source=shown, path=path)
+
+
+#: The names an override may set, by the part of the case they belong to.
+_OVERRIDABLE = (
+    ("parameters", Parameters.names()),
+    ("initial", InitialState.names()),
+    ("options", SolverOptions.names()),
+)
+
+
+def check_setting(name: str) -> None:
+    """Refuse a name that is neither a parameter, an initial value nor a solver option."""
+    known = [n for _, names in _OVERRIDABLE for n in names]
+    if name not in known:
+        raise OscillatorError(
+            f"unknown setting {shown(name)}{_suggest(name, known)} (parameters, initial state "
+            f"t0 x1 v1 x2 v2, or solver options {', '.join(SolverOptions.names())})",
+            field=str(name),
+        )
+
+
+def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **overrides: float) -> Case:
+    """The case with overrides applied: parameter, initial-state and solver-option names."""
+    if not isinstance(case, Case):
+        case = load_case(case)
+    groups: dict[str, dict] = {group: {} for group, _ in _OVERRIDABLE}
+    for key, value in overrides.items():
+        check_setting(key)
+        group = next(group for group, names in _OVERRIDABLE if key in names)
+        groups[group][key] = value
+    return dataclasses.replace(
+        case,
+        parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
+        initial=dataclasses.replace(case.initial, **groups["initial"]),
+        options=dataclasses.replace(case.options, **groups["options"]),
+        t_end=case.t_end if t_end is None else t_end,
+    )
 
 
 def case_to_toml(case: Case) -> str:

@@ -1,45 +1,48 @@
-"""The ``oscillator`` command: list, show, run, check and report cases.
+"""The ``oscillator`` command: list, show, run, check, report, sweep and locate.
 
-Every refusal (unknown case or parameter, bad value, malformed file, unwritable folder) is one
-line naming the field and the fix, with exit code 2 and nothing written.  A run that starts and
-then fails (solver error, guard) exits 1, and ``run`` writes its partial result marked
-``failed``; ``check`` exits 1 when a time is outside its tolerance.  Ctrl-C exits 130.
+The rule for exit codes:
+
+* **2** - the input was refused before anything ran (unknown case or parameter, bad value,
+  malformed or damaged file, an output folder that is taken or cannot be written): one line
+  naming the field and the fix, and nothing created.
+* **1** - work started and could not finish (a solver error, a guard, a full disk, a figure
+  that could not be drawn): what was computed is kept (``run`` writes its partial result marked
+  ``failed``; ``sweep`` keeps its finished points); or ``check`` found a time out of tolerance.
+* **130** - interrupted (Ctrl-C): the same as 1, marked ``interrupted``.
+
+Text that is not the program's own (titles, labels, paths, values) is printed as plain text,
+never as markup, with control characters escaped.  The numerical libraries are imported only
+by the commands that compute, so ``--help`` and refusals are quick.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
+import os
 import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
-from rich.markup import escape
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
-from oscillator import OscillatorError, __version__, case_names, load_case
-from oscillator._files import replace_file
-from oscillator.cases import Case, parse_value
-from oscillator.output import FORMATS, check_output_folder, default_output_folder, read_run, write_run
+from oscillator import __version__
+from oscillator._errors import OscillatorError
+from oscillator._files import check_name
+from oscillator._signals import interrupts_deferred
+from oscillator._text import printable, shown
+from oscillator.cases import Case, case_names, check_setting, load_case, parse_value, resolve_case
 from oscillator.parameters import SolverOptions, SweepSettings
-from oscillator.plotting import write_figures, write_sweep_figures
-from oscillator.report import render_html, render_markdown
-from oscillator.reproduction import compare
-from oscillator.simulation import resolve_case, simulate
-from oscillator.sweep import locate as locate_change
-from oscillator.sweep import read_sweep, run_sweep, sliding_ranges
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator._files import FolderClaim
+    from oscillator.result import Result
 
 __all__ = ["app", "main"]
 
@@ -52,18 +55,47 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     rich_markup_mode="markdown",
 )
-out = Console(highlight=False, soft_wrap=True)
-err = Console(stderr=True, highlight=False)
+#: Consoles that never read markup or emoji codes in what they print.
+out = Console(highlight=False, soft_wrap=True, markup=False, emoji=False)
+err = Console(stderr=True, highlight=False, soft_wrap=True, markup=False, emoji=False)
 _INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
+FORMATS = ("csv", "parquet", "both")
 
 
-class BadInput(Exception):
-    """Raised inside commands for refusals that are not the library's own."""
+class Refused(Exception):
+    """Input refused before anything ran: exit 2."""
+
+
+#: Whether a command has printed its own error (an interrupt that Typer turned into exit 130
+#: before the command ran has not).
+_reported = False
 
 
 def _fail(message: str, code: int = 2) -> typer.Exit:
-    err.print(f"[bold red]error:[/] {escape(message)}", soft_wrap=True)
+    global _reported
+    _reported = True
+    lines = str(message).split("\n")
+    err.print(Text.assemble(("error:", "bold red"), " ", printable(lines[0])))
+    for line in lines[1:]:
+        err.print(printable(line))
     return typer.Exit(code)
+
+
+def _say(*parts: str | tuple[str, str]) -> None:
+    """Print plain text (user text is never markup); ``(text, style)`` pairs are styled."""
+    out.print(Text.assemble(*((printable(p[0]), p[1]) if isinstance(p, tuple) else printable(p) for p in parts)))
+
+
+def _load(*modules: str) -> None:
+    """Import the numerical modules a command needs, holding Ctrl-C until they are in.
+
+    Some libraries they import catch every exception while importing (a ``KeyboardInterrupt``
+    among them: SciPy's array-API layer probes NumPy's attributes), which would lose the
+    interrupt and let the command run on.
+    """
+    with interrupts_deferred():
+        for name in modules:
+            importlib.import_module(name)
 
 
 def _overrides(assignments: list[str]) -> dict:
@@ -73,11 +105,12 @@ def _overrides(assignments: list[str]) -> dict:
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep or not name:
-            raise OscillatorError(f"--set {item!r}: write NAME=VALUE, e.g. --set Omega=1.7", field="--set")
-        value = parse_value(text.strip(), field=f"--set {name}")
+            raise OscillatorError(f"--set {shown(item)}: write NAME=VALUE, e.g. --set Omega=1.7", field="--set")
+        check_setting(name)
+        value = parse_value(text.strip(), field=f"--set {printable(name)}")
         if name in _INTEGER_OPTIONS:
-            if not float(value).is_integer():
-                raise OscillatorError(f"--set {name}={text}: {name} is a whole number", field=name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or not float(value).is_integer():
+                raise OscillatorError(f"--set {printable(name)}={shown(text)}: {name} is a whole number", field=name)
             value = int(value)
         values[name] = value
     return values
@@ -92,8 +125,8 @@ def _events_table(events, limit: int = 40) -> Table:
     for column in ("t (s)", "mass", "kind", "boundary", "domain", "theorem", "eq."):
         table.add_column(column, justify="right" if column in ("t (s)", "mass") else "left", no_wrap=column == "kind")
     rows = list(events.itertuples(index=False))
-    shown = rows if len(rows) <= limit else [*rows[: limit // 2], None, *rows[-limit // 2 :]]
-    for row in shown:
+    shown_rows = rows if len(rows) <= limit else [*rows[: limit // 2], None, *rows[-limit // 2 :]]
+    for row in shown_rows:
         if row is None:
             table.add_row("…", "", f"{len(rows) - limit} more", "", "", "", "")
             continue
@@ -108,6 +141,8 @@ def _sample_grid(case: Case, sample: float | None):
     """The grid of ``--sample DT``: every DT seconds from t0, and t_end."""
     if sample is None:
         return None
+    import numpy as np
+
     if not (math.isfinite(sample) and sample > 0):
         raise OscillatorError(f"--sample must be a positive time step in s, got {sample!r}", field="--sample")
     rows = (case.t_end - case.initial.t0) / sample
@@ -121,14 +156,16 @@ def _sample_grid(case: Case, sample: float | None):
     return np.unique(np.append(grid[grid < case.t_end], case.t_end))
 
 
-def _simulate_with_progress(case: Case, quiet: bool, t_eval=None):
-    if quiet:
+def _simulate_with_progress(case: Case, quiet: bool, t_eval=None) -> Result:
+    from oscillator.simulation import simulate
+
+    if quiet or not err.is_terminal:  # a progress bar only where a person watches
         return simulate(case, t_eval=t_eval)
     span = case.t_end - case.initial.t0
-    columns = (TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
+    columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
                TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
     with Progress(*columns, console=err, transient=True) as progress:
-        task = progress.add_task(case.name, total=span, t=case.initial.t0)
+        task = progress.add_task(printable(case.name), total=span, t=case.initial.t0)
         last = [0.0]
 
         def report(t: float) -> None:
@@ -161,9 +198,9 @@ def show(case: Annotated[str, typer.Argument(help="A named case or the path of a
         c = load_case(case)
     except OscillatorError as error:
         raise _fail(str(error)) from None
-    out.print(f"[bold]{c.name}[/]: {c.title}")
+    _say((c.name, "bold"), f": {c.title}")
     if c.description:
-        out.print(" ".join(c.description.split()))
+        _say(" ".join(c.description.split()))
     params = Table(title="parameters", title_justify="left", header_style="bold")
     for column in ("name", "value", "name ", "value "):
         params.add_column(column, justify="right" if "value" in column else "left")
@@ -173,40 +210,61 @@ def show(case: Annotated[str, typer.Argument(help="A named case or the path of a
         params.add_row(*left, *right)
     out.print(params)
     initial = c.initial
-    out.print(
+    _say(
         f"start: t0 = {initial.t0} s, x1 = {initial.x1} m, v1 = {initial.v1} m/s, x2 = {initial.x2} m, "
         f"v2 = {initial.v2} m/s; end: t_end = {c.t_end} s"
     )
-    options = ", ".join(f"{name} = {getattr(c.options, name)}" for name in c.options.names())
-    out.print(f"solver: {options}")
+    _say("solver: " + ", ".join(f"{name} = {getattr(c.options, name)}" for name in c.options.names()))
     if c.expected:
         table = Table(title="expected events", title_justify="left", header_style="bold")
         for column in ("event", "mass", "kind", "domain", "article (s)", "reference (s)", "tolerance (s)"):
             table.add_column(column)
         for e in c.expected:
-            table.add_row(e.label, str(e.mass), str(e.kind), "" if e.to_domain is None else str(e.to_domain),
+            table.add_row(printable(e.label), str(e.mass), str(e.kind), "" if e.to_domain is None else str(e.to_domain),
                           "—" if e.t is None else f"{e.t}", "—" if e.reference is None else f"{e.reference}",
                           f"{e.tolerance:g}")  # fmt: skip
         out.print(table)
 
 
-def _keep_partial(error: BaseException, folder: Path | None, fmt: str) -> str:
-    """Write the error's partial result (``error.result``), if any; say where it went, or why not.
+# --------------------------------------------------------------------------- run
 
-    The partial result is written like a complete run (tables, case.toml, and run.json with its
-    status and reason) without figures or report: ``oscillator report`` makes those.
-    """
+
+def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> str:
+    """Write the error's partial result (``error.result``) into the claimed folder; say where."""
+    from oscillator.output import write_run
+
     partial = getattr(error, "result", None)
-    if partial is None or folder is None:
+    if partial is None:
+        claim.abandon()
         return "nothing was written"
     try:
-        write_run(partial, folder, formats=fmt, command=["oscillator", *sys.argv[1:]])
-    except (OscillatorError, OSError, KeyboardInterrupt) as failure:
+        with interrupts_deferred():
+            folder = write_run(partial, claim, formats=fmt, command=["oscillator", *sys.argv[1:]], pending=pending)
+    except (OSError, OscillatorError) as failure:
         return f"the partial result could not be written: {failure}"
+    except KeyboardInterrupt:
+        return "interrupted again while writing the partial result; nothing was written"
     return (
         f"the partial result up to t = {partial.final_state[0]:.10g} s is in {folder} "
         f'(run.json: "status": "{partial.status}"); `oscillator report {folder}` makes its report'
     )
+
+
+def _prepare_run(case: str, t_end, set_, out_dir, fmt: str, sample) -> tuple[Case, object, FolderClaim]:
+    """Every check of ``run`` before anything is created, then the output folder claimed."""
+    if fmt not in FORMATS:
+        raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {shown(fmt)}", field="--format")
+    resolved = _case(case, t_end, set_)
+    grid = _sample_grid(resolved, sample)
+    if out_dir is not None:
+        check_name(out_dir, option="--out")
+    _load("oscillator.output", "oscillator.simulation")
+    from oscillator.output import claim_output
+    from oscillator.simulation import admit
+
+    with interrupts_deferred():  # the first call of the compiled formulas loads them
+        admit(resolved)
+    return resolved, grid, claim_output(out_dir, resolved.name)
 
 
 @app.command()
@@ -238,51 +296,68 @@ def run(
     * `oscillator run my-case.toml --format parquet --no-plots --quiet`
     * `oscillator run instance-1 --t-end 20000 --sample 0.05` (a long run, trajectory every 0.05 s)
     """
-    folder: Path | None = None
     try:
-        if fmt not in FORMATS:
-            raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}", field="--format")
-        resolved = _case(case, t_end, set_)
-        folder = out_dir if out_dir is not None else default_output_folder(resolved.name)
-        check_output_folder(folder)
-        result = _simulate_with_progress(resolved, quiet, _sample_grid(resolved, sample))
-        comparison = compare(resolved, result) if resolved.expected else None
-
-        def extras(tmp: Path, info: dict) -> None:
-            if not no_plots:
-                start = (resolved.initial.t0, *resolved.initial.y)
-                write_figures(result.trajectory, result.events, resolved.parameters, start, tmp / "figures",
-                              title=resolved.name)  # fmt: skip
-            if comparison is not None:
-                info["check"] = {
-                    "expected": len(comparison),
-                    "within_tolerance": int((comparison.within_article & comparison.within_reference).sum()),
-                }
-            if not no_report:
-                text = render_markdown(resolved, result.events, info, comparison=comparison, figures=not no_plots)
-                (tmp / "report.md").write_text(text, encoding="utf-8")
-                (tmp / "report.html").write_text(render_html(text, tmp), encoding="utf-8")
-
-        write_run(result, folder, formats=fmt, extras=extras, command=["oscillator", *sys.argv[1:]])
+        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample)
     except OscillatorError as error:
-        if not hasattr(error, "result"):  # refused before running: exit 2
-            raise _fail(str(error)) from None
-        raise _fail(f"{error}\n{_keep_partial(error, folder, fmt)}", code=1) from None
+        raise _fail(str(error)) from None
+    except KeyboardInterrupt:
+        raise _fail("interrupted; nothing was written", 130) from None
+    from oscillator.output import finish_run, write_run
+
+    pending = tuple(step for step, skipped in (("figures", no_plots), ("report", no_report)) if not skipped)
+    try:
+        result = _simulate_with_progress(resolved, quiet, grid)
+    except OscillatorError as error:
+        code = 1 if hasattr(error, "result") else 2
+        raise _fail(f"{error}\n{_write_partial(error, claim, fmt, pending)}", code=code) from None
     except KeyboardInterrupt as interrupt:
-        raise _fail(f"interrupted; {_keep_partial(interrupt, folder, fmt)}", code=130) from None
+        raise _fail(f"interrupted; {_write_partial(interrupt, claim, fmt, pending)}", 130) from None
+    except BaseException:
+        claim.abandon()
+        raise
+    try:
+        with interrupts_deferred():  # Ctrl-C waits until the tables are written whole
+            folder = write_run(result, claim, formats=fmt, command=["oscillator", *sys.argv[1:]], pending=pending)
+    except KeyboardInterrupt:  # it came while the tables were written: they are whole
+        raise _fail(f"interrupted; {_tables_kept(folder)}", 130) from None
+    except (OSError, OscillatorError) as error:
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        raise _fail(f"cannot write the run to {claim.target}: {reason}; nothing was written; free the space or "
+                    f"give another --out, and run again", 1) from None  # fmt: skip
+    if pending:
+        try:
+            _load("oscillator.plotting", "oscillator.report")
+            finish_run(folder, figures=not no_plots, report=not no_report)
+        except KeyboardInterrupt:
+            raise _fail(f"interrupted; {_tables_kept(folder)}", 130) from None
+        except Exception as error:  # a later step failed: the run itself is safe
+            reason = f"{type(error).__name__}: {error}"
+            raise _fail(f"the figures or report could not be made ({reason}); {_tables_kept(folder)}", 1) from None
+    _print_run(resolved, result, folder, quiet)
+
+
+def _tables_kept(folder: Path) -> str:
+    return f"the run's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
+
+
+def _print_run(case: Case, result: Result, folder: Path, quiet: bool) -> None:
     if quiet:
-        out.print(str(folder))
+        out.print(printable(str(folder)))
         return
-    out.print(f"[bold]{resolved.name}[/]: {resolved.title}")
+    _say((case.name, "bold"), f": {case.title}")
     out.print(_events_table(result.events) if len(result.events) else "no switching events")
     energy = result.energy
-    out.print(
-        f"energy audit residual {energy['residual']:.2e} J (E0 = {energy['E0']:.4f} J, E1 = {energy['E1']:.4f} J)"
-    )
-    if comparison is not None:
+    _say(f"energy audit residual {energy['residual']:.2e} J (E0 = {energy['E0']:.4f} J, E1 = {energy['E1']:.4f} J)")
+    if case.expected:
+        from oscillator.reproduction import compare
+
+        comparison = compare(case, result.events)
         ok = int((comparison.within_article & comparison.within_reference).sum())
-        out.print(f"expected events within tolerance: {ok}/{len(comparison)}")
-    out.print(f"written to [bold]{folder}[/]")
+        _say(f"expected events within tolerance: {ok}/{len(comparison)}")
+    _say("written to ", (str(folder), "bold"))
+
+
+# --------------------------------------------------------------------------- check and report
 
 
 @app.command()
@@ -297,30 +372,37 @@ def check(
     try:
         resolved = _case(case, None, set_)
         if not resolved.expected:
-            raise OscillatorError(f"case {resolved.name!r} has no [[expected]] events to check against", field="case")
-        table = compare(resolved, simulate(resolved, record_trajectory=False))
+            raise OscillatorError(
+                f"case {shown(resolved.name)} has no [[expected]] events to check against", field="case"
+            )
+        _load("oscillator.reproduction", "oscillator.simulation")
+        from oscillator.reproduction import compare
+        from oscillator.simulation import simulate
+
+        table = compare(resolved, simulate(resolved, record_trajectory=False).events)
     except OscillatorError as error:
         raise _fail(str(error), code=1 if hasattr(error, "result") else 2) from None
     except KeyboardInterrupt:
         raise _fail("interrupted", code=130) from None
-    view = Table(title=f"{resolved.name}: expected switching times", title_justify="left", header_style="bold")
+    view = Table(title=f"{printable(resolved.name)}: expected switching times", title_justify="left",
+                 header_style="bold")  # fmt: skip
     for column in ("event", "article", "reference", "ours", "ours − article", "ours − reference", "ok"):
         view.add_column(column)
     for row in table.itertuples(index=False):
         ok = row.within_article and row.within_reference
         view.add_row(
-            row.label, _time(row.article), _time(row.reference), _time(row.ours, 6),
-            _delta(row.ours_minus_article), _delta(row.ours_minus_reference), "✓" if ok else "[red]✗[/]",
+            printable(row.label), _time(row.article), _time(row.reference), _time(row.ours, 6),
+            _delta(row.ours_minus_article), _delta(row.ours_minus_reference), Text("✓") if ok else Text("✗", "red"),
         )  # fmt: skip
     out.print(view)
     for row in table.itertuples(index=False):
         if row.note:
-            out.print(f"[dim]{row.label}: {row.note}[/]")
+            out.print(Text(f"{printable(row.label)}: {printable(row.note)}", style="dim"))
     failed = int((~(table.within_article & table.within_reference)).sum())
     if failed:
-        err.print(f"[bold red]{failed} expected time(s) out of tolerance[/]")
+        err.print(Text(f"{failed} expected time(s) out of tolerance", style="bold red"))
         raise typer.Exit(1)
-    out.print(f"all {len(table)} expected times within tolerance")
+    _say(f"all {len(table)} expected times within tolerance")
 
 
 def _time(value: float, digits: int = 4) -> str:
@@ -333,32 +415,29 @@ def _delta(value: float) -> str:
 
 @app.command()
 def report(folder: Annotated[Path, typer.Argument(help="A folder written by `oscillator run`.")]) -> None:
-    """Rebuild the report (and any missing figures) of a run folder.
+    """Rebuild the report of a run folder, and draw its figures if they are missing.
+
+    Finishes a run that was interrupted after its tables were written.
 
     Example: `oscillator report runs/instance-3-20261121-101500`
     """
     try:
-        run_folder = read_run(folder)
-        case = run_folder.case
-        figures = folder / "figures"
-        if not figures.is_dir() and not run_folder.trajectory.empty:
-            start = (case.initial.t0, *case.initial.y)
-            write_figures(run_folder.trajectory, run_folder.events, case.parameters, start, figures, title=case.name)
-        comparison = None
-        if case.expected:
-            from oscillator.result import Result
+        _load("oscillator.output", "oscillator.plotting", "oscillator.report")
+        from oscillator.output import finish_run
 
-            result = Result(case, run_folder.events, run_folder.trajectory, run_folder.run.get("energy", {}), {}, ())
-            comparison = compare(case, result)
-        text = render_markdown(case, run_folder.events, run_folder.run, comparison=comparison,
-                               figures=figures.is_dir())  # fmt: skip
-        replace_file(folder / "report.md", text)
-        replace_file(folder / "report.html", render_html(text, folder))
+        if folder.is_dir() and not os.access(folder, os.W_OK):
+            raise OscillatorError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
+        finish_run(folder)
     except OscillatorError as error:
         raise _fail(str(error)) from None
+    except KeyboardInterrupt:
+        raise _fail(f"interrupted; `oscillator report {folder}` finishes the report", 130) from None
     except OSError as error:
-        raise _fail(f"{folder}: {error.strerror}; give a run folder you can write to") from None
-    out.print(f"report rebuilt: {folder / 'report.md'}, {folder / 'report.html'}")
+        raise _fail(f"{folder}: {error.strerror or error}; the report could not be written", 1) from None
+    _say(f"report rebuilt: {folder / 'report.md'}, {folder / 'report.html'}")
+
+
+# --------------------------------------------------------------------------- sweeps
 
 
 def _sweep_settings(c: Case, param, start, stop, steps, transient, record) -> SweepSettings:
@@ -366,13 +445,32 @@ def _sweep_settings(c: Case, param, start, stop, steps, transient, record) -> Sw
     base = c.sweep
     if base is None and (param is None or start is None or stop is None):
         raise OscillatorError(
-            f"case {c.name!r} has no [sweep] table; give --param NAME --from A --to B", field="--param"
+            f"case {shown(c.name)} has no [sweep] table; give --param NAME --from A --to B", field="--param"
         )
     changes = {k: v for k, v in dict(param=param, start=start, stop=stop, steps=steps, transient=transient,
                                      record=record).items() if v is not None}  # fmt: skip
     if base is None:
         return SweepSettings(**changes)
     return dataclasses.replace(base, **changes)
+
+
+def _sweep_progress(name: str, settings: SweepSettings):
+    """A progress bar and its callback ``report(done, total)``."""
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+    bar = Progress(*columns, console=err, transient=True)
+    task = bar.add_task(f"{printable(name)}: {settings.param}", total=settings.steps, rate="")
+    began = time.monotonic()
+    first: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        if not first:
+            first.append(done)
+        new = done - first[0]
+        rate = f"{new / (time.monotonic() - began):.2f} points/s" if new else ""
+        bar.update(task, completed=done, total=total, rate=rate)
+
+    return bar, report
 
 
 @app.command()
@@ -413,53 +511,82 @@ def sweep(
     try:
         resolved = _case(case, None, set_)
         settings = _sweep_settings(resolved, param, start, stop, steps, transient, record)
-        if workers is not None and workers < 1:
-            raise OscillatorError(f"--workers must be >= 1, got {workers}", field="--workers")
-        folder = out_dir if out_dir is not None else default_output_folder(f"{resolved.name}-sweep")
-        if quiet:
-            outcome = run_sweep(resolved, settings, folder, workers=workers, scheduler=scheduler)
-        else:
-            columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                       TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
-            with Progress(*columns, console=err, transient=True) as bar:
-                task = bar.add_task(f"{resolved.name}: {settings.param}", total=settings.steps, rate="")
-                began = time.monotonic()
-                first: list[int] = []
-
-                def report(done: int, total: int) -> None:
-                    first.append(done) if not first else None
-                    new = done - first[0]
-                    rate = f"{new / (time.monotonic() - began):.2f} points/s" if new else ""
-                    bar.update(task, completed=done, total=total, rate=rate)
-
-                outcome = run_sweep(resolved, settings, folder, workers=workers, scheduler=scheduler, progress=report)
-        tables = read_sweep(folder)
-        if not no_plots:
-            write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=resolved.name)
+        plan = _open_sweep(resolved, settings, out_dir, workers, scheduler)
     except OscillatorError as error:
         raise _fail(str(error)) from None
     except KeyboardInterrupt:
+        raise _fail("interrupted; nothing was written", 130) from None
+    folder = plan.folder
+    try:
+        if quiet or not err.is_terminal:
+            outcome = plan.run()
+        else:
+            bar, report_progress = _sweep_progress(resolved.name, settings)
+            with bar:
+                outcome = plan.run(report_progress)
+    except OscillatorError as error:
+        raise _fail(str(error), 1) from None
+    except KeyboardInterrupt:
         raise _fail("interrupted; the points finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        plan.close()
+    _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
+
+
+def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, workers, scheduler):
+    """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
+    from oscillator._files import FolderTaken
+
+    _load("oscillator.sweep")
+    from oscillator.sweep import open_sweep
+
+    if out_dir is not None:
+        return open_sweep(case, settings, out_dir, workers=workers, scheduler=scheduler)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    for n in range(1, 10_000):
+        folder = Path("runs") / (f"{case.name}-sweep-{stamp}" if n == 1 else f"{case.name}-sweep-{stamp}-{n}")
+        if os.path.lexists(folder):
+            continue
+        try:
+            return open_sweep(case, settings, folder, workers=workers, scheduler=scheduler)
+        except FolderTaken:
+            continue
+    raise OscillatorError("no free folder name under runs/; give --out", field="--out")
+
+
+def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no_plots: bool, quiet: bool) -> None:
+    from oscillator.sweep import read_sweep, sliding_ranges
+
+    tables = read_sweep(folder)
+    if not no_plots:
+        try:
+            _load("oscillator.plotting")
+            from oscillator.plotting import write_sweep_figures
+
+            write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=case.name)
+        except KeyboardInterrupt:
+            raise _fail(f"interrupted while drawing; the sweep's tables are in {folder}", 130) from None
+        except Exception as error:  # the sweep itself is safe
+            raise _fail(f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
+                        f"are in {folder}", 1) from None  # fmt: skip
     if quiet:
-        out.print(str(folder))
+        out.print(printable(str(folder)))
         return
     summary = tables["summary"]
     ranges = sliding_ranges(summary, settings.param)
-    out.print(
-        f"[bold]{resolved.name}[/]: {settings.param} from {settings.start:g} to {settings.stop:g} "
-        f"({settings.steps} values, {settings.transient} + {settings.record} periods); "
-        f"{outcome.computed} computed, {outcome.resumed} resumed, {outcome.failed} failed, {outcome.wall_time:.1f} s"
+    _say(
+        (case.name, "bold"),
+        f": {settings.param} from {settings.start:g} to {settings.stop:g} ({settings.steps} values, "
+        f"{settings.transient} + {settings.record} periods); {outcome.computed} computed, {outcome.resumed} resumed, "
+        f"{outcome.failed} failed, {outcome.wall_time:.1f} s",
     )
-    if ranges:
-        for a, b in ranges:
-            out.print(
-                f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]"
-            )
-    else:
-        out.print(f"m{settings.mass} never slides in this range")
+    for a, b in ranges:
+        _say(f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]")
+    if not ranges:
+        _say(f"m{settings.mass} never slides in this range")
     periods = summary[summary.status == "ok"].period.value_counts().sort_index()
-    out.print("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
-    out.print(f"written to [bold]{folder}[/]")
+    _say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
+    _say("written to ", (str(folder), "bold"))
 
 
 @app.command()
@@ -484,20 +611,26 @@ def locate(
     """
     try:
         resolved = _case(case, None, set_)
+        _load("oscillator.sweep")
+        from oscillator.sweep import locate as locate_change
+
         lo, hi = between
         settings = _sweep_settings(resolved, param, lo, hi, None, transient, record)
         found = locate_change(resolved, settings, what, (lo, hi), tolerance=tolerance)
     except OscillatorError as error:
         raise _fail(str(error)) from None
-    out.print(
-        f"[bold]{what}[/] changes at {found.param} = {found.value:.10f} "
-        f"(between {found.lower:.10f} and {found.upper:.10f}, width {found.width:.1e}, {found.iterations} bisections)"
+    except KeyboardInterrupt:
+        raise _fail("interrupted", 130) from None
+    _say(
+        (what, "bold"),
+        f" changes at {found.param} = {found.value:.10f} (between {found.lower:.10f} and {found.upper:.10f}, "
+        f"width {found.width:.1e}, {found.iterations} bisections)",
     )
     for side, summary, events in (("below", found.below, found.evidence_below),
                                   ("above", found.above, found.evidence_above)):  # fmt: skip
         row = summary.iloc[0]
         kinds = ", ".join(f"{k}: {n}" for k, n in events.kind.value_counts().items()) or "none"
-        out.print(
+        _say(
             f"{side} ({found.param} = {row[found.param]:.10f}): sliding {bool(row.sliding)}, "
             f"period {int(row.period)}, {row.switches_per_period:g} switches/period, "
             f"rest {row.rest_time_per_period:.3g} s/period; events: {kinds}"
@@ -513,6 +646,42 @@ def _version(
         raise typer.Exit(0)
 
 
-def main() -> None:
-    """Entry point of the ``oscillator`` command."""
-    app()
+#: Click's exception classes, as Typer uses them (recent Typer versions bring their own copy of
+#: Click, older ones use Click itself): found through the class Typer exports.
+_CLICK_ERROR = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+
+
+def _usage_error(error: Exception, args: list[str]) -> int:
+    """A usage error (unknown option, value of the wrong type) in one line, naming the option."""
+    context = getattr(error, "ctx", None)
+    if not args and context is not None:  # `oscillator` alone: the help, as with --help
+        out.print(context.get_help(), markup=False)
+        return 2
+    message = printable(" ".join(str(error.format_message()).split()))  # type: ignore[attr-defined]
+    hint = f" (see '{context.command_path} --help')" if context is not None else ""
+    err.print(Text.assemble(("error:", "bold red"), f" {message}{printable(hint)}"))
+    return int(getattr(error, "exit_code", 2))
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of the ``oscillator`` command: every outcome is an exit code and at most one
+    line of error, never a traceback (see the module docstring for the codes)."""
+    args = sys.argv[1:] if args is None else list(args)
+    try:
+        command = typer.main.get_command(app)
+        code = command.main(args=args, prog_name="oscillator", standalone_mode=False)
+        if code == 130 and not _reported:  # Typer caught Ctrl-C while it read the command line
+            raise KeyboardInterrupt
+    except _CLICK_ERROR as error:
+        code = _usage_error(error, args)
+    except (typer.Abort, KeyboardInterrupt):
+        err.print(Text.assemble(("error:", "bold red"), " interrupted"))
+        code = 130
+    except BrokenPipeError:  # the reader of our output went away (`oscillator list | head -1`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
+        code = 1
+    if code == 130:
+        from oscillator.__main__ import interrupted_exit
+
+        interrupted_exit()
+    sys.exit(code if isinstance(code, int) else 0)

@@ -30,20 +30,23 @@ POWER_NAMES = ("forcing", "feedback", "damping", "friction")
 
 
 def mechanical_energy(y: Sequence[float], p: Parameters, left: bool, right: bool) -> float:
-    """Kinetic plus potential energy (J) under the given contacts."""
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    """Kinetic plus potential energy (J) under the given contacts (``inf`` past floating point)."""
+    x1, v1, x2, v2 = (float(v) for v in y[:4])  # Python floats: an overflow gives inf, never raises
+    squares = (x1 * x1, x2 * x2)
     energy = (
-        0.5 * p.m1 * v1**2
-        + 0.5 * p.m2 * v2**2
-        + 0.5 * p.K1 * x1**2
-        + 0.25 * p.K2 * x1**4
-        + 0.5 * p.K4 * x2**2
-        + 0.25 * p.K5 * x2**4
+        0.5 * p.m1 * (v1 * v1)
+        + 0.5 * p.m2 * (v2 * v2)
+        + 0.5 * p.K1 * squares[0]
+        + 0.25 * p.K2 * (squares[0] * squares[0])
+        + 0.5 * p.K4 * squares[1]
+        + 0.25 * p.K5 * (squares[1] * squares[1])
     )
     if left:
-        energy += 0.5 * p.K3 * (x1 - x2 + p.d) ** 2
+        gap = x1 - x2 + p.d
+        energy += 0.5 * p.K3 * (gap * gap)
     if right:
-        energy += 0.5 * p.K6 * (x1 - p.d1) ** 2
+        overlap = x1 - p.d1
+        energy += 0.5 * p.K6 * (overlap * overlap)
     return energy
 
 

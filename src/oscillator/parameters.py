@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass, fields
 from typing import Any
 
 from oscillator._errors import OscillatorError
+from oscillator._text import shown
 
 __all__ = ["InitialState", "Parameters", "SolverOptions", "SweepSettings"]
 
@@ -20,12 +22,29 @@ __all__ = ["InitialState", "Parameters", "SolverOptions", "SweepSettings"]
 #: The largest magnitude a parameter or initial value may have.  The fields raise states to the
 #: fourth power and multiply them by parameters; past this, forces leave floating point.
 MAX_MAGNITUDE = 1e100
+#: The smallest magnitude a nonzero parameter or initial value may have.  Forces are divided by
+#: the masses, the forcing period is ``2 pi / Omega``, and a root function of subnormal size
+#: cannot be located; 1e-100 of any unit is zero in any physical system.
+MIN_MAGNITUDE = 1e-100
+#: The most values a sweep may have, and the most forcing periods it may record per value.
+MAX_SWEEP_STEPS = 100_000
+MAX_SWEEP_RECORD = 100_000
+
+
+def is_number(value: Any) -> bool:
+    """A real number (Python's or NumPy's), not a boolean."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def is_whole_number(value: Any) -> bool:
+    """An integer (Python's or NumPy's), not a boolean."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 def _require_finite(owner: str, name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if not is_number(value):
         raise OscillatorError(
-            f"{owner}.{name} must be a number, got {value!r} ({type(value).__name__}); "
+            f"{owner}.{name} must be a number, got {shown(value)} ({type(value).__name__}); "
             f"write it as a plain number such as 1.0",
             field=name,
         )
@@ -47,6 +66,12 @@ def _coerce_all(obj: Any) -> None:
             raise OscillatorError(
                 f"{owner}.{f.name} = {value!r} is beyond any physical scale (|{f.name}| <= {MAX_MAGNITUDE:g}); "
                 f"check its units",
+                field=f.name,
+            )
+        if 0 < abs(value) < MIN_MAGNITUDE:
+            raise OscillatorError(
+                f"{owner}.{f.name} = {value!r} is below any physical scale (a nonzero {f.name} has "
+                f"|{f.name}| >= {MIN_MAGNITUDE:g}); check its units",
                 field=f.name,
             )
         object.__setattr__(obj, f.name, value)
@@ -277,10 +302,11 @@ class SolverOptions:
             object.__setattr__(self, name, value)
         for name in ("max_events", "storm_events", "max_periods", "max_trajectory_rows", "max_num_steps"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 10**12:
+            if not is_whole_number(value) or not 1 <= value <= 10**12:
                 raise OscillatorError(
-                    f"{owner}.{name} must be a whole number from 1 to 10^12, got {value!r}", field=name
+                    f"{owner}.{name} must be a whole number from 1 to 10^12, got {shown(value)}", field=name
                 )
+            object.__setattr__(self, name, int(value))
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -327,19 +353,25 @@ class SweepSettings:
             close = difflib.get_close_matches(str(self.param), Parameters.names(), n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
             raise OscillatorError(
-                f"{owner}.param: {self.param!r} is not a parameter{hint} (one of {', '.join(Parameters.names())})",
+                f"{owner}.param: {shown(self.param)} is not a parameter{hint} (one of {', '.join(Parameters.names())})",
                 field="param",
             )
         for name in ("start", "stop", "period_tolerance"):
             object.__setattr__(self, name, _require_finite(owner, name, getattr(self, name)))
         if self.period_tolerance <= 0:
             raise OscillatorError(f"{owner}.period_tolerance must be > 0", field="period_tolerance")
-        for name, low in (("steps", 1), ("transient", 0), ("record", 1), ("max_period", 1)):
+        limits = (("steps", 1, MAX_SWEEP_STEPS), ("transient", 0, 10**8), ("record", 1, MAX_SWEEP_RECORD),
+                  ("max_period", 1, 10**6))  # fmt: skip
+        for name, low, high in limits:
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < low:
-                raise OscillatorError(f"{owner}.{name} must be a whole number >= {low}, got {value!r}", field=name)
-        if self.mass not in (1, 2):
-            raise OscillatorError(f"{owner}.mass must be 1 or 2, got {self.mass!r}", field="mass")
+            if not is_whole_number(value) or not low <= value <= high:
+                raise OscillatorError(
+                    f"{owner}.{name} must be a whole number from {low} to {high:,}, got {shown(value)}", field=name
+                )
+            object.__setattr__(self, name, int(value))
+        if not is_whole_number(self.mass) or self.mass not in (1, 2):
+            raise OscillatorError(f"{owner}.mass must be 1 or 2, got {shown(self.mass)}", field="mass")
+        object.__setattr__(self, "mass", int(self.mass))
 
     @property
     def values(self) -> tuple[float, ...]:

@@ -25,7 +25,7 @@ from oscillator.fields import flow_barrier_field, kinetic_field, non_friction_fo
 from oscillator.parameters import Parameters
 from oscillator.phase_space import contacts_of_state, velocity_sign
 
-__all__ = ["FIGURES", "force_histories", "write_figures", "write_sweep_figures"]
+__all__ = ["FIGURES", "force_histories", "missing_figures", "write_figures", "write_sweep_figures"]
 
 #: Figure files (without suffix) and what each shows.
 FIGURES = {
@@ -136,7 +136,8 @@ def _finish_time_panel(ax, events, t0, y0, quantity: str, ylabel: str, title: st
     for mass in (1, 2):
         _start(ax, t0, y0[2 * mass - 2 + offset])
         _mark_events(ax, events, mass, f"{quantity}{mass}", seen)
-    ax.set(xlabel="time t (s)", ylabel=ylabel, title=title)
+    ax.set(xlabel="time t (s)", ylabel=ylabel)
+    ax.set_title(title, parse_math=False)  # the case's name is text, never mathtext
     ax.legend(fontsize=8, loc="best")
 
 
@@ -183,7 +184,7 @@ def _phase(trajectory, events, p, t0, y0, title):
         _mark_events(ax, events, mass, "phase", set())
         ax.set(xlabel=f"displacement $x_{mass}$ (m)", ylabel=f"velocity $v_{mass}$ (m/s)", title=f"m{mass}")
         ax.legend(fontsize=8, loc="lower right")
-    fig.suptitle(f"{title} — (c) phase portraits")
+    fig.suptitle(f"{title} — (c) phase portraits", parse_math=False)
     fig.tight_layout()
     return fig
 
@@ -211,7 +212,7 @@ def _forces(trajectory, events, p, t0, y0, title):
         ax.set(ylabel=f"force per unit mass on m{mass} (N/kg)")
         ax.legend(fontsize=7, loc="best", ncol=2)
     axes[-1].set(xlabel="time t (s)")
-    fig.suptitle(f"{title} — (d) G-functions (forces); switching times as red lines")
+    fig.suptitle(f"{title} — (d) G-functions (forces); switching times as red lines", parse_math=False)
     fig.tight_layout()
     return fig
 
@@ -226,6 +227,11 @@ def _save(fig, directory: Path, name: str) -> list[Path]:
     finally:
         plt.close(fig)
     return paths
+
+
+def missing_figures(directory: Path) -> list[str]:
+    """The figures of :data:`FIGURES` of which ``directory`` lacks the PNG or the SVG file."""
+    return [name for name in FIGURES if not all((directory / f"{name}{s}").is_file() for s in (".png", ".svg"))]
 
 
 _PANELS = {
@@ -284,7 +290,7 @@ def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *,
         ax.set(ylabel=label)
         ax.legend(fontsize=8, loc="best", markerscale=2)
     axes[-1].set(xlabel=f"{param}")
-    fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)")
+    fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)", parse_math=False)
     fig.tight_layout()
     written += _save(fig, directory, "fig-14-bifurcation")
 
@@ -294,7 +300,7 @@ def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *,
             ax.axvspan(a, b, color="tab:orange", alpha=0.15)
         ax.scatter(poincare[param], poincare[column], s=4, color=_MASS_COLOR[mass])
         ax.set(xlabel=param, ylabel=f"{column} at t0 + nT")
-    fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)")
+    fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)", parse_math=False)
     fig.tight_layout()
     written += _save(fig, directory, "fig-14-poincare")
     return written

@@ -6,20 +6,19 @@ The report reads only what a run folder holds (``case.toml``, ``events``, ``traj
 
 from __future__ import annotations
 
-import base64
-import html
 import math
-import re
+from collections.abc import Sequence
 from pathlib import Path
 
-import markdown
 import pandas as pd
 
+from oscillator._files import replace_file
 from oscillator.cases import Case
+from oscillator.document import Block, Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
 from oscillator.phase_space import domain_label
 from oscillator.plotting import FIGURES
 
-__all__ = ["domain_intervals", "render_html", "render_markdown", "transition_log"]
+__all__ = ["available_figures", "domain_intervals", "report_document", "transition_log", "write_report"]
 
 
 def _f(value: float, digits: int = 5) -> str:
@@ -133,11 +132,10 @@ def _tick(value: bool) -> str:
     return "✓" if value else "✗"
 
 
-def _markdown_table(frame: pd.DataFrame, formats: dict | None = None) -> str:
+def _cells(frame: pd.DataFrame, formats: dict | None = None) -> Table:
+    """A table block of a frame: floats to 4 decimals (NaN as a dash), other values as text."""
     formats = formats or {}
-    header = "| " + " | ".join(frame.columns) + " |"
-    rule = "|" + "|".join("---" for _ in frame.columns) + "|"
-    body = []
+    rows = []
     for row in frame.itertuples(index=False):
         cells = []
         for column, value in zip(frame.columns, row, strict=True):
@@ -147,111 +145,128 @@ def _markdown_table(frame: pd.DataFrame, formats: dict | None = None) -> str:
                 cells.append("—" if math.isnan(value) else f"{value:.4f}")
             else:
                 cells.append(str(value))
-        body.append("| " + " | ".join(cells) + " |")
-    return "\n".join([header, rule, *body])
+        rows.append(tuple(cells))
+    return Table(tuple(str(c) for c in frame.columns), tuple(rows))
 
 
-def render_markdown(
-    case: Case, events: pd.DataFrame, run: dict, *, comparison: pd.DataFrame | None = None, figures: bool = True
-) -> str:
-    """The transition-log report of a run, in Markdown (figures referenced as files)."""
+def _number(value: object, spec: str) -> str:
+    """A number from ``run.json`` formatted, or a dash for anything else."""
+    return format(value, spec) if isinstance(value, (int, float)) and not isinstance(value, bool) else "—"
+
+
+def _header(case: Case, run: dict) -> list[Block]:
+    """Title, description, the reason a run is incomplete, and the start and the system in one line."""
     p, start = case.parameters, case.initial
-    t_final = run.get("t_final", case.t_end)
-    lines = [f"# {case.name}: {case.title}" if case.title else f"# {case.name}", ""]
+    t_final = _number(run.get("t_final", case.t_end), ".10g")
+    blocks: list[Block] = [Heading(1, (f"{case.name}: {case.title}" if case.title else case.name,))]
     if case.description:
-        lines += [" ".join(case.description.split()), ""]
+        blocks.append(Paragraph((case.description,)))
     status = run.get("status", "complete")
     if status != "complete":
-        lines += [
-            f"**Incomplete run ({status}) at t = {t_final} s, before t_end = {case.t_end} s:** "
-            f"{run.get('failure') or 'no reason recorded'}",
-            "",
-        ]
-    lines += [
-        f"Start t0 = {start.t0} s at x1 = {start.x1} m, v1 = {start.v1} m/s, x2 = {start.x2} m, v2 = {start.v2} m/s; "
-        f"run to {t_final} s. Forcing Q1 = {_f(p.Q1)} N, Q2 = {_f(p.Q2)} N at Ω = {_f(p.Omega)} rad/s "
-        f"(period {_f(p.period)} s); friction μk = {p.mu_k}, μs = {p.mu_s}; stops at d = {p.d} m (left, "
-        f"z1 = −d) and d1 = {p.d1} m (right, x1 = d1).",
-        "",
-        "## Transition log",
-        "",
-    ]
-    log = transition_log(events)
-    lines += [f"- {line}" for line in log] if log else ["No switching event: each mass stays in its domain."]
-    lines += ["", "## Time in each domain", ""]
-    intervals = domain_intervals(events, case, t_final)
-    if intervals.empty:
-        lines.append("No domain change.")
-    else:
-        lines.append(_markdown_table(intervals))
-    energy = run.get("energy", {})
-    if energy:
-        lines += [
-            "",
-            "## Energy audit",
-            "",
-            "Change of mechanical energy = forcing work + feedback work − damper losses − friction losses:",
-            "",
-            f"- E(t0) = {energy['E0']:.6f} J, E(t_end) = {energy['E1']:.6f} J",
-            f"- forcing {energy['forcing']:+.6f} J, feedback {energy['feedback']:+.6f} J, "
-            f"dampers −{energy['damping']:.6f} J, friction −{energy['friction']:.6f} J",
-            f"- residual {energy['residual']:.2e} J",
-        ]
-    if comparison is not None and not comparison.empty:
-        shown = comparison[["label", "article", "reference", "ours", "within_article", "within_reference"]]
-        ok = bool((comparison.within_article & comparison.within_reference).all())
-        lines += [
-            "",
-            "## Comparison with the article",
-            "",
-            "*article*: the article's time; *reference*: an independent implementation (MODEL.md Sec. 6).",
-            "",
-            _markdown_table(shown, dict.fromkeys(("within_article", "within_reference"), _tick)),
-            "",
-            "All expected times are within tolerance." if ok else "**Some expected times are out of tolerance.**",
-        ]
-        for row in comparison.itertuples(index=False):
-            if row.note:
-                lines += ["", f"*{row.label}*: {row.note}"]
-    if figures:
-        lines += ["", "## Figures", ""]
-        for name, caption in FIGURES.items():
-            lines += [f"![{caption}](figures/{name}.png)", ""]
-    counts = run.get("counts", {})
-    if counts:
-        lines += [
-            "",
-            "## Run",
-            "",
-            f"{counts.get('events', 0)} events, {counts.get('returns', 0)} solver returns, "
-            f"{counts.get('rhs_evaluations', 0)} right-hand-side evaluations, {counts.get('restarts', 0)} restarts; "
-            f"wall time {run.get('wall_time', float('nan')):.3f} s; "
-            f"oscillator {run.get('versions', {}).get('oscillator', '?')}.",
-        ]
-    return "\n".join(lines) + "\n"
-
-
-_STYLE = """
-body { font-family: system-ui, sans-serif; max-width: 60rem; margin: 2rem auto; padding: 0 1rem; line-height: 1.45; }
-table { border-collapse: collapse; margin: 0.5rem 0; } td, th { border: 1px solid #ccc; padding: 0.2rem 0.5rem; }
-th { background: #f3f3f3; } img { max-width: 100%; } li { margin: 0.2rem 0; }
-"""
-
-
-def render_html(markdown_text: str, folder: Path) -> str:
-    """One self-contained HTML page: the Markdown rendered, figures embedded as data URIs."""
-    body = markdown.markdown(markdown_text, extensions=["tables"])
-
-    def embed(match: re.Match) -> str:
-        path = folder / match.group(1)
-        if not path.is_file():
-            return match.group(0)
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
-        return f'src="data:image/png;base64,{data}"'
-
-    body = re.sub(r'src="(figures/[^"]+\.png)"', embed, body)
-    title = html.escape(markdown_text.splitlines()[0].lstrip("# "))
-    return (
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{title}</title>'
-        f"<style>{_STYLE}</style></head><body>\n{body}\n</body></html>\n"
+        reason = run.get("failure") or "no reason recorded"
+        headline = f"Incomplete run ({status}) at t = {t_final} s, before t_end = {case.t_end:.10g} s:"
+        blocks.append(Paragraph((Span(headline, "strong"), f" {reason}")))
+    where = (
+        f"Start t0 = {start.t0:.10g} s at x1 = {start.x1:.10g} m, v1 = {start.v1:.10g} m/s, "
+        f"x2 = {start.x2:.10g} m, v2 = {start.v2:.10g} m/s; run to {t_final} s. "
     )
+    system = (
+        f"Forcing Q1 = {_f(p.Q1)} N, Q2 = {_f(p.Q2)} N at Ω = {_f(p.Omega)} rad/s (period {_f(p.period)} s); "
+        f"friction μk = {p.mu_k:g}, μs = {p.mu_s:g}; stops at d = {p.d:g} m (left, z1 = −d) and "
+        f"d1 = {p.d1:g} m (right, x1 = d1)."
+    )
+    return [*blocks, Paragraph((where + system,))]
+
+
+def _energy(energy: dict) -> list[Block]:
+    g = {key: _number(energy.get(key), ".6f") for key in ("E0", "E1", "forcing", "feedback", "damping", "friction")}
+    balance = "Change of mechanical energy = forcing work + feedback work − damper losses − friction losses:"
+    return [
+        Heading(2, ("Energy audit",)),
+        Paragraph((balance,)),
+        Bullets(
+            (
+                (f"E(t0) = {g['E0']} J, E(t_end) = {g['E1']} J",),
+                (
+                    f"forcing {g['forcing']} J, feedback {g['feedback']} J, dampers −{g['damping']} J, "
+                    f"friction −{g['friction']} J",
+                ),
+                (f"residual {_number(energy.get('residual'), '.2e')} J",),
+            )
+        ),
+    ]
+
+
+def _comparison(comparison: pd.DataFrame) -> list[Block]:
+    table = comparison[["label", "article", "reference", "ours", "within_article", "within_reference"]]
+    ok = bool((comparison.within_article & comparison.within_reference).all())
+    verdict = (
+        ("All expected times are within tolerance.",)
+        if ok
+        else (Span("Some expected times are out of tolerance.", "strong"),)
+    )
+    legend = (Span("article", "em"), ": the article's time; ", Span("reference", "em"),
+              ": an independent implementation (MODEL.md Sec. 6).")  # fmt: skip
+    blocks: list[Block] = [
+        Heading(2, ("Comparison with the article",)),
+        Paragraph(legend),
+        _cells(table, dict.fromkeys(("within_article", "within_reference"), _tick)),
+        Paragraph(verdict),
+    ]
+    return blocks + [Paragraph((Span(row.label, "em"), f": {row.note}")) for row in comparison.itertuples() if row.note]
+
+
+def _counts(run: dict, counts: dict) -> list[Block]:
+    versions = run.get("versions") if isinstance(run.get("versions"), dict) else {}
+    n = {key: _number(counts.get(key), "d") for key in ("events", "returns", "rhs_evaluations", "restarts")}
+    text = (
+        f"{n['events']} events, {n['returns']} solver returns, {n['rhs_evaluations']} right-hand-side evaluations, "
+        f"{n['restarts']} restarts; wall time {_number(run.get('wall_time'), '.3f')} s; "
+        f"oscillator {versions.get('oscillator', '?')}."
+    )
+    return [Heading(2, ("Run",)), Paragraph((text,))]
+
+
+def report_document(
+    case: Case,
+    events: pd.DataFrame,
+    run: dict,
+    *,
+    comparison: pd.DataFrame | None = None,
+    figures: Sequence[str] = (),
+) -> list[Block]:
+    """The transition-log report of a run as a document (see :mod:`oscillator.document`).
+
+    ``figures`` names the figure files (of :data:`~oscillator.plotting.FIGURES`) that the run
+    folder holds; only those are shown.
+    """
+    blocks = _header(case, run)
+    blocks.append(Heading(2, ("Transition log",)))
+    log = transition_log(events)
+    none = Paragraph(("No switching event: each mass stays in its domain.",))
+    blocks.append(Bullets(tuple((line,) for line in log)) if log else none)
+    blocks.append(Heading(2, ("Time in each domain",)))
+    intervals = domain_intervals(events, case, run.get("t_final", case.t_end))
+    blocks.append(Paragraph(("No domain change.",)) if intervals.empty else _cells(intervals))
+    if run.get("energy"):
+        blocks += _energy(run["energy"])
+    if comparison is not None and not comparison.empty:
+        blocks += _comparison(comparison)
+    if figures:
+        blocks.append(Heading(2, ("Figures",)))
+        blocks += [Figure(name, FIGURES[name]) for name in FIGURES if name in figures]
+    if run.get("counts"):
+        blocks += _counts(run, run["counts"])
+    return blocks
+
+
+def available_figures(folder: Path) -> list[str]:
+    """The figures of :data:`~oscillator.plotting.FIGURES` whose PNG the run folder holds."""
+    return [name for name in FIGURES if (folder / "figures" / f"{name}.png").is_file()]
+
+
+def write_report(folder: Path, blocks: list[Block]) -> None:
+    """Write ``report.md`` and the self-contained ``report.html`` into a run folder, atomically."""
+    title = "".join(p if isinstance(p, str) else p.text for p in blocks[0].content) if blocks else "report"
+    replace_file(folder / "report.md", to_markdown(blocks))
+    replace_file(folder / "report.html", to_html(blocks, folder=folder, title=title))

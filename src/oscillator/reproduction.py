@@ -7,7 +7,6 @@ import math
 import pandas as pd
 
 from oscillator.cases import Case, ExpectedEvent
-from oscillator.result import Result
 
 __all__ = ["compare", "match_event"]
 
@@ -30,17 +29,23 @@ COMPARISON_COLUMNS = (
 
 
 def match_event(events: pd.DataFrame, expected: ExpectedEvent) -> pd.Series | None:
-    """The simulated event of the same mass, kind (and domain entered) nearest in time."""
+    """The simulated event of the same mass, kind (and domain entered) nearest in time.
+
+    An expected event without a time (neither ``t`` nor ``reference``) expects the event to
+    happen: the first one of that mass, kind and domain matches.
+    """
     rows = events[(events["mass"] == expected.mass) & (events["kind"] == str(expected.kind))]
     if expected.to_domain is not None:
         rows = rows[rows["to_domain"] == expected.to_domain]
     if rows.empty:
         return None
     when = expected.t if expected.t is not None else expected.reference
+    if when is None:
+        return rows.iloc[0]
     return rows.loc[(rows["t"] - when).abs().idxmin()]
 
 
-def compare(case: Case, result: Result) -> pd.DataFrame:
+def compare(case: Case, events: pd.DataFrame) -> pd.DataFrame:
     """One row per expected event: the article's, the reference's and our time, and verdicts.
 
     ``within_article`` is true where the article gives no time; ``within_reference`` where the
@@ -49,7 +54,7 @@ def compare(case: Case, result: Result) -> pd.DataFrame:
     """
     rows = []
     for expected in case.expected:
-        match = match_event(result.events, expected)
+        match = match_event(events, expected)
         ours = math.nan if match is None else float(match["t"])
         article = math.nan if expected.t is None else expected.t
         reference = math.nan if expected.reference is None else expected.reference
@@ -104,7 +109,7 @@ def render_markdown(names: list[str]) -> str:
     for name in names:
         case = load_case(name)
         result = simulate(case, record_trajectory=False)
-        table = compare(case, result)
+        table = compare(case, result.events)
         lines += [f"## {name}: {case.title}", ""]
         lines += [
             "| event | article | reference | ours | ours − article | ours − reference |",

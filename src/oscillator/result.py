@@ -2,47 +2,16 @@
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
-import numpy as np
 import pandas as pd
 
 from oscillator.cases import Case
 from oscillator.energy import POWER_NAMES, mechanical_energy
-from oscillator.events import Event
 from oscillator.supervisor import RunRecord
+from oscillator.tables import events_frame, trajectory_frame
 
-__all__ = ["Result", "events_frame", "trajectory_frame"]
-
-TRAJECTORY_COLUMNS = ("t", "x1", "v1", "x2", "v2", "domain1", "domain2", "system_state")
-
-
-def events_frame(events: list[Event]) -> pd.DataFrame:
-    """``Result.events``: one row per event and mass, columns :meth:`Event.columns`."""
-    columns = Event.columns()
-    rows = [dataclasses.astuple(e) for e in events]
-    frame = pd.DataFrame(rows, columns=list(columns))
-    frame["kind"] = frame["kind"].astype(str)
-    return frame.astype({"t": float, "mass": int, "from_domain": int, "to_domain": int})
-
-
-def trajectory_frame(record: RunRecord) -> pd.DataFrame:
-    """``Result.trajectory``: ``t, x1, v1, x2, v2, domain1, domain2, system_state``."""
-    y = np.array(record.y, dtype=float).reshape(-1, 4)
-    return pd.DataFrame(
-        {
-            "t": np.array(record.t, dtype=float),
-            "x1": y[:, 0],
-            "v1": y[:, 1],
-            "x2": y[:, 2],
-            "v2": y[:, 3],
-            "domain1": np.array([m.domain1 for m in record.modes], dtype=int),
-            "domain2": np.array([m.domain2 for m in record.modes], dtype=int),
-            "system_state": [m.system_state for m in record.modes],
-        },
-        columns=list(TRAJECTORY_COLUMNS),
-    )
+__all__ = ["Result"]
 
 
 @dataclass(frozen=True)
@@ -101,7 +70,7 @@ class Result:
         e0 = mechanical_energy(y0, p, start.left, start.right)
         e1 = mechanical_energy(record.y_final[:4], p, end.left, end.right)
         supplied = work["forcing"] + work["feedback"] - work["damping"] - work["friction"]
-        energy = {"E0": e0, "E1": e1, **work, "residual": e1 - e0 - supplied}
+        energy = {"E0": e0, "E1": e1, **work, "residual": e1 - e0 - supplied}  # inf or nan past floating point
         stats = {
             "returns": record.returns,
             "rhs_evaluations": record.rhs_evaluations,
@@ -111,4 +80,5 @@ class Result:
             "wall_time": record.wall_time,
         }
         final = (record.t_final, *(float(v) for v in record.y_final[:4]))
-        return cls(case, events_frame(record.events), trajectory_frame(record), energy, stats, final, status, failure)
+        trajectory = trajectory_frame(record.t, record.y, record.modes)
+        return cls(case, events_frame(record.events), trajectory, energy, stats, final, status, failure)

@@ -1,9 +1,7 @@
-"""The one entry point: :func:`simulate`."""
+"""The one entry point, :func:`simulate`, and the checks a case passes before it runs."""
 
 from __future__ import annotations
 
-import contextlib
-import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -11,66 +9,75 @@ from pathlib import Path
 import numpy as np
 
 from oscillator._errors import OscillatorError
-from oscillator.cases import Case, _suggest, load_case
-from oscillator.parameters import InitialState, Parameters, SolverOptions
+from oscillator._text import shown
+from oscillator.cases import Case, resolve_case
+from oscillator.parameters import is_number
 from oscillator.result import Result
-from oscillator.supervisor import ARITHMETIC_ERRORS, Supervisor, strict_arithmetic
+from oscillator.supervisor import Supervisor, start_problem
 
-__all__ = ["resolve_case", "simulate"]
-
-
-def resolve_case(case: Case | str | Path, *, t_end: float | None = None, **overrides: float) -> Case:
-    """The case with overrides applied: parameter, initial-state and solver-option names."""
-    if not isinstance(case, Case):
-        case = load_case(case)
-    groups: dict[str, dict] = {"parameters": {}, "initial": {}, "options": {}}
-    owners = (
-        ("parameters", Parameters.names()),
-        ("initial", InitialState.names()),
-        ("options", SolverOptions.names()),
-    )
-    known = [name for _, names in owners for name in names]
-    for key, value in overrides.items():
-        for group, names in owners:
-            if key in names:
-                groups[group][key] = value
-                break
-        else:
-            raise OscillatorError(
-                f"unknown setting {key!r}{_suggest(key, known)} (parameters, initial state "
-                f"t0 x1 v1 x2 v2, or solver options {', '.join(SolverOptions.names())})",
-                field=key,
-            )
-    return dataclasses.replace(
-        case,
-        parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
-        initial=dataclasses.replace(case.initial, **groups["initial"]),
-        options=dataclasses.replace(case.options, **groups["options"]),
-        t_end=case.t_end if t_end is None else t_end,
-    )
+__all__ = ["admit", "resolve_case", "simulate"]
 
 
 def _time(value: object, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or math.isnan(value):
-        raise OscillatorError(f"{name} must be a time in s (a number), got {value!r}", field=name)
+    if not is_number(value) or math.isnan(value):
+        raise OscillatorError(f"{name} must be a time in s (a number), got {shown(value)}", field=name)
     return float(value)
 
 
-def _grid(t_eval: object) -> np.ndarray:
-    """``t_eval`` as a 1-D array of finite, increasing times."""
+def _grid(t_eval: object, case: Case) -> np.ndarray:
+    """``t_eval`` as a 1-D array of finite, increasing times within ``[t0, t_end]``."""
     try:
         grid = np.asarray(t_eval, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise OscillatorError(f"t_eval must be a sequence of times in s, got {t_eval!r}", field="t_eval") from exc
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise OscillatorError(f"t_eval must be a sequence of times in s, got {shown(t_eval)}", field="t_eval") from exc
     if grid.ndim != 1 or not np.isfinite(grid).all() or np.any(np.diff(grid) <= 0):
         raise OscillatorError(
             "t_eval must be a one-dimensional sequence of finite, strictly increasing times in s", field="t_eval"
         )
+    t0, t_end = case.initial.t0, case.t_end
+    if grid.size and (grid[0] < t0 or grid[-1] > t_end):
+        outside = float(grid[0] if grid[0] < t0 else grid[-1])
+        raise OscillatorError(
+            f"t_eval holds t = {outside!r} s, outside the run [t0, t_end] = [{t0!r}, {t_end!r}] s; "
+            f"give times within the run",
+            field="t_eval",
+        )
     return grid
+
+
+def admit(case: Case) -> None:
+    """Refuse a case that cannot start: too long a run, or a start beyond floating point.
+
+    Run by :func:`simulate` before anything is integrated (and by the command line before it
+    creates an output folder), so that the rule is simple: a refused input raises before the
+    run, a failure after it has started carries the partial result.
+
+    Raises
+    ------
+    OscillatorError
+        More than ``max_periods`` forcing periods between ``t0`` and ``t_end``; or the fields,
+        root functions, powers or energy at the start are not finite numbers.
+    """
+    p, start = case.parameters, case.initial
+    periods = (case.t_end - start.t0) / p.period
+    if periods > case.options.max_periods:
+        raise OscillatorError(
+            f"t_end - t0 = {case.t_end - start.t0:.6g} s is {periods:.3g} forcing periods, more than max_periods = "
+            f"{case.options.max_periods}; shorten t_end (or check Omega), or raise max_periods",
+            field="max_periods",
+        )
+    problem = start_problem(start.t0, start.y, p)
+    if problem is not None:
+        state = ", ".join(f"{name} = {value:g}" for name, value in zip(("x1", "v1", "x2", "v2"), start.y, strict=True))
+        raise OscillatorError(
+            f"at the start (t0 = {start.t0:g} s, {state}) {problem}; give parameters and a start of physical size",
+            field="initial",
+        )
 
 
 def simulate(
     case: Case | str | Path,
+    /,
     *,
     t_end: float | None = None,
     t_eval: Sequence[float] | np.ndarray | None = None,
@@ -88,11 +95,13 @@ def simulate(
     t_end : float, optional
         End time (s); the case's by default.
     t_eval : array_like, optional
-        Record the trajectory on this grid instead of at CVODE's steps.
+        Record the trajectory on this grid (times within ``[t0, t_end]``) instead of at CVODE's
+        steps.
     record_trajectory : bool
         Keep trajectory rows (events and the energy audit are always kept).
     progress : callable, optional
-        Called with the current time after every solver step (keep it cheap).
+        Called with the current time after every solver step (keep it cheap).  An exception it
+        raises stops the run and reaches the caller unchanged.
     keep_events_from : float, optional
         Keep only the events at or after this time in ``Result.events`` (``stats["events"]``
         counts them all). With the trajectory off too, memory stays flat in the run's length.
@@ -108,10 +117,10 @@ def simulate(
     Raises
     ------
     OscillatorError
-        Bad input, or a solver failure or guard (with the time, domains and state).  When the
-        run had started, ``error.result`` holds the partial :class:`Result` up to the last point
-        reached, with ``status == "failed"``; a ``KeyboardInterrupt`` carries one the same way,
-        with ``status == "interrupted"``.
+        Bad input (before anything runs, see :func:`admit`), or a solver failure or guard (with
+        the time, domains and state).  When the run had started, ``error.result`` holds the
+        partial :class:`Result` up to the last point reached, with ``status == "failed"``; a
+        ``KeyboardInterrupt`` carries one the same way, with ``status == "interrupted"``.
 
     Examples
     --------
@@ -121,13 +130,24 @@ def simulate(
     [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
     """
     case = resolve_case(case, t_end=t_end, **overrides)
+    if not isinstance(record_trajectory, (bool, np.bool_)):
+        raise OscillatorError(
+            f"record_trajectory must be True or False, got {shown(record_trajectory)}", field="record_trajectory"
+        )
+    if progress is not None and not callable(progress):
+        raise OscillatorError(
+            f"progress must be a function of the time (or None), got {shown(progress)}", field="progress"
+        )
+    grid = None if t_eval is None else _grid(t_eval, case)
+    keep_from = -math.inf if keep_events_from is None else _time(keep_events_from, "keep_events_from")
+    admit(case)
     supervisor = Supervisor(
         case.parameters,
         case.options,
-        t_eval=None if t_eval is None else _grid(t_eval),
+        t_eval=grid,
         record_trajectory=bool(record_trajectory),
         progress=progress,
-        keep_events_from=-math.inf if keep_events_from is None else _time(keep_events_from, "keep_events_from"),
+        keep_events_from=keep_from,
     )
     try:
         record = supervisor.run(case.initial.t0, case.initial.y, case.t_end)
@@ -136,14 +156,6 @@ def simulate(
         if partial is not None and partial.mode_initial is not None and partial.y_final is not None:
             status = "interrupted" if isinstance(error, KeyboardInterrupt) else "failed"
             failure = str(error) or "interrupted by the user"
-            with contextlib.suppress(*ARITHMETIC_ERRORS), strict_arithmetic():
-                error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
+            error.result = Result.from_record(case, partial, status=status, failure=failure)  # type: ignore[attr-defined]
         raise
-    try:
-        with strict_arithmetic():
-            return Result.from_record(case, record)
-    except ARITHMETIC_ERRORS as exc:
-        raise OscillatorError(
-            f"the energy audit left floating point ({exc}); give parameters and a start of physical size",
-            field="parameters",
-        ) from exc
+    return Result.from_record(case, record)

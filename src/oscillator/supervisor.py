@@ -30,6 +30,7 @@ from sksundae.cvode import CVODE
 
 from oscillator._errors import OscillatorError
 from oscillator.detection import NUM_ROOTS, Root, mode_violation, root_directions, root_kernel
+from oscillator.energy import mechanical_energy
 from oscillator.events import Event
 from oscillator.fields import coefficients
 from oscillator.kernels import derivative
@@ -37,7 +38,7 @@ from oscillator.parameters import Parameters, SolverOptions
 from oscillator.phase_space import Mode
 from oscillator.switching import Resolution, initial_mode, resolve
 
-__all__ = ["ARITHMETIC_ERRORS", "RunRecord", "Supervisor", "strict_arithmetic"]
+__all__ = ["ARITHMETIC_ERRORS", "RunRecord", "Supervisor", "start_problem", "strict_arithmetic"]
 
 #: What :func:`strict_arithmetic` and Python's own float arithmetic raise when numbers leave
 #: floating point.
@@ -64,6 +65,43 @@ _SAME_INSTANT = 1e-12
 _CHUNK_PERIODS = 4
 #: How far (relative) the state may stand on the wrong side of a boundary of its mode at a root.
 _CONSISTENCY = 1e-9
+
+
+class _CallbackRaised(Exception):
+    """Carries an exception of the user's progress callback through the supervisor's handlers."""
+
+    def __init__(self, error: Exception) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+def start_problem(t0: float, y0: tuple[float, float, float, float], p: Parameters) -> str | None:
+    """What cannot be evaluated at the start, or ``None``: the initial mode is decided and its
+    field, powers, root functions and energy are computed; each must be a finite number."""
+    try:
+        with strict_arithmetic():
+            start = initial_mode(t0, y0, p)
+            mode = start.mode
+            y = np.zeros(8)
+            y[:4] = start.y
+            rates, roots = np.zeros(8), np.zeros(NUM_ROOTS)
+            c = coefficients(p)
+            derivative(t0, y, rates, c, mode.sign(1), mode.sign(2), mode.left, mode.right)
+            root_kernel(t0, y, roots, c, mode.sign(1), mode.sign(2), mode.left, mode.right, 0.0, 0.0)
+            energy = mechanical_energy(start.y, p, mode.left, mode.right)
+    except ARITHMETIC_ERRORS:
+        return "the forces overflow"
+    except OscillatorError as error:
+        return f"the switching rules fail ({error})"
+    if not np.isfinite(rates[:4]).all():
+        return "the forces overflow"
+    if not np.isfinite(rates[4:]).all():
+        return "the powers of the energy audit overflow"
+    if not np.isfinite(roots).all():
+        return "the switching functions overflow"
+    if not math.isfinite(energy):
+        return "the mechanical energy overflows"
+    return None
 
 
 @dataclass
@@ -126,6 +164,7 @@ class Supervisor:
         # scikit-sundae prints CVODE's error messages to stdout; they are caught here and told
         # in the library's own error when the solver fails.
         self._solver_output = io.StringIO()
+        self._caller_errstate = np.geterr()
 
     # ----------------------------------------------------------------- CVODE problems per mode
 
@@ -166,21 +205,17 @@ class Supervisor:
     def run(self, t0: float, y0: tuple[float, float, float, float], t_end: float) -> RunRecord:
         """Integrate from ``t0`` to ``t_end``; raise :class:`OscillatorError` on failure.
 
-        The partial record is attached to the error as ``error.partial``.
+        The partial record is attached to the error as ``error.partial``.  An exception raised
+        by the progress callback reaches the caller unchanged.
         """
-        periods = (t_end - t0) / self.params.period
-        if periods > self.options.max_periods:
-            raise OscillatorError(
-                f"t_end - t0 = {t_end - t0:.6g} s is {periods:.3g} forcing periods, more than max_periods = "
-                f"{self.options.max_periods}; shorten t_end (or check Omega), or raise max_periods",
-                field="max_periods",
-            )
         record = RunRecord()
         self._recent.clear()
         started = time.perf_counter()
         try:
             with strict_arithmetic():
                 self._run(record, t0, y0, t_end)
+        except _CallbackRaised as raised:
+            raise raised.error from None
         except ARITHMETIC_ERRORS as exc:
             error = OscillatorError(
                 f"arithmetic failed after t = {record.t_final:.10g} s ({exc}): the forces leave floating point; "
@@ -195,6 +230,15 @@ class Supervisor:
         finally:
             record.wall_time = time.perf_counter() - started
         return record
+
+    def _report_progress(self, t: float) -> None:
+        """Call the progress callback with the caller's floating-point settings; let what it
+        raises through untouched (Ctrl-C, which lands there often, stays an interrupt)."""
+        with np.errstate(**self._caller_errstate):
+            try:
+                self.progress(t)  # type: ignore[misc]
+            except Exception as exc:
+                raise _CallbackRaised(exc) from exc
 
     def _record(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         if self.record_trajectory:
@@ -241,7 +285,7 @@ class Supervisor:
             self._solver_output.truncate()
             solver.init_step(0.0, y)
             record.restarts += 1
-            after_root, stalls, last_root = False, 0, -math.inf
+            after_root, stalls, last_root, steps = False, 0, -math.inf, 0
             while True:
                 on_grid = grid is not None and grid_index < grid.size
                 if on_grid:
@@ -269,9 +313,12 @@ class Supervisor:
                 y = np.array(out.y, dtype=float)
                 record.t_final, record.y_final, record.mode_final = t, y, mode
                 if self.progress is not None:
-                    self.progress(t)
+                    self._report_progress(t)
                 if every_step:
                     self._record(record, t, y, mode)
+                    steps = 0 if out.status == _ROOT_RETURN else steps + 1
+                    if steps > self.options.max_num_steps:  # CVODE counts only between outputs
+                        raise self._too_many_steps(t, y, mode)
                 elif on_grid and out.status != _ROOT_RETURN and t == target:
                     self._record(record, t, y, mode)
                     grid_index += 1
@@ -344,6 +391,16 @@ class Supervisor:
             f"there. Change the case, or raise storm_events (now {self.options.storm_events}) or lower "
             f"storm_window (now {self.options.storm_window:g} s) if such a rate is meant",
             field="storm_events",
+        )
+
+    def _too_many_steps(self, t: float, y: np.ndarray, mode: Mode) -> OscillatorError:
+        """CVODE's ``max_num_steps`` failure, for steps taken one at a time (each one an output)."""
+        x1, v1, x2, v2 = (float(v) for v in y[:4])
+        return OscillatorError(
+            f"CVODE took more than max_num_steps = {self.options.max_num_steps} steps without a switch up to "
+            f"t = {t:.10g} s in domains m1: {mode.domain1}, m2: {mode.domain2} (state {mode.system_state}; "
+            f"x1={x1:.6g}, v1={v1:.6g}, x2={x2:.6g}, v2={v2:.6g}); loosen rtol/atol or raise max_num_steps",
+            field="max_num_steps",
         )
 
     def _failure(self, out, t: float, y: np.ndarray, mode: Mode) -> OscillatorError:

@@ -29,7 +29,9 @@ import json
 import math
 import multiprocessing
 import os
+import stat
 import time
+import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
@@ -39,18 +41,22 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from oscillator._errors import OscillatorError
-from oscillator._files import atomic_folder, atomic_path, replace_file
-from oscillator.cases import Case, case_to_toml
-from oscillator.parameters import SweepSettings
-from oscillator.simulation import resolve_case, simulate
+from oscillator._files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
+from oscillator._signals import interrupts_ignored, prepare_worker
+from oscillator._text import printable, shown
+from oscillator.cases import Case, case_to_toml, resolve_case
+from oscillator.parameters import SweepSettings, is_number, is_whole_number
+from oscillator.simulation import simulate
 
 __all__ = [
     "TABLES",
     "Location",
     "PointTables",
+    "Sweep",
     "SweepOutcome",
     "detect_period",
     "locate",
+    "open_sweep",
     "read_sweep",
     "run_point",
     "run_sweep",
@@ -210,6 +216,13 @@ def sliding_ranges(summary: pd.DataFrame, param: str) -> list[tuple[float, float
 
 # --------------------------------------------------------------------------- storage
 
+#: The largest ``sweep.json`` read back (bytes).
+_MAX_SWEEP_JSON = 1 << 20
+
+
+def _damaged(path: Path, what: str, fix: str = "give a new folder") -> OscillatorError:
+    return OscillatorError(f"{printable(str(path))} is damaged: {what}; {fix}", field=path.name)
+
 
 class _Store:
     """A sweep folder: its identity, the finished points, and the consolidated tables."""
@@ -219,31 +232,68 @@ class _Store:
         self.parts = folder / "parts"
         self.identity = {"case": case_to_toml(case), "settings": dataclasses.asdict(settings)}
         self.settings = settings
+        self.resuming = False
+
+    def check(self) -> None:
+        """Refuse, before anything is created, a folder that cannot hold this sweep.
+
+        A new name must be writable; an existing folder must be this very sweep (then it is
+        resumed), with its ``sweep.json``, ``parts/`` and finished parts intact.
+        """
+        shown = printable(str(self.folder))
+        check_name(self.folder, option="--out")
+        if not os.path.lexists(self.folder):
+            return
+        if not self.folder.is_dir():
+            raise OscillatorError(f"--out {shown} exists and is not a folder; give a new folder", field="--out")
+        marker = self.folder / "sweep.json"
+        if not os.path.lexists(marker):
+            if any(self.folder.iterdir()):
+                raise OscillatorError(f"--out {shown} exists and is not a sweep folder; give a new folder",
+                                      field="--out")  # fmt: skip
+            return
+        text = read_untrusted(marker, what="sweep file", field="sweep.json", limit=_MAX_SWEEP_JSON)
+        try:
+            stored = json.loads(text)
+        except (ValueError, RecursionError) as exc:
+            raise _damaged(marker, "it is not JSON") from exc
+        if not isinstance(stored, dict) or "identity" not in stored:
+            raise _damaged(marker, "it holds no sweep identity")
+        if stored["identity"] != self.identity:
+            raise OscillatorError(
+                f"--out {shown} holds a different sweep (another case or settings); give a new "
+                f"folder, or the same case and settings to resume it",
+                field="--out",
+            )
+        if not self.parts.is_dir():
+            raise _damaged(self.folder, "its parts/ folder is missing")
+        for part in sorted(self.parts.glob("*.parquet")):
+            try:
+                index, name, _ = part.name.split(".")
+                int(index)
+                if name not in TABLES or not stat.S_ISREG(os.stat(part).st_mode):
+                    raise ValueError(name)
+                pq.read_metadata(part)
+            except Exception as exc:  # pyarrow raises many types for a damaged file
+                if isinstance(exc, MemoryError):
+                    raise
+                raise _damaged(part, "it is not a part of this sweep",
+                               "delete it, and run the same command to compute that point again") from exc  # fmt: skip
+        self.resuming = True
 
     def open(self) -> None:
-        """Create the folder, or check that it holds this very sweep (to resume it)."""
-        marker = self.folder / "sweep.json"
-        if marker.is_file():
-            stored = json.loads(marker.read_text(encoding="utf-8"))
-            if stored.get("identity") != self.identity:
-                raise OscillatorError(
-                    f"--out {self.folder} holds a different sweep (another case or settings); give a new "
-                    f"folder, or the same case and settings to resume it",
-                    field="--out",
-                )
+        """Create the folder (appearing whole: parts/, case.toml, sweep.json), unless resuming."""
+        if self.resuming:
             return
-        if self.folder.exists() and any(self.folder.iterdir()):
-            raise OscillatorError(
-                f"--out {self.folder} exists and is not a sweep folder; give a new folder", field="--out"
-            )
-        try:  # the new folder appears whole (parts/, case.toml, sweep.json) or not at all
+        try:
             with atomic_folder(self.folder) as temporary:
                 (temporary / "parts").mkdir()
                 (temporary / "case.toml").write_text(self.identity["case"], encoding="utf-8")
                 (temporary / "sweep.json").write_text(self._status("running", done=0), encoding="utf-8")
         except OSError as exc:
             raise OscillatorError(
-                f"--out {self.folder}: cannot create it ({exc.strerror}); choose a writable folder", field="--out"
+                f"--out {printable(str(self.folder))}: cannot create it ({exc.strerror}); choose a writable folder",
+                field="--out",
             ) from exc
 
     def _status(self, status: str, **extra) -> str:
@@ -299,11 +349,17 @@ def _points_serial(case, settings, tasks) -> Iterator[PointTables]:
 
 
 def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
-    """A local process pool; at most ``4 workers`` points in flight, so memory stays flat."""
+    """A local process pool; at most ``4 workers`` points in flight, so memory stays flat.
+
+    The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator._signals`); on an
+    interrupt or an error here they are stopped at once, so nothing outlives the sweep.
+    """
     context = multiprocessing.get_context("spawn")
     pending = iter(tasks)
-    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        running = set()
+    running: set[cf.Future] = set()
+    with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
+        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=prepare_worker,
+                                      initargs=(os.getpid(),))  # fmt: skip
 
         def fill() -> None:
             for index, value in pending:
@@ -312,35 +368,69 @@ def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
                     return
 
         fill()
+    try:
         while running:
             finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for future in finished:
                 running.discard(future)
                 yield future.result()
             fill()
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):  # no public way to stop busy workers
+            process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)  # quick now; frees the pool's semaphores
+        raise
+    pool.shutdown()
 
 
-def _points_dask(case, settings, tasks, scheduler: str) -> Iterator[PointTables]:
+def _scheduler_address(scheduler: str) -> str:
+    """Refuse an address that is not ``tcp://HOST:PORT`` (or tls://, ucx://, inproc://)."""
+    parsed = urllib.parse.urlsplit(scheduler)
     try:
-        from distributed import Client, as_completed
+        port = parsed.port
+    except ValueError:
+        port = None
+    if (
+        parsed.scheme not in ("tcp", "tls", "ucx", "inproc")
+        or not parsed.hostname
+        or (parsed.scheme != "inproc" and port is None)
+    ):
+        raise OscillatorError(
+            f"--scheduler {shown(scheduler)} is not the address of a Dask scheduler; give tcp://HOST:PORT",
+            field="--scheduler",
+        )
+    return scheduler
+
+
+def _connect(scheduler: str):
+    """A Dask client of the scheduler at ``scheduler``, or a clear error."""
+    address = _scheduler_address(scheduler)
+    try:
+        from distributed import Client
     except ImportError as exc:
         raise OscillatorError(
             "--scheduler needs Dask: pip install 'oscillator[dask]' (dask.distributed)", field="--scheduler"
         ) from exc
     try:
-        client = Client(scheduler, timeout="10s")
-    except OSError as exc:
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError) as exc:
         raise OscillatorError(
-            f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc}); check the address", field="--scheduler"
+            f"--scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",
+            field="--scheduler",
         ) from exc
+
+
+def _points_dask(client, case, settings, tasks) -> Iterator[PointTables]:
+    from distributed import as_completed
+
+    case_on_cluster = client.scatter(case, broadcast=True)
+    futures = [client.submit(run_point, case_on_cluster, settings, i, v, pure=False) for i, v in tasks]
     try:
-        case_on_cluster = client.scatter(case, broadcast=True)
-        futures = [client.submit(run_point, case_on_cluster, settings, i, v, pure=False) for i, v in tasks]
         for future in as_completed(futures):
             yield future.result()
             future.release()
     finally:
-        client.close()
+        client.cancel(futures)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -353,6 +443,115 @@ class SweepOutcome:
     resumed: int
     failed: int
     wall_time: float
+
+
+#: The most local worker processes per core: more only share the cores.
+MAX_WORKERS_PER_CORE = 4
+
+
+class Sweep:
+    """A sweep checked and ready to run: :func:`open_sweep` makes it, :meth:`run` runs it.
+
+    Everything that can be refused (the settings, the folder, the workers, the scheduler) is
+    refused by :func:`open_sweep` before anything is created; what :meth:`run` raises comes
+    after work started, and every point finished by then is kept in the folder.
+    """
+
+    def __init__(self, case: Case, settings: SweepSettings, store: _Store, workers: int, client, lock) -> None:
+        self.case, self.settings, self._store, self.workers = case, settings, store, workers
+        self._client, self._lock = client, lock
+
+    @property
+    def folder(self) -> Path:
+        return self._store.folder
+
+    def close(self) -> None:
+        """Let go of the folder's lock and the Dask client, if any (:meth:`run` does it)."""
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+        self._lock.release()
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> SweepOutcome:
+        """Compute the points not yet done, store each as it finishes, and consolidate the tables.
+
+        ``progress(done, total)`` is called after every stored point.
+        """
+        started = time.perf_counter()
+        store, settings = self._store, self.settings
+        try:
+            store.open()
+            values = settings.values
+            done = store.done()
+            tasks = [(i, v) for i, v in enumerate(values) if i not in done]
+            if progress is not None:
+                progress(len(done), len(values))
+            if self._client is not None:
+                points: Iterable[PointTables] = _points_dask(self._client, self.case, settings, tasks)
+            elif self.workers == 1 or len(tasks) <= 1:
+                points = _points_serial(self.case, settings, tasks)
+            else:
+                points = _points_pool(self.case, settings, tasks, min(self.workers, len(tasks)))
+            computed = 0
+            for point in points:
+                store.write_point(point)
+                computed += 1
+                if progress is not None:
+                    progress(len(done) + computed, len(values))
+            store.consolidate()
+            summary = pd.read_parquet(store.folder / "summary.parquet")
+            failed = int((summary.status != "ok").sum())
+            wall = time.perf_counter() - started
+            store.write_status("complete", done=len(values), failed=failed, wall_time_last_run=wall)
+        except OSError as exc:
+            where = printable(str(exc.filename)) if exc.filename else printable(str(store.folder))
+            raise OscillatorError(
+                f"cannot write {where} ({exc.strerror or exc}); the points finished so far are kept: free the space "
+                f"or fix the folder, and run the same command to resume",
+                field="--out",
+            ) from exc
+        finally:
+            self.close()
+        return SweepOutcome(store.folder, len(values), computed, len(done), failed, wall)
+
+
+def open_sweep(
+    case: Case,
+    settings: SweepSettings,
+    folder: Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+) -> Sweep:
+    """Check a sweep before anything is created: the folder, the workers, the scheduler.
+
+    Parameters are those of :func:`run_sweep`.
+
+    Raises
+    ------
+    OscillatorError
+        A folder that cannot hold this sweep (a file, another sweep, a damaged sweep), a
+        number of workers out of range, or a scheduler that is not an address or cannot be
+        reached.
+    """
+    store = _Store(Path(folder), case, settings)
+    store.check()
+    most = MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if workers is not None and (not is_whole_number(workers) or not 1 <= workers <= most):
+        raise OscillatorError(
+            f"--workers must be a whole number from 1 to {most} ({MAX_WORKERS_PER_CORE} per core), "
+            f"got {shown(workers)}",
+            field="--workers",
+        )
+    client = _connect(scheduler) if scheduler else None
+    try:
+        lock = lock_name(store.folder, busy=f"--out {printable(str(store.folder))} is being swept by another "
+                         f"process now; wait for it, or give another folder")  # fmt: skip
+    except OscillatorError:
+        if client is not None:
+            client.close()
+        raise
+    return Sweep(case, settings, store, workers or os.cpu_count() or 1, client, lock)
 
 
 def run_sweep(
@@ -374,39 +573,13 @@ def run_sweep(
     folder : Path
         Created if new; if it holds the same sweep, the points already finished are kept.
     workers : int, optional
-        Local processes (default: every core); 1 runs in this process.
+        Local processes (default: every core; at most 4 per core); 1 runs in this process.
     scheduler : str, optional
         ``tcp://HOST:PORT`` of a Dask scheduler: the points run on that cluster instead.
     progress : callable, optional
         Called as ``progress(done, total)`` after every stored point.
     """
-    started = time.perf_counter()
-    store = _Store(Path(folder), case, settings)
-    store.open()
-    values = settings.values
-    done = store.done()
-    tasks = [(i, v) for i, v in enumerate(values) if i not in done]
-    if progress is not None:
-        progress(len(done), len(values))
-    if scheduler:
-        points: Iterable[PointTables] = _points_dask(case, settings, tasks, scheduler)
-    else:
-        workers = workers or os.cpu_count() or 1
-        points = _points_serial(case, settings, tasks) if workers == 1 or len(tasks) <= 1 else _points_pool(
-            case, settings, tasks, workers
-        )  # fmt: skip
-    computed = 0
-    for point in points:
-        store.write_point(point)
-        computed += 1
-        if progress is not None:
-            progress(len(done) + computed, len(values))
-    store.consolidate()
-    summary = pd.read_parquet(store.folder / "summary.parquet")
-    failed = int((summary.status != "ok").sum())
-    wall = time.perf_counter() - started
-    store.write_status("complete", done=len(values), failed=failed, wall_time_last_run=wall)
-    return SweepOutcome(store.folder, len(values), computed, len(done), failed, wall)
+    return open_sweep(case, settings, folder, workers=workers, scheduler=scheduler).run(progress)
 
 
 # --------------------------------------------------------------------------- locate
@@ -437,38 +610,61 @@ class Location:
 
 
 def locate(
-    case: Case, settings: SweepSettings, what: str, between: tuple[float, float], *, tolerance: float = 1e-8
+    case: Case,
+    settings: SweepSettings,
+    what: str,
+    between: tuple[float, float],
+    *,
+    tolerance: float = 1e-8,
+    progress: Callable[[int, int, float, float], None] | None = None,
 ) -> Location:
     """Bisect ``[a, b]`` until the bracket is narrower than ``tolerance``.
 
     ``what`` is ``sliding`` (whether the mass rests), ``period`` (the period-n found) or
     ``grazing`` (switches of the mass per period: at a grazing bifurcation a pair of crossings
-    appears or disappears).  The indicator must differ at ``a`` and ``b``.
+    appears or disappears).  The indicator must differ at ``a`` and ``b``; both ends are
+    simulated to see it.  ``tolerance`` must be positive and at least a few units of floating
+    point at the bracket (4 ulp); the bisection then takes ``ceil(log2((b - a) / tolerance))``
+    steps.  ``progress(step, steps, a, b)`` is called before each simulation (the two ends are
+    steps 1 and 2).
     """
     if what not in _INDICATORS:
-        raise OscillatorError(f"--what must be one of {', '.join(_INDICATORS)}, got {what!r}", field="--what")
+        raise OscillatorError(f"--what must be one of {', '.join(_INDICATORS)}, got {shown(what)}", field="--what")
     column = _INDICATORS[what]
+    if len(between) != 2 or not all(is_number(v) and math.isfinite(v) for v in between):
+        raise OscillatorError(f"--between needs two finite values, got {shown(between)}", field="--between")
     a, b = float(min(between)), float(max(between))
     if not b > a:
-        raise OscillatorError(f"--between needs two different values, got {between}", field="--between")
+        raise OscillatorError(f"--between needs two different values, got {shown(between)}", field="--between")
+    resolution = 4 * float(np.spacing(max(abs(a), abs(b))))
+    if not (is_number(tolerance) and math.isfinite(tolerance) and tolerance >= resolution):
+        raise OscillatorError(
+            f"--tolerance must be a width of at least {resolution:.2g} (4 ulp of floating point at "
+            f"{settings.param} = {b:g}), got {shown(tolerance)}",
+            field="--tolerance",
+        )
+    steps = 2 + max(0, math.ceil(math.log2((b - a) / tolerance)))
 
-    def evaluate(value: float) -> PointTables:
+    def evaluate(value: float, step: int) -> PointTables:
+        if progress is not None:
+            progress(step, steps, a, b)
         point = run_point(case, settings, 0, value)
         row = point.summary.iloc[0]
         if row.status != "ok":
             raise OscillatorError(f"{settings.param} = {value!r}: {row.message}", field=settings.param)
         return point
 
-    low, high = evaluate(a), evaluate(b)
+    low, high = evaluate(a, 1), evaluate(b, 2)
     if low.summary[column].iloc[0] == high.summary[column].iloc[0]:
         raise OscillatorError(
-            f"{what} is the same at {settings.param} = {a!r} and {b!r} ({column} = {low.summary[column].iloc[0]}); "
-            f"give two values on either side of a change (see the sweep's summary table)",
+            f"{what} is the same at {settings.param} = {a!r} and {b!r} ({column} = {low.summary[column].iloc[0]}, "
+            f"seen by simulating both ends); give two values on either side of a change (see the sweep's summary "
+            f"table)",
             field="--between",
         )
     iterations = 0
-    while b - a > tolerance:
-        middle = evaluate(0.5 * (a + b))
+    while b - a > tolerance and iterations < steps - 2:
+        middle = evaluate(0.5 * (a + b), iterations + 3)
         iterations += 1
         if middle.summary[column].iloc[0] == low.summary[column].iloc[0]:
             a, low = middle.value, middle

@@ -65,9 +65,22 @@ class Resolution:
 ZERO = 1e-9
 
 
-def zero_tolerance(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int) -> float:
-    """How close to zero a force-like G-function of mass ``mass`` counts as zero at ``(t, y)``."""
-    return ZERO * force_scale(t, y, p, mode, mass)
+#: The time resolution of a located root, relative to the forcing period: CVODE locates a root
+#: to about ``100 eps`` times the span it integrated since its last restart (a few periods at
+#: most), 1e-13 periods; this is ten times that.
+ZERO_TIME = 1e-12
+
+
+def zero_tolerance(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, rate: float) -> float:
+    """How close to zero a force-like G-function of mass ``mass`` counts as zero at ``(t, y)``.
+
+    Within the rounding of the terms that make it up (:data:`ZERO` of
+    :func:`~oscillator.fields.force_scale`), or within what its rate ``rate`` (its
+    first-order G-function) changes it in the time resolution of a located root
+    (:data:`ZERO_TIME`).  The second matters where every term is small but the function moves
+    fast: a resting mass struck by the other one, whose contact force starts from zero.
+    """
+    return ZERO * force_scale(t, y, p, mode, mass) + ZERO_TIME * p.period * abs(rate)
 
 
 def _field_name(mass: int, domain: int, *, barrier: bool = False) -> str:
@@ -161,7 +174,7 @@ def _arrive(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: int, 
     beta = domain_of(mass, -s, left=mode.left, right=mode.right)
     g_alpha = velocity_g(t, y, p, mode, mass, s)
     g_beta = velocity_g(t, y, p, mode, mass, -s)
-    tol = zero_tolerance(t, y, p, mode, mass)
+    tol = zero_tolerance(t, y, p, mode, mass, g_beta[1])
     names = (_field_name(mass, alpha), _field_name(mass, beta))
     boundary = mode.boundary_label(mass)
 
@@ -192,7 +205,7 @@ def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: i
     barrier = flow_barrier_g(t, y, p, mode, mass, s)
     field = velocity_g(t, y, p, mode, mass, s)
     decision = theorem_5_4_sliding_vanishes(
-        mass, delta, barrier[0], barrier[1], field[0], tolerance=zero_tolerance(t, y, p, mode, mass)
+        mass, delta, barrier[0], barrier[1], field[0], tolerance=zero_tolerance(t, y, p, mode, mass, barrier[1])
     )
     if not decision:
         return mode
@@ -237,7 +250,7 @@ def settle(t: float, y: Sequence[float], p: Parameters, mode: Mode, events: list
             elif y[2 * mass - 1] == 0.0:
                 s = mode.sign(mass)
                 g0, g1 = velocity_g(t, y, p, mode, mass, s)
-                tol = zero_tolerance(t, y, p, mode, mass)
+                tol = zero_tolerance(t, y, p, mode, mass, g1)
                 if s * g0 < -tol or (is_zero(g0, tol) and s * g1 < 0):
                     new = _arrive(t, y, p, mode, mass, events)
                     changed |= new != mode
@@ -270,7 +283,8 @@ def _grazing_reports(
         if _EXTREMUM[mass] in fired and s and before.domain(mass) == mode.domain(mass):
             alpha = mode.domain(mass)
             g = velocity_g(t, y, p, mode, mass, s)
-            decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=zero_tolerance(t, y, p, mode, mass))
+            tolerance = zero_tolerance(t, y, p, mode, mass, g[1])
+            decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=tolerance)
             speed = abs(y[2 * mass - 1])
             if decision and speed <= options.grazing_velocity_tolerance:
                 events.append(

@@ -1,0 +1,78 @@
+"""Ctrl-C and the death of a parent: what a finished result and a pool of workers need.
+
+* :func:`interrupts_deferred` holds Ctrl-C while files are being written, so that a finished
+  computation reaches the disk whole; the interrupt is raised when the block ends.
+* :func:`interrupts_ignored` ignores SIGINT while worker processes are spawned: they are born
+  ignoring it, so a Ctrl-C that reaches a worker before it is ready (its imports take seconds)
+  cannot print a traceback.
+* :func:`prepare_worker` runs first in each worker: it ignores SIGINT (the parent alone decides
+  what an interrupt does, and stops the workers) and exits when the parent dies, so that a
+  killed sweep leaves no orphan processes behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import threading
+import time
+from collections.abc import Iterator
+
+__all__ = ["interrupts_deferred", "interrupts_ignored", "prepare_worker"]
+
+#: How often a worker checks that its parent is alive (s).
+_WATCH_INTERVAL = 0.25
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextlib.contextmanager
+def interrupts_deferred() -> Iterator[None]:
+    """Hold SIGINT for the block; raise ``KeyboardInterrupt`` after it if one came."""
+    if not _main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if received:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def interrupts_ignored() -> Iterator[None]:
+    """Ignore SIGINT for the block: processes started in it are born ignoring it.
+
+    A process keeps an ignored signal ignored across ``exec``, and Python then installs no
+    ``KeyboardInterrupt`` handler of its own; so a Ctrl-C that reaches a worker while it starts
+    (its imports take seconds) cannot print a traceback.  (A blocked mask would not do:
+    ``multiprocessing`` starts processes with an empty one.)  A Ctrl-C that reaches this
+    process during the block, a few milliseconds while the workers are spawned, is lost.
+    """
+    if not _main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        if os.getppid() != parent:
+            os._exit(1)
+        time.sleep(_WATCH_INTERVAL)
+
+
+def prepare_worker(parent: int) -> None:
+    """A worker's initializer: ignore SIGINT, and exit as soon as process ``parent`` is gone."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch_parent, args=(parent,), name="parent-watch", daemon=True).start()
