@@ -12,8 +12,12 @@
 7. the floor of scikit-sundae's callbacks: the cost of one CVODE step of a trivial problem whose
    right-hand side is a Python function, which bounds the speed of any CVODE-based simulator here.
 
-Usage: python benchmarks/run.py [--quick] [--memory-periods N] [--soak-periods N] [--json PATH]
-  --quick: skip the sweep, use 2,000 and 20,000 periods for the memory runs and 10,000 for the soak.
+Usage: python benchmarks/run.py [--quick] [--only SECTION ...] [--memory-periods N] [--soak-periods N]
+                                [--json PATH]
+  --quick: a check that every section runs, in under a minute: a 5-value sweep, 500 periods for
+  the memory runs and the soak, short throughput and baseline windows; its figures are not the
+  benchmark's. Every section prints a line when it starts and each measurement as it
+  ends.
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from scipy_baseline import run_scipy
 
-from oscillator import load_case, simulate
+from oscillator import load_case, resolve_case, simulate
 
 HERE = Path(__file__).resolve().parent
 WINDOW = 20  # forcing periods over which event-time accuracy is compared
@@ -62,20 +66,23 @@ def switching_times(events) -> np.ndarray:
     return np.array([e[0] for e in events if e[2] != "grazing"])
 
 
+def say(text: str) -> None:
+    print(f"  [{time.strftime('%H:%M:%S')}] {text}", flush=True)
+
+
 def throughput(omega: float, periods: int) -> dict:
-    case = load_case("instance-1")
-    case = case.__class__(**{**case.__dict__, "parameters": case.parameters.replace(Omega=omega)})
+    case = resolve_case("instance-1", Omega=omega)
     period = case.parameters.period
     t0 = case.initial.t0
     wall, result = best_of(2, lambda: simulate(case, t_end=t0 + periods * period, record_trajectory=False))
+    say(f"Omega = {omega}: {periods} periods in {wall:.2f} s")
     return {"omega": omega, "periods": periods, "wall_s": wall, "periods_per_s": periods / wall,
             "rhs_calls_per_period": result.stats["rhs_evaluations"] / periods}  # fmt: skip
 
 
-def accuracy_and_baseline(omega: float) -> dict:
-    case = load_case("instance-1")
-    case = case.__class__(**{**case.__dict__, "parameters": case.parameters.replace(Omega=omega)})
-    t_end = case.initial.t0 + WINDOW * case.parameters.period
+def accuracy_and_baseline(omega: float, window: int = WINDOW) -> dict:
+    case = resolve_case("instance-1", Omega=omega)
+    t_end = case.initial.t0 + window * case.parameters.period
     reference = simulate(case, t_end=t_end, rtol=1e-13, atol=1e-13, record_trajectory=False).events
     reference = reference[reference.kind != "grazing"].t.to_numpy()
     ours_wall, ours = best_of(3, lambda: simulate(case, t_end=t_end, record_trajectory=False))
@@ -92,21 +99,29 @@ def accuracy_and_baseline(omega: float) -> dict:
     chosen = max(good) if good else min(trials, key=lambda item: item[1])[0]
     scipy_wall, (events, stats) = best_of(2, lambda: run_scipy(case, t_end, rtol=chosen, atol=chosen))
     scipy_error = float(np.max(np.abs(switching_times(events) - reference)))
-    return {"omega": omega, "periods": WINDOW, "ours_error_s": ours_error, "ours_wall_s": ours_wall,
+    say(f"Omega = {omega}: ours {ours_wall:.3f} s, SciPy {scipy_wall:.3f} s at rtol {chosen:g}")
+    return {"omega": omega, "periods": window, "ours_error_s": ours_error, "ours_wall_s": ours_wall,
             "scipy_rtol": chosen, "scipy_error_s": scipy_error, "scipy_wall_s": scipy_wall,
             "scipy_rhs_calls": stats["rhs_evaluations"], "speedup": scipy_wall / ours_wall,
             "scipy_trials": trials}  # fmt: skip
 
 
-def sweep() -> dict:
+def sweep(steps: int | None = None) -> dict:
+    import dataclasses
     import tempfile
 
     from oscillator.sweep import run_sweep
 
     case = load_case("bifurcation-omega")
+    settings = case.sweep if steps is None else dataclasses.replace(case.sweep, steps=steps)
+
+    def progress(done: int, total: int) -> None:
+        if done % 10 == 0 or done == total:
+            say(f"{done}/{total} values")
+
     with tempfile.TemporaryDirectory() as scratch:
-        outcome = run_sweep(case, case.sweep, Path(scratch) / "sweep")
-    return {"points": outcome.points, "periods_per_point": case.sweep.transient + case.sweep.record,
+        outcome = run_sweep(case, settings, Path(scratch) / "sweep", progress=progress)
+    return {"points": outcome.points, "periods_per_point": settings.transient + settings.record,
             "workers": os.cpu_count(), "wall_s": outcome.wall_time}  # fmt: skip
 
 
@@ -129,12 +144,15 @@ print(json.dumps({"case": name, "periods": periods, "wall_s": time.perf_counter(
 
 def memory(periods: int, name: str = "instance-1") -> dict:
     """A run of ``periods`` forcing periods of a case in a fresh process, trajectory and events off."""
+    say(f"{name}: {periods} periods in a fresh process ...")
     done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(periods), name], capture_output=True, text=True)
     if done.returncode != 0:
         last = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit code {done.returncode}"
         return {"case": name, "periods": periods, "wall_s": float("nan"), "events": 0, "peak_rss_mb": float("nan"),
                 "energy_residual": float("nan"), "error": last}  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    row = json.loads(done.stdout.strip().splitlines()[-1])
+    say(f"{name}: {periods} periods in {row['wall_s']:.1f} s, peak RSS {row['peak_rss_mb']:.1f} MB")
+    return row
 
 
 def callback_floor(steps: int = 200_000) -> dict:
@@ -168,7 +186,7 @@ def print_throughput(rows: list[dict]) -> None:
 
 
 def print_baseline(rows: list[dict]) -> None:
-    print(f"against SciPy solve_ivp (DOP853, events), {WINDOW} periods, event times vs a 1e-13 reference:")
+    print(f"against SciPy solve_ivp (DOP853, events), {rows[0]['periods']} periods, event times vs a 1e-13 reference:")
     print(
         f"{'Omega':<8}{'ours err':>10}{'ours (s)':>10}{'SciPy rtol':>11}{'SciPy err':>11}{'SciPy (s)':>11}{'ratio':>8}"
     )
@@ -207,18 +225,22 @@ def main() -> None:
     parser.add_argument("--only", choices=SECTIONS, nargs="+", default=None, help="run only these sections")
     parser.add_argument("--json", type=Path, default=HERE / "results.json")
     args = parser.parse_args()
-    long_run = args.memory_periods or (20_000 if args.quick else 100_000)
-    soak = args.soak_periods or (10_000 if args.quick else 100_000)
-    wanted = set(args.only or SECTIONS) - ({"sweep"} if args.quick and not args.only else set())
+    long_run = args.memory_periods or (500 if args.quick else 100_000)
+    soak = args.soak_periods or (500 if args.quick else 100_000)
+    quick = args.quick
+    wanted = set(args.only or SECTIONS)
     simulate("instance-1")  # compile the kernels (numba caches them on disk) before timing
 
     machine = {"platform": platform.platform(), "python": platform.python_version(), "cores": os.cpu_count()}
     print(f"machine: {machine['platform']}, {machine['cores']} cores")
     measure = {
         "instances": (instances, print_instances),
-        "throughput": (lambda: [throughput(1.6, 200), throughput(1.85, 200)], print_throughput),
-        "baseline": (lambda: [accuracy_and_baseline(1.6), accuracy_and_baseline(1.85)], print_baseline),
-        "sweep": (sweep, print_sweep),
+        "throughput": (lambda: [throughput(omega, 20 if quick else 200) for omega in (1.6, 1.85)], print_throughput),
+        "baseline": (
+            lambda: [accuracy_and_baseline(omega, 4 if quick else WINDOW) for omega in (1.6, 1.85)],
+            print_baseline,
+        ),
+        "sweep": (lambda: sweep(5 if quick else None), print_sweep),
         "memory": (lambda: [memory(long_run // 10), memory(long_run)], print_long_runs),
         "soak": (
             lambda: [memory(n, name) for name in ("instance-3", "instance-5") for n in (soak // 10, soak)],
@@ -230,8 +252,8 @@ def main() -> None:
     for section in SECTIONS:
         if section in wanted:
             compute, show = measure[section]
+            print(f"\n[{section}]", flush=True)
             results[section] = compute()
-            print(f"\n[{section}]")
             show(results[section])
     args.json.write_text(json.dumps(results, indent=2, default=float) + "\n", encoding="utf-8")
     print(f"\nwritten to {args.json}")

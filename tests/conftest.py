@@ -39,6 +39,16 @@ def make_case(t_end, *, initial, name="constructed", options=None, **params):
     )
 
 
+#: m2 (2 kg, no spring) driven at 1.5 times its static threshold at Omega = 1e8 rad/s: it leaves
+#: rest, then its velocity changes sign twice per forcing period, 3.2e7 times per second.
+CHATTER = dict(K1=0.0, K4=0.0, Q2=1.5 * 0.2 * 2.0 * 9.8, Omega=1e8)
+
+
+def chatter_case(t_end=1.0, **options):
+    return make_case(t_end, initial=(0.0, 0.0, 0.0, 0.5, 0.0), name="chatter", options=SolverOptions(**options),
+                     **CHATTER)  # fmt: skip
+
+
 def assert_same_tables(a, b):
     """Two sweeps' tables (``read_sweep``) are equal, but for wall times."""
     import pandas as pd

@@ -1,4 +1,4 @@
-"""An independent event-driven implementation on SciPy, written from MODEL.md alone.
+"""An independent event-driven implementation on SciPy, written from docs/model.md (Sec. 1-6) alone.
 
 It shares no code with the package: its own forces, its own mode bookkeeping, SciPy's DOP853 with
 ``solve_ivp`` events instead of CVODE.  Tests compare the package's switching events with it on

@@ -137,10 +137,33 @@ def test_check_passes_for_the_instances(name):
     assert "within tolerance" in result.stdout
 
 
-def test_check_fails_when_a_time_is_out_of_tolerance():
-    result = invoke("check", "instance-3", "--set", "x1=3.6")
+def test_check_fails_when_a_time_is_out_of_tolerance(tmp_path):
+    path = tmp_path / "moved.toml"  # Instance 3 started 0.1 m off, its expectations kept
+    path.write_text(load_case("instance-3").source.read_text().replace("x1 = 3.5", "x1 = 3.6"))
+    result = invoke("check", path)
     assert result.exit_code == 1
     assert "out of tolerance" in result.stderr
+
+
+def test_check_refuses_a_changed_case_but_takes_solver_options():
+    refused = invoke("check", "instance-3", "--set", "x1=3.6")
+    assert refused.exit_code == 2 and "--set changes the case (x1 3.5 → 3.6)" in refused.stderr
+    assert invoke("check", "instance-3", "--set", "rtol=1e-11").exit_code == 0
+
+
+def test_a_changed_case_is_not_scored_against_the_article(tmp_path):
+    folder = tmp_path / "changed"
+    result = invoke("run", "instance-1", "--t-end", "3", "--set", "Omega=1.7", "--out", folder)
+    assert result.exit_code == 0, result.stderr
+    assert "modified case (Omega 1.6 → 1.7): the expected times of the case as written are not compared" in (
+        result.stdout
+    )
+    assert "within tolerance" not in result.stdout
+    saved = load_case(folder / "case.toml")
+    assert saved.expected == () and saved.title.endswith("(modified: Omega 1.6 → 1.7)")
+    report = (folder / "report.md").read_text()
+    assert "**Modified case:** Omega 1.6 → 1.7" in report and "Comparison with the article" not in report
+    assert "(modified: Omega 1.6 → 1.7)" in report.splitlines()[0]
 
 
 def test_report_rebuilds_from_the_folder(instance_3_run):
@@ -346,3 +369,40 @@ def test_a_run_without_events_writes_typed_tables_and_reports(tmp_path):
     rebuilt = invoke("report", folder)
     assert rebuilt.exit_code == 0, rebuilt.stderr
     assert "No switching event: each mass stays in its domain." in (folder / "report.md").read_text()
+
+
+def test_figures_of_a_window_and_refused_windows(tmp_path):
+    folder = tmp_path / "long"
+    result = invoke("run", "instance-1", "--t-end", "60", "--sample", "0.05", "--window", "40", "50", "--out", folder)
+    assert result.exit_code == 0, result.stderr
+    info = json.loads((folder / "run.json").read_text())
+    assert info["figures"] == {"window": [40.0, 50.0], "label": "t in [40, 50] s"}
+    assert "The figures show t in \\[40, 50\\] s." in (folder / "report.md").read_text()  # escaped
+    assert "<p>The figures show t in [40, 50] s.</p>" in (folder / "report.html").read_text()
+    redrawn = invoke("report", folder, "--window", "10", "20")
+    assert redrawn.exit_code == 0, redrawn.stderr
+    assert json.loads((folder / "run.json").read_text())["figures"]["window"] == [10.0, 20.0]
+    assert_refused(invoke("report", folder, "--window", "50", "70"), "--window 50 70 must be two times T0 < T1")
+    for window in (("5", "4"), ("0", "2")):
+        assert_refused(invoke("run", "instance-1", "--window", *window, "--out", tmp_path / "x"), "--window",
+                       folder=tmp_path / "x")  # fmt: skip
+    assert_refused(invoke("run", "instance-1", "--window", "1", "1.5", "--no-plots", "--out", tmp_path / "y"),
+                   "no use with --no-plots", folder=tmp_path / "y")  # fmt: skip
+
+
+def test_the_event_table_fits_a_narrow_terminal_without_cutting_a_time(tmp_path):
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    command = str(Path(sys.executable).with_name("oscillator"))
+    expected = [f"{t:.6f}" for t in simulate("instance-3").events.t]
+    for width in (120, 80, 60, 40):
+        arguments = [command, "run", "instance-3", "--no-plots", "--no-report", "--out", tmp_path / str(width)]
+        done = subprocess.run(arguments, capture_output=True, text=True, env={**os.environ, "COLUMNS": str(width)})
+        assert done.returncode == 0, done.stderr
+        lines = done.stdout.splitlines()
+        table = lines[1 : lines.index(next(line for line in lines if line.startswith("energy audit")))]
+        assert max(len(line) for line in table) <= width, (width, table)
+        assert re.findall(r"\d\.\d{6}", "\n".join(table)) == expected, width

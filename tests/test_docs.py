@@ -1,5 +1,7 @@
 """The generated documentation is what the case files give now."""
 
+import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -48,28 +50,40 @@ def test_docstring_examples_run():
     assert tested >= 2 and failed == 0
 
 
-def test_the_case_file_example_loads_and_runs(tmp_path):
+def test_the_case_file_example_does_what_its_title_says(tmp_path):
+    """m1 strikes its right stop: contact starts at x1 = d1 = 3.5 with v1 > 0 and ends, twice."""
     from oscillator import load_case, simulate
+    from oscillator.reproduction import compare
 
     text = (ROOT / "docs" / "cases.md").read_text(encoding="utf-8")
     block = text.split("```toml\n", 1)[1].split("```", 1)[0]
-    path = tmp_path / "example.toml"
+    path = tmp_path / "my-case.toml"
     path.write_text(block, encoding="utf-8")
     case = load_case(path)
-    assert case.parameters.phi2 == __import__("math").pi / 4 and case.expected[0].kind == "sliding_vanish"
-    assert len(simulate(case, t_end=2.0).events) >= 1
+    assert case.parameters.d1 == 3.5 and case.parameters.phi2 == math.pi / 4
+    events = simulate(case).events
+    onsets = events[events.kind == "right_contact_onset"]
+    releases = events[events.kind == "right_contact_release"]
+    assert len(onsets) == len(releases) == 2
+    assert (onsets.x1 - 3.5).abs().max() < 1e-9 and (onsets.v1 > 0).all() and (releases.v1 < 0).all()
+    assert {"sliding_onset", "sliding_vanish"} <= set(events.kind)  # "both masses rest and leave rest"
+    table = compare(case, events)
+    assert table.within_article.all() and table.within_reference.all() and len(table) == 2
 
 
-def test_error_lines_quoted_in_the_cli_guide_are_what_the_command_prints():
-    from typer.testing import CliRunner
+def test_the_readme_says_what_the_reproduction_page_shows():
+    from oscillator import load_case, simulate
+    from oscillator.reproduction import _summary, compare
 
-    from oscillator.cli import app
-
-    guide = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
-    for args in (["run", "instance-1", "--set", "Omgea=1.7"], ["run", "instance-1", "--set", "mu_s=0.01"]):
-        printed = CliRunner().invoke(app, args).stderr.strip()
-        quoted = printed.split(" (")[0] if "Omgea" in printed else printed
-        assert quoted in guide, printed
+    tables = {name: compare(load_case(name), simulate(name, record_trajectory=False).events)
+              for name in (f"instance-{i}" for i in range(1, 6))}  # fmt: skip
+    summary = _summary(tables)
+    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    given, close = re.findall(r"Of the (\d+) times the article gives, (\d+) are within", summary)[0]
+    assert f"Of the {given} switching times the article gives for them, {close} are within 1e-3 s" in readme
+    assert "differs by 6.9e-03 s" in summary and "differs by 6.9e-3 s" in readme
+    references, equal = re.findall(r"Of the (\d+) reference times, (\d+) equal", summary)[0]
+    assert references == equal and f"All {references} times of an independent implementation" in readme
 
 
 def test_the_solver_settings_listed_in_the_case_guide_are_every_option_with_its_default():

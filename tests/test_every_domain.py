@@ -1,6 +1,6 @@
 """Constructed cases that reach every domain, checked against an independent SciPy implementation.
 
-``tests/independent.py`` implements MODEL.md on SciPy's DOP853 with its own code; here the
+``tests/independent.py`` implements docs/model.md on SciPy's DOP853 with its own code; here the
 switching sequences (time, mass, kind, velocity sign entered) must agree.
 """
 

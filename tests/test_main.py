@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 
 def run(*args, cwd=None):
@@ -24,10 +25,15 @@ def test_unknown_case_is_one_line_and_exit_2():
     assert "Traceback" not in done.stderr
 
 
-def test_check_exit_codes():
+def test_check_exit_codes(tmp_path):
     assert run("check", "instance-4").returncode == 0
     # a start moved by 0.1 m shifts the switches beyond the article's tolerance
-    assert run("check", "instance-3", "--set", "x1=3.6").returncode == 1
+    moved = tmp_path / "moved.toml"
+    moved.write_text(
+        (Path(__file__).parents[1] / "cases" / "instance-3.toml").read_text().replace("x1 = 3.5", "x1 = 3.6")
+    )
+    assert run("check", moved).returncode == 1
+    assert run("check", "instance-3", "--set", "x1=3.6").returncode == 2  # a changed case has no expectations
 
 
 def test_version():

@@ -21,7 +21,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from conftest import assert_same_tables, make_case
+from conftest import CHATTER, assert_same_tables, chatter_case
 from oscillator import OscillatorError, Parameters, SolverOptions, load_case, simulate
 from oscillator.cases import case_to_toml
 from oscillator.cli import app
@@ -29,14 +29,6 @@ from oscillator.output import read_events_csv, read_run
 from oscillator.sweep import read_sweep
 
 runner = CliRunner()
-
-#: m2 (2 kg, no spring) driven at 1.5 times its static threshold at Omega = 1e8 rad/s: it leaves
-#: rest, then its velocity changes sign twice per forcing period, 3.2e7 times per second.
-CHATTER = dict(K1=0.0, K4=0.0, Q2=1.5 * 0.2 * 2.0 * 9.8, Omega=1e8)
-
-
-def chatter_case(t_end=1.0, **options):
-    return make_case(t_end, initial=(0.0, 0.0, 0.0, 0.5, 0.0), options=SolverOptions(**options), **CHATTER)
 
 
 def invoke(*args):

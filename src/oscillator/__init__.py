@@ -1,7 +1,8 @@
 """oscillator: event-driven simulation of a 2-DOF frictional oscillator with elastic stops.
 
-The model, domains, G-functions and switching theorems are those of the article in
-``shared/paper`` (see ``docs/model.md`` for the map from the article to the code).
+The model, domains, G-functions and switching theorems are those of the article *On the
+discontinuous dynamics of a class of 2-DOF frictional vibration systems with asymmetric elastic
+constraints*; ``docs/model.md`` states the model and maps the article to the code.
 
 The names below are imported on first use (PEP 562), so that ``import oscillator`` and the
 command's start, its ``--help`` and its refusals of bad input do not wait for the numerical

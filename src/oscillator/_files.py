@@ -371,7 +371,8 @@ def claim_folder(target: Path, *, option: str = "--out") -> FolderClaim:
         if descriptor is not None:
             _unlock(lock_path, descriptor)
         _undo(created)
-        where = printable(str(exc.filename)) if exc.filename else shown
+        failed = Path(exc.filename) if exc.filename else target.parent
+        where = printable(str(failed.parent if failed.name.startswith(f".{target.name}.") else failed))
         reason = exc.strerror or str(exc)
         if exc.errno == errno.ENAMETOOLONG:
             reason += " (give a shorter name)"

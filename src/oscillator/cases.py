@@ -99,7 +99,7 @@ class ExpectedEvent:
     to_domain : int or None
         The domain entered, when the article names it.
     reference : float or None
-        The independent implementation's time, to 4 decimals (MODEL.md Sec. 6).
+        The independent implementation's time, to 4 decimals (docs/model.md, Sec. 9).
     tolerance : float
         Allowed distance from the article's time (s); 1e-3 unless the case explains otherwise.
     reference_tolerance : float
@@ -124,7 +124,12 @@ class ExpectedEvent:
 
 @dataclass(frozen=True)
 class Case:
-    """A runnable case: parameters, initial state, end time, settings and expectations."""
+    """A runnable case: parameters, initial state, end time, settings and expectations.
+
+    ``modified`` lists the parameters and initial values that overrides changed from the case
+    as written (``"Omega 1.6 → 1.7"``); such a case expects nothing (its
+    ``expected`` events were the written case's), and :attr:`full_title` says so.
+    """
 
     name: str
     parameters: Parameters
@@ -136,6 +141,15 @@ class Case:
     expected: tuple[ExpectedEvent, ...] = ()
     sweep: SweepSettings | None = None
     source: Path | None = None
+    modified: tuple[str, ...] = ()
+
+    @property
+    def full_title(self) -> str:
+        """The title, and what overrides changed, if anything."""
+        if not self.modified:
+            return self.title
+        changes = f"modified: {', '.join(self.modified)}"
+        return f"{self.title} ({changes})" if self.title else changes
 
     def __post_init__(self) -> None:
         t_end = _finite("run.t_end", self.t_end)
@@ -424,7 +438,13 @@ def check_setting(name: str) -> None:
 
 
 def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **overrides: float) -> Case:
-    """The case with overrides applied: parameter, initial-state and solver-option names."""
+    """The case with overrides applied: parameter, initial-state and solver-option names.
+
+    A change of a parameter or of the start makes another case: its ``expected`` events (the
+    article's times for the case as written) are dropped, and ``modified`` lists the changes.
+    Solver options change no physics and keep them; an earlier ``t_end`` drops the expected
+    events after it.
+    """
     if not isinstance(case, Case):
         case = load_case(case)
     groups: dict[str, dict] = {group: {} for group, _ in _OVERRIDABLE}
@@ -432,13 +452,27 @@ def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **ov
         check_setting(key)
         group = next(group for group, names in _OVERRIDABLE if key in names)
         groups[group][key] = value
-    return dataclasses.replace(
+    resolved = dataclasses.replace(
         case,
         parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
         initial=dataclasses.replace(case.initial, **groups["initial"]),
         options=dataclasses.replace(case.options, **groups["options"]),
         t_end=case.t_end if t_end is None else t_end,
     )
+    changes = tuple(
+        f"{name} {getattr(old, name):.10g} → {getattr(new, name):.10g}"
+        for old, new in ((case.parameters, resolved.parameters), (case.initial, resolved.initial))
+        for name in old.names()
+        if getattr(new, name) != getattr(old, name)
+    )
+    if changes:
+        return dataclasses.replace(resolved, expected=(), modified=(*case.modified, *changes))
+    kept = tuple(e for e in resolved.expected if _expected_time(e) is None or _expected_time(e) <= resolved.t_end)
+    return dataclasses.replace(resolved, expected=kept)
+
+
+def _expected_time(expected: ExpectedEvent) -> float | None:
+    return expected.t if expected.t is not None else expected.reference
 
 
 def case_to_toml(case: Case) -> str:
@@ -449,7 +483,7 @@ def case_to_toml(case: Case) -> str:
     """
     import tomli_w
 
-    data: dict[str, Any] = {"title": case.title}
+    data: dict[str, Any] = {"title": case.full_title}
     if case.description:
         data["description"] = case.description
     data["parameters"] = dataclasses.asdict(case.parameters)

@@ -27,7 +27,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich import box
 from rich.console import Console
+from rich.measure import Measurement
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
@@ -53,7 +55,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
-    rich_markup_mode="markdown",
+    rich_markup_mode=None,
 )
 #: Consoles that never read markup or emoji codes in what they print.
 out = Console(highlight=False, soft_wrap=True, markup=False, emoji=False)
@@ -120,20 +122,35 @@ def _case(case: str, t_end: float | None = None, assignments: list[str] | None =
     return resolve_case(load_case(case), t_end=t_end, **_overrides(assignments or []))
 
 
+#: The event table's columns, most important first: (header, justification, cell of a row).
+_EVENT_COLUMNS = (
+    ("t (s)", "right", lambda row: f"{row.t:.6f}"),
+    ("mass", "right", lambda row: str(row.mass)),
+    ("kind", "left", lambda row: row.kind),
+    ("domain", "left", lambda row: f"{row.from_domain} → {row.to_domain}"),
+    ("theorem", "left", lambda row: f"{row.theorem} {row.equation}"),
+    ("boundary", "left", lambda row: row.boundary),
+)
+
+
 def _events_table(events, limit: int = 40) -> Table:
-    table = Table(title="switching events", title_justify="left", header_style="bold")
-    for column in ("t (s)", "mass", "kind", "boundary", "domain", "theorem", "eq."):
-        table.add_column(column, justify="right" if column in ("t (s)", "mass") else "left", no_wrap=column == "kind")
+    """The switching events as a table as wide as the terminal allows: columns are left out, least
+    important first, until it fits; a number is never cut."""
     rows = list(events.itertuples(index=False))
     shown_rows = rows if len(rows) <= limit else [*rows[: limit // 2], None, *rows[-limit // 2 :]]
-    for row in shown_rows:
-        if row is None:
-            table.add_row("…", "", f"{len(rows) - limit} more", "", "", "", "")
-            continue
-        table.add_row(
-            f"{row.t:.6f}", str(row.mass), row.kind, row.boundary, f"{row.from_domain} → {row.to_domain}",
-            row.theorem, row.equation,
-        )  # fmt: skip
+    natural = out.options.update_width(10_000)
+    for count in range(len(_EVENT_COLUMNS), 2, -1):
+        columns = _EVENT_COLUMNS[:count]
+        cells = [None if row is None else [printable(cell(row)) for _, _, cell in columns] for row in shown_rows]
+        table = Table(title="switching events", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+        for i, (header, justify, _) in enumerate(columns):
+            widest = max([len(header), *(len(c[i]) for c in cells if c is not None)])
+            # numbers keep their width; texts fold onto a second line if the terminal is narrower still
+            table.add_column(header, justify=justify, overflow="fold", min_width=widest if i < 2 else None)
+        for row in cells:
+            table.add_row(*(row or ["…", "", f"{len(rows) - limit} more", *[""] * (count - 3)]))
+        if Measurement.get(out, natural, table).maximum <= out.width:
+            return table
     return table
 
 
@@ -177,9 +194,14 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval=None) -> Result:
         return simulate(case, t_eval=t_eval, progress=report)
 
 
-@app.command("list")
+@app.command("list", short_help="List the named cases.")
 def list_cases() -> None:
-    """List the named cases with their titles."""
+    """List the named cases with their titles.
+
+    \b
+    Example:
+      oscillator list
+    """
     table = Table(header_style="bold")
     table.add_column("case")
     table.add_column("title")
@@ -188,11 +210,13 @@ def list_cases() -> None:
     out.print(table)
 
 
-@app.command()
-def show(case: Annotated[str, typer.Argument(help="A named case or the path of a case file.")]) -> None:
+@app.command(short_help="Show a case: parameters, start, settings, expected events.")
+def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")]) -> None:
     """Show a case: its parameters, start, run settings and expected events.
 
-    Example: `oscillator show instance-2`
+    \b
+    Example:
+      oscillator show instance-2
     """
     try:
         c = load_case(case)
@@ -250,54 +274,83 @@ def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: 
     )
 
 
-def _prepare_run(case: str, t_end, set_, out_dir, fmt: str, sample) -> tuple[Case, object, FolderClaim]:
+def _prepare_run(case: str, t_end, set_, out_dir, fmt: str, sample, window) -> tuple[Case, object, FolderClaim]:
     """Every check of ``run`` before anything is created, then the output folder claimed."""
     if fmt not in FORMATS:
         raise OscillatorError(f"--format must be one of {', '.join(FORMATS)}, got {shown(fmt)}", field="--format")
     resolved = _case(case, t_end, set_)
     grid = _sample_grid(resolved, sample)
+
     if out_dir is not None:
         check_name(out_dir, option="--out")
-    _load("oscillator.output", "oscillator.simulation")
+    _load("oscillator.output", "oscillator.simulation", "oscillator.plotting")
     from oscillator.output import claim_output
+    from oscillator.plotting import figure_window
     from oscillator.simulation import admit
+
+    if window is not None:
+        figure_window(resolved.initial.t0, resolved.t_end, resolved.parameters.period, window)
 
     with interrupts_deferred():  # the first call of the compiled formulas loads them
         admit(resolved)
     return resolved, grid, claim_output(out_dir, resolved.name)
 
 
-@app.command()
+@app.command(short_help="Run a case; write its tables, figures and report.")
 def run(
-    case: Annotated[str, typer.Argument(help="A named case (see `oscillator list`) or a case file (.toml).")],
-    t_end: Annotated[float | None, typer.Option("--t-end", help="End time in s (default: the case's).")] = None,
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case (oscillator list) or a case file (.toml).")],
+    t_end: Annotated[
+        float | None, typer.Option("--t-end", metavar="T", help="End time in s (default: the case's).")
+    ] = None,
     set_: Annotated[
         list[str] | None,
-        typer.Option("--set", help="Override a parameter, initial value or solver option: NAME=VALUE (repeatable)."),
+        typer.Option(
+            "--set",
+            metavar="NAME=VALUE",
+            help="Override a parameter, initial value or solver option (repeatable). A changed parameter or start "
+            "is another case: the article's expected times are then not compared.",
+        ),
     ] = None,
     out_dir: Annotated[
-        Path | None, typer.Option("--out", help="Output folder (default: runs/<case>-<timestamp>/); must not exist.")
+        Path | None,
+        typer.Option("--out", metavar="DIR", help="Output folder, new (default: runs/CASE-YYYYmmdd-HHMMSS)."),
     ] = None,
-    fmt: Annotated[str, typer.Option("--format", help="Event table format: csv, parquet or both.")] = "both",
+    fmt: Annotated[
+        str, typer.Option("--format", metavar="FORMAT", help="Event table format: csv, parquet or both.")
+    ] = "both",
     no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the figures.")] = False,
     no_report: Annotated[bool, typer.Option("--no-report", help="Skip the Markdown/HTML report.")] = False,
     sample: Annotated[
         float | None,
-        typer.Option("--sample", help="Record the trajectory every DT s, not at every solver step (long runs)."),
+        typer.Option("--sample", metavar="DT", help="Record the trajectory every DT s, not at every solver step."),
+    ] = None,
+    window: Annotated[
+        tuple[float, float] | None,
+        typer.Option(
+            "--window",
+            metavar="T0 T1",
+            help="Draw the figures for this time window (default: the whole run, or its last 10 forcing periods "
+            "when it is longer than 20).",
+        ),
     ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
 ) -> None:
-    """Run a case, print its switching events and write tables, figures and a report.
+    """Run a case, print its switching events, and write tables, figures and a report.
 
+    \b
     Examples:
-
-    * `oscillator run instance-3`
-    * `oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7`
-    * `oscillator run my-case.toml --format parquet --no-plots --quiet`
-    * `oscillator run instance-1 --t-end 20000 --sample 0.05` (a long run, trajectory every 0.05 s)
+      oscillator run instance-3
+      oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7
+      oscillator run my-case.toml --format parquet --no-plots --quiet --out runs/mine
+      oscillator run instance-1 --t-end 2000 --sample 0.05 --out runs/long
+      oscillator run instance-1 --t-end 2000 --sample 0.05 --window 1000 1010 --out runs/long-window
     """
     try:
-        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample)
+        if window is not None and no_plots:
+            raise OscillatorError(
+                "--window chooses what the figures show; it has no use with --no-plots", field="--window"
+            )
+        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window)
     except OscillatorError as error:
         raise _fail(str(error)) from None
     except KeyboardInterrupt:
@@ -327,7 +380,7 @@ def run(
     if pending:
         try:
             _load("oscillator.plotting", "oscillator.report")
-            finish_run(folder, figures=not no_plots, report=not no_report)
+            finish_run(folder, figures=not no_plots, report=not no_report, window=window)
         except KeyboardInterrupt:
             raise _fail(f"interrupted; {_tables_kept(folder)}", 130) from None
         except Exception as error:  # a later step failed: the run itself is safe
@@ -344,7 +397,7 @@ def _print_run(case: Case, result: Result, folder: Path, quiet: bool) -> None:
     if quiet:
         out.print(printable(str(folder)))
         return
-    _say((case.name, "bold"), f": {case.title}")
+    _say((case.name, "bold"), f": {case.full_title}")
     out.print(_events_table(result.events) if len(result.events) else "no switching events")
     energy = result.energy
     _say(f"energy audit residual {energy['residual']:.2e} J (E0 = {energy['E0']:.4f} J, E1 = {energy['E1']:.4f} J)")
@@ -354,23 +407,38 @@ def _print_run(case: Case, result: Result, folder: Path, quiet: bool) -> None:
         comparison = compare(case, result.events)
         ok = int((comparison.within_article & comparison.within_reference).sum())
         _say(f"expected events within tolerance: {ok}/{len(comparison)}")
+    elif case.modified:
+        _say(f"modified case ({', '.join(case.modified)}): the expected times of the case as written are not compared")
     _say("written to ", (str(folder), "bold"))
 
 
 # --------------------------------------------------------------------------- check and report
 
 
-@app.command()
+@app.command(short_help="Compare a case's switching times with the article's.")
 def check(
-    case: Annotated[str, typer.Argument(help="A case with [[expected]] events.")],
-    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A case with [[expected]] events.")],
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", metavar="NAME=VALUE", help="A solver option (rtol, atol, ...) for this check."),
+    ] = None,
 ) -> None:
     """Compare a case's switching times with the article's; exit 1 if one is out of tolerance.
 
-    Example: `oscillator check instance-5`
+    \b
+    Examples:
+      oscillator check instance-5
+      oscillator check instance-3 --set rtol=1e-12 --set atol=1e-12
     """
     try:
         resolved = _case(case, None, set_)
+        if resolved.modified:
+            raise OscillatorError(
+                f"--set changes the case ({', '.join(resolved.modified)}); its expected times are for the case as "
+                f"written, so check takes solver options only (rtol, atol, ...); write a case file to check another "
+                f"case",
+                field="--set",
+            )
         if not resolved.expected:
             raise OscillatorError(
                 f"case {shown(resolved.name)} has no [[expected]] events to check against", field="case"
@@ -413,13 +481,23 @@ def _delta(value: float) -> str:
     return "—" if value != value else f"{value:+.1e}"
 
 
-@app.command()
-def report(folder: Annotated[Path, typer.Argument(help="A folder written by `oscillator run`.")]) -> None:
-    """Rebuild the report of a run folder, and draw its figures if they are missing.
+@app.command(short_help="Rebuild a run folder's report (and missing figures).")
+def report(
+    folder: Annotated[Path, typer.Argument(metavar="DIR", help="A folder written by oscillator run.")],
+    window: Annotated[
+        tuple[float, float] | None,
+        typer.Option("--window", metavar="T0 T1", help="Redraw the figures for this time window."),
+    ] = None,
+) -> None:
+    """Rebuild the report of a run folder; draw its figures if they are missing.
 
-    Finishes a run that was interrupted after its tables were written.
+    Finishes a run whose figures or report were interrupted. With --window, redraws the
+    figures for that time window.
 
-    Example: `oscillator report runs/instance-3-20261121-101500`
+    \b
+    Examples:
+      oscillator report runs/omega-1.7
+      oscillator report runs/long --window 1990 2000
     """
     try:
         _load("oscillator.output", "oscillator.plotting", "oscillator.report")
@@ -427,7 +505,7 @@ def report(folder: Annotated[Path, typer.Argument(help="A folder written by `osc
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise OscillatorError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
-        finish_run(folder)
+        finish_run(folder, window=window)
     except OscillatorError as error:
         raise _fail(str(error)) from None
     except KeyboardInterrupt:
@@ -473,40 +551,56 @@ def _sweep_progress(name: str, settings: SweepSettings):
     return bar, report
 
 
-@app.command()
+@app.command(short_help="Sweep a parameter: Fig. 14-style switching and Poincaré points.")
 def sweep(
-    case: Annotated[str, typer.Argument(help="A scene with a [sweep] table (bifurcation-omega, ...) or any case.")],
-    param: Annotated[str | None, typer.Option("--param", help="The swept parameter (default: the case's).")] = None,
-    start: Annotated[float | None, typer.Option("--from", help="First value.")] = None,
-    stop: Annotated[float | None, typer.Option("--to", help="Last value.")] = None,
-    steps: Annotated[int | None, typer.Option("--steps", help="Number of values (default 111).")] = None,
-    transient: Annotated[
-        int | None, typer.Option("--transient", help="Forcing periods before recording (100).")
+    case: Annotated[
+        str, typer.Argument(metavar="CASE", help="A scene with a [sweep] table (bifurcation-omega, ...) or any case.")
+    ],
+    param: Annotated[
+        str | None, typer.Option("--param", metavar="NAME", help="The swept parameter (default: the case's).")
     ] = None,
-    record: Annotated[int | None, typer.Option("--record", help="Forcing periods recorded (50).")] = None,
-    workers: Annotated[int | None, typer.Option("--workers", help="Local processes (default: every core).")] = None,
+    start: Annotated[float | None, typer.Option("--from", metavar="A", help="First value.")] = None,
+    stop: Annotated[float | None, typer.Option("--to", metavar="B", help="Last value.")] = None,
+    steps: Annotated[int | None, typer.Option("--steps", metavar="N", help="Number of values (default 111).")] = None,
+    transient: Annotated[
+        int | None, typer.Option("--transient", metavar="N", help="Forcing periods before recording (default 100).")
+    ] = None,
+    record: Annotated[
+        int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded (default 50).")
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
+    ] = None,
     scheduler: Annotated[
-        str | None, typer.Option("--scheduler", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler.")
+        str | None,
+        typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
     ] = None,
     out_dir: Annotated[
-        Path | None, typer.Option("--out", help="Output folder; the same folder again resumes the sweep.")
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Output folder (default: runs/CASE-sweep-YYYYmmdd-HHMMSS); the same folder again resumes the sweep.",
+        ),
     ] = None,
-    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+    set_: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
+    ] = None,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the diagrams.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")] = False,
 ) -> None:
-    """Sweep a parameter and tabulate switching points, Poincaré points and a summary per value.
+    """Sweep a parameter: switching points, Poincaré points and a summary per value.
 
-    Writes `switches.parquet`, `poincare.parquet`, `summary.parquet` (each with the swept parameter
+    Writes switches.parquet, poincare.parquet and summary.parquet (each with the swept parameter
     as a column) and Fig. 14-style diagrams. Interrupted or killed, the same command with the same
-    `--out` resumes where it stopped.
+    --out resumes where it stopped. On a Dask cluster (pip install "oscillator[dask]"), give
+    --scheduler tcp://HOST:PORT.
 
+    \b
     Examples:
-
-    * `oscillator sweep bifurcation-omega --out runs/omega`
-    * `oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2`
-    * `oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10`
-    * `oscillator sweep bifurcation-omega --scheduler tcp://10.0.0.5:8786 --out runs/omega`
+      oscillator sweep bifurcation-omega --out runs/omega
+      oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2
+      oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10
     """
     try:
         resolved = _case(case, None, set_)
@@ -589,25 +683,41 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
     _say("written to ", (str(folder), "bold"))
 
 
-@app.command()
+@app.command(short_help="Find where a sweep's summary changes, to 1e-8.")
 def locate(
-    case: Annotated[str, typer.Argument(help="A scene or case (its [sweep] table gives the defaults).")],
-    between: Annotated[
-        tuple[float, float], typer.Option("--between", help="Two parameter values on either side of a change.")
+    case: Annotated[
+        str, typer.Argument(metavar="CASE", help="A scene or case (its [sweep] table gives the defaults).")
     ],
-    what: Annotated[str, typer.Option("--what", help="What changes: sliding, grazing or period.")] = "sliding",
-    param: Annotated[str | None, typer.Option("--param", help="The parameter (default: the case's).")] = None,
-    transient: Annotated[int | None, typer.Option("--transient", help="Forcing periods before recording.")] = None,
-    record: Annotated[int | None, typer.Option("--record", help="Forcing periods recorded.")] = None,
-    tolerance: Annotated[float, typer.Option("--tolerance", help="Width of the final bracket.")] = 1e-8,
-    set_: Annotated[list[str] | None, typer.Option("--set", help="Override: NAME=VALUE (repeatable).")] = None,
+    between: Annotated[
+        tuple[float, float],
+        typer.Option("--between", metavar="A B", help="Two parameter values on either side of a change."),
+    ],
+    what: Annotated[
+        str, typer.Option("--what", metavar="WHAT", help="What changes: sliding, grazing or period.")
+    ] = "sliding",
+    param: Annotated[
+        str | None, typer.Option("--param", metavar="NAME", help="The parameter (default: the case's).")
+    ] = None,
+    transient: Annotated[
+        int | None, typer.Option("--transient", metavar="N", help="Forcing periods before recording.")
+    ] = None,
+    record: Annotated[int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded.")] = None,
+    tolerance: Annotated[
+        float, typer.Option("--tolerance", metavar="WIDTH", help="Width of the final bracket.")
+    ] = 1e-8,
+    set_: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
+    ] = None,
 ) -> None:
-    """Find where the sweep's summary changes between two values, to 1e-8 in the parameter.
+    """Find where the sweep's summary changes between two values (bisection, to 1e-8).
 
-    Bisection; prints the bracket and, on both sides, the summary and the switching events that
+    Both ends are simulated first to see that they differ; then each bisection step simulates
+    the middle. Prints the bracket and, on both sides, the summary and the switching events that
     show the change.
 
-    Example: `oscillator locate bifurcation-omega --between 1.53 1.535 --what sliding`
+    \b
+    Example:
+      oscillator locate bifurcation-omega --between 1.595 1.600 --what sliding
     """
     try:
         resolved = _case(case, None, set_)
@@ -616,7 +726,19 @@ def locate(
 
         lo, hi = between
         settings = _sweep_settings(resolved, param, lo, hi, None, transient, record)
-        found = locate_change(resolved, settings, what, (lo, hi), tolerance=tolerance)
+        if not err.is_terminal:
+            found = locate_change(resolved, settings, what, (lo, hi), tolerance=tolerance)
+        else:
+            columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                       TextColumn("{task.fields[bracket]}"), TimeElapsedColumn())  # fmt: skip
+            with Progress(*columns, console=err, transient=True) as bar:
+                task = bar.add_task(f"locating {printable(what)}", total=None, bracket="")
+
+                def report(step: int, steps: int, a: float, b: float) -> None:
+                    stage = "simulating both ends" if step <= 2 else f"bracket [{a:.10g}, {b:.10g}], {b - a:.1e} wide"
+                    bar.update(task, completed=step - 1, total=steps, bracket=stage)
+
+                found = locate_change(resolved, settings, what, (lo, hi), tolerance=tolerance, progress=report)
     except OscillatorError as error:
         raise _fail(str(error)) from None
     except KeyboardInterrupt:

@@ -4,7 +4,7 @@ All functions are pure functions of ``(t, y, params, ...)`` with ``y = (x1, v1, 
 The contact terms are switched by the *mode's* flags, never by the state: each domain's field
 is smooth and every switch is a root function watched by the supervisor.
 
-Notation (MODEL.md Sec. 1 and 3): ``A_i`` is the non-friction force per unit mass **without**
+Notation (docs/model.md, Sec. 1 and 3): ``A_i`` is the non-friction force per unit mass **without**
 the feedback term; the field of a moving mass with velocity sign ``s`` is
 ``F_i = A_i - s (mu_k g + p_i)`` (the article writes F in domains 1-4 and H in 5-8; one formula
 serves both, the contact terms being part of ``A_i``).
@@ -122,7 +122,7 @@ def non_friction_force_rate(
     """``(DA1, DA2)``: total time derivatives of ``A_i`` along a flow with accelerations ``a_i``.
 
     ``DA1 = [Q1 Omega cos(.) - (K1 + 3 K2 x1^2) v1 - (C1 + 3 C2 v1^2) a1
-    - L (K3 (v1 - v2) + C3 (a1 - a2)) - R K6 v1] / m1`` (MODEL.md Sec. 4); ``a_i`` is the
+    - L (K3 (v1 - v2) + C3 (a1 - a2)) - R K6 v1] / m1`` (docs/model.md, Sec. 4); ``a_i`` is the
     acceleration of the field assumed for mass ``i`` (0 for a resting mass).
     """
     return force_rates(
@@ -161,7 +161,7 @@ def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:
 def flow_barrier_field(p: Parameters, mass: int, sign: int, force: float) -> float:
     """``F_i^(0>0_delta) = A_i - s (mu_s g + p_i)`` at the barrier's edge ``tau_1`` (4.22), (4.24).
 
-    The feedback belongs in it, as the article's (4.22) carries ``b_i`` (MODEL.md Sec. 3).
+    The feedback belongs in it, as the article's (4.22) carries ``b_i`` (docs/model.md, Sec. 3).
     """
     return barrier(coefficients(p), mass, sign, float(force))
 

@@ -111,7 +111,8 @@ def run_info(result: Result, *, command: list[str] | None = None, pending: tuple
     info: dict[str, Any] = {
         "case": case.name,
         "source": str(case.source) if case.source else None,
-        "title": case.title,
+        "title": case.full_title,
+        "modified": list(case.modified),
         "complete": result.complete,
         "status": result.status,
         "failure": result.failure,
@@ -232,7 +233,7 @@ def _check_run_info(data: Any, path: Path) -> dict:
     for key in ("t_final", "wall_time", "t0", "t_end"):
         if key in data and not (_is_number(data[key]) and math.isfinite(data[key])):
             raise _damaged(path, f"{key} is not a finite number")
-    for key in ("energy", "counts", "versions", "solver", "check"):
+    for key in ("energy", "counts", "versions", "solver", "check", "figures"):
         if key in data and data[key] is not None and not isinstance(data[key], dict):
             raise _damaged(path, f"{key} is not a JSON object")
     for key, value in (data.get("energy") or {}).items():
@@ -247,6 +248,11 @@ def _check_run_info(data: Any, path: Path) -> dict:
     for key in ("failure", "case", "title"):
         if data.get(key) is not None and not isinstance(data[key], str):
             raise _damaged(path, f"{key} is not text")
+    if not isinstance((data.get("figures") or {}).get("label", ""), str):
+        raise _damaged(path, "figures.label is not text")
+    modified = data.get("modified", [])
+    if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
+        raise _damaged(path, "modified must be a list of texts")
     return data
 
 
@@ -303,33 +309,43 @@ def read_events_csv(path: Path) -> pd.DataFrame:
 # --------------------------------------------------------------------------- finishing
 
 
-def _update_pending(folder: Path, info: dict, done: str) -> None:
-    info["pending"] = [item for item in info.get("pending", []) if item != done]
+def _update(folder: Path, info: dict, *, done: str | None = None, **changes: Any) -> None:
+    """Rewrite ``run.json`` with ``changes``, and with ``done`` taken off ``"pending"``."""
+    info.update(changes)
+    if done is not None:
+        info["pending"] = [item for item in info.get("pending", []) if item != done]
     replace_file(folder / "run.json", json_text(info))
 
 
-def finish_run(folder: Path, *, figures: bool = True, report: bool = True) -> RunFolder:
+def finish_run(
+    folder: Path, *, figures: bool = True, report: bool = True, window: tuple[float, float] | None = None
+) -> RunFolder:
     """Draw the run's missing figures (``figures``) and write its report (``report``).
 
-    Each figure and report file is written atomically, and ``run.json``'s ``"pending"`` says
-    what is still to be made, so an interrupted finish is finished by calling this again.
+    The figures show the whole run, or the last forcing periods of a long one; ``window``
+    redraws them all for that time window (``run.json``'s ``"figures"`` records which).  Each
+    file is written atomically, and ``run.json``'s ``"pending"`` says what is still to be made,
+    so an interrupted finish is finished by calling this again.
     """
     run = read_run(folder)  # checked before the drawing libraries are loaded
-    from oscillator.plotting import missing_figures, write_figures
+    from oscillator.plotting import figure_window, missing_figures, write_figures
     from oscillator.report import available_figures, report_document, write_report
     from oscillator.reproduction import compare
 
-    case = run.case
-    if figures and missing_figures(folder / "figures") and not run.trajectory.empty:
+    case, info = run.case, run.run
+    t_final = info.get("t_final", case.t_end)
+    chosen = figure_window(case.initial.t0, t_final, case.parameters.period, window)
+    if (window is not None or (figures and missing_figures(folder / "figures"))) and not run.trajectory.empty:
         start = (case.initial.t0, *case.initial.y)
-        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=case.name)
-    if figures and "figures" in run.run.get("pending", []):
-        _update_pending(folder, run.run, "figures")
+        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=case.name,
+                      window=chosen)  # fmt: skip
+        _update(folder, info, figures={"window": [chosen.start, chosen.stop], "label": chosen.label})
+    if figures and "figures" in info.get("pending", []):
+        _update(folder, info, done="figures")
     if report:
         comparison = compare(case, run.events) if case.expected else None
-        blocks = report_document(case, run.events, run.run, comparison=comparison,
-                                 figures=available_figures(folder))  # fmt: skip
+        blocks = report_document(case, run.events, info, comparison=comparison, figures=available_figures(folder))
         write_report(folder, blocks)
-        if "report" in run.run.get("pending", []):
-            _update_pending(folder, run.run, "report")
+        if "report" in info.get("pending", []):
+            _update(folder, info, done="report")
     return run

@@ -57,9 +57,28 @@ def _require_finite(owner: str, name: str, value: Any) -> float:
     return value
 
 
+#: The SI unit of each parameter ("" for the friction coefficients), for labels.
+UNITS = {
+    "m1": "kg", "m2": "kg", "C1": "N s/m", "C2": "N s^3/m^3", "C3": "N s/m", "C4": "N s/m", "C5": "N s^3/m^3",
+    "K1": "N/m", "K2": "N/m^3", "K3": "N/m", "K4": "N/m", "K5": "N/m^3", "K6": "N/m", "mu_k": "", "mu_s": "",
+    "d": "m", "d1": "m", "Q1": "N", "Q2": "N", "Omega": "rad/s", "phi1": "rad", "phi2": "rad", "P1": "N",
+    "P2": "N", "g": "m/s^2",
+}  # fmt: skip
+
+
+def labelled(name: str) -> str:
+    """``"Omega (rad/s)"``: a parameter's name with its unit, for an axis."""
+    unit = UNITS.get(name, "")
+    return f"{name} ({unit or 'dimensionless'})"
+
+
+#: Messages name a value as the case file does: by its section and name (``parameters.m1``).
+_SECTIONS = {"Parameters": "parameters", "InitialState": "initial", "SolverOptions": "run", "SweepSettings": "sweep"}
+
+
 def _coerce_all(obj: Any) -> None:
     """Check every field is a finite number and store it as ``float``."""
-    owner = type(obj).__name__
+    owner = _SECTIONS[type(obj).__name__]
     for f in fields(obj):
         value = _require_finite(owner, f.name, getattr(obj, f.name))
         if abs(value) > MAX_MAGNITUDE:
@@ -147,20 +166,20 @@ class Parameters:
         for name in ("m1", "m2", "Omega", "g"):
             if getattr(self, name) <= 0:
                 raise OscillatorError(
-                    f"Parameters.{name} must be > 0, got {getattr(self, name)!r}; give a positive value",
+                    f"parameters.{name} must be > 0, got {getattr(self, name)!r}; give a positive value",
                     field=name,
                 )
         nonnegative = ("C1", "C2", "C3", "C4", "C5", "K1", "K2", "K3", "K4", "K5", "K6")
         for name in (*nonnegative, "mu_k", "P1", "P2"):
             if getattr(self, name) < 0:
                 raise OscillatorError(
-                    f"Parameters.{name} must be >= 0, got {getattr(self, name)!r}; "
+                    f"parameters.{name} must be >= 0, got {getattr(self, name)!r}; "
                     f"springs, dampers, friction and feedback cannot be negative",
                     field=name,
                 )
         if self.mu_s < self.mu_k:
             raise OscillatorError(
-                f"Parameters.mu_s must be >= mu_k (static friction is at least kinetic), "
+                f"parameters.mu_s must be >= mu_k (static friction is at least kinetic), "
                 f"got mu_s={self.mu_s!r} < mu_k={self.mu_k!r}; raise mu_s or lower mu_k",
                 field="mu_s",
             )
@@ -204,7 +223,7 @@ class Parameters:
 class InitialState:
     """Start of a run: time ``t0`` and ``(x1, v1, x2, v2)``.
 
-    A mass given ``v_i = 0`` starts at rest on its velocity boundary (MODEL.md rule 8).
+    A mass given ``v_i = 0`` starts at rest on its velocity boundary (docs/model.md, rule 8).
     """
 
     t0: float
@@ -272,7 +291,7 @@ class SolverOptions:
     max_num_steps: int = 100_000
 
     def __post_init__(self) -> None:
-        owner = "SolverOptions"
+        owner = "run"
         for name in ("rtol", "atol", "max_step_fraction", "storm_window"):
             value = _require_finite(owner, name, getattr(self, name))
             if value <= 0:
@@ -346,7 +365,7 @@ class SweepSettings:
     max_period: int = 16
 
     def __post_init__(self) -> None:
-        owner = "SweepSettings"
+        owner = "sweep"
         if self.param not in Parameters.names():
             import difflib
 

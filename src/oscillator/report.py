@@ -161,6 +161,14 @@ def _header(case: Case, run: dict) -> list[Block]:
     blocks: list[Block] = [Heading(1, (f"{case.name}: {case.title}" if case.title else case.name,))]
     if case.description:
         blocks.append(Paragraph((case.description,)))
+    modified = run.get("modified")
+    if modified and isinstance(modified, list):
+        changes = ", ".join(str(change) for change in modified)
+        blocks.append(Paragraph((
+            Span("Modified case:", "strong"),
+            f" {changes}. The expected times of the case as written (the article's) do not apply to it "
+            f"and are not compared.",
+        )))  # fmt: skip
     status = run.get("status", "complete")
     if status != "complete":
         reason = run.get("failure") or "no reason recorded"
@@ -206,7 +214,7 @@ def _comparison(comparison: pd.DataFrame) -> list[Block]:
         else (Span("Some expected times are out of tolerance.", "strong"),)
     )
     legend = (Span("article", "em"), ": the article's time; ", Span("reference", "em"),
-              ": an independent implementation (MODEL.md Sec. 6).")  # fmt: skip
+              ": an independent implementation, to 4 decimals (docs/model.md, Sec. 9).")  # fmt: skip
     blocks: list[Block] = [
         Heading(2, ("Comparison with the article",)),
         Paragraph(legend),
@@ -254,6 +262,9 @@ def report_document(
         blocks += _comparison(comparison)
     if figures:
         blocks.append(Heading(2, ("Figures",)))
+        drawn = run.get("figures") if isinstance(run.get("figures"), dict) else {}
+        if drawn.get("label"):
+            blocks.append(Paragraph((f"The figures show {drawn['label']}.",)))
         blocks += [Figure(name, FIGURES[name]) for name in FIGURES if name in figures]
     if run.get("counts"):
         blocks += _counts(run, run["counts"])

@@ -144,8 +144,9 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
         point = resolve_case(case, **{param: value})
         period = point.parameters.period
         t0 = point.initial.t0
-        grid = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
-        result = simulate(point, t_end=float(grid[-1]), t_eval=grid, keep_events_from=float(grid[0]))
+        # one Poincaré point at the start of each recorded period; the run ends with the last period
+        marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
+        result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
     except OscillatorError as error:
         summary = {param: value, "index": index, "status": "failed", "message": str(error), "period": 0,
                    "periodic": False, "sliding": False, "sliding_periods": 0, "rest_time_per_period": math.nan,
@@ -154,7 +155,7 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
         empty = [_frame([], columns["switches"]), _frame([], columns["poincare"])]
         return PointTables(index, value, *empty, _frame(summary, columns["summary"]))
 
-    start, stop = float(grid[0]), float(grid[-1])
+    start, stop = float(marks[0]), float(marks[-1])
     events = result.events
     window = events[(events.mass == mass) & (events.t >= start) & (events.t <= stop)]
     omega = point.parameters.Omega

@@ -1,4 +1,4 @@
-"""Switching decisions: from the roots that fired to the next mode (MODEL.md Sec. 5).
+"""Switching decisions: from the roots that fired to the next mode (docs/model.md, Sec. 6).
 
 :func:`resolve` is a pure function of ``(t, y, params, mode, fired roots)``.  It resolves one
 instant in a fixed order, re-checking until the domains are consistent:
@@ -230,7 +230,7 @@ def _leave_rest(t: float, y: Sequence[float], p: Parameters, mode: Mode, mass: i
 
 
 def settle(t: float, y: Sequence[float], p: Parameters, mode: Mode, events: list) -> Mode:
-    """Re-check every mass at one instant until the domains are consistent (MODEL.md rule 7).
+    """Re-check every mass at one instant until the domains are consistent (docs/model.md, rule 7).
 
     A resting mass leaves if Theorem 5.4 holds on either side: its force is past the flow
     barrier (after a contact made it jump, or at the start), or on it and turning outward (a
@@ -311,7 +311,7 @@ def _grazing_reports(
 
 
 def _stop_grazing(t: float, y: Sequence[float], p: Parameters, mode: Mode, stop: str, decision: Decision, events: list):
-    """Report grazing of a stop (MODEL.md rule 6): ``G^(0)`` (``v1`` or ``zdot1``) is zero on it."""
+    """Report grazing of a stop (docs/model.md, rule 6): ``G^(0)`` (``v1`` or ``zdot1``) is zero on it."""
     g = displacement_g(t, y, p, mode, stop)
     distance = abs(y[0] - p.d1) if stop == "right" else abs(y[0] - y[2] + p.d)
     boundary = "x1 = d1" if stop == "right" else "z1 = -d"
@@ -361,7 +361,7 @@ def resolve(
 
 
 def initial_mode(t0: float, y: Sequence[float], p: Parameters) -> Resolution:
-    """The mode at the start, and the masses that leave rest at once (MODEL.md rule 8).
+    """The mode at the start, and the masses that leave rest at once (docs/model.md, rule 8).
 
     A mass given ``v_i = 0`` is at rest; it leaves at ``t0`` only if Theorem 5.4 holds.
     Contacts follow ``z1 <= -d`` and ``x1 >= d1``.  Exactly on a stop, the contact counts if the

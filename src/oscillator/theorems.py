@@ -190,7 +190,7 @@ def theorem_5_8_left_contact(onset: bool, zdot1_minus: float, zdot1_plus: float)
     (5.50): onset (``∂Ω26``, and by the same rule ``∂Ω15``) iff ``zdot1 < 0`` on both sides.
     (5.51): release (``∂Ω15``, and by the same rule ``∂Ω26``) iff ``zdot1 > 0`` on both sides.
     The article states the rule for Ω2 -> Ω6 and Ω5 -> Ω1 only; it holds on all four
-    boundaries ∂Ω15, ∂Ω26 (MODEL.md rule 5; Instance 3 enters with ``v1 > 0``).
+    boundaries ∂Ω15, ∂Ω26 (docs/model.md, rule 5; Instance 3 enters with ``v1 > 0``).
     """
     if onset:
         return Decision(_enters_with(-1, zdot1_minus, zdot1_plus), "5.8", "(5.50)")

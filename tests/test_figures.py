@@ -1,0 +1,132 @@
+"""What can be checked of a figure without looking at it: markers, legends, units, windows."""
+
+import re
+
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from oscillator import SweepSettings, load_case, simulate
+from oscillator.plotting import KIND_STYLE, draw_figures, draw_sweep_figures, figure_window
+from oscillator.sweep import run_point
+
+#: Runs that show, between them, every kind of event.
+RUNS = {
+    "instance-1": {},  # leaving rest (sliding vanishes)
+    "instance-2": {},  # grazing
+    "instance-3": {},  # left contact onset and release, passable
+    "instance-5": {},  # right contact onset and release
+    "instance-1 at Omega = 1.6 for 6 periods": {"t_end": 1.0 + 6 * 2 * 3.141592653589793 / 1.6},  # sliding onsets
+}
+
+
+@pytest.fixture(scope="module")
+def figures():
+    drawn = {}
+    for label, changes in RUNS.items():
+        result = simulate(label.split()[0], **changes)
+        case = result.case
+        start = (case.initial.t0, *case.initial.y)
+        drawn[label] = draw_figures(result.trajectory, result.events, case.parameters, start, title=case.name)
+    return drawn
+
+
+def _legend_markers(figure) -> dict[str, str]:
+    markers = {}
+    for ax in figure.axes:
+        legend = ax.get_legend()
+        if legend is None:
+            continue
+        for text, handle in zip(legend.get_texts(), legend.legend_handles, strict=True):
+            if hasattr(handle, "get_paths") and text.get_text().replace(" ", "_") in KIND_STYLE:
+                markers[text.get_text()] = handle
+    return markers
+
+
+def test_every_kind_has_its_own_marker_the_same_in_every_figure(figures):
+    kinds_seen: dict[str, set] = {}
+    for by_name in figures.values():
+        for figure in by_name.values():
+            for ax in figure.axes:
+                for collection in ax.collections:
+                    label = collection.get_label().replace(" ", "_")
+                    if label in KIND_STYLE:
+                        path = collection.get_paths()[0]
+                        kinds_seen.setdefault(label, set()).add(tuple(map(tuple, path.vertices.round(6))))
+    assert set(kinds_seen) == set(KIND_STYLE), set(KIND_STYLE) - set(kinds_seen)
+    assert all(len(shapes) == 1 for shapes in kinds_seen.values()), kinds_seen  # one marker per kind everywhere
+    shapes = [next(iter(s)) for s in kinds_seen.values()]
+    assert len(set(shapes)) == len(shapes)  # and no two kinds share one
+    assert len({marker for marker, _ in KIND_STYLE.values()}) == len(KIND_STYLE)
+
+
+def test_legends_hide_no_data(figures):
+    for by_name in figures.values():
+        for name, figure in by_name.items():
+            renderer = FigureCanvasAgg(figure).get_renderer()
+            figure.draw(renderer)
+            boxes = [ax.get_window_extent(renderer) for ax in figure.axes]
+            for ax in figure.axes:
+                legend = ax.get_legend()
+                if legend is None:
+                    continue
+                extent = legend.get_window_extent(renderer)
+                for box in boxes:
+                    assert not extent.overlaps(box), (name, ax.get_title())
+
+
+UNIT = re.compile(r"\([^()]+\)$")
+
+
+def test_every_axis_names_its_unit(figures):
+    for by_name in figures.values():
+        for name, figure in by_name.items():
+            for ax in figure.axes:
+                assert UNIT.search(ax.get_ylabel()), (name, ax.get_ylabel())
+                assert UNIT.search(ax.get_xlabel()) or ax.get_xlabel() == "", (name, ax.get_xlabel())
+            assert UNIT.search(figure.axes[-1].get_xlabel()), name  # axes sharing x label it once, below
+
+
+def test_the_phase_portrait_names_each_side_of_its_velocity_boundary_on_that_side(figures):
+    for by_name in figures.values():
+        figure = by_name["fig-c-phase"]
+        for ax in figure.axes:
+            low, high = ax.get_ylim()
+            assert low < 0 < high  # v = 0 and both sides of it are shown
+            for text in ax.texts:
+                _, y = text.get_position()  # axes coordinates
+                value = low + y * (high - low)
+                assert (value > 0) == ("> 0" in text.get_text()), text.get_text()
+
+
+def test_a_long_run_is_drawn_over_its_last_periods_and_says_so():
+    result = simulate("instance-1", t_end=1.0 + 60 * 2 * 3.141592653589793 / 1.6, t_eval=None)
+    case = result.case
+    figure = draw_figures(result.trajectory, result.events, case.parameters, (case.initial.t0, *case.initial.y),
+                          title="long")["fig-b-velocity"]  # fmt: skip
+    (ax,) = figure.axes
+    assert "the last 10 of 60 forcing periods" in ax.get_title()
+    left, right = ax.get_xlim()
+    period = case.parameters.period
+    assert left > case.t_end - 11 * period and right < case.t_end + period
+
+
+def test_a_window_must_lie_in_the_run():
+    assert figure_window(0.0, 10.0, 1.0, (2.0, 3.0)).label == "t in [2, 3] s"
+    assert figure_window(0.0, 10.0, 1.0).label == ""  # 10 periods: the whole run
+    for window in ((3.0, 2.0), (-1.0, 2.0), (2.0, 11.0)):
+        with pytest.raises(ValueError, match="must be two times T0 < T1 within the run"):
+            figure_window(0.0, 10.0, 1.0, window)
+
+
+def test_the_sweep_diagrams_name_their_units():
+    case = load_case("bifurcation-omega")
+    settings = SweepSettings(param="Omega", start=1.59, stop=1.61, steps=3, transient=3, record=2)
+    points = [run_point(case, settings, i, v) for i, v in enumerate(settings.values)]
+    import pandas as pd
+
+    tables = {name: pd.concat([p.table(name) for p in points], ignore_index=True)
+              for name in ("switches", "poincare", "summary")}  # fmt: skip
+    for name, figure in draw_sweep_figures(tables, "Omega", 2, title="scene").items():
+        for ax in figure.axes:
+            assert ax.get_xlabel() in ("Omega (rad/s)", ""), name
+            assert UNIT.search(ax.get_ylabel()), (name, ax.get_ylabel())
