@@ -57,8 +57,8 @@ def instances() -> list[dict]:
     for i in range(1, 6):
         name = f"instance-{i}"
         wall, result = best_of(3, lambda name=name: simulate(name))
-        rows.append({"case": name, "wall_s": wall, "events": result.stats["events"],
-                     "cvode_steps": result.stats["returns"], "rhs_calls": result.stats["rhs_evaluations"]})  # fmt: skip
+        rows.append({"case": name, "wall_s": wall, "events": result.stats.events,
+                     "cvode_steps": result.stats.returns, "rhs_calls": result.stats.rhs_evaluations})  # fmt: skip
     return rows
 
 
@@ -77,7 +77,7 @@ def throughput(omega: float, periods: int) -> dict:
     wall, result = best_of(2, lambda: simulate(case, t_end=t0 + periods * period, record_trajectory=False))
     say(f"Omega = {omega}: {periods} periods in {wall:.2f} s")
     return {"omega": omega, "periods": periods, "wall_s": wall, "periods_per_s": periods / wall,
-            "rhs_calls_per_period": result.stats["rhs_evaluations"] / periods}  # fmt: skip
+            "rhs_calls_per_period": result.stats.rhs_evaluations / periods}  # fmt: skip
 
 
 def accuracy_and_baseline(omega: float, window: int = WINDOW) -> dict:
@@ -110,7 +110,7 @@ def sweep(steps: int | None = None) -> dict:
     import dataclasses
     import tempfile
 
-    from oscillator.sweep import run_sweep
+    from oscillator.analysis.sweeps import run_sweep
 
     case = load_case("bifurcation-omega")
     settings = case.sweep if steps is None else dataclasses.replace(case.sweep, steps=steps)
@@ -134,11 +134,11 @@ started = time.perf_counter()
 t_end = case.initial.t0 + periods * case.parameters.period
 result = simulate(case, t_end=t_end, record_trajectory=False, keep_events_from=t_end)
 print(json.dumps({"case": name, "periods": periods, "wall_s": time.perf_counter() - started,
-                  "events": result.stats["events"],
+                  "events": result.stats.events,
                   "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "energy_residual": result.energy["residual"],
-                  "relative_residual": abs(result.energy["residual"]) / sum(
-                      abs(result.energy[k]) for k in ("forcing", "feedback", "damping", "friction"))}))
+                  "energy_residual": result.energy.residual,
+                  "relative_residual": abs(result.energy.residual) / sum(
+                      abs(getattr(result.energy, k)) for k in ("forcing", "feedback", "damping", "friction"))}))
 """
 
 

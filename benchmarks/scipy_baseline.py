@@ -1,28 +1,22 @@
 """The same switching rules on SciPy's ``solve_ivp`` (DOP853 with events): the baseline.
 
 What a SciPy user would write: the field and the root functions in plain Python
-(:func:`python_field`, :func:`python_roots`), one ``solve_ivp`` event per root function
-(memoised per ``(t, y)``, so SciPy pays one evaluation of the root vector per point it asks
-about). The switching decisions are the package's own (``switching.initial_mode`` and
-``resolve``): they run at events only, so the comparison is of the integration and root finding.
-``compiled=True`` uses the package's compiled formulas instead of the plain-Python ones.
+(:func:`python_field`, :func:`python_roots`), handed to the package's SciPy engine
+(:class:`oscillator.engines.scipy.ScipyEngine`: one ``solve_ivp`` call per mode, one event per root
+function). The supervisor and the switching decisions are the package's own, so the comparison is
+of the integration and the root finding. ``compiled=True`` uses the package's compiled formulas
+instead of the plain-Python ones.
 """
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
-from scipy.integrate import solve_ivp
-
-from oscillator import Case
-from oscillator.detection import NUM_ROOTS, Root, root_directions, root_values
-from oscillator.fields import state_derivative
-from oscillator.switching import initial_mode, resolve
+from oscillator import Case, simulate
+from oscillator.engines.scipy import ScipyEngine
+from oscillator.model.roots import NUM_ROOTS, Root
 
 __all__ = ["run_scipy"]
-
-WATCH_ONLY = (Root.EXTREMUM_1, Root.EXTREMUM_2, Root.RELATIVE_VELOCITY)
 
 
 def python_field(t, y, p, s1, s2, left, right):
@@ -41,7 +35,7 @@ def python_field(t, y, p, s1, s2, left, right):
 
 
 def python_roots(t, y, p, s1, s2, left, right):
-    """The root vector of ``oscillator.detection`` in plain Python (same layout)."""
+    """The root vector of ``oscillator.model.roots`` in plain Python (same layout)."""
     x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
     _, a1, _, a2 = python_field(t, y, p, s1, s2, left, right)
     g = [1.0] * NUM_ROOTS
@@ -59,65 +53,26 @@ def python_roots(t, y, p, s1, s2, left, right):
     return g
 
 
+def plain_python_engine(p, options):
+    """The SciPy engine on the plain-Python field (no work quadratures: the energy audit is off)."""
+
+    def flags(mode):
+        return mode.sign(1), mode.sign(2), mode.left, mode.right
+
+    def field(t, y, mode):
+        return [*python_field(t, y, p, *flags(mode)), 0.0, 0.0, 0.0, 0.0]
+
+    def roots(t, y, mode):
+        return python_roots(t, y, p, *flags(mode))
+
+    return ScipyEngine(p, options, field=field, roots=roots)
+
+
 def run_scipy(case: Case, t_end: float, *, rtol: float, atol: float, compiled: bool = False) -> tuple[list, dict]:
     """Switching events ``(t, mass, kind, to_domain)`` and counters of a run to ``t_end``."""
-    p, options = case.parameters, case.options
-    start = initial_mode(case.initial.t0, case.initial.y, p)
-    mode, y, t = start.mode, np.array(start.y, dtype=float), case.initial.t0
-    events = [(e.t, e.mass, str(e.kind), e.to_domain) for e in start.events]
-    stats = {"rhs_evaluations": 0, "segments": 0, "steps": 0}
-    step = options.max_step_fraction * p.period
-    near = options.grazing_displacement_tolerance
-    while t < t_end:
-        cache: dict = {}
-
-        flags = (mode.sign(1), mode.sign(2), mode.left, mode.right)
-
-        def roots(tt, yy, mode=mode, cache=cache, flags=flags):
-            key = (tt, yy.tobytes())
-            if key not in cache:
-                cache.clear()
-                if compiled:
-                    cache[key] = root_values(tt, yy, p, mode, step=step, near=near)
-                else:
-                    cache[key] = python_roots(tt, yy, p, *flags)
-            return cache[key]
-
-        def rhs(tt, yy, mode=mode, flags=flags):
-            stats["rhs_evaluations"] += 1
-            return state_derivative(tt, yy, p, mode) if compiled else python_field(tt, yy, p, *flags)
-
-        watchers = []
-        for index, direction in enumerate(root_directions(mode)):
-
-            def watcher(tt, yy, index=index):
-                return roots(tt, yy)[index]
-
-            # extrema are watched, not switched on: solve_ivp would stop at them and, restarted
-            # at a zero of the same function, stop there again
-            watcher.terminal = Root(index) not in WATCH_ONLY
-            watcher.direction = direction
-            watchers.append(watcher)
-        solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=rtol, atol=atol, events=watchers,
-                             max_step=step)  # fmt: skip
-        stats["segments"] += 1
-        stats["steps"] += len(solution.t) - 1
-        terminal = [k for k in range(NUM_ROOTS) if Root(k) not in WATCH_ONLY]
-        t_stop = solution.t[-1]
-        for k in WATCH_ONLY:  # grazing reports from the watched extrema, with the same rules
-            for tk, yk in zip(solution.t_events[k], solution.y_events[k], strict=True):
-                if tk < t_stop:
-                    report = resolve(tk, yk, p, mode, [Root(k)], options)
-                    events.extend((e.t, e.mass, str(e.kind), e.to_domain) for e in report.events)
-        if solution.status != 1:
-            break
-        hits = [(solution.t_events[k][0], k) for k in terminal if solution.t_events[k].size]
-        t = min(hit[0] for hit in hits)
-        fired = [Root(k) for tk, k in hits if tk == t]
-        y = solution.y_events[fired[0]][0].copy()
-        resolution = resolve(t, y, p, mode, fired, options)
-        events.extend((e.t, e.mass, str(e.kind), e.to_domain) for e in resolution.events)
-        y[:4] = resolution.y
-        mode = resolution.mode
-    events.sort(key=lambda e: e[0])
+    result = simulate(case, t_end=t_end, rtol=rtol, atol=atol, record_trajectory=False,
+                      engine=ScipyEngine if compiled else plain_python_engine)  # fmt: skip
+    events = [(e.t, e.mass, str(e.kind), e.to_domain) for e in result.events.itertuples(index=False)]
+    stats = {"rhs_evaluations": result.stats.rhs_evaluations, "segments": result.stats.restarts,
+             "steps": result.stats.returns}  # fmt: skip
     return events, stats

@@ -15,7 +15,7 @@ CHILD = r"""
 import json, resource, sys, time
 from pathlib import Path
 from oscillator import SweepSettings, load_case
-from oscillator.sweep import run_sweep
+from oscillator.analysis.sweeps import run_sweep
 steps, folder = int(sys.argv[1]), Path(sys.argv[2])
 settings = SweepSettings(param="Omega", start=1.5, stop=1.7, steps=steps, transient=10, record=5)
 started = time.perf_counter()

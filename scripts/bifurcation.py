@@ -26,9 +26,10 @@ import time
 from pathlib import Path
 
 from oscillator import load_case
-from oscillator.document import Table, to_markdown
-from oscillator.plotting import write_sweep_figures
-from oscillator.sweep import locate, read_sweep, run_sweep
+from oscillator.analysis.locate import locate
+from oscillator.analysis.sweeps import read_sweep, run_sweep
+from oscillator.report.figures import write_sweep_figures
+from oscillator.report.markup import Table, to_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "bifurcation.md"

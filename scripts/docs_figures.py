@@ -8,7 +8,7 @@ import tempfile
 from pathlib import Path
 
 from oscillator import simulate
-from oscillator.plotting import write_figures
+from oscillator.report.figures import write_figures
 
 IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 SHOWN = {  # panel -> the instance that shows it best

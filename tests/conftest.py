@@ -53,7 +53,7 @@ def assert_same_tables(a, b):
     """Two sweeps' tables (``read_sweep``) are equal, but for wall times."""
     import pandas as pd
 
-    from oscillator.sweep import TABLES
+    from oscillator.analysis.sweeps import TABLES
 
     for name in TABLES:
         left = a[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)

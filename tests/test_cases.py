@@ -36,7 +36,7 @@ def test_named_case_loads_with_its_expectations():
 def test_user_file_runs_with_documented_defaults(tmp_path):
     case = load_case(write(tmp_path, minimal_case_text()))
     assert (case.parameters.g, case.parameters.P1, case.parameters.phi2) == (9.8, 0.0, 0.0)
-    assert simulate(case).stats["events"] >= 1
+    assert simulate(case).stats.events >= 1
 
 
 def test_unknown_case_name_suggests_the_closest():

@@ -30,14 +30,14 @@ def test_event_time_error_shrinks_with_the_tolerance():
 def test_work_energy_audit_closes(name):
     """E(t1) - E(t0) = forcing + feedback work - damper and friction losses."""
     energy = simulate(name, record_trajectory=False).energy
-    scale = abs(energy["forcing"]) + abs(energy["damping"]) + abs(energy["friction"]) + energy["E0"]
-    assert abs(energy["residual"]) < 1e-8 * scale
-    assert energy["damping"] >= 0 and energy["friction"] >= 0
+    scale = abs(energy.forcing) + abs(energy.damping) + abs(energy.friction) + energy.E0
+    assert abs(energy.residual) < 1e-8 * scale
+    assert energy.damping >= 0 and energy.friction >= 0
 
 
 def test_energy_audit_detects_a_wrong_friction_law():
     """The audit can fail: bookkeeping friction with the wrong coefficient leaves a residual."""
     result = simulate("instance-3", record_trajectory=False)
     e = result.energy
-    wrong = e["E1"] - e["E0"] - (e["forcing"] + e["feedback"] - e["damping"] - 1.05 * e["friction"])
-    assert abs(wrong) > 1e3 * abs(e["residual"])
+    wrong = e.E1 - e.E0 - (e.forcing + e.feedback - e.damping - 1.05 * e.friction)
+    assert abs(wrong) > 1e3 * abs(e.residual)

@@ -17,7 +17,7 @@ def test_reproduction_page_is_up_to_date():
 
 
 def test_model_page_names_every_theorem_function():
-    import oscillator.theorems as theorems
+    import oscillator.model.theorems as theorems
 
     text = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
     for name in theorems.__all__:
@@ -43,7 +43,7 @@ def test_docstring_examples_run():
     import oscillator
 
     failed = tested = 0
-    for info in pkgutil.iter_modules(oscillator.__path__, "oscillator."):
+    for info in pkgutil.walk_packages(oscillator.__path__, "oscillator."):
         module = importlib.import_module(info.name)
         outcome = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         failed, tested = failed + outcome.failed, tested + outcome.attempted
@@ -53,7 +53,7 @@ def test_docstring_examples_run():
 def test_the_case_file_example_does_what_its_title_says(tmp_path):
     """m1 strikes its right stop: contact starts at x1 = d1 = 3.5 with v1 > 0 and ends, twice."""
     from oscillator import load_case, simulate
-    from oscillator.reproduction import compare
+    from oscillator.analysis.reproduction import compare
 
     text = (ROOT / "docs" / "cases.md").read_text(encoding="utf-8")
     block = text.split("```toml\n", 1)[1].split("```", 1)[0]
@@ -73,7 +73,7 @@ def test_the_case_file_example_does_what_its_title_says(tmp_path):
 
 def test_the_readme_says_what_the_reproduction_page_shows():
     from oscillator import load_case, simulate
-    from oscillator.reproduction import _summary, compare
+    from oscillator.analysis.reproduction import _summary, compare
 
     tables = {name: compare(load_case(name), simulate(name, record_trajectory=False).events)
               for name in (f"instance-{i}" for i in range(1, 6))}  # fmt: skip

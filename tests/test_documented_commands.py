@@ -26,8 +26,8 @@ import pytest
 from typer.testing import CliRunner
 
 from conftest import chatter_case
-from oscillator.cases import case_to_toml
-from oscillator.cli import app
+from oscillator.cli.app import app
+from oscillator.io.cases import case_to_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMAND = str(Path(sys.executable).with_name("oscillator"))

@@ -12,7 +12,7 @@ import pytest
 from conftest import random_case
 from independent import run
 from oscillator import case_names, load_case, simulate
-from oscillator.phase_space import velocity_sign
+from oscillator.model.phase_space import velocity_sign
 
 #: Seeds of ``random_case`` whose runs visit every domain of m1 (1, 145, 179), rest while in
 #: one or both contacts (141, 145, 149, 190), re-stick many times (200) or touch a stop briefly (268).

@@ -6,8 +6,8 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from oscillator import SweepSettings, load_case, simulate
-from oscillator.plotting import KIND_STYLE, draw_figures, draw_sweep_figures, figure_window
-from oscillator.sweep import run_point
+from oscillator.analysis.sweeps import run_point
+from oscillator.report.figures import KIND_STYLE, draw_figures, draw_sweep_figures, figure_window
 
 #: Runs that show, between them, every kind of event.
 RUNS = {

@@ -11,8 +11,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from oscillator import Mode, load_case
-from oscillator.fields import state_derivative
-from oscillator.g_functions import displacement_g, flow_barrier_g, velocity_g
+from oscillator.model.fields import kinetic_threshold, state_derivative, static_threshold
+from oscillator.model.g_functions import displacement_g, flow_barrier_g, velocity_g
 
 PARAMS = load_case("instance-3").parameters.replace(Q1=7.0, phi1=0.4, phi2=1.1, P1=0.3, P2=0.2)
 H = 1e-3
@@ -85,7 +85,7 @@ def test_flow_barrier_g1_is_the_derivative_of_g0(mode):
             flow_barrier_g(t, y, PARAMS, mode, mass, 1)[0],
             flow_barrier_g(t, y, PARAMS, mode, mass, -1)[0],
         )
-        assert minus - plus == pytest.approx(2 * PARAMS.static_threshold(mass))
+        assert minus - plus == pytest.approx(2 * static_threshold(PARAMS, mass))
 
 
 @pytest.mark.parametrize("mode", MODES[:12], ids=str)
@@ -105,4 +105,4 @@ def test_velocity_g_across_a_boundary_differs_by_twice_the_kinetic_threshold():
     y = np.array([0.5, 0.0, 1.0, -0.3])
     here = velocity_g(0.3, y, PARAMS, mode, 1, 1)[0]
     across = velocity_g(0.3, y, PARAMS, mode, 1, -1)[0]
-    assert across - here == pytest.approx(2 * PARAMS.kinetic_threshold(1))
+    assert across - here == pytest.approx(2 * kinetic_threshold(PARAMS, 1))

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-import oscillator.detection as detection
+import oscillator.model.roots as detection
 from oscillator import simulate
 
 THRESHOLD = 0.2 * 9.8  # mu_s g with mu_s = 0.2, no feedback
@@ -36,7 +36,7 @@ def test_without_the_extremum_roots_it_would_be_missed(brief_excursion, monkeypa
         original(t, y, g, *args)
         g[detection.Root.EXTREMUM_1] = 1.0
 
-    monkeypatch.setattr("oscillator.supervisor.root_kernel", without_extrema)
+    monkeypatch.setattr("oscillator.engines.cvode.root_kernel", without_extrema)
     events = simulate(case, max_step_fraction=0.25).events
     assert events.empty or abs(events.t.iloc[0] - leave) > 1e-3
 

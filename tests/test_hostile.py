@@ -30,7 +30,7 @@ import pytest
 import tomli_w
 
 from oscillator import load_case
-from oscillator.cases import case_to_toml
+from oscillator.io.cases import case_to_toml
 
 TIMEOUT = 120
 CASE = "instance-3"
@@ -298,14 +298,14 @@ def test_a_full_disk_is_one_clear_message_and_exit_1(work, command):
 
 SLOW_FIGURES = """
 import sys, time
-import oscillator.plotting as plotting
+import oscillator.report.figures as plotting
 draw = plotting.write_figures
 def slow(*args, **kwargs):
     print("drawing", file=sys.stderr, flush=True)
     time.sleep(60)
     return draw(*args, **kwargs)
 plotting.write_figures = slow
-from oscillator.cli import main
+from oscillator.cli.app import main
 main(sys.argv[1:])
 """
 

@@ -5,7 +5,7 @@ import itertools
 import pytest
 
 from oscillator import Mode, OscillatorError
-from oscillator.phase_space import (
+from oscillator.model.phase_space import (
     contact_flags,
     displacement_boundary_label,
     domain_of,

@@ -8,6 +8,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from oscillator import load_case, simulate
+from oscillator.model.fields import kinetic_threshold
 
 
 def test_instance_2_grazing_is_the_speed_minimum_of_m2():
@@ -19,7 +20,7 @@ def test_instance_2_grazing_is_the_speed_minimum_of_m2():
     def m2(t, y):
         x, v = y
         force = (p.Q2 * math.sin(p.Omega * t + p.phi2) - p.K4 * x - p.K5 * x**3 - p.C4 * v - p.C5 * v**3) / p.m2
-        return [v, force + p.kinetic_threshold(2)]  # Omega_1(2): v2 < 0
+        return [v, force + kinetic_threshold(p, 2)]  # Omega_1(2): v2 < 0
 
     sol = solve_ivp(m2, (case.initial.t0, 4.0), [case.initial.x2, case.initial.v2], method="DOP853",
                     rtol=1e-13, atol=1e-13, dense_output=True)  # fmt: skip
@@ -43,7 +44,7 @@ def test_free_flight_matches_scipy_between_events():
         x1, v1, x2, v2 = y
         a1 = (p.Q1 * math.sin(p.Omega * t) - p.K1 * x1 - p.K2 * x1**3 - p.C1 * v1 - p.C2 * v1**3) / p.m1
         a2 = (p.Q2 * math.sin(p.Omega * t) - p.K4 * x2 - p.K5 * x2**3 - p.C4 * v2 - p.C5 * v2**3) / p.m2
-        return [v1, a1 - p.kinetic_threshold(1), v2, a2 + p.kinetic_threshold(2)]  # v1 > 0, v2 < 0
+        return [v1, a1 - kinetic_threshold(p, 1), v2, a2 + kinetic_threshold(p, 2)]  # v1 > 0, v2 < 0
 
     rows = result.trajectory[result.trajectory.t <= first].drop_duplicates("t")
     sol = solve_ivp(free, (case.initial.t0, first), case.initial.y, method="DOP853", rtol=1e-13, atol=1e-13,

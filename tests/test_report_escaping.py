@@ -21,9 +21,9 @@ from markdown_it import MarkdownIt
 from typer.testing import CliRunner
 
 from oscillator import load_case
-from oscillator.cases import case_to_toml
-from oscillator.cli import app
-from oscillator.document import Bullets, Heading, Paragraph, Span, Table, to_html, to_markdown
+from oscillator.cli.app import app
+from oscillator.io.cases import case_to_toml
+from oscillator.report.markup import Bullets, Heading, Paragraph, Span, Table, to_html, to_markdown
 
 TITLE = "<script>alert(1)</script> [l](javascript:alert(2)) **bold** [/nope] $x$"
 DESCRIPTION = (
@@ -156,7 +156,7 @@ def test_any_text_comes_out_of_every_block_of_html_as_the_same_text(text):
 
 
 def test_a_figure_is_named_by_the_package_never_by_a_path():
-    from oscillator.document import Figure
+    from oscillator.report.markup import Figure
 
     for name in ("../x", "figures/../../x", "/etc/passwd", "a b", ""):
         with pytest.raises(ValueError, match="plain file name"):

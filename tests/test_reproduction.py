@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from oscillator import case_names, load_case, simulate
-from oscillator.reproduction import compare
+from oscillator.analysis.reproduction import compare
 
 INSTANCES = [f"instance-{i}" for i in range(1, 6)]
 

@@ -7,12 +7,12 @@ import pytest
 from oscillator import OscillatorError, simulate
 
 REQUIRED_EVENT_COLUMNS = ["t", "mass", "kind", "boundary", "from_domain", "to_domain", "theorem", "equation",
-                          "x1", "v1", "x2", "v2"]  # fmt: skip
+                          "branch", "x1", "v1", "x2", "v2"]  # fmt: skip
 
 
 def test_event_columns_and_kinds():
     events = simulate("instance-5").events
-    assert list(events.columns[:12]) == REQUIRED_EVENT_COLUMNS
+    assert list(events.columns[:13]) == REQUIRED_EVENT_COLUMNS
     assert {"G0_alpha", "G1_alpha", "G0_beta", "G1_beta", "G_alpha", "G_beta", "distance"} <= set(events.columns)
     assert events.G_alpha.tolist()[:2] == ["F1^(0>0_1)", "F2^(0>0_1)"]
 
@@ -56,8 +56,8 @@ def test_event_count_guard_names_the_last_event():
     with pytest.raises(OscillatorError, match=r"more than max_events = 3 .* mass \d") as info:
         simulate("instance-3", max_events=3)
     # the partial record travels with the error; the instant that tripped it is kept whole
-    assert [e.kind for e in info.value.partial.events[-2:]] == ["left_contact_onset"] * 2
-    assert len(info.value.partial.events) == 5
+    assert info.value.result.events.kind.tolist()[-2:] == ["left_contact_onset"] * 2
+    assert len(info.value.result.events) == 5
 
 
 def test_a_long_rest_under_forcing_is_not_a_stall(build):
@@ -66,7 +66,7 @@ def test_a_long_rest_under_forcing_is_not_a_stall(build):
     case = build(200 * 2 * np.pi, initial=(0.0, 0.0, 0.0, 0.0, 0.0), Q1=1.0, Q2=1.0)
     result = simulate(case, record_trajectory=False)
     assert result.events.empty
-    assert result.stats["root_returns"] >= 399
+    assert result.stats.root_returns >= 399
 
 
 def test_progress_is_reported_with_increasing_times():
@@ -78,6 +78,6 @@ def test_progress_is_reported_with_increasing_times():
 def test_events_can_be_kept_from_a_time_on():
     full = simulate("instance-3", record_trajectory=False)
     late = simulate("instance-3", record_trajectory=False, keep_events_from=3.0)
-    assert late.stats["events"] == full.stats["events"] == 8
+    assert late.stats.events == full.stats.events == 8
     pd.testing.assert_frame_equal(late.events.reset_index(drop=True),
                                   full.events[full.events.t >= 3.0].reset_index(drop=True))  # fmt: skip

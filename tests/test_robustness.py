@@ -22,11 +22,11 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from conftest import CHATTER, assert_same_tables, chatter_case
-from oscillator import OscillatorError, Parameters, SolverOptions, load_case, simulate
-from oscillator.cases import case_to_toml
-from oscillator.cli import app
-from oscillator.output import read_events_csv, read_run
-from oscillator.sweep import read_sweep
+from oscillator import OscillatorError, Parameters, SolverOptions, Status, load_case, simulate
+from oscillator.analysis.sweeps import read_sweep
+from oscillator.cli.app import app
+from oscillator.io.cases import case_to_toml
+from oscillator.io.runs import read_events_csv, read_run
 
 runner = CliRunner()
 
@@ -48,10 +48,10 @@ def test_too_many_steps_stops_with_time_domains_state_and_keeps_the_partial_resu
     assert f"CVODE failed after t = {first.t:.10g} s with flag -1" in message
     assert "max_num_steps" in message and "m1: 2, m2: 1" in message and "x1=" in message
     partial = error.result
-    assert partial.status == "failed" and not partial.complete and partial.failure == message
+    assert partial.status is Status.FAILED and not partial.success and partial.message == message
     assert partial.final_state[0] == first.t
     # the partial result is the full run's beginning, to the last digit
-    assert len(partial.events) == partial.stats["events"] == 1
+    assert len(partial.events) == partial.stats.events == 1
     np.testing.assert_array_equal(partial.events.t, full.events.t.iloc[:1])
     np.testing.assert_array_equal(partial.final_state[1:], first[["x1", "v1", "x2", "v2"]].to_numpy(float))
 
@@ -64,7 +64,7 @@ def test_absurd_tolerances_collapse_the_step_and_say_so():
     assert "flag -4" in message and "min step size" in message and "loosen rtol/atol" in message
     assert f"after t = {case.initial.t0:g} s" in message
     partial = caught.value.result
-    assert partial.status == "failed" and partial.final_state == (case.initial.t0, *case.initial.y)
+    assert partial.status is Status.FAILED and partial.final_state == (case.initial.t0, *case.initial.y)
     assert partial.events.empty
 
 
@@ -100,13 +100,13 @@ def test_a_chattering_case_stops_with_the_boundary_and_the_time():
 def test_the_storm_guard_is_configurable():
     period = 2 * math.pi / CHATTER["Omega"]
     tolerated = simulate(chatter_case(t_end=300 * period, storm_events=10**6), record_trajectory=False)
-    assert tolerated.complete and tolerated.stats["events"] == pytest.approx(601, abs=2)
+    assert tolerated.success and tolerated.stats.events == pytest.approx(601, abs=2)
     with pytest.raises(OscillatorError, match="event storm: 51 events") as caught:
         simulate(chatter_case(storm_events=50), record_trajectory=False)
     assert len(caught.value.result.events) == 51
     # a window shorter than the time between two crossings never holds 51 of them
     quiet = simulate(chatter_case(t_end=300 * period, storm_events=50, storm_window=0.1 * period))
-    assert quiet.complete
+    assert quiet.success
 
 
 @pytest.mark.parametrize(
@@ -128,7 +128,7 @@ def test_a_run_of_absurd_length_is_refused_before_it_starts():
     with pytest.raises(OscillatorError, match=r"is 1.43e\+49 forcing periods, more than max_periods") as caught:
         simulate("instance-1", Omega=1e50)
     assert caught.value.field == "max_periods" and not hasattr(caught.value, "result")
-    assert simulate("instance-1", t_end=1.0 + 5 * 2 * math.pi / 1.6, max_periods=5, record_trajectory=False).complete
+    assert simulate("instance-1", t_end=1.0 + 5 * 2 * math.pi / 1.6, max_periods=5, record_trajectory=False).success
 
 
 def test_a_trajectory_too_long_to_hold_stops_with_the_rows_so_far():
@@ -218,11 +218,12 @@ KILLED_WHILE_WRITING = textwrap.dedent(
     import sys, time
     from pathlib import Path
     from oscillator import simulate
-    from oscillator import output
+    from oscillator.io import runs as output
+    from oscillator.io import cases
 
     result = simulate("instance-3")
     claim = output.claim_output(Path(sys.argv[1]), "instance-3")
-    to_toml = output.case_to_toml
+    to_toml = cases.case_to_toml
 
     def slow(case):  # the tables are written by now, case.toml and run.json not yet
         print("writing", flush=True)
@@ -238,7 +239,7 @@ REPLACED_WHILE_WRITING = textwrap.dedent(
     """
     import sys, time
     from pathlib import Path
-    from oscillator._files import atomic_path
+    from oscillator.io.files import atomic_path
 
     with atomic_path(Path(sys.argv[1]) / "table.txt") as tmp:
         tmp.write_text("new, half")
@@ -318,7 +319,7 @@ def _runs_or_refuses(case) -> None:
     except OscillatorError as error:
         assert str(error) and error.field is not None
     else:
-        assert result.complete and all(math.isfinite(v) for v in result.final_state)
+        assert result.success and all(math.isfinite(v) for v in result.final_state)
 
 
 #: The places of a case file: mostly the real ones, sometimes made-up sections and keys.
@@ -375,7 +376,7 @@ def test_fuzzed_case_text_is_refused_with_its_reason(tmp_path_factory, text):
 def test_fuzzed_overrides_of_the_api_run_or_are_refused(name, value):
     try:
         case = load_case("instance-1")
-        from oscillator.simulation import resolve_case
+        from oscillator.hybrid.simulate import resolve_case
 
         case = resolve_case(case, **{name: value})
     except OscillatorError as error:
@@ -426,7 +427,7 @@ def test_fuzzed_keywords_of_simulate_run_or_are_refused(t_end, t_eval, keep):
     except OscillatorError as error:
         assert str(error) and error.field is not None
         return
-    assert result.complete
+    assert result.success
 
 
 # ----------------------------------------------------------------------------- the library's own input
@@ -465,7 +466,7 @@ def test_the_step_limit_holds_when_every_step_is_recorded():
     with pytest.raises(OscillatorError, match="more than max_num_steps = 5 steps without a switch") as caught:
         simulate("instance-1", max_num_steps=5)
     partial = caught.value.result
-    assert caught.value.field == "max_num_steps" and partial.status == "failed"
+    assert caught.value.field == "max_num_steps" and partial.status is Status.FAILED
     after_last_switch = partial.trajectory.t > partial.events.t.iloc[-1]
     assert after_last_switch.sum() == 6  # five steps allowed, the sixth stops the run
 
@@ -480,7 +481,7 @@ def test_positive_parameters_below_any_physical_scale_are_refused(name, value):
 def test_run_json_is_strict_json_even_with_infinite_values():
     import json
 
-    from oscillator.output import json_text
+    from oscillator.io.runs import json_text
 
     text = json_text({"energy": {"E0": math.inf, "residual": math.nan, "E1": np.float64(2.5)}, "n": np.int64(3)})
     assert json.loads(text) == {"energy": {"E0": None, "residual": None, "E1": 2.5}, "n": 3}

@@ -14,7 +14,8 @@ import pytest
 
 from conftest import assert_same_tables, make_case
 from oscillator import OscillatorError, SweepSettings, load_case
-from oscillator.sweep import TABLES, detect_period, locate, read_sweep, run_point, run_sweep, sliding_ranges
+from oscillator.analysis.locate import locate
+from oscillator.analysis.sweeps import TABLES, detect_period, read_sweep, run_point, run_sweep, sliding_ranges
 
 SMALL = dict(param="Omega", start=1.55, stop=1.7, steps=4, transient=4, record=3)
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from oscillator.theorems import (
+from oscillator.model.theorems import (
     theorem_5_1_passable,
     theorem_5_2_sliding_exists,
     theorem_5_3_sliding_appears,

@@ -1,0 +1,90 @@
+"""oscillator: event-driven simulation of a 2-DOF frictional oscillator with elastic stops.
+
+The model, domains, G-functions and switching theorems are those of the article *On the
+discontinuous dynamics of a class of 2-DOF frictional vibration systems with asymmetric elastic
+constraints*; ``docs/model.md`` states the model and maps the article to the code.
+
+The names below are imported on first use (PEP 562), so that ``import oscillator`` and the
+command's start, its ``--help`` and its refusals of bad input do not wait for the numerical
+libraries.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: ``typing.TYPE_CHECKING`` without importing ``typing``: the command starts faster, and a
+#: Ctrl-C in its first milliseconds reaches code that can catch it sooner.
+TYPE_CHECKING = False
+
+__version__ = "0.2.0"
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "Case": "oscillator.io.cases",
+    "ExpectedEvent": "oscillator.io.cases",
+    "case_names": "oscillator.io.cases",
+    "load_case": "oscillator.io.cases",
+    "resolve_case": "oscillator.io.cases",
+    "Event": "oscillator.model.events",
+    "EventKind": "oscillator.model.events",
+    "InitialState": "oscillator.model.parameters",
+    "Parameters": "oscillator.model.parameters",
+    "SolverOptions": "oscillator.model.parameters",
+    "SweepSettings": "oscillator.model.parameters",
+    "Mode": "oscillator.model.phase_space",
+    "OscillatorError": "oscillator.errors",
+    "InputError": "oscillator.errors",
+    "SimulationFailed": "oscillator.errors",
+    "Interrupted": "oscillator.errors",
+    "Result": "oscillator.hybrid.result",
+    "Status": "oscillator.hybrid.result",
+    "EnergyAudit": "oscillator.hybrid.result",
+    "SolverStats": "oscillator.hybrid.result",
+    "simulate": "oscillator.hybrid.simulate",
+}
+
+__all__ = [
+    "Case",
+    "EnergyAudit",
+    "Event",
+    "EventKind",
+    "ExpectedEvent",
+    "InitialState",
+    "InputError",
+    "Interrupted",
+    "Mode",
+    "OscillatorError",
+    "Parameters",
+    "Result",
+    "SimulationFailed",
+    "SolverOptions",
+    "SolverStats",
+    "Status",
+    "SweepSettings",
+    "case_names",
+    "load_case",
+    "resolve_case",
+    "simulate",
+]
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
+    from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status
+    from oscillator.hybrid.simulate import simulate
+    from oscillator.io.cases import Case, ExpectedEvent, case_names, load_case, resolve_case
+    from oscillator.model.events import Event, EventKind
+    from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
+    from oscillator.model.phase_space import Mode
+
+
+def __getattr__(name: str) -> object:
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'oscillator' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})

@@ -1,0 +1,589 @@
+"""Parameter sweeps (sliding bifurcation diagrams, Sec. 7) and locating where a summary changes.
+
+A sweep runs one simulation per value of a parameter: a transient of forcing periods, then a
+recorded window.  For each value it keeps, after the transient,
+
+* every switching point of the chosen mass (``switches``): the value, ``t``, the phase
+  ``Omega t mod 2 pi``, kind, boundary, domains, ``x`` and ``v`` of that mass;
+* the Poincaré points ``(x1, v1, x2, v2)`` at ``t0 + n T`` (``poincare``);
+* a summary row (``summary``): period-n found (Poincaré points repeating within a tolerance)
+  or 0, whether the mass rests (``sliding``) and in how many periods, rest time per period,
+  switches per period (events that change a domain or a contact; grazing reports, which
+  switch nothing, are counted apart), and whether the point ran at all.
+
+Every table carries the swept parameter as a column named after it (e.g. ``Omega``).
+
+Points are computed by :func:`run_point` (a pure function, so the same rows come out serially,
+in a process pool or on a Dask cluster) and stored by the parent process as they finish: each
+point as small Parquet parts written atomically, its summary part last.  A summary part marks
+the point done, so running the same sweep into the same folder again resumes it, with no point
+lost or duplicated, also after the process was killed.  At the end the parts are streamed into
+one Parquet file per table (memory stays flat in the number of points).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import dataclasses
+import json
+import math
+import multiprocessing
+import os
+import stat
+import time
+import urllib.parse
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from oscillator.analysis.intervals import runs, spans
+from oscillator.errors import InputError, OscillatorError
+from oscillator.hybrid.simulate import simulate
+from oscillator.io.cases import Case, case_to_toml, resolve_case
+from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
+from oscillator.io.signals import interrupts_ignored, prepare_worker
+from oscillator.model.parameters import SweepSettings, is_whole_number
+from oscillator.text import printable, shown
+
+__all__ = [
+    "TABLES",
+    "PointTables",
+    "Sweep",
+    "SweepOutcome",
+    "detect_period",
+    "open_sweep",
+    "read_sweep",
+    "run_point",
+    "run_sweep",
+    "sliding_ranges",
+]
+
+#: The tables a sweep writes, one Parquet file each.
+TABLES = ("switches", "poincare", "summary")
+
+
+@dataclasses.dataclass(frozen=True)
+class PointSummary:
+    """One row of ``summary.parquet``, after the swept parameter's own column.
+
+    The defaults are those of a value that failed (``status = "failed"`` and the message).
+    """
+
+    index: int  #: the value's place in the sweep, from 0
+    status: str = "ok"  #: ``ok`` or ``failed``
+    message: str = ""  #: why it failed, else empty
+    period: int = 0  #: period-n of the Poincaré points, 0 if none within ``max_period``
+    periodic: bool = False
+    sliding: bool = False  #: the mass rests on its velocity boundary
+    sliding_periods: int = 0  #: recorded periods with a rest in them
+    rest_time_per_period: float = math.nan
+    switches_per_period: float = math.nan
+    crossings_per_period: float = math.nan
+    grazings_per_period: float = math.nan
+    wall_time: float = math.nan  #: seconds spent on the value
+
+    def row(self, param: str, value: float) -> dict[str, Any]:
+        return {param: value, **dataclasses.asdict(self)}
+
+
+_DTYPES = {"int": "int64", "float": "float64", "bool": "bool", "str": "str"}
+
+
+def _columns(param: str) -> dict[str, dict[str, str]]:
+    """Column names and dtypes of each table; the swept parameter comes first."""
+    return {
+        "switches": {param: "float64", "index": "int64", "t": "float64", "phase": "float64", "kind": "str",
+                     "boundary": "str", "from_domain": "int64", "to_domain": "int64", "x": "float64",
+                     "v": "float64"},
+        "poincare": {param: "float64", "index": "int64", "n": "int64", "t": "float64", "x1": "float64",
+                     "v1": "float64", "x2": "float64", "v2": "float64"},
+        "summary": {param: "float64", **{f.name: _DTYPES[str(f.type)] for f in dataclasses.fields(PointSummary)}},
+    }  # fmt: skip
+
+
+def _frame(rows: list[dict] | dict, columns: dict[str, str]) -> pd.DataFrame:
+    frame = pd.DataFrame(rows if isinstance(rows, list) else [rows], columns=list(columns))
+    return frame.astype(columns)
+
+
+@dataclasses.dataclass(frozen=True)
+class PointTables:
+    """The rows one parameter value contributes to each table."""
+
+    index: int
+    value: float
+    switches: pd.DataFrame
+    poincare: pd.DataFrame
+    summary: pd.DataFrame
+
+    def table(self, name: str) -> pd.DataFrame:
+        return getattr(self, name)
+
+
+def detect_period(points: np.ndarray, tolerance: float, max_period: int) -> int:
+    """The smallest ``n <= max_period`` with ``P_(k+n) = P_k`` for every recorded ``k``, else 0.
+
+    ``points`` are the Poincaré points in order, one row each; two points are equal when their
+    distance is at most ``tolerance (1 + |P|)``.
+    """
+    scale = tolerance * (1.0 + np.max(np.abs(points))) if points.size else tolerance
+    for n in range(1, min(max_period, len(points) - 1) + 1):
+        if np.max(np.linalg.norm(points[n:] - points[:-n], axis=1)) <= scale:
+            return n
+    return 0
+
+
+def _rest_time(
+    events: pd.DataFrame, mass: int, domain_at_start: int, start: float, stop: float
+) -> tuple[float, list[tuple[float, float]]]:
+    """Total rest time of ``mass`` in ``[start, stop]`` and the rest intervals."""
+    switches = events[(events.mass == mass) & (events.from_domain != events.to_domain)]
+    switches = switches[(switches.t >= start) & (switches.t <= stop)]
+    times = [start, *switches.t]
+    resting = [domain_at_start == 0, *(switches.to_domain == 0)]
+    intervals = [(a, b) for rests, a, b in spans(times, resting, stop) if rests]
+    return sum(b - a for a, b in intervals), intervals
+
+
+def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> PointTables:
+    """Simulate one parameter value and tabulate what the sweep keeps of it.
+
+    A value the model refuses (e.g. ``Omega <= 0``) or a solver failure gives a summary row
+    with ``status = "failed"`` and the message, and no other rows.
+    """
+    param, mass = settings.param, settings.mass
+    columns = _columns(param)
+    started = time.perf_counter()
+    try:
+        point = resolve_case(case, **{param: value})
+        period = point.parameters.period
+        t0 = point.initial.t0
+        # one Poincaré point at the start of each recorded period; the run ends with the last period
+        marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
+        result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
+    except OscillatorError as error:
+        failed = PointSummary(index, "failed", str(error), wall_time=time.perf_counter() - started)
+        summary = failed.row(param, value)
+        empty_switches, empty_poincare = _frame([], columns["switches"]), _frame([], columns["poincare"])
+        return PointTables(index, value, empty_switches, empty_poincare, _frame(summary, columns["summary"]))
+
+    start, stop = float(marks[0]), float(marks[-1])
+    events = result.events
+    window = events[(events.mass == mass) & (events.t >= start) & (events.t <= stop)]
+    omega = point.parameters.Omega
+    switches = _frame(
+        [
+            {param: value, "index": index, "t": row.t, "phase": math.fmod(omega * row.t, 2 * math.pi),
+             "kind": row.kind, "boundary": row.boundary, "from_domain": row.from_domain,
+             "to_domain": row.to_domain, "x": getattr(row, f"x{mass}"), "v": getattr(row, f"v{mass}")}
+            for row in window.itertuples()
+        ],
+        columns["switches"],
+    )  # fmt: skip
+    trajectory = result.trajectory
+    poincare = _frame(
+        [
+            {param: value, "index": index, "n": settings.transient + k, "t": row.t, "x1": row.x1, "v1": row.v1,
+             "x2": row.x2, "v2": row.v2}
+            for k, row in enumerate(trajectory.itertuples())
+        ],
+        columns["poincare"],
+    )  # fmt: skip
+    points = poincare[["x1", "v1", "x2", "v2"]].to_numpy()
+    n = detect_period(points, settings.period_tolerance, settings.max_period)
+    domain_at_start = int(trajectory[f"domain{mass}"].iloc[0])
+    rest, intervals = _rest_time(events, mass, domain_at_start, start, stop)
+    periods_with_rest: set[int] = set()
+    for a, b in intervals:  # a rest spanning several periods counts in each of them
+        first = min(int((a - start) // period), settings.record - 1)
+        last = min(math.ceil((b - start) / period), settings.record)
+        periods_with_rest.update(range(first, max(last, first + 1)))
+    crossings = window[window.kind.isin(["passable", "sliding_onset"])]
+    grazings = window[window.kind == "grazing"]  # reports: they switch nothing
+    summary = PointSummary(
+        index, period=n, periodic=n > 0, sliding=rest > 0, sliding_periods=len(periods_with_rest),
+        rest_time_per_period=rest / settings.record,
+        switches_per_period=(len(window) - len(grazings)) / settings.record,
+        crossings_per_period=len(crossings) / settings.record, grazings_per_period=len(grazings) / settings.record,
+        wall_time=time.perf_counter() - started,
+    ).row(param, value)  # fmt: skip
+    return PointTables(index, value, switches, poincare, _frame(summary, columns["summary"]))
+
+
+def sliding_ranges(summary: pd.DataFrame, param: str) -> list[tuple[float, float]]:
+    """The ranges ``(first, last)`` of consecutive swept values at which the mass slides."""
+    ok = summary[summary.status == "ok"].sort_values(param)
+    values = ok[param].tolist()
+    return [(values[i], values[j - 1]) for slides, i, j in runs(ok.sliding.tolist()) if slides]
+
+
+# --------------------------------------------------------------------------- storage
+
+#: The largest ``sweep.json`` read back (bytes).
+_MAX_SWEEP_JSON = 1 << 20
+
+
+def _damaged(path: Path, what: str, fix: str = "give a new folder") -> InputError:
+    return InputError(f"{printable(str(path))} is damaged: {what}; {fix}", field=path.name)
+
+
+class _Store:
+    """A sweep folder: its identity, the finished points, and the consolidated tables."""
+
+    def __init__(self, folder: Path, case: Case, settings: SweepSettings) -> None:
+        self.folder = folder
+        self.parts = folder / "parts"
+        self.identity = {"case": case_to_toml(case), "settings": dataclasses.asdict(settings)}
+        self.settings = settings
+        self.resuming = False
+
+    def check(self) -> None:
+        """Refuse, before anything is created, a folder that cannot hold this sweep.
+
+        A new name must be writable; an existing folder must be this very sweep (then it is
+        resumed), with its ``sweep.json``, ``parts/`` and finished parts intact.
+        """
+        shown = printable(str(self.folder))
+        check_name(self.folder, option="folder")
+        if not os.path.lexists(self.folder):
+            return
+        if not self.folder.is_dir():
+            raise InputError(f"folder {shown} exists and is not a folder; give a new folder", field="folder")
+        marker = self.folder / "sweep.json"
+        if not os.path.lexists(marker):
+            if any(self.folder.iterdir()):
+                raise InputError(f"folder {shown} exists and is not a sweep folder; give a new folder",
+                                      field="folder")  # fmt: skip
+            return
+        text = read_untrusted(marker, what="sweep file", field="sweep.json", limit=_MAX_SWEEP_JSON)
+        try:
+            stored = json.loads(text)
+        except (ValueError, RecursionError) as exc:
+            raise _damaged(marker, "it is not JSON") from exc
+        if not isinstance(stored, dict) or "identity" not in stored:
+            raise _damaged(marker, "it holds no sweep identity")
+        if stored["identity"] != self.identity:
+            raise InputError(
+                f"folder {shown} holds a different sweep (another case or settings); give a new "
+                f"folder, or the same case and settings to resume it",
+                field="folder",
+            )
+        if not self.parts.is_dir():
+            raise _damaged(self.folder, "its parts/ folder is missing")
+        for part in sorted(self.parts.glob("*.parquet")):
+            try:
+                index, name, _ = part.name.split(".")
+                int(index)
+                if name not in TABLES or not stat.S_ISREG(os.stat(part).st_mode):
+                    raise ValueError(name)
+                pq.read_metadata(part)
+            except Exception as exc:  # pyarrow raises many types for a damaged file
+                if isinstance(exc, MemoryError):
+                    raise
+                raise _damaged(part, "it is not a part of this sweep",
+                               "delete it, and run the same command to compute that point again") from exc  # fmt: skip
+        self.resuming = True
+
+    def open(self) -> None:
+        """Create the folder (appearing whole: parts/, case.toml, sweep.json), unless resuming."""
+        if self.resuming:
+            return
+        try:
+            with atomic_folder(self.folder) as temporary:
+                (temporary / "parts").mkdir()
+                (temporary / "case.toml").write_text(str(self.identity["case"]), encoding="utf-8")
+                (temporary / "sweep.json").write_text(self._status("running", done=0), encoding="utf-8")
+        except OSError as exc:
+            raise InputError(
+                f"folder {printable(str(self.folder))}: cannot create it ({exc.strerror}); choose a writable folder",
+                field="folder",
+            ) from exc
+
+    def _status(self, status: str, **extra) -> str:
+        info = {"identity": self.identity, "status": status, "param": self.settings.param,
+                "points": self.settings.steps, **extra}  # fmt: skip
+        return json.dumps(info, indent=2, default=str)
+
+    def write_status(self, status: str, **extra) -> None:
+        replace_file(self.folder / "sweep.json", self._status(status, **extra))
+
+    def done(self) -> set[int]:
+        return {int(p.name.split(".")[0]) for p in self.parts.glob("*.summary.parquet")}
+
+    def write_point(self, point: PointTables) -> None:
+        for name in TABLES:  # the summary last: it marks the point done
+            with atomic_path(self.parts / f"{point.index:06d}.{name}.parquet") as temporary:
+                point.table(name).to_parquet(temporary, index=False)
+
+    def consolidate(self) -> None:
+        """Stream the parts, in parameter order, into one Parquet file per table."""
+        for name in TABLES:
+            with atomic_path(self.folder / f"{name}.parquet") as temporary:
+                writer = None
+                try:
+                    for part in sorted(self.parts.glob(f"*.{name}.parquet")):
+                        table = pq.read_table(part)
+                        if writer is None:
+                            writer = pq.ParquetWriter(temporary, table.schema)
+                        writer.write_table(table.cast(writer.schema))
+                    if writer is None:
+                        columns = _columns(self.settings.param)[name]
+                        pq.write_table(pa.Table.from_pandas(_frame([], columns), preserve_index=False), temporary)
+                finally:
+                    if writer is not None:
+                        writer.close()
+
+
+def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
+    """The consolidated tables of a finished sweep folder."""
+    folder = Path(folder)
+    missing = [name for name in TABLES if not (folder / f"{name}.parquet").is_file()]
+    if missing:
+        raise InputError(f"{folder} holds no finished sweep (no {missing[0]}.parquet)", field="folder")
+    return {name: pd.read_parquet(folder / f"{name}.parquet") for name in TABLES}
+
+
+# --------------------------------------------------------------------------- execution
+
+
+def _points_serial(case, settings, tasks) -> Iterator[PointTables]:
+    for index, value in tasks:
+        yield run_point(case, settings, index, value)
+
+
+def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
+    """A local process pool; at most ``4 workers`` points in flight, so memory stays flat.
+
+    The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator.io.signals`); on an
+    interrupt or an error here they are stopped at once, so nothing outlives the sweep.
+    """
+    context = multiprocessing.get_context("spawn")
+    pending = iter(tasks)
+    running: set[cf.Future] = set()
+    with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
+        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=prepare_worker,
+                                      initargs=(os.getpid(),))  # fmt: skip
+
+        def fill() -> None:
+            for index, value in pending:
+                running.add(pool.submit(run_point, case, settings, index, value))
+                if len(running) >= 4 * workers:
+                    return
+
+        fill()
+    try:
+        while running:
+            finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+            for future in finished:
+                running.discard(future)
+                yield future.result()
+            fill()
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):  # no public way to stop busy workers
+            process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)  # quick now; frees the pool's semaphores
+        raise
+    pool.shutdown()
+
+
+def _scheduler_address(scheduler: str) -> str:
+    """Refuse an address that is not ``tcp://HOST:PORT`` (or tls://, ucx://, inproc://)."""
+    parsed = urllib.parse.urlsplit(scheduler)
+    try:
+        port = parsed.port
+    except ValueError:
+        port = None
+    if (
+        parsed.scheme not in ("tcp", "tls", "ucx", "inproc")
+        or not parsed.hostname
+        or (parsed.scheme != "inproc" and port is None)
+    ):
+        raise InputError(
+            f"scheduler {shown(scheduler)} is not the address of a Dask scheduler; give tcp://HOST:PORT",
+            field="scheduler",
+        )
+    return scheduler
+
+
+def _connect(scheduler: str):
+    """A Dask client of the scheduler at ``scheduler``, or a clear error."""
+    address = _scheduler_address(scheduler)
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise InputError(
+            "scheduler needs Dask: pip install 'oscillator[dask]' (dask.distributed)", field="scheduler"
+        ) from exc
+    try:
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError) as exc:
+        raise InputError(
+            f"scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",
+            field="scheduler",
+        ) from exc
+
+
+def _points_dask(client, case, settings, tasks) -> Iterator[PointTables]:
+    from distributed import as_completed
+
+    case_on_cluster = client.scatter(case, broadcast=True)
+    futures = [client.submit(run_point, case_on_cluster, settings, i, v, pure=False) for i, v in tasks]
+    try:
+        for future in as_completed(futures):
+            yield future.result()
+            future.release()
+    finally:
+        client.cancel(futures)
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepOutcome:
+    """Where a sweep was written and how it went."""
+
+    folder: Path
+    points: int
+    computed: int
+    resumed: int
+    failed: int
+    wall_time: float
+
+
+#: The most local worker processes per core: more only share the cores.
+MAX_WORKERS_PER_CORE = 4
+
+
+class Sweep:
+    """A sweep checked and ready to run: :func:`open_sweep` makes it, :meth:`run` runs it.
+
+    Everything that can be refused (the settings, the folder, the workers, the scheduler) is
+    refused by :func:`open_sweep` before anything is created; what :meth:`run` raises comes
+    after work started, and every point finished by then is kept in the folder.
+    """
+
+    def __init__(self, case: Case, settings: SweepSettings, store: _Store, workers: int, client, lock) -> None:
+        self.case, self.settings, self._store, self.workers = case, settings, store, workers
+        self._client, self._lock = client, lock
+
+    @property
+    def folder(self) -> Path:
+        return self._store.folder
+
+    def close(self) -> None:
+        """Let go of the folder's lock and the Dask client, if any (:meth:`run` does it)."""
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+        self._lock.release()
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> SweepOutcome:
+        """Compute the points not yet done, store each as it finishes, and consolidate the tables.
+
+        ``progress(done, total)`` is called after every stored point.
+        """
+        started = time.perf_counter()
+        store, settings = self._store, self.settings
+        try:
+            store.open()
+            values = settings.values
+            done = store.done()
+            tasks = [(i, v) for i, v in enumerate(values) if i not in done]
+            if progress is not None:
+                progress(len(done), len(values))
+            if self._client is not None:
+                points: Iterable[PointTables] = _points_dask(self._client, self.case, settings, tasks)
+            elif self.workers == 1 or len(tasks) <= 1:
+                points = _points_serial(self.case, settings, tasks)
+            else:
+                points = _points_pool(self.case, settings, tasks, min(self.workers, len(tasks)))
+            computed = 0
+            for point in points:
+                store.write_point(point)
+                computed += 1
+                if progress is not None:
+                    progress(len(done) + computed, len(values))
+            store.consolidate()
+            summary = pd.read_parquet(store.folder / "summary.parquet")
+            failed = int((summary.status != "ok").sum())
+            wall = time.perf_counter() - started
+            store.write_status("complete", done=len(values), failed=failed, wall_time_last_run=wall)
+        except OSError as exc:
+            where = printable(str(exc.filename)) if exc.filename else printable(str(store.folder))
+            raise OscillatorError(
+                f"cannot write {where} ({exc.strerror or exc}); the points finished so far are kept: free the space "
+                f"or fix the folder, and run the same command to resume",
+                field="folder",
+            ) from exc
+        finally:
+            self.close()
+        return SweepOutcome(store.folder, len(values), computed, len(done), failed, wall)
+
+
+def open_sweep(
+    case: Case,
+    settings: SweepSettings,
+    folder: Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+) -> Sweep:
+    """Check a sweep before anything is created: the folder, the workers, the scheduler.
+
+    Parameters are those of :func:`run_sweep`.
+
+    Raises
+    ------
+    OscillatorError
+        A folder that cannot hold this sweep (a file, another sweep, a damaged sweep), a
+        number of workers out of range, or a scheduler that is not an address or cannot be
+        reached.
+    """
+    store = _Store(Path(folder), case, settings)
+    store.check()
+    most = MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if workers is not None and (not is_whole_number(workers) or not 1 <= workers <= most):
+        raise InputError(
+            f"workers must be a whole number from 1 to {most} ({MAX_WORKERS_PER_CORE} per core), got {shown(workers)}",
+            field="workers",
+        )
+    client = _connect(scheduler) if scheduler else None
+    try:
+        lock = lock_name(store.folder, busy=f"folder {printable(str(store.folder))} is being swept by another "
+                         f"process now; wait for it, or give another folder")  # fmt: skip
+    except OscillatorError:
+        if client is not None:
+            client.close()
+        raise
+    return Sweep(case, settings, store, workers or os.cpu_count() or 1, client, lock)
+
+
+def run_sweep(
+    case: Case,
+    settings: SweepSettings,
+    folder: Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SweepOutcome:
+    """Run (or resume) a sweep into ``folder``.
+
+    Parameters
+    ----------
+    case : Case
+        The base case; its start and parameters except the swept one are used for every value.
+    settings : SweepSettings
+    folder : Path
+        Created if new; if it holds the same sweep, the points already finished are kept.
+    workers : int, optional
+        Local processes (default: every core; at most 4 per core); 1 runs in this process.
+    scheduler : str, optional
+        ``tcp://HOST:PORT`` of a Dask scheduler: the points run on that cluster instead.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after every stored point.
+    """
+    return open_sweep(case, settings, folder, workers=workers, scheduler=scheduler).run(progress)

@@ -1,0 +1,100 @@
+"""The ``oscillator`` command: list, show, run, check, report, sweep and locate.
+
+The rule for exit codes:
+
+* **2** - the input was refused before anything ran (unknown case or parameter, bad value,
+  malformed or damaged file, an output folder that is taken or cannot be written): one line
+  naming the field and the fix, and nothing created.
+* **1** - work started and could not finish (a solver error, a guard, a full disk, a figure
+  that could not be drawn): what was computed is kept (``run`` writes its partial result marked
+  ``failed``; ``sweep`` keeps its finished points); or ``check`` found a time out of tolerance.
+* **130** - interrupted (Ctrl-C): the same as 1, marked ``interrupted``.
+
+The numerical libraries are imported only by the commands that compute, so ``--help`` and
+refusals are quick.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import Annotated
+
+import typer
+from rich.text import Text
+
+from oscillator import __version__
+from oscillator.cli import cases, check, console, run, sweep
+from oscillator.cli.console import err, out
+from oscillator.text import printable
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="oscillator",
+    help="Simulate the 2-DOF frictional oscillator with elastic stops of the article, "
+    "and explain every switch by its theorem.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+
+def _version(
+    version: Annotated[bool, typer.Option("--version", help="Print the version and exit.")] = False,
+) -> None:
+    if version:
+        out.print(f"oscillator {__version__}")
+        raise typer.Exit(0)
+
+
+#: Click's exception classes, as Typer uses them (recent Typer versions bring their own copy of
+#: Click, older ones use Click itself): found through the class Typer exports.
+_CLICK_ERROR: type[Exception] = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+
+
+def _usage_error(error: Exception, args: list[str]) -> int:
+    """A usage error (unknown option, value of the wrong type) in one line, naming the option."""
+    context = getattr(error, "ctx", None)
+    if not args and context is not None:  # `oscillator` alone: the help, as with --help
+        out.print(context.get_help(), markup=False)
+        return 2
+    message = printable(" ".join(str(error.format_message()).split()))  # type: ignore[attr-defined]
+    hint = f" (see '{context.command_path} --help')" if context is not None else ""
+    err.print(Text.assemble(("error:", "bold red"), f" {message}{printable(hint)}"))
+    return int(getattr(error, "exit_code", 2))
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of the ``oscillator`` command: every outcome is an exit code and at most one
+    line of error, never a traceback (see the module docstring for the codes)."""
+    args = sys.argv[1:] if args is None else list(args)
+    try:
+        command = typer.main.get_command(app)
+        code = command.main(args=args, prog_name="oscillator", standalone_mode=False)
+        if code == 130 and not console.reported:  # Typer caught Ctrl-C while it read the command line
+            raise KeyboardInterrupt
+    except _CLICK_ERROR as error:
+        code = _usage_error(error, args)
+    except (typer.Abort, KeyboardInterrupt):
+        err.print(Text.assemble(("error:", "bold red"), " interrupted"))
+        code = 130
+    except BrokenPipeError:  # the reader of our output went away (`oscillator list | head -1`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
+        code = 1
+    if code == 130:
+        from oscillator.__main__ import interrupted_exit
+
+        interrupted_exit()
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+app.command("list", short_help="List the named cases.")(cases.list_cases)
+app.command(short_help="Show a case: parameters, start, settings, expected events.")(cases.show)
+app.command(short_help="Run a case; write its tables, figures and report.")(run.run)
+app.command(short_help="Compare a case's switching times with the article's.")(check.check)
+app.command(short_help="Rebuild a run folder's report (and missing figures).")(run.report)
+app.command(short_help="Sweep a parameter: Fig. 14-style switching and Poincaré points.")(sweep.sweep)
+app.command(short_help="Find where a sweep's summary changes, to 1e-8.")(sweep.locate)
+app.callback(invoke_without_command=True)(_version)

@@ -1,0 +1,69 @@
+"""``oscillator list`` and ``oscillator show``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from oscillator.cli.console import fail, message, out, say
+from oscillator.errors import OscillatorError
+from oscillator.io.cases import case_names, load_case
+from oscillator.text import printable
+
+__all__ = ["list_cases", "show"]
+
+
+def list_cases() -> None:
+    """List the named cases with their titles.
+
+    \b
+    Example:
+      oscillator list
+    """
+    table = Table(header_style="bold")
+    table.add_column("case")
+    table.add_column("title")
+    for name in case_names():
+        table.add_row(name, load_case(name).title)
+    out.print(table)
+
+
+def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")]) -> None:
+    """Show a case: its parameters, start, run settings and expected events.
+
+    \b
+    Example:
+      oscillator show instance-2
+    """
+    try:
+        c = load_case(case)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    say((c.name, "bold"), f": {c.title}")
+    if c.description:
+        say(" ".join(c.description.split()))
+    params = Table(title="parameters", title_justify="left", header_style="bold")
+    for column in ("name", "value", "name ", "value "):
+        params.add_column(column, justify="right" if "value" in column else "left")
+    items = [(name, f"{getattr(c.parameters, name):.10g}") for name in c.parameters.names()]
+    half = (len(items) + 1) // 2
+    for left, right in zip(items[:half], [*items[half:], ("", "")], strict=False):
+        params.add_row(*left, *right)
+    out.print(params)
+    initial = c.initial
+    say(
+        f"start: t0 = {initial.t0} s, x1 = {initial.x1} m, v1 = {initial.v1} m/s, x2 = {initial.x2} m, "
+        f"v2 = {initial.v2} m/s; end: t_end = {c.t_end} s"
+    )
+    say("solver: " + ", ".join(f"{name} = {getattr(c.options, name)}" for name in c.options.names()))
+    if c.expected:
+        table = Table(title="expected events", title_justify="left", header_style="bold")
+        for column in ("event", "mass", "kind", "domain", "article (s)", "reference (s)", "tolerance (s)"):
+            table.add_column(column)
+        for e in c.expected:
+            table.add_row(printable(e.label), str(e.mass), str(e.kind), "" if e.to_domain is None else str(e.to_domain),
+                          "—" if e.t is None else f"{e.t}", "—" if e.reference is None else f"{e.reference}",
+                          f"{e.tolerance:g}")  # fmt: skip
+        out.print(table)

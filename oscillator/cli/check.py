@@ -1,0 +1,79 @@
+"""``oscillator check``: a case's switching times against the article's."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.table import Table
+from rich.text import Text
+
+from oscillator.cli.console import err, fail, load, message, out, say
+from oscillator.cli.inputs import case_from
+from oscillator.errors import InputError, OscillatorError, SimulationFailed
+from oscillator.text import printable, shown
+
+__all__ = ["check"]
+
+
+def check(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A case with [[expected]] events.")],
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", metavar="NAME=VALUE", help="A solver option (rtol, atol, ...) for this check."),
+    ] = None,
+) -> None:
+    """Compare a case's switching times with the article's; exit 1 if one is out of tolerance.
+
+    \b
+    Examples:
+      oscillator check instance-5
+      oscillator check instance-3 --set rtol=1e-12 --set atol=1e-12
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        if resolved.modified:
+            raise InputError(
+                f"--set changes the case ({', '.join(resolved.modified)}); its expected times are for the case as "
+                f"written, so check takes solver options only (rtol, atol, ...); write a case file to check another "
+                f"case",
+                field="--set",
+            )
+        if not resolved.expected:
+            raise InputError(f"case {shown(resolved.name)} has no [[expected]] events to check against", field="case")
+        load("oscillator.analysis.reproduction", "oscillator.hybrid.simulate")
+        from oscillator.analysis.reproduction import compare
+        from oscillator.hybrid.simulate import simulate
+
+        table = compare(resolved, simulate(resolved, record_trajectory=False).events)
+    except OscillatorError as error:
+        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted", code=130) from None
+    view = Table(title=f"{printable(resolved.name)}: expected switching times", title_justify="left",
+                 header_style="bold")  # fmt: skip
+    for column in ("event", "article", "reference", "ours", "ours − article", "ours − reference", "ok"):
+        view.add_column(column)
+    for row in table.itertuples(index=False):
+        ok = row.within_article and row.within_reference
+        view.add_row(
+            printable(row.label), _time(row.article), _time(row.reference), _time(row.ours, 6),
+            _delta(row.ours_minus_article), _delta(row.ours_minus_reference), Text("✓") if ok else Text("✗", "red"),
+        )  # fmt: skip
+    out.print(view)
+    for row in table.itertuples(index=False):
+        if row.note:
+            out.print(Text(f"{printable(row.label)}: {printable(row.note)}", style="dim"))
+    failed = int((~(table.within_article & table.within_reference)).sum())
+    if failed:
+        err.print(Text(f"{failed} expected time(s) out of tolerance", style="bold red"))
+        raise typer.Exit(1)
+    say(f"all {len(table)} expected times within tolerance")
+
+
+def _time(value: float, digits: int = 4) -> str:
+    return "—" if value != value else f"{value:.{digits}f}"
+
+
+def _delta(value: float) -> str:
+    return "—" if value != value else f"{value:+.1e}"

@@ -1,0 +1,79 @@
+"""What the command prints: plain text on stdout, one-line errors on stderr.
+
+Text that is not the program's own (titles, labels, paths, values) is printed as plain text,
+never as markup, with control characters escaped.  The library names its own arguments in its
+errors (``folder``, ``formats``, ``window``); :func:`message` names the flags instead.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import typer
+from rich.console import Console
+from rich.text import Text
+
+from oscillator.errors import OscillatorError
+from oscillator.io.signals import interrupts_deferred
+from oscillator.text import printable
+
+__all__ = ["FLAGS", "err", "fail", "load", "message", "out", "say"]
+
+#: The library's argument names and the command line's flags for them.
+FLAGS = {
+    "folder": "--out",
+    "formats": "--format",
+    "window": "--window",
+    "what": "--what",
+    "between": "--between",
+    "tolerance": "--tolerance",
+    "workers": "--workers",
+    "scheduler": "--scheduler",
+}
+
+#: Consoles that never read markup or emoji codes in what they print.
+out = Console(highlight=False, soft_wrap=True, markup=False, emoji=False)
+
+
+err = Console(stderr=True, highlight=False, soft_wrap=True, markup=False, emoji=False)
+
+
+#: Whether a command has printed its own error (an interrupt that Typer turned into exit 130
+#: before the command ran has not).
+reported = False
+
+
+def fail(message: str, code: int = 2) -> typer.Exit:
+    global reported
+    reported = True
+    lines = str(message).split("\n")
+    err.print(Text.assemble(("error:", "bold red"), " ", printable(lines[0])))
+    for line in lines[1:]:
+        err.print(printable(line))
+    return typer.Exit(code)
+
+
+def say(*parts: str | tuple[str, str]) -> None:
+    """Print plain text (user text is never markup); ``(text, style)`` pairs are styled."""
+    out.print(Text.assemble(*((printable(p[0]), p[1]) if isinstance(p, tuple) else printable(p) for p in parts)))
+
+
+def load(*modules: str) -> None:
+    """Import the numerical modules a command needs, holding Ctrl-C until they are in.
+
+    Some libraries they import catch every exception while importing (a ``KeyboardInterrupt``
+    among them: SciPy's array-API layer probes NumPy's attributes), which would lose the
+    interrupt and let the command run on.
+    """
+    with interrupts_deferred():
+        for name in modules:
+            importlib.import_module(name)
+
+
+def message(error: OscillatorError) -> str:
+    """The error's message, with the library's name of the argument replaced by its flag."""
+    text = str(error)
+    flag = FLAGS.get(error.field or "")
+    if flag is not None and text.startswith(error.field or ""):
+        return flag + text[len(error.field or "") :]
+    return text

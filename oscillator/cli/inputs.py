@@ -1,0 +1,75 @@
+"""The command line's inputs: a case with its ``--set`` overrides, ``--sample`` and sweep settings."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+from oscillator.errors import InputError
+from oscillator.io.cases import Case, check_setting, load_case, resolve_case
+from oscillator.io.expressions import parse_value
+from oscillator.model.parameters import SolverOptions, SweepSettings
+from oscillator.text import printable, shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    pass
+
+__all__ = ["case_from", "overrides", "sample_grid", "sweep_settings"]
+
+INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
+
+
+def overrides(assignments: list[str]) -> dict:
+    """``NAME=VALUE`` strings to overrides, values as numbers or expressions of pi."""
+    values = {}
+    for item in assignments:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise InputError(f"--set {shown(item)}: write NAME=VALUE, e.g. --set Omega=1.7", field="--set")
+        check_setting(name)
+        value = parse_value(text.strip(), field=f"--set {printable(name)}")
+        if name in INTEGER_OPTIONS:
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or not float(value).is_integer():
+                raise InputError(f"--set {printable(name)}={shown(text)}: {name} is a whole number", field=name)
+            value = int(value)
+        values[name] = value
+    return values
+
+
+def case_from(case: str, t_end: float | None = None, assignments: list[str] | None = None) -> Case:
+    return resolve_case(load_case(case), t_end=t_end, **overrides(assignments or []))
+
+
+def sample_grid(case: Case, sample: float | None):
+    """The grid of ``--sample DT``: every DT seconds from t0, and t_end."""
+    if sample is None:
+        return None
+    import numpy as np
+
+    if not (math.isfinite(sample) and sample > 0):
+        raise InputError(f"--sample must be a positive time step in s, got {sample!r}", field="--sample")
+    rows = (case.t_end - case.initial.t0) / sample
+    if rows > case.options.max_trajectory_rows:
+        raise InputError(
+            f"--sample {sample:g} gives {rows:.3g} rows, more than max_trajectory_rows = "
+            f"{case.options.max_trajectory_rows}; give a longer step",
+            field="--sample",
+        )
+    grid = case.initial.t0 + sample * np.arange(math.floor(rows) + 1)
+    return np.unique(np.append(grid[grid < case.t_end], case.t_end))
+
+
+def sweep_settings(c: Case, param, start, stop, steps, transient, record) -> SweepSettings:
+    """The case's ``[sweep]`` table with the command line's changes."""
+    base = c.sweep
+    if base is None and (param is None or start is None or stop is None):
+        raise InputError(
+            f"case {shown(c.name)} has no [sweep] table; give --param NAME --from A --to B", field="--param"
+        )
+    changes = {k: v for k, v in dict(param=param, start=start, stop=stop, steps=steps, transient=transient,
+                                     record=record).items() if v is not None}  # fmt: skip
+    if base is None:
+        return SweepSettings(**changes)
+    return dataclasses.replace(base, **changes)

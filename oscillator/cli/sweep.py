@@ -1,0 +1,254 @@
+"""``oscillator sweep`` (Fig. 14-style sweeps, resumable, local or on Dask) and ``oscillator locate``."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from oscillator.cli.console import err, fail, load, message, out, say
+from oscillator.cli.inputs import case_from, sweep_settings
+from oscillator.errors import InputError, OscillatorError
+from oscillator.io.cases import Case
+from oscillator.model.parameters import SweepSettings
+from oscillator.text import printable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.analysis.locate import Location
+
+__all__ = ["locate", "sweep"]
+
+
+def _sweep_progress(name: str, settings: SweepSettings):
+    """A progress bar and its callback ``report(done, total)``."""
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+    bar = Progress(*columns, console=err, transient=True)
+    task = bar.add_task(f"{printable(name)}: {settings.param}", total=settings.steps, rate="")
+    began = time.monotonic()
+    first: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        if not first:
+            first.append(done)
+        new = done - first[0]
+        rate = f"{new / (time.monotonic() - began):.2f} points/s" if new else ""
+        bar.update(task, completed=done, total=total, rate=rate)
+
+    return bar, report
+
+
+def sweep(
+    case: Annotated[
+        str, typer.Argument(metavar="CASE", help="A scene with a [sweep] table (bifurcation-omega, ...) or any case.")
+    ],
+    param: Annotated[
+        str | None, typer.Option("--param", metavar="NAME", help="The swept parameter (default: the case's).")
+    ] = None,
+    start: Annotated[float | None, typer.Option("--from", metavar="A", help="First value.")] = None,
+    stop: Annotated[float | None, typer.Option("--to", metavar="B", help="Last value.")] = None,
+    steps: Annotated[int | None, typer.Option("--steps", metavar="N", help="Number of values (default 111).")] = None,
+    transient: Annotated[
+        int | None, typer.Option("--transient", metavar="N", help="Forcing periods before recording (default 100).")
+    ] = None,
+    record: Annotated[
+        int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded (default 50).")
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
+    ] = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Output folder (default: runs/CASE-sweep-YYYYmmdd-HHMMSS); the same folder again resumes the sweep.",
+        ),
+    ] = None,
+    set_: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
+    ] = None,
+    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the diagrams.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")] = False,
+) -> None:
+    """Sweep a parameter: switching points, Poincaré points and a summary per value.
+
+    Writes switches.parquet, poincare.parquet and summary.parquet (each with the swept parameter
+    as a column) and Fig. 14-style diagrams. Interrupted or killed, the same command with the same
+    --out resumes where it stopped. On a Dask cluster (pip install "oscillator[dask]"), give
+    --scheduler tcp://HOST:PORT.
+
+    \b
+    Examples:
+      oscillator sweep bifurcation-omega --out runs/omega
+      oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2
+      oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        settings = sweep_settings(resolved, param, start, stop, steps, transient, record)
+        plan = _open_sweep(resolved, settings, out_dir, workers, scheduler)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    folder = plan.folder
+    try:
+        if quiet or not err.is_terminal:
+            outcome = plan.run()
+        else:
+            bar, report_progress = _sweep_progress(resolved.name, settings)
+            with bar:
+                outcome = plan.run(report_progress)
+    except OscillatorError as error:
+        raise fail(message(error), 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; the points finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        plan.close()
+    _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
+
+
+def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, workers, scheduler):
+    """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
+    from oscillator.io.files import FolderTaken
+
+    load("oscillator.analysis.sweeps")
+    from oscillator.analysis.sweeps import open_sweep
+
+    if out_dir is not None:
+        return open_sweep(case, settings, out_dir, workers=workers, scheduler=scheduler)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    for n in range(1, 10_000):
+        folder = Path("runs") / (f"{case.name}-sweep-{stamp}" if n == 1 else f"{case.name}-sweep-{stamp}-{n}")
+        if os.path.lexists(folder):
+            continue
+        try:
+            return open_sweep(case, settings, folder, workers=workers, scheduler=scheduler)
+        except FolderTaken:
+            continue
+    raise InputError("no free folder name under runs/; give --out", field="--out")
+
+
+def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no_plots: bool, quiet: bool) -> None:
+    from oscillator.analysis.sweeps import read_sweep, sliding_ranges
+
+    tables = read_sweep(folder)
+    if not no_plots:
+        try:
+            load("oscillator.report.figures")
+            from oscillator.report.figures import write_sweep_figures
+
+            write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=case.name)
+        except KeyboardInterrupt:
+            raise fail(f"interrupted while drawing; the sweep's tables are in {folder}", 130) from None
+        except Exception as error:  # the sweep itself is safe
+            raise fail(f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
+                        f"are in {folder}", 1) from None  # fmt: skip
+    if quiet:
+        out.print(printable(str(folder)))
+        return
+    summary = tables["summary"]
+    ranges = sliding_ranges(summary, settings.param)
+    say(
+        (case.name, "bold"),
+        f": {settings.param} from {settings.start:g} to {settings.stop:g} ({settings.steps} values, "
+        f"{settings.transient} + {settings.record} periods); {outcome.computed} computed, {outcome.resumed} resumed, "
+        f"{outcome.failed} failed, {outcome.wall_time:.1f} s",
+    )
+    for a, b in ranges:
+        say(f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]")
+    if not ranges:
+        say(f"m{settings.mass} never slides in this range")
+    periods = summary[summary.status == "ok"].period.value_counts().sort_index()
+    say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
+    say("written to ", (str(folder), "bold"))
+
+
+def locate(
+    case: Annotated[
+        str, typer.Argument(metavar="CASE", help="A scene or case (its [sweep] table gives the defaults).")
+    ],
+    between: Annotated[
+        tuple[float, float],
+        typer.Option("--between", metavar="A B", help="Two parameter values on either side of a change."),
+    ],
+    what: Annotated[
+        str, typer.Option("--what", metavar="WHAT", help="What changes: sliding, grazing or period.")
+    ] = "sliding",
+    param: Annotated[
+        str | None, typer.Option("--param", metavar="NAME", help="The parameter (default: the case's).")
+    ] = None,
+    transient: Annotated[
+        int | None, typer.Option("--transient", metavar="N", help="Forcing periods before recording.")
+    ] = None,
+    record: Annotated[int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded.")] = None,
+    tolerance: Annotated[
+        float, typer.Option("--tolerance", metavar="WIDTH", help="Width of the final bracket.")
+    ] = 1e-8,
+    set_: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
+    ] = None,
+) -> None:
+    """Find where the sweep's summary changes between two values (bisection, to 1e-8).
+
+    Both ends are simulated first to see that they differ; then each bisection step simulates
+    the middle. Prints the bracket and, on both sides, the summary and the switching events that
+    show the change.
+
+    \b
+    Example:
+      oscillator locate bifurcation-omega --between 1.595 1.600 --what sliding
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        load("oscillator.analysis.locate")
+        lo, hi = between
+        settings = sweep_settings(resolved, param, lo, hi, None, transient, record)
+        found = _locate_with_progress(resolved, settings, what, (lo, hi), tolerance)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted", 130) from None
+    say(
+        (what, "bold"),
+        f" changes at {found.param} = {found.value:.10f} (between {found.lower:.10f} and {found.upper:.10f}, "
+        f"width {found.width:.1e}, {found.iterations} bisections)",
+    )
+    for side, summary, events in (("below", found.below, found.evidence_below),
+                                  ("above", found.above, found.evidence_above)):  # fmt: skip
+        row = summary.iloc[0]
+        kinds = ", ".join(f"{k}: {n}" for k, n in events.kind.value_counts().items()) or "none"
+        say(
+            f"{side} ({found.param} = {row[found.param]:.10f}): sliding {bool(row.sliding)}, "
+            f"period {int(row.period)}, {row.switches_per_period:g} switches/period, "
+            f"rest {row.rest_time_per_period:.3g} s/period; events: {kinds}"
+        )
+
+
+def _locate_with_progress(
+    case: Case, settings: SweepSettings, what: str, between: tuple[float, float], tolerance: float
+) -> Location:
+    """``analysis.locate`` with a progress bar (bisection step, bracket width) on a terminal."""
+    from oscillator.analysis.locate import locate as locate_change
+
+    if not err.is_terminal:
+        return locate_change(case, settings, what, between, tolerance=tolerance)
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("{task.fields[bracket]}"), TimeElapsedColumn())  # fmt: skip
+    with Progress(*columns, console=err, transient=True) as bar:
+        task = bar.add_task(f"locating {printable(what)}", total=None, bracket="")
+
+        def report(step: int, steps: int, a: float, b: float) -> None:
+            stage = "simulating both ends" if step <= 2 else f"bracket [{a:.10g}, {b:.10g}], {b - a:.1e} wide"
+            bar.update(task, completed=step - 1, total=steps, bracket=stage)
+
+        return locate_change(case, settings, what, between, tolerance=tolerance, progress=report)

@@ -1,0 +1,119 @@
+"""Integrators behind one interface: the supervisor drives an :class:`Engine`, never a solver.
+
+An engine integrates the smooth field of one mode and watches its root functions
+(:mod:`oscillator.model.roots`).  The supervisor (:mod:`oscillator.hybrid.supervisor`) calls
+
+* ``reset(mode, t, y)`` at the start and after every switch: integrate ``mode``'s field from
+  ``(t, y)`` (``y`` is the 8-vector of the state and the four work quadratures);
+* ``advance(target, t_stop=..., one_step=...)`` to go on: the engine returns a :class:`Step` at the
+  first root, at ``target``, or - with ``one_step`` - after one internal step; never past
+  ``t_stop``.
+
+The engines:
+
+* ``"cvode"`` - :class:`~oscillator.engines.cvode.CvodeEngine`, SUNDIALS CVODE (Adams) through
+  scikit-sundae, with CVODE's rootfinding;
+* ``"scipy"`` - :class:`~oscillator.engines.scipy.ScipyEngine`, SciPy's ``solve_ivp`` (DOP853)
+  with its events: the baseline of the benchmarks.
+"""
+
+from __future__ import annotations
+
+import enum
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from oscillator.errors import InputError
+from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.model.parameters import Parameters, SolverOptions
+    from oscillator.model.phase_space import Mode
+
+__all__ = ["ENGINES", "Engine", "EngineChoice", "EngineFailure", "Step", "StepKind", "build_engine", "engine_factory"]
+
+
+class StepKind(enum.Enum):
+    """Why an engine returned."""
+
+    ROOT = "root"  #: a root function vanished (``Step.roots`` says which)
+    TARGET = "target"  #: the requested target (or ``t_stop``) was reached
+    STEP = "step"  #: one internal step was taken (``one_step=True``)
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """One return of an engine: the time, the state (8 values, a fresh array) and why."""
+
+    t: float
+    y: np.ndarray
+    kind: StepKind
+    roots: tuple[int, ...] = ()
+
+
+class EngineFailure(Exception):
+    """The integrator failed; ``flag`` is its code and the message says what it reported."""
+
+    def __init__(self, message: str, flag: int | str) -> None:
+        super().__init__(message)
+        self.flag = flag
+
+
+class Engine(Protocol):
+    """What the supervisor needs of an integrator."""
+
+    #: The engine's name, recorded in ``Result.stats.engine``.
+    name: str
+
+    def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
+        """Integrate ``mode``'s field from ``(t, y)`` from now on."""
+        ...
+
+    def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
+        """Go on to the first root, to ``target`` or, with ``one_step``, one internal step.
+
+        Raises :class:`EngineFailure` when the integrator fails.
+        """
+        ...
+
+    @property
+    def rhs_evaluations(self) -> int:
+        """Evaluations of the field so far."""
+        ...
+
+    @property
+    def restarts(self) -> int:
+        """(Re-)initialisations so far."""
+        ...
+
+
+#: Engine name -> ``module:class``; the module is imported only when the engine is chosen.
+ENGINES = {
+    "cvode": "oscillator.engines.cvode:CvodeEngine",
+    "scipy": "oscillator.engines.scipy:ScipyEngine",
+}
+
+
+def engine_factory(name: str) -> type:
+    """The engine class called ``name`` (see :data:`ENGINES`); its constructor takes
+    ``(params: Parameters, options: SolverOptions)``."""
+    if not isinstance(name, str) or name not in ENGINES:
+        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(name)}", field="engine")
+    module, _, cls = ENGINES[name].partition(":")
+    engine: type = getattr(importlib.import_module(module), cls)
+    return engine
+
+
+#: What ``simulate(engine=...)`` takes: an engine's name, or a callable that builds an engine.
+EngineChoice = str | Callable[["Parameters", "SolverOptions"], Engine]
+
+
+def build_engine(choice: EngineChoice, params: Parameters, options: SolverOptions) -> Engine:
+    """An engine ready for :meth:`Engine.reset`: the one called ``choice``, or ``choice(params, options)``."""
+    factory = choice if callable(choice) else engine_factory(choice)
+    engine: Engine = factory(params, options)
+    return engine

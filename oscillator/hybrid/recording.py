@@ -1,0 +1,139 @@
+"""What a run keeps: the trajectory at the solver's steps, on a grid, or not at all; and the events
+from some time on.
+
+A :class:`Recording` tells the supervisor where to ask the engine to go next and keeps the rows;
+the supervisor itself knows nothing of the three ways.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from oscillator.engines import Step, StepKind
+from oscillator.errors import SimulationFailed
+from oscillator.hybrid.record import RunRecord
+from oscillator.model.events import Event
+from oscillator.model.phase_space import Mode
+
+__all__ = ["AtSteps", "NoTrajectory", "OnGrid", "Recording", "recording"]
+
+#: Without a trajectory to record, the engine runs this many forcing periods between returns.
+CHUNK_PERIODS = 4
+
+
+@dataclass
+class Recording:
+    """The base policy: no trajectory rows; the engine returns every ``chunk`` seconds.
+
+    Attributes
+    ----------
+    max_rows : int
+        The most trajectory rows kept (``SolverOptions.max_trajectory_rows``).
+    chunk : float
+        Longest stretch (s) between the engine's returns when there is nothing to record.
+    keep_events_from : float
+        Keep only the events at or after this time (all are counted).
+    """
+
+    max_rows: int
+    chunk: float
+    keep_events_from: float = -math.inf
+
+    #: Whether the engine is asked for one internal step at a time.
+    one_step = False
+
+    def start(self, record: RunRecord, t0: float, y: np.ndarray, mode: Mode, t_end: float) -> None:
+        """The run starts at ``(t0, y)`` in ``mode``."""
+
+    def target(self, t: float, t_end: float) -> float:
+        """Where the engine goes next from ``t``."""
+        return min(t_end, t + self.chunk)
+
+    def returned(self, record: RunRecord, step: Step, mode: Mode, target: float) -> None:
+        """The engine returned ``step`` (``target`` was asked for)."""
+
+    def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
+        """The mode switched at ``t`` to ``mode``, with the state ``y`` after the switch."""
+
+    def events(self, record: RunRecord, t: float, events: Sequence[Event]) -> None:
+        """Count events at ``t`` and keep them if they are late enough."""
+        record.event_count += len(events)
+        if t >= self.keep_events_from:
+            record.events.extend(events)
+
+    def row(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
+        """Keep one trajectory row; refuse past ``max_rows``."""
+        if len(record.t) >= self.max_rows:
+            raise SimulationFailed(
+                f"the trajectory passed max_trajectory_rows = {self.max_rows} rows at t = {t:.10g} s; record it on "
+                f"a grid (t_eval; --sample DT on the command line) or not at all, shorten t_end, or raise "
+                f"max_trajectory_rows",
+                field="max_trajectory_rows",
+            )
+        record.t.append(t)
+        record.y.append(y[:4].copy())
+        record.modes.append(mode)
+
+
+class NoTrajectory(Recording):
+    """Events and the energy audit only."""
+
+
+class AtSteps(Recording):
+    """A row at every step of the engine, and one on each side of every switch."""
+
+    one_step = True
+
+    def start(self, record: RunRecord, t0: float, y: np.ndarray, mode: Mode, t_end: float) -> None:
+        self.row(record, t0, y, mode)
+
+    def target(self, t: float, t_end: float) -> float:
+        return t_end
+
+    def returned(self, record: RunRecord, step: Step, mode: Mode, target: float) -> None:
+        self.row(record, step.t, step.y, mode)
+
+    def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
+        self.row(record, t, y, mode)
+
+
+@dataclass
+class OnGrid(Recording):
+    """A row at each time of a grid (which the engine reaches exactly)."""
+
+    grid: np.ndarray = field(default_factory=lambda: np.empty(0))
+    _next: int = 0
+
+    def start(self, record: RunRecord, t0: float, y: np.ndarray, mode: Mode, t_end: float) -> None:
+        self.grid = self.grid[(self.grid >= t0) & (self.grid <= t_end)]
+        self._next = 0
+        if self.grid.size and self.grid[0] == t0:
+            self.row(record, t0, y, mode)
+            self._next = 1
+
+    def target(self, t: float, t_end: float) -> float:
+        if self._next < self.grid.size:
+            return float(self.grid[self._next])
+        return super().target(t, t_end)
+
+    def returned(self, record: RunRecord, step: Step, mode: Mode, target: float) -> None:
+        on_grid = self._next < self.grid.size
+        if on_grid and step.kind is not StepKind.ROOT and step.t == target:
+            self.row(record, step.t, step.y, mode)
+            self._next += 1
+
+
+def recording(
+    *, grid: np.ndarray | None, trajectory: bool, max_rows: int, period: float, keep_events_from: float
+) -> Recording:
+    """The policy for a run: with ``trajectory``, on ``grid`` if given, else at the steps; else none."""
+    chunk = CHUNK_PERIODS * period
+    if not trajectory:
+        return NoTrajectory(max_rows, chunk, keep_events_from)
+    if grid is not None:
+        return OnGrid(max_rows, chunk, keep_events_from, grid=np.asarray(grid, dtype=float))
+    return AtSteps(max_rows, chunk, keep_events_from)

@@ -1,0 +1,142 @@
+"""What a run returns: the event and trajectory tables, the energy audit and the solver's counts."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.hybrid.record import RunRecord
+from oscillator.io.cases import Case
+from oscillator.io.tables import events_frame, trajectory_frame
+from oscillator.model.energy import POWER_NAMES, mechanical_energy
+
+__all__ = ["EnergyAudit", "Result", "SolverStats", "Status"]
+
+
+class Status(enum.StrEnum):
+    """How a run ended."""
+
+    COMPLETE = "complete"  #: it reached ``t_end``
+    FAILED = "failed"  #: the solver or a guard stopped it
+    INTERRUPTED = "interrupted"  #: Ctrl-C stopped it
+
+
+@dataclass(frozen=True, slots=True)
+class EnergyAudit:
+    """The work-energy balance over the run (J).
+
+    ``residual = E1 - E0 - (forcing + feedback - damping - friction)``: zero up to the solver's
+    tolerance for a correct run (``inf`` or ``nan`` when a failed run left floating point).
+    """
+
+    E0: float  #: mechanical energy at the start
+    E1: float  #: mechanical energy at the end
+    forcing: float  #: work of the harmonic forces Q1, Q2
+    feedback: float  #: work of the constant forces P1, P2
+    damping: float  #: energy lost in the dampers C1, C2, C4, C5 and C3 in contact
+    friction: float  #: energy lost to friction
+    residual: float
+
+    @classmethod
+    def of(cls, record: RunRecord, case: Case) -> EnergyAudit:
+        """The audit of a run: the works are the four quadratures the supervisor integrates."""
+        p = case.parameters
+        assert record.mode_initial is not None and record.mode_final is not None and record.y_final is not None
+        start, end = record.mode_initial, record.mode_final
+        work = dict(zip(POWER_NAMES, (float(w) for w in record.y_final[4:8]), strict=True))
+        e0 = mechanical_energy(case.initial.y, p, start.left, start.right)
+        e1 = mechanical_energy(record.y_final[:4], p, end.left, end.right)
+        supplied = work["forcing"] + work["feedback"] - work["damping"] - work["friction"]
+        return cls(E0=e0, E1=e1, **work, residual=e1 - e0 - supplied)
+
+    def as_dict(self) -> dict[str, float]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True, slots=True)
+class SolverStats:
+    """What the run cost."""
+
+    engine: str  #: the integrator that ran (:mod:`oscillator.engines`)
+    returns: int  #: times the integrator handed back (every step when the trajectory is kept at its steps)
+    rhs_evaluations: int  #: evaluations of the vector field
+    restarts: int  #: (re-)initialisations of the integrator
+    root_returns: int  #: returns at a root of the switching functions
+    events: int  #: switching events, all of them (``Result.events`` may keep only the late ones)
+    wall_time: float  #: seconds
+
+    def as_dict(self) -> dict[str, float | int | str]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class Result:
+    """The outcome of :func:`oscillator.simulate`.
+
+    Attributes
+    ----------
+    case : Case
+        The fully resolved case that was run (overrides applied).
+    events : pandas.DataFrame
+        Switching events, columns ``t, mass, kind, boundary, from_domain, to_domain, theorem,
+        equation, branch, x1, v1, x2, v2, G0_alpha, G1_alpha, G0_beta, G1_beta, G_alpha, G_beta,
+        distance, state_from, state_to`` (see :class:`oscillator.model.events.Event`).
+    trajectory : pandas.DataFrame
+        ``t, x1, v1, x2, v2, domain1, domain2, system_state`` at the solver's steps (an event
+        time appears twice, before and after the switch) or on the requested grid.
+    energy : EnergyAudit
+        The work-energy audit.
+    stats : SolverStats
+        The solver's counts and the wall time.
+    final_state : tuple
+        ``(t, x1, v1, x2, v2)`` at the end (for a partial result, the last point reached).
+    status : Status
+        ``COMPLETE``; or, for the partial result an error carries, ``FAILED`` or ``INTERRUPTED``.
+    message : str
+        Why a partial result stopped (the error's message); empty when complete.
+    """
+
+    case: Case
+    events: pd.DataFrame
+    trajectory: pd.DataFrame
+    energy: EnergyAudit
+    stats: SolverStats
+    final_state: tuple[float, float, float, float, float]
+    status: Status = Status.COMPLETE
+    message: str = ""
+
+    @property
+    def success(self) -> bool:
+        """Whether the run reached ``t_end``."""
+        return self.status is Status.COMPLETE
+
+    @classmethod
+    def from_record(
+        cls, case: Case, record: RunRecord, *, engine: str, status: Status = Status.COMPLETE, message: str = ""
+    ) -> Result:
+        assert record.y_final is not None
+        stats = SolverStats(
+            engine=engine,
+            returns=record.returns,
+            rhs_evaluations=record.rhs_evaluations,
+            restarts=record.restarts,
+            root_returns=record.root_returns,
+            events=record.event_count,
+            wall_time=record.wall_time,
+        )
+        x1, v1, x2, v2 = (float(v) for v in np.asarray(record.y_final[:4]))
+        trajectory = trajectory_frame(record.t, record.y, record.modes)
+        return cls(
+            case,
+            events_frame(record.events),
+            trajectory,
+            EnergyAudit.of(record, case),
+            stats,
+            (record.t_final, x1, v1, x2, v2),
+            status,
+            message,
+        )

@@ -1,0 +1,175 @@
+"""The one entry point, :func:`simulate`, and the checks a case passes before it runs."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from oscillator.engines import EngineChoice, build_engine
+from oscillator.errors import InputError, Interrupted, SimulationFailed
+from oscillator.hybrid.guards import start_problem
+from oscillator.hybrid.record import RunRecord
+from oscillator.hybrid.recording import recording
+from oscillator.hybrid.result import Result, Status
+from oscillator.hybrid.supervisor import CallbackRaised, Supervisor
+from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import as_float
+from oscillator.text import shown
+
+__all__ = ["admit", "resolve_case", "simulate"]
+
+
+def _time(value: object, name: str) -> float:
+    number = as_float(value)
+    if math.isnan(number):
+        raise InputError(f"{name} must be a time in s (a number), got {shown(value)}", field=name)
+    return number
+
+
+def _grid(t_eval: object, case: Case) -> np.ndarray:
+    """``t_eval`` as a 1-D array of finite, increasing times within ``[t0, t_end]``."""
+    try:
+        grid = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"t_eval must be a sequence of times in s, got {shown(t_eval)}", field="t_eval") from exc
+    if grid.ndim != 1 or not np.isfinite(grid).all() or np.any(np.diff(grid) <= 0):
+        raise InputError(
+            "t_eval must be a one-dimensional sequence of finite, strictly increasing times in s", field="t_eval"
+        )
+    t0, t_end = case.initial.t0, case.t_end
+    if grid.size and (grid[0] < t0 or grid[-1] > t_end):
+        outside = float(grid[0] if grid[0] < t0 else grid[-1])
+        raise InputError(
+            f"t_eval holds t = {outside!r} s, outside the run [t0, t_end] = [{t0!r}, {t_end!r}] s; "
+            f"give times within the run",
+            field="t_eval",
+        )
+    return grid
+
+
+def admit(case: Case) -> None:
+    """Refuse a case that cannot start: too long a run, or a start beyond floating point.
+
+    Run by :func:`simulate` before anything is integrated (and by the command line before it
+    creates an output folder), so that the rule is simple: a refused input raises before the
+    run, a failure after it has started carries the partial result.
+
+    Raises
+    ------
+    InputError
+        More than ``max_periods`` forcing periods between ``t0`` and ``t_end``; or the fields,
+        root functions, powers or energy at the start are not finite numbers.
+    """
+    p, start = case.parameters, case.initial
+    periods = (case.t_end - start.t0) / p.period
+    if periods > case.options.max_periods:
+        raise InputError(
+            f"t_end - t0 = {case.t_end - start.t0:.6g} s is {periods:.3g} forcing periods, more than max_periods = "
+            f"{case.options.max_periods}; shorten t_end (or check Omega), or raise max_periods",
+            field="max_periods",
+        )
+    problem = start_problem(start.t0, start.y, p)
+    if problem is not None:
+        state = ", ".join(f"{name} = {value:g}" for name, value in zip(("x1", "v1", "x2", "v2"), start.y, strict=True))
+        raise InputError(
+            f"at the start (t0 = {start.t0:g} s, {state}) {problem}; give parameters and a start of physical size",
+            field="initial",
+        )
+
+
+def simulate(
+    case: Case | str | Path,
+    /,
+    *,
+    t_end: float | None = None,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    record_trajectory: bool = True,
+    progress: Callable[[float], None] | None = None,
+    keep_events_from: float | None = None,
+    engine: EngineChoice = "cvode",
+    **overrides: float,
+) -> Result:
+    """Simulate a case from its start to ``t_end``.
+
+    Parameters
+    ----------
+    case : Case, str or Path
+        A :class:`Case`, a shipped case's name (``"instance-1"``) or a case file's path.
+    t_end : float, optional
+        End time (s); the case's by default.
+    t_eval : array_like, optional
+        Record the trajectory on this grid (times within ``[t0, t_end]``) instead of at the
+        solver's steps.
+    record_trajectory : bool
+        Keep trajectory rows (events and the energy audit are always kept).
+    progress : callable, optional
+        Called with the current time after every solver step (keep it cheap).  An exception it
+        raises stops the run and reaches the caller unchanged.
+    keep_events_from : float, optional
+        Keep only the events at or after this time in ``Result.events`` (``stats.events``
+        counts them all). With the trajectory off too, memory stays flat in the run's length.
+    engine : str or callable
+        The integrator (:mod:`oscillator.engines`): ``"cvode"`` (default) or ``"scipy"``; or a
+        callable ``engine(params, options)`` that returns an :class:`~oscillator.engines.Engine`.
+    **overrides
+        Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
+        (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).
+
+    Returns
+    -------
+    Result
+        Events, trajectory, energy audit and solver statistics.
+
+    Raises
+    ------
+    InputError
+        Bad input, before anything runs (see :func:`admit`).
+    SimulationFailed
+        A solver failure or a guard (with the time, domains and state); ``error.result`` holds
+        the partial :class:`Result` up to the last point reached (``Status.FAILED``).
+    Interrupted
+        Ctrl-C during the run (a ``KeyboardInterrupt``); ``error.result`` holds the partial
+        result (``Status.INTERRUPTED``).
+
+    Examples
+    --------
+    >>> from oscillator import simulate
+    >>> result = simulate("instance-1")
+    >>> result.events[["t", "mass", "kind", "to_domain"]].round(4).values.tolist()
+    [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
+    """
+    case = resolve_case(case, t_end=t_end, **overrides)
+    if not isinstance(record_trajectory, (bool, np.bool_)):
+        raise InputError(
+            f"record_trajectory must be True or False, got {shown(record_trajectory)}", field="record_trajectory"
+        )
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress must be a function of the time (or None), got {shown(progress)}", field="progress")
+    grid = None if t_eval is None else _grid(t_eval, case)
+    keep_from = -math.inf if keep_events_from is None else _time(keep_events_from, "keep_events_from")
+    admit(case)
+    p, options = case.parameters, case.options
+    integrator = build_engine(engine, p, options)
+    policy = recording(grid=grid, trajectory=bool(record_trajectory), max_rows=options.max_trajectory_rows,
+                       period=p.period, keep_events_from=keep_from)  # fmt: skip
+    supervisor = Supervisor(p, options, integrator, policy, progress=progress)
+    record = RunRecord()
+    try:
+        supervisor.run(case.initial.t0, case.initial.y, case.t_end, record)
+    except CallbackRaised as raised:
+        raise raised.error from None
+    except SimulationFailed as error:
+        if record.started:
+            error.result = Result.from_record(case, record, engine=integrator.name, status=Status.FAILED,
+                                              message=str(error))  # fmt: skip
+        raise
+    except KeyboardInterrupt:
+        if not record.started:
+            raise
+        partial = Result.from_record(case, record, engine=integrator.name, status=Status.INTERRUPTED,
+                                     message="interrupted by the user")  # fmt: skip
+        raise Interrupted(partial) from None
+    return Result.from_record(case, record, engine=integrator.name)

@@ -1,0 +1,356 @@
+"""Run folders: everything a run produced, written atomically, read back and finished.
+
+A run folder holds ``events.csv`` and/or ``events.parquet`` (the columns of ``Result.events``),
+``trajectory.parquet``, ``case.toml`` (the fully resolved case, to repeat the run exactly),
+``run.json`` (versions, solver settings, wall time, counts, energy audit), ``figures/`` and
+``report.md`` / ``report.html``.
+
+It is made in two steps, so that a finished computation is never lost to a later step:
+
+1. :func:`write_run` writes the tables, ``case.toml`` and ``run.json`` into the folder claimed
+   before the run (:func:`claim_output`) and renames it into place.  ``run.json`` lists what is
+   still to be made under ``"pending"`` (``figures``, ``report``).
+2. :func:`finish_run` draws the figures and writes the report, each file atomically, and takes
+   them off ``"pending"``.  ``oscillator report DIR`` runs this step again: it finishes a folder
+   whose figures or report were interrupted, and redraws missing figures.
+
+A run that the solver or a guard stopped, or that was interrupted, is written the same way from
+its partial result, with ``"status": "failed"`` or ``"interrupted"`` and the reason
+(``"failure"``) in ``run.json``.  Everything read back is checked (:func:`read_run`): a damaged
+file is named in the error, never a traceback.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as dt
+import json
+import math
+import os
+import platform
+import stat
+import sys
+from importlib import metadata
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from oscillator.errors import InputError
+from oscillator.io.cases import Case, case_to_toml, load_case
+from oscillator.io.files import FolderClaim, FolderTaken, claim_folder, read_untrusted, replace_file
+from oscillator.io.tables import check_events, check_trajectory
+from oscillator.model.events import Event
+from oscillator.model.parameters import is_number
+from oscillator.text import printable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.hybrid.result import Result
+
+__all__ = [
+    "FORMATS",
+    "PENDING",
+    "RunFolder",
+    "claim_output",
+    "finish_run",
+    "read_events_csv",
+    "read_run",
+    "write_run",
+]
+
+FORMATS = ("csv", "parquet", "both")
+#: What :func:`finish_run` makes after the tables are safe, in order.
+PENDING = ("figures", "report")
+_PACKAGES = ("oscillator", "scikit-sundae", "numpy", "pandas", "pyarrow", "matplotlib", "typer")
+_STATUSES = ("complete", "failed", "interrupted")
+#: The largest ``run.json`` read back (bytes); ours are about 2 kB.
+_MAX_RUN_JSON = 1 << 20
+
+
+@dataclasses.dataclass(frozen=True)
+class RunFolder:
+    """A run folder read back: the case, the tables and ``run.json``."""
+
+    path: Path
+    case: Case
+    events: pd.DataFrame
+    trajectory: pd.DataFrame
+    run: dict
+
+
+def claim_output(folder: Path | None, case_name: str, *, root: Path = Path("runs")) -> FolderClaim:
+    """Claim the output folder before a run: ``folder``, or ``runs/<case>-<YYYYmmdd-HHMMSS>``.
+
+    A default name taken by another run (a folder, or one being written now) gets the first free
+    suffix ``-2``, ``-3``, ...; an explicit ``folder`` that is taken is refused
+    (:func:`oscillator.io.files.claim_folder`).
+    """
+    if folder is not None:
+        return claim_folder(folder)
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    for n in range(1, 10_000):
+        try:
+            return claim_folder(root / (f"{case_name}-{stamp}" if n == 1 else f"{case_name}-{stamp}-{n}"))
+        except FolderTaken:
+            continue
+    raise InputError(f"no free folder name under {root} for {case_name}; give a folder", field="folder")
+
+
+def _versions() -> dict:
+    versions: dict[str, str | None] = {"python": platform.python_version()}
+    for name in _PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
+
+
+#: What run.json says of each engine.
+_INTEGRATORS = {
+    "cvode": "CVODE (SUNDIALS, through scikit-sundae), Adams, root finding",
+    "scipy": "SciPy solve_ivp (DOP853), events",
+}
+
+
+def run_info(result: Result, *, command: list[str] | None = None, pending: tuple[str, ...] = PENDING) -> dict:
+    """What ``run.json`` holds."""
+    case = result.case
+    info: dict[str, Any] = {
+        "case": case.name,
+        "source": str(case.source) if case.source else None,
+        "title": case.full_title,
+        "modified": list(case.modified),
+        "complete": result.success,
+        "status": str(result.status),
+        "failure": result.message or None,
+        "pending": list(pending),
+        "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        "command": command if command is not None else sys.argv,
+        "versions": _versions(),
+        "platform": platform.platform(),
+        "solver": {
+            "integrator": _INTEGRATORS.get(result.stats.engine, result.stats.engine),
+            "engine": result.stats.engine,
+            **dataclasses.asdict(case.options),
+            "max_step": case.options.max_step_fraction * case.parameters.period,
+        },
+        "t0": case.initial.t0,
+        "t_end": case.t_end,
+        "t_final": result.final_state[0],
+        "final_state": dict(zip(("t", "x1", "v1", "x2", "v2"), result.final_state, strict=True)),
+        "wall_time": result.stats.wall_time,
+        "counts": {k: v for k, v in result.stats.as_dict().items() if k not in ("wall_time", "engine")},
+        "energy": result.energy.as_dict(),
+    }
+    if case.expected:
+        from oscillator.analysis.reproduction import compare
+
+        table = compare(case, result.events)
+        ok = int((table.within_article & table.within_reference).sum())
+        info["check"] = {"expected": len(table), "within_tolerance": ok}
+    return info
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as strict JSON: non-finite floats become ``null``, NumPy scalars Python ones."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def json_text(info: dict) -> str:
+    """Strict JSON (no ``NaN`` or ``Infinity``, which JSON does not have)."""
+    return json.dumps(_plain(info), indent=2, default=str, allow_nan=False) + "\n"
+
+
+def write_run(
+    result: Result,
+    claim: FolderClaim,
+    *,
+    formats: str = "both",
+    command: list[str] | None = None,
+    pending: tuple[str, ...] = PENDING,
+) -> Path:
+    """Write the tables, ``case.toml`` and ``run.json`` into the claimed folder and put it in place.
+
+    Returns the folder's path (see :meth:`FolderClaim.commit`).  On any failure the claim is
+    abandoned: nothing is left behind.
+    """
+    if formats not in FORMATS:
+        raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
+    temporary = claim.temporary
+    try:
+        if formats in ("csv", "both"):
+            result.events.to_csv(temporary / "events.csv", index=False)
+        if formats in ("parquet", "both"):
+            result.events.to_parquet(temporary / "events.parquet", index=False)
+        result.trajectory.to_parquet(temporary / "trajectory.parquet", index=False)
+        (temporary / "case.toml").write_text(case_to_toml(result.case), encoding="utf-8")
+        info = run_info(result, command=command, pending=pending)
+        (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+# --------------------------------------------------------------------------- reading back
+
+
+def _damaged(path: Path, what: str) -> InputError:
+    return InputError(
+        f"{printable(str(path))} is damaged: {what}; run the case again to remake the folder", field=path.name
+    )
+
+
+def _regular(path: Path) -> bool:
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def _require(folder: Path, name: str) -> Path:
+    path = folder / name
+    if not _regular(path):
+        what = "is not a regular file" if os.path.lexists(path) else "is missing"
+        raise InputError(
+            f"{printable(str(folder))} is not a complete run folder: {name} {what}; give a folder written by "
+            f"'oscillator run' (or run the case again)",
+            field=name,
+        )
+    return path
+
+
+def _check_run_info(data: Any, path: Path) -> dict:
+    """``run.json``'s content, with the fields the report reads checked."""
+    if not isinstance(data, dict):
+        raise _damaged(path, "it is not a JSON object")
+    if data.get("status", "complete") not in _STATUSES:
+        raise _damaged(path, f"status must be one of {', '.join(_STATUSES)}")
+    for key in ("t_final", "wall_time", "t0", "t_end"):
+        if key in data and not (is_number(data[key]) and math.isfinite(data[key])):
+            raise _damaged(path, f"{key} is not a finite number")
+    for key in ("energy", "counts", "versions", "solver", "check", "figures"):
+        if key in data and data[key] is not None and not isinstance(data[key], dict):
+            raise _damaged(path, f"{key} is not a JSON object")
+    for key, value in (data.get("energy") or {}).items():
+        if value is not None and not is_number(value):
+            raise _damaged(path, f"energy.{key} is not a number")
+    for key, value in (data.get("counts") or {}).items():
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise _damaged(path, f"counts.{key} is not a whole number")
+    pending = data.get("pending", [])
+    if not isinstance(pending, list) or not set(pending) <= set(PENDING):
+        raise _damaged(path, f"pending must be a list of {', '.join(PENDING)}")
+    for key in ("failure", "case", "title"):
+        if data.get(key) is not None and not isinstance(data[key], str):
+            raise _damaged(path, f"{key} is not text")
+    if not isinstance((data.get("figures") or {}).get("label", ""), str):
+        raise _damaged(path, "figures.label is not text")
+    modified = data.get("modified", [])
+    if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
+        raise _damaged(path, "modified must be a list of texts")
+    return data
+
+
+def _read_table(path: Path, reader) -> pd.DataFrame:
+    try:
+        return reader(path)
+    except Exception as exc:  # pyarrow and pandas raise many types for a damaged file
+        if isinstance(exc, MemoryError):
+            raise
+        raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})") from exc
+
+
+def read_run(folder: Path) -> RunFolder:
+    """Read a run folder back (for ``oscillator report``), checking every file it reads.
+
+    Raises
+    ------
+    OscillatorError
+        Not a run folder, a file missing, or a file damaged (named in the message).
+    """
+    folder = Path(folder)
+    if not folder.is_dir() or not (folder / "run.json").exists():
+        raise InputError(
+            f"{printable(str(folder))} is not a run folder (no run.json); give a folder written by 'oscillator run'",
+            field="folder",
+        )
+    info_path = _require(folder, "run.json")
+    text = read_untrusted(info_path, what="run file", field="run.json", limit=_MAX_RUN_JSON)
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise _damaged(info_path, "it is not JSON") from exc
+    info = _check_run_info(data, info_path)
+    case = dataclasses.replace(load_case(_require(folder, "case.toml")), name=info.get("case") or folder.name)
+    if _regular(folder / "events.parquet"):
+        events = _read_table(folder / "events.parquet", pd.read_parquet)
+        source = folder / "events.parquet"
+    else:
+        source = _require(folder, "events.csv")
+        events = _read_table(source, read_events_csv)
+    events = check_events(events, printable(str(source)))
+    trajectory_path = _require(folder, "trajectory.parquet")
+    trajectory = check_trajectory(_read_table(trajectory_path, pd.read_parquet), printable(str(trajectory_path)))
+    return RunFolder(folder, case, events, trajectory, info)
+
+
+def read_events_csv(path: Path) -> pd.DataFrame:
+    """``events.csv`` back as ``Result.events``: text columns as text, empty text as ``""``."""
+    text = Event.text_columns()
+    events = pd.read_csv(path, dtype=dict.fromkeys(text, str))
+    return events.fillna(dict.fromkeys(text, ""))
+
+
+# --------------------------------------------------------------------------- finishing
+
+
+def _update(folder: Path, info: dict, *, done: str | None = None, **changes: Any) -> None:
+    """Rewrite ``run.json`` with ``changes``, and with ``done`` taken off ``"pending"``."""
+    info.update(changes)
+    if done is not None:
+        info["pending"] = [item for item in info.get("pending", []) if item != done]
+    replace_file(folder / "run.json", json_text(info))
+
+
+def finish_run(
+    folder: Path, *, figures: bool = True, report: bool = True, window: tuple[float, float] | None = None
+) -> RunFolder:
+    """Draw the run's missing figures (``figures``) and write its report (``report``).
+
+    The figures show the whole run, or the last forcing periods of a long one; ``window``
+    redraws them all for that time window (``run.json``'s ``"figures"`` records which).  Each
+    file is written atomically, and ``run.json``'s ``"pending"`` says what is still to be made,
+    so an interrupted finish is finished by calling this again.
+    """
+    run = read_run(folder)  # checked before the drawing libraries are loaded
+    from oscillator.analysis.reproduction import compare
+    from oscillator.report.figures import figure_window, missing_figures, write_figures
+    from oscillator.report.transitions import available_figures, report_document, write_report
+
+    case, info = run.case, run.run
+    t_final = info.get("t_final", case.t_end)
+    chosen = figure_window(case.initial.t0, t_final, case.parameters.period, window)
+    if (window is not None or (figures and missing_figures(folder / "figures"))) and not run.trajectory.empty:
+        start = (case.initial.t0, *case.initial.y)
+        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=case.name,
+                      window=chosen)  # fmt: skip
+        _update(folder, info, figures={"window": [chosen.start, chosen.stop], "label": chosen.label})
+    if figures and "figures" in info.get("pending", []):
+        _update(folder, info, done="figures")
+    if report:
+        comparison = compare(case, run.events) if case.expected else None
+        blocks = report_document(case, run.events, info, comparison=comparison, figures=available_figures(folder))
+        write_report(folder, blocks)
+        if "report" in info.get("pending", []):
+            _update(folder, info, done="report")
+    return run

@@ -1,0 +1,394 @@
+"""Figures in the article's style (Figs. 9-13, panels a-d, and Fig. 14), as PNG and SVG.
+
+(a) displacements with the displacement boundaries ``x1 = d1`` and ``x1 = x2 - d``;
+(b) velocities with the velocity boundary ``v = 0`` and rest intervals shaded;
+(c) phase portraits of each mass with its domains and boundaries;
+(d) G-function (force) histories: the real field solid, the other side's ("imaginary") field
+dashed, and the flow-barrier fields dotted while a mass rests.
+
+Start points are green stars; every kind of switching event has its own marker
+(:data:`KIND_STYLE`), the same in every figure.  Legends sit outside the axes, so they hide no
+data, and every axis names its unit.  A long run is drawn over a window of it
+(:func:`figure_window`): its last 10 forcing periods by default, and the window is named in
+the titles.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from oscillator.analysis.intervals import spans
+from oscillator.errors import InputError
+from oscillator.io.files import atomic_path
+from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
+from oscillator.model.parameters import Parameters, labelled
+from oscillator.model.phase_space import contacts_of_state, velocity_sign
+
+__all__ = [
+    "FIGURES",
+    "KIND_STYLE",
+    "Window",
+    "draw_figures",
+    "draw_sweep_figures",
+    "figure_window",
+    "force_histories",
+    "missing_figures",
+    "write_figures",
+    "write_sweep_figures",
+]
+
+#: Figure files (without suffix) and what each shows.
+FIGURES = {
+    "fig-a-displacement": "(a) displacements and displacement boundaries",
+    "fig-b-velocity": "(b) velocities, velocity boundary and rest intervals",
+    "fig-c-phase": "(c) phase portraits with domains and boundaries",
+    "fig-d-forces": "(d) G-function (force) histories",
+}
+_MASS_COLOR = {1: "tab:blue", 2: "black"}
+#: Marker and face colour of each kind of event, in every figure; the start is a green star.
+KIND_STYLE = {
+    "passable": ("o", "gold"),
+    "sliding_onset": ("s", "white"),
+    "sliding_vanish": ("D", "white"),
+    "grazing": ("v", "tab:red"),
+    "right_contact_onset": (">", "tab:red"),
+    "right_contact_release": ("<", "mistyrose"),
+    "left_contact_onset": ("P", "tab:pink"),
+    "left_contact_release": ("X", "lavenderblush"),
+}
+#: A run longer than this many forcing periods is drawn over its last :data:`SHOWN_PERIODS`.
+LONG_RUN_PERIODS = 20
+SHOWN_PERIODS = 10
+
+
+@dataclass(frozen=True)
+class Window:
+    """The time window drawn, and how the titles name it (empty for the whole run)."""
+
+    start: float
+    stop: float
+    label: str = ""
+
+
+def figure_window(t0: float, t_final: float, period: float, window: tuple[float, float] | None = None) -> Window:
+    """The window to draw: ``window`` (checked to lie in the run), else the whole run, or its
+    last :data:`SHOWN_PERIODS` forcing periods if it is longer than :data:`LONG_RUN_PERIODS`."""
+    if window is not None:
+        a, b = (float(v) for v in window)
+        if not (math.isfinite(a) and math.isfinite(b) and t0 <= a < b <= t_final):
+            raise InputError(
+                f"window {a:g} {b:g} must be two times T0 < T1 within the run [{t0:.10g}, {t_final:.10g}] s",
+                field="window",
+            )
+        return Window(a, b, f"t in [{a:.6g}, {b:.6g}] s")
+    periods = (t_final - t0) / period
+    if periods > LONG_RUN_PERIODS:
+        return Window(t_final - SHOWN_PERIODS * period, t_final,
+                      f"the last {SHOWN_PERIODS} of {periods:.0f} forcing periods")  # fmt: skip
+    return Window(t0, t_final)
+
+
+def _dense(trajectory: pd.DataFrame, points: int) -> pd.DataFrame:
+    """The trajectory with extra rows, linear in the state, inside each step of one mode.
+
+    During rest the state is constant, so the forces (driven by ``sin(Omega t)``) are then
+    exact; during motion CVODE's steps are short against the motion's curvature.
+    """
+    t = trajectory.t.to_numpy()
+    if len(t) < 2 or t[-1] == t[0]:
+        return trajectory
+    numbers = ["t", "x1", "v1", "x2", "v2"]
+    labels = ["domain1", "domain2", "system_state"]
+    values = trajectory[numbers].to_numpy(float)
+    same = np.ones(len(t) - 1, dtype=bool)
+    for column in labels:
+        label = trajectory[column].to_numpy()
+        same &= label[:-1] == label[1:]
+    # step i gives its start and, inside one mode, floor(h / spacing) evenly spaced points more
+    extra = np.where(same, np.floor(np.diff(t) / ((t[-1] - t[0]) / points)), 0).astype(int)
+    counts = np.where(extra >= 1, extra + 1, 1)
+    step = np.repeat(np.arange(len(t) - 1), counts)
+    w = ((np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)) / counts[step])[:, None]
+    dense = pd.DataFrame((1 - w) * values[step] + w * values[step + 1], columns=numbers)
+    for column in labels:
+        dense[column] = trajectory[column].to_numpy()[step]
+    return pd.concat([dense[trajectory.columns], trajectory.iloc[[-1]]], ignore_index=True)
+
+
+def force_histories(trajectory: pd.DataFrame, p: Parameters, *, points: int = 2000) -> pd.DataFrame:
+    """Per time and mass: the real field, the other side's, and the flow barriers.
+
+    Columns ``F{i}_real`` (``F_i`` of the current domain, 0 at rest (4.12)), ``F{i}_plus`` and
+    ``F{i}_minus`` (the kinetic fields of the ``v > 0`` and ``v < 0`` sides), ``F{i}_barrier_plus``
+    and ``F{i}_barrier_minus`` (flow-barrier fields, NaN while the mass moves), on the
+    trajectory's times plus about ``points`` more.
+    """
+    rows = []
+    for row in _dense(trajectory, points).itertuples(index=False):
+        left, right = contacts_of_state(row.system_state)
+        forces = non_friction_force(row.t, (row.x1, row.v1, row.x2, row.v2), p, left, right)
+        entry = {"t": row.t}
+        for mass, domain in ((1, row.domain1), (2, row.domain2)):
+            s = velocity_sign(mass, domain)
+            force = forces[mass - 1]
+            entry[f"F{mass}_real"] = kinetic_field(p, mass, s, force)
+            entry[f"F{mass}_plus"] = kinetic_field(p, mass, 1, force)
+            entry[f"F{mass}_minus"] = kinetic_field(p, mass, -1, force)
+            resting = s == 0
+            entry[f"F{mass}_barrier_plus"] = flow_barrier_field(p, mass, 1, force) if resting else np.nan
+            entry[f"F{mass}_barrier_minus"] = flow_barrier_field(p, mass, -1, force) if resting else np.nan
+        rows.append(entry)
+    return pd.DataFrame(rows)
+
+
+def _rest_spans(trajectory: pd.DataFrame, mass: int) -> list[tuple[float, float]]:
+    resting = (trajectory[f"domain{mass}"] == 0).tolist()
+    t = trajectory.t.tolist()
+    return [(a, b) for rests, a, b in spans(t, resting, t[-1] if t else 0.0) if rests]
+
+
+def _marker(kind: str) -> dict:
+    marker, face = KIND_STYLE[kind]
+    return {"marker": marker, "facecolor": face, "edgecolor": "black"}
+
+
+def _mark_events(ax, events: pd.DataFrame, mass: int, column: str, label_kinds: set) -> None:
+    for kind, rows in events[events.mass == mass].groupby("kind"):
+        label = kind.replace("_", " ") if kind not in label_kinds else None
+        label_kinds.add(kind)
+        x, y = (rows[f"x{mass}"], rows[f"v{mass}"]) if column == "phase" else (rows.t, rows[column])
+        ax.scatter(x, y, s=46, zorder=5, label=label, **_marker(kind))
+
+
+def _start(ax, x, y, label: str | None = None) -> None:
+    ax.scatter([x], [y], s=130, marker="*", color="limegreen", edgecolor="black", zorder=6, label=label)
+
+
+def _outside_legend(ax, **options) -> None:
+    """The legend to the right of the axes, where it hides no data."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8, **options)
+
+
+def _titled(title: str, panel: str, window: Window) -> str:
+    return " — ".join(part for part in (title, panel, window.label) if part)
+
+
+def _finish_time_panel(ax, events, t0, y0, quantity: str, ylabel: str, title: str, window: Window) -> None:
+    """Start points, switching points of both masses (``quantity`` is ``x`` or ``v``), labels."""
+    seen: set = set()
+    offset = 0 if quantity == "x" else 1
+    for mass in (1, 2):
+        if window.start <= t0 <= window.stop:
+            _start(ax, t0, y0[2 * mass - 2 + offset], label="start" if mass == 1 else None)
+        _mark_events(ax, events, mass, f"{quantity}{mass}", seen)
+    ax.set(xlabel="time t (s)", ylabel=ylabel)
+    ax.set_title(title, parse_math=False)  # the case's name is text, never mathtext
+    _outside_legend(ax)
+
+
+def _displacements(trajectory, events, p, t0, y0, title, window):
+    fig = Figure(figsize=(10, 4.5), layout="constrained")
+    ax = fig.subplots()
+    t = trajectory.t
+    ax.plot(t, trajectory.x1, color=_MASS_COLOR[1], label="$x_1$ (m1)")
+    ax.plot(t, trajectory.x2, color=_MASS_COLOR[2], label="$x_2$ (m2)")
+    ax.axhline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")
+    ax.plot(t, trajectory.x2 - p.d, color="tab:pink", ls="--", lw=1,
+            label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)")  # fmt: skip
+    _finish_time_panel(ax, events, t0, y0, "x", "displacement (m)", _titled(title, "(a) displacements", window),
+                       window)  # fmt: skip
+    return fig
+
+
+def _velocities(trajectory, events, p, t0, y0, title, window):
+    fig = Figure(figsize=(10, 4.5), layout="constrained")
+    ax = fig.subplots()
+    t = trajectory.t
+    for mass in (1, 2):
+        ax.plot(t, trajectory[f"v{mass}"], color=_MASS_COLOR[mass], label=f"$v_{mass}$ (m{mass})")
+        for i, (a, b) in enumerate(_rest_spans(trajectory, mass)):
+            ax.axvspan(
+                a, b, color=_MASS_COLOR[mass], alpha=0.12, label=f"m{mass} at rest (sliding)" if i == 0 else None
+            )
+    ax.axhline(0.0, color="black", ls="--", lw=1, label=r"velocity boundary $v = 0$ ($\partial\Omega_{12}$)")
+    _finish_time_panel(ax, events, t0, y0, "v", "velocity (m/s)", _titled(title, "(b) velocities", window), window)
+    return fig
+
+
+def _with_velocity_boundary(ax) -> None:
+    """Widen the velocity axis so that it shows ``v = 0`` with both sides of it."""
+    low, high = ax.get_ylim()
+    margin = 0.08 * (high - low)
+    ax.set_ylim(min(low, -margin), max(high, margin))
+
+
+def _phase(trajectory, events, p, t0, y0, title, window):
+    fig = Figure(figsize=(11, 5), layout="constrained")
+    axes = fig.subplots(1, 2)
+    for ax, mass in zip(axes, (1, 2), strict=True):
+        x, v = trajectory[f"x{mass}"], trajectory[f"v{mass}"]
+        ax.plot(x, v, color=_MASS_COLOR[mass], lw=1.2, label=f"m{mass}")
+        ax.axhline(0.0, color="black", ls="--", lw=1, label="velocity boundary $v = 0$")
+        if mass == 1:
+            ax.axvline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop)")
+        if window.start <= t0 <= window.stop:
+            _start(ax, y0[2 * mass - 2], y0[2 * mass - 1], label="start")
+        _mark_events(ax, events, mass, "phase", set())
+        _with_velocity_boundary(ax)  # the labels below sit on their own side of it
+        names = ("Ω1(1): v1 > 0", "Ω2(1): v1 < 0") if mass == 1 else ("Ω2(2): v2 > 0", "Ω1(2): v2 < 0")
+        ax.text(0.02, 0.97, names[0], transform=ax.transAxes, fontsize=8, va="top")
+        ax.text(0.02, 0.03, names[1], transform=ax.transAxes, fontsize=8, va="bottom")
+        ax.set(xlabel=f"displacement $x_{mass}$ (m)", ylabel=f"velocity $v_{mass}$ (m/s)", title=f"m{mass}")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), fontsize=8, ncols=2)
+    fig.suptitle(_titled(title, "(c) phase portraits", window), parse_math=False)
+    return fig
+
+
+def _forces(trajectory, events, p, t0, y0, title, window):
+    histories = force_histories(trajectory, p)
+    fig = Figure(figsize=(10, 7), layout="constrained")
+    axes = fig.subplots(2, 1, sharex=True)
+    for ax, mass in zip(axes, (1, 2), strict=True):
+        t = histories.t
+        ax.plot(t, histories[f"F{mass}_real"], color=_MASS_COLOR[mass], label=f"real $F_{mass}$ (current domain)")
+        plus, minus = (1, 2) if mass == 1 else (2, 1)
+        ax.plot(t, histories[f"F{mass}_plus"], color="tab:orange", ls="--", lw=1,
+                label=f"$F_{mass}^{{({plus})}}$ ($v_{mass} > 0$ side)")  # fmt: skip
+        ax.plot(t, histories[f"F{mass}_minus"], color="tab:green", ls="--", lw=1,
+                label=f"$F_{mass}^{{({minus})}}$ ($v_{mass} < 0$ side)")  # fmt: skip
+        ax.plot(t, histories[f"F{mass}_barrier_plus"], color="tab:orange", ls=":", lw=1.5,
+                label=f"flow barrier $F_{mass}^{{(0>0_{plus})}}$")  # fmt: skip
+        ax.plot(t, histories[f"F{mass}_barrier_minus"], color="tab:green", ls=":", lw=1.5,
+                label=f"flow barrier $F_{mass}^{{(0>0_{minus})}}$")  # fmt: skip
+        ax.axhline(0.0, color="grey", lw=0.8)
+        for a, b in _rest_spans(trajectory, mass):
+            ax.axvspan(a, b, color=_MASS_COLOR[mass], alpha=0.1)
+        times = events.t[events.mass == mass].to_numpy()
+        ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), color="tab:red", lw=0.6, alpha=0.6,
+                  label=f"switching times of m{mass}")  # fmt: skip
+        ax.set(ylabel=f"force per unit mass on m{mass} (N/kg)")
+        _outside_legend(ax)
+    axes[-1].set(xlabel="time t (s)")
+    fig.suptitle(_titled(title, "(d) G-functions (forces)", window), parse_math=False)
+    return fig
+
+
+def _save(fig, directory: Path, name: str) -> list[Path]:
+    """Save a figure as PNG and SVG, each atomically (temporary name, then rename)."""
+    paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
+    for path in paths:
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, format=path.suffix[1:], dpi=110, bbox_inches="tight")
+    return paths
+
+
+def missing_figures(directory: Path) -> list[str]:
+    """The figures of :data:`FIGURES` of which ``directory`` lacks the PNG or the SVG file."""
+    return [name for name in FIGURES if not all((directory / f"{name}{s}").is_file() for s in (".png", ".svg"))]
+
+
+_PANELS = {
+    "fig-a-displacement": _displacements,
+    "fig-b-velocity": _velocities,
+    "fig-c-phase": _phase,
+    "fig-d-forces": _forces,
+}
+
+
+def _clipped(trajectory: pd.DataFrame, events: pd.DataFrame, window: Window) -> tuple[pd.DataFrame, pd.DataFrame]:
+    inside = (trajectory.t >= window.start) & (trajectory.t <= window.stop)
+    return trajectory[inside].reset_index(drop=True), events[(events.t >= window.start) & (events.t <= window.stop)]
+
+
+def draw_figures(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    start: tuple[float, float, float, float, float],
+    *,
+    title: str = "",
+    window: Window | None = None,
+) -> dict[str, Figure]:
+    """The four panels as matplotlib figures, over ``window`` (see :func:`figure_window`)."""
+    t0, *y0 = start
+    if window is None:
+        t_final = float(trajectory.t.iloc[-1]) if len(trajectory) else t0
+        window = figure_window(t0, t_final, p.period)
+    trajectory, events = _clipped(trajectory, events, window)
+    return {name: panel(trajectory, events, p, t0, y0, title, window) for name, panel in _PANELS.items()}
+
+
+def write_figures(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    start: tuple[float, float, float, float, float],
+    directory: Path,
+    *,
+    title: str = "",
+    window: Window | None = None,
+) -> list[Path]:
+    """Write the four panels as PNG and SVG into ``directory``; return the files written."""
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, fig in draw_figures(trajectory, events, p, start, title=title, window=window).items():
+        written += _save(fig, directory, name)
+    return written
+
+
+_SWEEP_COLORS = {"passable": "tab:blue", "sliding_onset": "tab:red", "sliding_vanish": "tab:green"}
+
+
+def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
+    """Fig. 14-style diagrams of a sweep: ``fig-14-bifurcation`` (the switching displacement and
+    phase of the mass against the parameter, sliding ranges shaded) and ``fig-14-poincare``."""
+    switches, summary, poincare = tables["switches"], tables["summary"], tables["poincare"]
+    from oscillator.analysis.sweeps import sliding_ranges
+
+    values = np.sort(summary[param].to_numpy())
+    half = 0.5 * np.min(np.diff(values)) if len(values) > 1 else 0.0
+    spans = [(a - half, b + half) for a, b in sliding_ranges(summary, param)]
+
+    fig = Figure(figsize=(10, 7), layout="constrained")
+    axes = fig.subplots(2, 1, sharex=True)
+    for ax, column, label in ((axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
+                              (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)")):  # fmt: skip
+        for i, (a, b) in enumerate(spans):
+            ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
+        for kind, rows in switches.groupby("kind"):
+            color = _SWEEP_COLORS.get(kind, "grey")
+            ax.scatter(rows[param], rows[column], s=8, marker=KIND_STYLE[kind][0], color=color,
+                       label=kind.replace("_", " "))  # fmt: skip
+        ax.set(ylabel=label)
+        _outside_legend(ax, markerscale=2)
+    axes[-1].set(xlabel=labelled(param))
+    fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)", parse_math=False)
+    bifurcation = fig
+
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    axes = fig.subplots(1, 2)
+    units = {"x": "m", "v": "m/s"}
+    for ax, quantity in zip(axes, ("x", "v"), strict=True):
+        for i, (a, b) in enumerate(spans):
+            ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
+        ax.scatter(poincare[param], poincare[f"{quantity}{mass}"], s=4, color=_MASS_COLOR[mass],
+                   label="Poincaré points")  # fmt: skip
+        ax.set(xlabel=labelled(param), ylabel=f"${quantity}_{mass}$ at $t_0 + nT$ ({units[quantity]})")
+    axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
+    fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)", parse_math=False)
+    return {"fig-14-bifurcation": bifurcation, "fig-14-poincare": fig}
+
+
+def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *, title: str = "") -> list[Path]:
+    """Write the Fig. 14-style diagrams of a sweep as PNG and SVG (see :func:`draw_sweep_figures`)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, fig in draw_sweep_figures(tables, param, mass, title=title).items():
+        written += _save(fig, directory, name)
+    return written
