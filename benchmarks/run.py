@@ -10,7 +10,13 @@
 6. the soak of issue 6: Instances 3 and 5 over N/10 and N forcing periods (fresh processes): wall
    time, events, peak memory and the energy-audit residual;
 7. the floor of scikit-sundae's callbacks: the cost of one CVODE step of a trivial problem whose
-   right-hand side is a Python function, which bounds the speed of any CVODE-based simulator here.
+   right-hand side is a Python function, which bounds the speed of any CVODE-based simulator here;
+8. the engines side by side (C-level CVODE, scikit-sundae's Python API, SciPy on the package's
+   compiled formulas), 5 interleaved repeats, medians, on Instance 1's system;
+9. the Python work per root return outside the engine (switching decisions, events, recording),
+   and the cost of building the event table per event;
+10. start-up: `simulate("instance-1", t_end=2)` in a fresh process with numba's cache empty (the
+   first run after an install) and filled (every later run).
 
 Usage: python benchmarks/run.py [--quick] [--only SECTION ...] [--memory-periods N] [--soak-periods N]
                                 [--json PATH]
@@ -214,7 +220,139 @@ def print_floor(floor: dict) -> None:
           f"Python right-hand side ({floor['rhs_calls']} calls)")  # fmt: skip
 
 
-SECTIONS = ("instances", "throughput", "baseline", "sweep", "memory", "soak", "floor")
+def engines(periods: int, repeats: int = 5) -> list[dict]:
+    """Milliseconds per forcing period of each engine, interleaved repeats, medians."""
+    rows = []
+    for omega in (1.6, 1.85):
+        case = resolve_case("instance-1", Omega=omega)
+        t_end = case.initial.t0 + periods * case.parameters.period
+        walls: dict[str, list[float]] = {"cvode": [], "sksundae": [], "scipy": []}
+        for _ in range(repeats):
+            for name in walls:
+                started = time.perf_counter()
+                simulate(case, t_end=t_end, record_trajectory=False, engine=name)
+                walls[name].append(time.perf_counter() - started)
+        row = {"omega": omega, "periods": periods}
+        row |= {name: 1e3 * float(np.median(w)) / periods for name, w in walls.items()}
+        say(f"Omega = {omega}: " + ", ".join(f"{k} {row[k]:.2f} ms/period" for k in walls))
+        rows.append(row)
+    return rows
+
+
+def per_root(periods: int, repeats: int = 7) -> dict:
+    """Python work per root return: the run's wall time less the engine's, over the root returns."""
+    import oscillator.hybrid.supervisor as supervisor
+    from oscillator.engines.cvode_c import CCvodeEngine
+    from oscillator.io.tables import events_frame
+
+    spent = {"engine": 0.0, "resolve": 0.0}
+
+    class Timed(CCvodeEngine):
+        def advance(self, *args, **kwargs):
+            started = time.perf_counter()
+            try:
+                return super().advance(*args, **kwargs)
+            finally:
+                spent["engine"] += time.perf_counter() - started
+
+        def reset(self, *args, **kwargs):
+            started = time.perf_counter()
+            super().reset(*args, **kwargs)
+            spent["engine"] += time.perf_counter() - started
+
+    resolve = supervisor.resolve
+
+    def timed_resolve(*args, **kwargs):
+        started = time.perf_counter()
+        try:
+            return resolve(*args, **kwargs)
+        finally:
+            spent["resolve"] += time.perf_counter() - started
+
+    case = resolve_case("instance-1", Omega=1.6)
+    t_end = case.initial.t0 + periods * case.parameters.period
+    samples = []
+    supervisor.resolve = timed_resolve
+    try:
+        for _ in range(repeats):
+            spent.update(engine=0.0, resolve=0.0)
+            started = time.perf_counter()
+            result = simulate(case, t_end=t_end, record_trajectory=False, engine=Timed)
+            wall = time.perf_counter() - started
+            samples.append((wall, spent["engine"], spent["resolve"], result.stats.root_returns))
+    finally:
+        supervisor.resolve = resolve
+    wall, engine, resolving, roots = sorted(samples)[len(samples) // 2]
+    events = simulate(case, t_end=t_end, record_trajectory=False).events
+    records = [_event_records(case, t_end)]
+    table_wall, _ = best_of(5, lambda: events_frame(records[0]))
+    row = {"periods": periods, "root_returns": roots, "wall_ms_per_period": 1e3 * wall / periods,
+           "engine_ms_per_period": 1e3 * engine / periods, "us_per_root_outside_engine": 1e6 * (wall - engine) / roots,
+           "us_per_root_in_resolve": 1e6 * resolving / roots, "events": len(events),
+           "us_per_event_table_row": 1e6 * table_wall / max(len(records[0]), 1)}  # fmt: skip
+    say(f"{row['us_per_root_outside_engine']:.0f} us per root return outside the engine "
+        f"({row['us_per_root_in_resolve']:.0f} us in resolve); "
+        f"event table {row['us_per_event_table_row']:.2f} us/row")  # fmt: skip
+    return row
+
+
+def _event_records(case, t_end):
+    """The run's events as the supervisor records them (Event objects), for timing the table build."""
+    from oscillator.engines import build_engine
+    from oscillator.hybrid.record import RunRecord
+    from oscillator.hybrid.recording import recording
+    from oscillator.hybrid.supervisor import Supervisor
+
+    p, options = case.parameters, case.options
+    policy = recording(grid=None, trajectory=False, max_rows=options.max_trajectory_rows, period=p.period,
+                       keep_events_from=-np.inf)  # fmt: skip
+    record = RunRecord()
+    Supervisor(p, options, build_engine(None, p, options), policy).run(case.initial.t0, case.initial.y, t_end, record)
+    return record.events
+
+
+STARTUP_CHILD = (
+    "import time; t = time.perf_counter(); from oscillator import simulate; "
+    "simulate('instance-1', t_end=2.0); print(time.perf_counter() - t)"
+)
+
+
+def startup() -> dict:
+    """Seconds to import and run a short case in a fresh process: numba's cache empty, then filled."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        runs = [subprocess.run([sys.executable, "-c", STARTUP_CHILD], env=env, capture_output=True, text=True,
+                               check=True) for _ in range(3)]  # fmt: skip
+    cold, *warm = (float(r.stdout.strip().splitlines()[-1]) for r in runs)
+    row = {"cold_s": cold, "warm_s": min(warm)}
+    say(f"first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s")
+    return row
+
+
+def print_engines(rows: list[dict]) -> None:
+    print(f"engines, ms per forcing period (medians), {rows[0]['periods']} periods, trajectory off:")
+    print(f"{'Omega':<8}{'cvode (C)':>11}{'sksundae':>10}{'scipy':>8}{'sksundae/cvode':>16}")
+    for row in rows:
+        print(f"{row['omega']:<8}{row['cvode']:>11.2f}{row['sksundae']:>10.2f}{row['scipy']:>8.2f}"
+              f"{row['sksundae'] / row['cvode']:>16.1f}")  # fmt: skip
+
+
+def print_per_root(row: dict) -> None:
+    print(f"Instance 1 at Omega = 1.6, {row['periods']} periods, {row['root_returns']} root returns: "
+          f"{row['wall_ms_per_period']:.2f} ms/period, of which the engine {row['engine_ms_per_period']:.2f}; "
+          f"{row['us_per_root_outside_engine']:.0f} us per root return outside the engine "
+          f"({row['us_per_root_in_resolve']:.0f} us in switching.resolve); event table "
+          f"{row['us_per_event_table_row']:.2f} us per row")  # fmt: skip
+
+
+def print_startup(row: dict) -> None:
+    print(f"start-up (import + a 2 s run, fresh process): {row['cold_s']:.1f} s with numba's cache empty, "
+          f"{row['warm_s']:.1f} s with it filled")  # fmt: skip
+
+
+SECTIONS = ("instances", "throughput", "baseline", "sweep", "memory", "soak", "floor", "engines", "per_root", "startup")
 
 
 def main() -> None:
@@ -247,6 +385,9 @@ def main() -> None:
             print_long_runs,
         ),
         "floor": (callback_floor, print_floor),
+        "engines": (lambda: engines(5 if quick else 30), print_engines),
+        "per_root": (lambda: per_root(5 if quick else 30), print_per_root),
+        "startup": (startup, print_startup),
     }
     results = {"machine": machine}
     for section in SECTIONS:

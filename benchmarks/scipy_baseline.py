@@ -54,18 +54,18 @@ def python_roots(t, y, p, s1, s2, left, right):
 
 
 def plain_python_engine(p, options):
-    """The SciPy engine on the plain-Python field (no work quadratures: the energy audit is off)."""
+    """The SciPy engine on the plain-Python field of the state (no work quadratures, as a script has)."""
 
     def flags(mode):
         return mode.sign(1), mode.sign(2), mode.left, mode.right
 
     def field(t, y, mode):
-        return [*python_field(t, y, p, *flags(mode)), 0.0, 0.0, 0.0, 0.0]
+        return python_field(t, y, p, *flags(mode))
 
     def roots(t, y, mode):
         return python_roots(t, y, p, *flags(mode))
 
-    return ScipyEngine(p, options, field=field, roots=roots)
+    return ScipyEngine(p, options, field=field, roots=roots, quadratures=False)
 
 
 def run_scipy(case: Case, t_end: float, *, rtol: float, atol: float, compiled: bool = False) -> tuple[list, dict]:

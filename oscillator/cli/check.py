@@ -9,7 +9,7 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import EngineOption, case_from, check_engine
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
 from oscillator.text import printable, shown
 
@@ -22,6 +22,7 @@ def check(
         list[str] | None,
         typer.Option("--set", metavar="NAME=VALUE", help="A solver option (rtol, atol, ...) for this check."),
     ] = None,
+    engine: EngineOption = None,
 ) -> None:
     """Compare a case's switching times with the article's; exit 1 if one is out of tolerance.
 
@@ -31,6 +32,7 @@ def check(
       oscillator check instance-3 --set rtol=1e-12 --set atol=1e-12
     """
     try:
+        check_engine(engine)
         resolved = case_from(case, None, set_)
         if resolved.modified:
             raise InputError(
@@ -45,7 +47,7 @@ def check(
         from oscillator.analysis.reproduction import compare
         from oscillator.hybrid.simulate import simulate
 
-        table = compare(resolved, simulate(resolved, record_trajectory=False).events)
+        table = compare(resolved, simulate(resolved, record_trajectory=False, engine=engine).events)
     except OscillatorError as error:
         raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
     except KeyboardInterrupt:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated
+
+import typer
 
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, check_setting, load_case, resolve_case
@@ -15,7 +17,27 @@ from oscillator.text import printable, shown
 if TYPE_CHECKING:  # pragma: no cover
     pass
 
-__all__ = ["case_from", "overrides", "sample_grid", "sweep_settings"]
+__all__ = ["EngineOption", "case_from", "check_engine", "overrides", "sample_grid", "sweep_settings"]
+
+#: ``--engine``: which integrator runs the case (:mod:`oscillator.engines`).
+EngineOption = Annotated[
+    str | None,
+    typer.Option(
+        "--engine",
+        metavar="NAME",
+        help="The integrator: cvode (CVODE through its C API, the default), sksundae (CVODE through "
+        "scikit-sundae's Python API) or scipy (SciPy's solve_ivp).",
+    ),
+]
+
+
+def check_engine(engine: str | None) -> None:
+    """Refuse an unknown ``--engine`` before anything is created."""
+    from oscillator.engines import ENGINES
+
+    if engine is not None and engine not in ENGINES:
+        raise InputError(f"--engine must be one of {', '.join(ENGINES)}, got {shown(engine)}", field="--engine")
+
 
 INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
 

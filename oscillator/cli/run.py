@@ -17,7 +17,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from rich.table import Table
 
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from, sample_grid
+from oscillator.cli.inputs import EngineOption, case_from, check_engine, sample_grid
 from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.io.files import check_name
@@ -65,11 +65,11 @@ def _events_table(events, limit: int = 40) -> Table:
     return table
 
 
-def _simulate_with_progress(case: Case, quiet: bool, t_eval=None) -> Result:
+def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine: str | None = None) -> Result:
     from oscillator.hybrid.simulate import simulate
 
     if quiet or not err.is_terminal:  # a progress bar only where a person watches
-        return simulate(case, t_eval=t_eval)
+        return simulate(case, t_eval=t_eval, engine=engine)
     span = case.t_end - case.initial.t0
     columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
                TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
@@ -83,7 +83,7 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval=None) -> Result:
                 last[0] = now
                 progress.update(task, completed=t - case.initial.t0, t=t)
 
-        return simulate(case, t_eval=t_eval, progress=report)
+        return simulate(case, t_eval=t_eval, progress=report, engine=engine)
 
 
 def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> str:
@@ -165,6 +165,7 @@ def run(
             "when it is longer than 20).",
         ),
     ] = None,
+    engine: EngineOption = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
 ) -> None:
     """Run a case, print its switching events, and write tables, figures and a report.
@@ -180,13 +181,14 @@ def run(
     try:
         if window is not None and no_plots:
             raise InputError("--window chooses what the figures show; it has no use with --no-plots", field="--window")
+        check_engine(engine)
         resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
     pending = tuple(step for step, skipped in (("figures", no_plots), ("report", no_report)) if not skipped)
-    result = _simulate_or_keep_partial(resolved, grid, claim, fmt, pending, quiet)
+    result = _simulate_or_keep_partial(resolved, grid, claim, fmt, pending, quiet, engine)
     folder = _write_tables(result, claim, fmt, pending)
     if pending:
         _finish(folder, figures=not no_plots, report=not no_report, window=window)
@@ -194,11 +196,11 @@ def run(
 
 
 def _simulate_or_keep_partial(
-    case: Case, grid: Any, claim: FolderClaim, fmt: str, pending: tuple[str, ...], quiet: bool
+    case: Case, grid: Any, claim: FolderClaim, fmt: str, pending: tuple[str, ...], quiet: bool, engine: str | None
 ) -> Result:
     """The run; if it fails or is interrupted, its partial result written into the claimed folder."""
     try:
-        return _simulate_with_progress(case, quiet, grid)
+        return _simulate_with_progress(case, quiet, grid, engine)
     except OscillatorError as error:
         code = 1 if isinstance(error, SimulationFailed) and error.result is not None else 2
         raise fail(f"{error}\n{_write_partial(error, claim, fmt, pending)}", code=code) from None

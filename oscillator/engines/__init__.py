@@ -9,10 +9,14 @@ An engine integrates the smooth field of one mode and watches its root functions
   first root, at ``target``, or - with ``one_step`` - after one internal step; never past
   ``t_stop``.
 
+* ``close()`` at the end, to free what the integrator holds.
+
 The engines:
 
-* ``"cvode"`` - :class:`~oscillator.engines.cvode.CvodeEngine`, SUNDIALS CVODE (Adams) through
-  scikit-sundae, with CVODE's rootfinding;
+* ``"cvode"`` - :class:`~oscillator.engines.cvode_c.CCvodeEngine`, SUNDIALS CVODE (Adams) with
+  its rootfinding, called through its C API with compiled callbacks: the default;
+* ``"sksundae"`` - :class:`~oscillator.engines.sksundae.SksundaeEngine`, the same through
+  scikit-sundae's Python API: the fallback where SUNDIALS' libraries cannot be loaded;
 * ``"scipy"`` - :class:`~oscillator.engines.scipy.ScipyEngine`, SciPy's ``solve_ivp`` (DOP853)
   with its events: the baseline of the benchmarks.
 """
@@ -21,6 +25,7 @@ from __future__ import annotations
 
 import enum
 import importlib
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
@@ -34,7 +39,17 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.parameters import Parameters, SolverOptions
     from oscillator.model.phase_space import Mode
 
-__all__ = ["ENGINES", "Engine", "EngineChoice", "EngineFailure", "Step", "StepKind", "build_engine", "engine_factory"]
+__all__ = [
+    "ENGINES",
+    "Engine",
+    "EngineChoice",
+    "EngineFailure",
+    "Step",
+    "StepKind",
+    "build_engine",
+    "default_engine",
+    "engine_factory",
+]
 
 
 class StepKind(enum.Enum):
@@ -90,10 +105,15 @@ class Engine(Protocol):
         """(Re-)initialisations so far."""
         ...
 
+    def close(self) -> None:
+        """Free what the integrator holds; the engine is not used afterwards."""
+        ...
+
 
 #: Engine name -> ``module:class``; the module is imported only when the engine is chosen.
 ENGINES = {
-    "cvode": "oscillator.engines.cvode:CvodeEngine",
+    "cvode": "oscillator.engines.cvode_c:CCvodeEngine",
+    "sksundae": "oscillator.engines.sksundae:SksundaeEngine",
     "scipy": "oscillator.engines.scipy:ScipyEngine",
 }
 
@@ -108,12 +128,42 @@ def engine_factory(name: str) -> type:
     return engine
 
 
-#: What ``simulate(engine=...)`` takes: an engine's name, or a callable that builds an engine.
-EngineChoice = str | Callable[["Parameters", "SolverOptions"], Engine]
+#: What ``simulate(engine=...)`` takes: ``None`` (the default engine), an engine's name, or a
+#: callable that builds an engine.
+EngineChoice = str | Callable[["Parameters", "SolverOptions"], Engine] | None
+
+
+def default_engine() -> str:
+    """``"cvode"`` where SUNDIALS' C libraries load, else ``"sksundae"`` with a one-line warning."""
+    from oscillator.engines.sundials import SundialsUnavailable, load
+
+    try:
+        load()
+    except SundialsUnavailable as reason:
+        warnings.warn(
+            f"the compiled CVODE engine is not available ({reason}); using scikit-sundae's Python API, "
+            f"several times slower",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        return "sksundae"
+    return "cvode"
 
 
 def build_engine(choice: EngineChoice, params: Parameters, options: SolverOptions) -> Engine:
-    """An engine ready for :meth:`Engine.reset`: the one called ``choice``, or ``choice(params, options)``."""
+    """An engine ready for :meth:`Engine.reset`: the default one (``None``), the one called
+    ``choice``, or ``choice(params, options)``."""
+    if choice is None:
+        choice = default_engine()
     factory = choice if callable(choice) else engine_factory(choice)
-    engine: Engine = factory(params, options)
+    try:
+        engine: Engine = factory(params, options)
+    except _unavailable() as reason:
+        raise InputError(f"engine {choice!r} is not available here: {reason}", field="engine") from reason
     return engine
+
+
+def _unavailable() -> type[Exception]:
+    from oscillator.engines.sundials import SundialsUnavailable
+
+    return SundialsUnavailable

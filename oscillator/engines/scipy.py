@@ -1,6 +1,7 @@
 """SciPy's ``solve_ivp`` (DOP853 by default) with its events: the engine of the benchmarks' baseline.
 
-What a SciPy user writes: one ``solve_ivp`` call per mode, one event function per root function
+What a SciPy user writes: one ``solve_ivp`` call per mode (and per time the supervisor asks to
+reach, e.g. a grid time), one event function per root function
 (memoised per ``(t, y)``, so SciPy pays one evaluation of the root vector per point it asks
 about).  The extrema of a velocity and the relative velocity are watched, not terminal: SciPy
 would stop at them and, restarted at a zero of the same function, stop there again.  The calls'
@@ -12,7 +13,6 @@ from __future__ import annotations
 
 import collections
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -47,6 +47,10 @@ class ScipyEngine:
     roots : callable, optional
         ``roots(t, y, mode) -> g`` in the layout of :mod:`oscillator.model.roots`; the package's
         compiled root functions by default.
+    quadratures : bool
+        Integrate the four work quadratures of the energy audit with the state (the default).
+        With ``False``, ``field`` returns the state's four rates only, SciPy's error norm is the
+        state's, and the audit's works stay zero: what a SciPy user's script integrates.
     """
 
     name = "scipy"
@@ -59,6 +63,7 @@ class ScipyEngine:
         method: str = "DOP853",
         field: Field | None = None,
         roots: Field | None = None,
+        quadratures: bool = True,
     ) -> None:
         self._params, self._options, self._method = params, options, method
         self._max_step = options.max_step_fraction * params.period
@@ -72,12 +77,12 @@ class ScipyEngine:
         def compiled_roots(t: float, y: np.ndarray, mode: Mode) -> np.ndarray:
             return root_values(t, y, params, mode, step=self._max_step, near=near)
 
+        self._size = 8 if quadratures else 4
         self._field = field or compiled_field
         self._root_values = roots or compiled_roots
         self._mode: Mode | None = None
         self._t, self._y = 0.0, np.zeros(8)
         self._pending: collections.deque[Step] | None = None
-        self._solution: Any = None
         self._evaluations = 0
         self._restarts = 0
 
@@ -88,6 +93,10 @@ class ScipyEngine:
     @property
     def restarts(self) -> int:
         return self._restarts
+
+    def close(self) -> None:
+        """Nothing to free."""
+        self._pending = None
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
         self._mode, self._t, self._y = mode, t, np.array(y, dtype=float)
@@ -114,45 +123,49 @@ class ScipyEngine:
             watchers.append(watcher)
         return watchers
 
-    def _solve(self, t_stop: float, one_step: bool) -> None:
-        """One ``solve_ivp`` call from the current point; its returns queued in time order."""
+    def _solve(self, end: float, one_step: bool) -> None:
+        """One ``solve_ivp`` call from the current point to ``end``; its returns queued in time order."""
         mode = self._mode
         assert mode is not None
         self._restarts += 1
+        n = self._size
         solution = solve_ivp(
-            lambda t, y: self._field(t, y, mode), (self._t, t_stop), self._y, method=self._method,
+            lambda t, y: self._field(t, y, mode), (self._t, end), self._y[:n], method=self._method,
             rtol=self._options.rtol, atol=self._options.atol, events=self._events(mode), max_step=self._max_step,
-            dense_output=True,
         )  # fmt: skip
         self._evaluations += solution.nfev
         if solution.status == -1:
             raise EngineFailure(solution.message, "solve_ivp")
-        end = float(solution.t[-1])
+        reached = float(solution.t[-1])
         returns: list[tuple[float, int, Step]] = []
         for k in WATCH_ONLY:
             for tk, yk in zip(solution.t_events[k], solution.y_events[k], strict=True):
-                if tk < end:
-                    returns.append((float(tk), 0, Step(float(tk), np.array(yk), StepKind.ROOT, (int(k),))))
+                if tk < reached:
+                    returns.append((float(tk), 0, Step(float(tk), self._full(yk), StepKind.ROOT, (int(k),))))
         if one_step:
-            returns += [(float(tk), 1, Step(float(tk), solution.y[:, i].copy(), StepKind.STEP))
+            returns += [(float(tk), 1, Step(float(tk), self._full(solution.y[:, i]), StepKind.STEP))
                         for i, tk in enumerate(solution.t[1:-1], start=1)]  # fmt: skip
+        last = self._full(solution.y[:, -1])
         if solution.status == 1:  # a terminal root
-            fired = tuple(k for k in range(NUM_ROOTS) if solution.t_events[k].size and solution.t_events[k][-1] == end)
-            returns.append((end, 2, Step(end, solution.y[:, -1].copy(), StepKind.ROOT, fired)))
+            fired = tuple(
+                k for k in range(NUM_ROOTS) if solution.t_events[k].size and solution.t_events[k][-1] == reached
+            )
+            returns.append((reached, 2, Step(reached, last, StepKind.ROOT, fired)))
         else:
-            returns.append((end, 2, Step(end, solution.y[:, -1].copy(), StepKind.TARGET)))
+            returns.append((end, 2, Step(end, last, StepKind.TARGET)))
         returns.sort(key=lambda item: (item[0], item[1]))
         self._pending = collections.deque(step for _, _, step in returns)
-        self._solution = solution.sol
+
+    def _full(self, y: Vector) -> Vector:
+        """The 8-vector of a state SciPy returned (the quadratures zero when not integrated)."""
+        full = np.zeros(8)
+        full[: self._size] = y
+        return full
 
     def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
         if not self._pending:
-            self._solve(t_stop, one_step)
+            self._solve(t_stop if one_step else target, one_step)
         assert self._pending
-        upcoming = self._pending[0]
-        if not one_step and target < upcoming.t:
-            step = Step(target, np.asarray(self._solution(target), dtype=float), StepKind.TARGET)
-        else:
-            step = self._pending.popleft()
+        step = self._pending.popleft()
         self._t, self._y = step.t, step.y
         return step

@@ -91,7 +91,7 @@ def _where(mode: Mode, y: np.ndarray) -> str:
 
 def solver_failure(engine: str, detail: str, flag: int | str, t: float, y: np.ndarray, mode: Mode) -> SimulationFailed:
     """The integrator's failure, told with the last point it reached (its output is undefined then)."""
-    name = "CVODE" if engine == "cvode" else engine
+    name = "SciPy solve_ivp" if engine == "scipy" else "CVODE"
     return SimulationFailed(
         f"{name} failed after t = {t:.10g} s with flag {flag} ({detail}) in {_where(mode, y)}; "
         f"loosen rtol/atol or raise max_num_steps",

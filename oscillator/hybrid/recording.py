@@ -67,16 +67,14 @@ class Recording:
 
     def row(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         """Keep one trajectory row; refuse past ``max_rows``."""
-        if len(record.t) >= self.max_rows:
+        if len(record.rows) >= self.max_rows:
             raise SimulationFailed(
                 f"the trajectory passed max_trajectory_rows = {self.max_rows} rows at t = {t:.10g} s; record it on "
                 f"a grid (t_eval; --sample DT on the command line) or not at all, shorten t_end, or raise "
                 f"max_trajectory_rows",
                 field="max_trajectory_rows",
             )
-        record.t.append(t)
-        record.y.append(y[:4].copy())
-        record.modes.append(mode)
+        record.rows.append((t, y[:4].copy(), mode))
 
 
 class NoTrajectory(Recording):

@@ -129,7 +129,8 @@ class Result:
             wall_time=record.wall_time,
         )
         x1, v1, x2, v2 = (float(v) for v in np.asarray(record.y_final[:4]))
-        trajectory = trajectory_frame(record.t, record.y, record.modes)
+        rows = record.rows
+        trajectory = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
         return cls(
             case,
             events_frame(record.events),

@@ -89,7 +89,7 @@ def simulate(
     record_trajectory: bool = True,
     progress: Callable[[float], None] | None = None,
     keep_events_from: float | None = None,
-    engine: EngineChoice = "cvode",
+    engine: EngineChoice = None,
     **overrides: float,
 ) -> Result:
     """Simulate a case from its start to ``t_end``.
@@ -111,9 +111,11 @@ def simulate(
     keep_events_from : float, optional
         Keep only the events at or after this time in ``Result.events`` (``stats.events``
         counts them all). With the trajectory off too, memory stays flat in the run's length.
-    engine : str or callable
-        The integrator (:mod:`oscillator.engines`): ``"cvode"`` (default) or ``"scipy"``; or a
-        callable ``engine(params, options)`` that returns an :class:`~oscillator.engines.Engine`.
+    engine : str or callable, optional
+        The integrator (:mod:`oscillator.engines`): ``"cvode"`` (CVODE through its C API, the
+        default where SUNDIALS' libraries load), ``"sksundae"`` (CVODE through scikit-sundae's
+        Python API, the fallback) or ``"scipy"``; or a callable ``engine(params, options)`` that
+        returns an :class:`~oscillator.engines.Engine`.
     **overrides
         Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
         (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).
@@ -172,4 +174,6 @@ def simulate(
         partial = Result.from_record(case, record, engine=integrator.name, status=Status.INTERRUPTED,
                                      message="interrupted by the user")  # fmt: skip
         raise Interrupted(partial) from None
+    finally:
+        integrator.close()
     return Result.from_record(case, record, engine=integrator.name)

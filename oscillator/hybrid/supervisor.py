@@ -135,7 +135,8 @@ class Supervisor:
                 resolution = self._resolve_root(record, step, mode)
                 if resolution.mode != mode:
                     y[:4] = resolution.y
-                    mode = record.mode_final = resolution.mode
+                    mode = resolution.mode
+                    record.reached(t, y, mode)
                     self.recording.switched(record, t, y, mode)
                     return t, y, mode
                 stalls.count(t, resolution.events, mode)

@@ -108,7 +108,8 @@ def _versions() -> dict:
 
 #: What run.json says of each engine.
 _INTEGRATORS = {
-    "cvode": "CVODE (SUNDIALS, through scikit-sundae), Adams, root finding",
+    "cvode": "CVODE (SUNDIALS, C API with compiled callbacks), Adams, root finding",
+    "sksundae": "CVODE (SUNDIALS, through scikit-sundae's Python API), Adams, root finding",
     "scipy": "SciPy solve_ivp (DOP853), events",
 }
 

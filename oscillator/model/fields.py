@@ -46,9 +46,26 @@ _POSITION = {name: index for index, name in enumerate(Parameters.names())}
 )  # fmt: skip
 
 
-@functools.lru_cache(maxsize=64)
+#: Parameters -> their vector, keyed by identity: called a few dozen times at every root, where
+#: hashing the 25 fields (an lru_cache) cost more than the formulas.
+_VECTORS: dict[int, tuple[Parameters, Vector]] = {}
+_MAX_VECTORS = 64
+
+
 def coefficients(p: Parameters) -> Vector:
     """The parameters as the vector the compiled formulas take (read-only, cached)."""
+    entry = _VECTORS.get(id(p))
+    if entry is not None and entry[0] is p:
+        return entry[1]
+    if len(_VECTORS) >= _MAX_VECTORS:
+        _VECTORS.clear()
+    vector = _vector(p)
+    _VECTORS[id(p)] = (p, vector)
+    return vector
+
+
+@functools.lru_cache(maxsize=64)
+def _vector(p: Parameters) -> Vector:
     vector = np.array([getattr(p, name) for name in Parameters.names()], dtype=np.float64)
     vector.setflags(write=False)
     return vector

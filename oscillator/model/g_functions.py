@@ -11,30 +11,87 @@ domain number of that side is ``phase_space.domain_of(mass, s, ...)``.  Normals 
 
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+from numba import njit
+
 from oscillator.model.fields import (
     accelerations,
-    flow_barrier_field,
-    kinetic_field,
-    non_friction_force,
-    non_friction_force_rate,
+    barrier,
+    coefficients,
+    force_rates,
+    force_scale,
+    forces,
+    kinetic,
 )
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
-from oscillator.model.types import StateLike
+from oscillator.model.types import StateLike, Vector
 
-__all__ = ["displacement_g", "flow_barrier_g", "velocity_g"]
+__all__ = ["displacement_g", "flow_barrier_g", "g_values", "scale", "velocity_g"]
 
 
-def _rate_of_force(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, own_acceleration: float) -> float:
-    """``D A_i`` with mass ``mass`` accelerating at ``own_acceleration`` and the other mass
-    following the mode's field."""
-    a1, a2 = accelerations(t, y, p, mode)
-    if mass == 1:
-        a1 = own_acceleration
-    else:
-        a2 = own_acceleration
-    rates = non_friction_force_rate(t, y, p, mode.left, mode.right, a1, a2)
-    return rates[mass - 1]
+#: Positions in the vector of :func:`g_values`: ``(G0, G1)`` of ``velocity_g(mass, sign)`` and of
+#: ``flow_barrier_g(mass, sign)``, for mass 1, 2 and side +1, -1.
+_VELOCITY = {(1, 1): 0, (1, -1): 2, (2, 1): 4, (2, -1): 6}
+_BARRIER = {(1, 1): 8, (1, -1): 10, (2, 1): 12, (2, -1): 14}
+
+
+@njit(cache=True)
+def g_values(  # pragma: no cover - compiled
+    t: float, x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, s1: int, s2: int, c: Vector
+) -> Vector:
+    """Every velocity and flow-barrier G-function of both masses at one point under one mode.
+
+    The same formulas in the same order as evaluated one at a time, so the same numbers: the
+    field of the side (4.13)-(4.14) or the barrier's (4.22), and its rate along the flow with
+    the other mass following the mode's field and the mass itself accelerating at ``G0``
+    (velocity boundary) or resting (flow barrier).
+    """
+    out = np.empty(16)
+    f1, f2 = forces(t, x1, v1, x2, v2, left, right, c)
+    a1, a2 = kinetic(c, 1, s1, f1), kinetic(c, 2, s2, f2)
+    k = 0
+    for barrier_side in (False, True):
+        for mass in (1, 2):
+            for sign in (1, -1):
+                force = f1 if mass == 1 else f2
+                g0 = barrier(c, mass, sign, force) if barrier_side else kinetic(c, mass, sign, force)
+                own = 0.0 if barrier_side else g0
+                rates = force_rates(t, x1, v1, x2, v2, left, right, own if mass == 1 else a1,
+                                    a2 if mass == 1 else own, c)  # fmt: skip
+                out[k], out[k + 1] = g0, rates[0] if mass == 1 else rates[1]
+                k += 2
+    return out
+
+
+#: The last point's values and force scales: the switching rules ask for several G-functions at
+#: one instant (the key's Modes are the interned ones of ``Mode.from_signs``: compared by identity).
+_last: dict[str, Any] = {"key": None, "p": None, "values": None, "scales": {}, "scales_p": None}
+
+
+def _values(t: float, y: StateLike, p: Parameters, mode: Mode) -> Vector:
+    key = (t, y[0], y[1], y[2], y[3], mode)
+    if _last["p"] is not p or _last["key"] != key:
+        _last["values"] = g_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left,
+                                   mode.right, mode.sign(1), mode.sign(2), coefficients(p))  # fmt: skip
+        _last["key"], _last["p"] = key, p
+    values: Vector = _last["values"]
+    return values
+
+
+def scale(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int) -> float:
+    """:func:`~oscillator.model.fields.force_scale` at the point, computed once per instant."""
+    key = (t, y[0], y[1], y[2], y[3], mode.left, mode.right, mass)
+    scales: dict[tuple[Any, ...], float] = _last["scales"]
+    if _last["scales_p"] is not p or len(scales) > 64:
+        scales = _last["scales"] = {}
+        _last["scales_p"] = p
+    found = scales.get(key)
+    if found is None:
+        found = scales[key] = force_scale(t, y, p, mode, mass)
+    return found
 
 
 def velocity_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, sign: int) -> tuple[float, float]:
@@ -44,9 +101,9 @@ def velocity_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, sig
     ``G^(1,delta) = D F_i^(delta)``, the field of side ``delta`` evaluated at ``y`` under the
     mode's contacts; the other mass follows the mode's field.
     """
-    force = non_friction_force(t, y, p, mode.left, mode.right)[mass - 1]
-    g0 = kinetic_field(p, mass, sign, force)
-    return g0, _rate_of_force(t, y, p, mode, mass, g0)
+    k = _VELOCITY[mass, sign]
+    values = _values(t, y, p, mode)
+    return float(values[k]), float(values[k + 1])
 
 
 def flow_barrier_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, sign: int) -> tuple[float, float]:
@@ -56,8 +113,9 @@ def flow_barrier_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int,
     zero.  Side ``s = +1`` is reached when ``A_i`` rises to ``mu_s g + p_i``, side ``s = -1``
     when it falls to ``-(mu_s g + p_i)``.
     """
-    force = non_friction_force(t, y, p, mode.left, mode.right)[mass - 1]
-    return flow_barrier_field(p, mass, sign, force), _rate_of_force(t, y, p, mode, mass, 0.0)
+    k = _BARRIER[mass, sign]
+    values = _values(t, y, p, mode)
+    return float(values[k]), float(values[k + 1])
 
 
 def displacement_g(t: float, y: StateLike, p: Parameters, mode: Mode, boundary: str) -> tuple[float, float]:

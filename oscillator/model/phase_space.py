@@ -13,6 +13,7 @@ not carry the contact flags in its number, yet its field and its flow barrier de
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from oscillator.errors import InputError
@@ -107,18 +108,29 @@ def domain_label(mass: int, domain: int, *, left: bool, right: bool = False) -> 
     return f"Ω{domain}({mass})"
 
 
+#: mass -> domain -> velocity sign, for :meth:`Mode.sign` (called at every root, many times).
+_SIGNS = {
+    mass: {domain: velocity_sign(mass, domain) for domain in ((0, *range(1, 9)) if mass == 1 else (0, 1, 2, 5, 6))}
+    for mass in (1, 2)
+}
+_REGIONS = {"I": (False, False), "II": (False, True), "III": (True, False), "IV": (True, True)}
+_LETTERS = {(False, False): "a", (True, False): "b", (False, True): "c", (True, True): "d"}
+#: (left, right, m1 resting, m2 resting) -> the state's label.
+_STATES = {
+    (left, right, resting1, resting2): f"{region}-{_LETTERS[(resting1, resting2)]}"
+    for region, (left, right) in _REGIONS.items()
+    for resting1 in (False, True)
+    for resting2 in (False, True)
+}
+
+
 def system_state(left: bool, right: bool, resting1: bool, resting2: bool) -> str:
     """The system state of Sec. 3.2, e.g. ``III-b``.
 
     Region I no contact, II right contact only, III left contact only, IV both; letter a both
     moving, b m1 at rest, c m2 at rest, d both at rest.
     """
-    region = {flags: name for name, flags in _REGIONS.items()}
-    letter = {(False, False): "a", (True, False): "b", (False, True): "c", (True, True): "d"}
-    return f"{region[(left, right)]}-{letter[(resting1, resting2)]}"
-
-
-_REGIONS = {"I": (False, False), "II": (False, True), "III": (True, False), "IV": (True, True)}
+    return _STATES[bool(left), bool(right), bool(resting1), bool(resting2)]
 
 
 def contacts_of_state(label: str) -> tuple[bool, bool]:
@@ -160,23 +172,19 @@ class Mode:
 
     @classmethod
     def from_signs(cls, s1: int, s2: int, *, left: bool, right: bool) -> Mode:
-        """The mode of velocity signs ``s1, s2`` (0 = at rest) under the given contacts."""
-        return cls(
-            domain_of(1, s1, left=left, right=right),
-            domain_of(2, s2, left=left),
-            left,
-            right,
-        )
+        """The mode of velocity signs ``s1, s2`` (0 = at rest) under the given contacts (one
+        object per mode: the switching rules build them at every root)."""
+        return _from_signs(s1, s2, bool(left), bool(right))
 
     def domain(self, mass: int) -> int:
         return self.domain1 if mass == 1 else self.domain2
 
     def sign(self, mass: int) -> int:
         """Velocity sign of mass ``mass`` in this mode (0 when at rest)."""
-        return velocity_sign(mass, self.domain(mass))
+        return _SIGNS[mass][self.domain1 if mass == 1 else self.domain2]
 
     def resting(self, mass: int) -> bool:
-        return self.domain(mass) == 0
+        return (self.domain1 if mass == 1 else self.domain2) == 0
 
     def with_sign(self, mass: int, sign: int) -> Mode:
         """The same contacts with mass ``mass`` moved to velocity sign ``sign``."""
@@ -196,3 +204,8 @@ class Mode:
     def boundary_label(self, mass: int) -> str:
         """The velocity boundary mass ``mass`` rests on or would cross."""
         return velocity_boundary_label(mass, left=self.left, right=self.right)
+
+
+@functools.cache
+def _from_signs(s1: int, s2: int, left: bool, right: bool) -> Mode:
+    return Mode(domain_of(1, s1, left=left, right=right), domain_of(2, s2, left=left), left, right)

@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 from oscillator.errors import SimulationFailed
 from oscillator.model.events import Event, EventKind
-from oscillator.model.fields import force_scale
-from oscillator.model.g_functions import displacement_g, flow_barrier_g, velocity_g
+from oscillator.model.g_functions import displacement_g, flow_barrier_g, scale, velocity_g
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode, displacement_boundary_label, domain_of
 from oscillator.model.roots import Root
@@ -81,7 +80,7 @@ def zero_tolerance(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int,
     (:data:`ZERO_TIME`).  The second matters where every term is small but the function moves
     fast: a resting mass struck by the other one, whose contact force starts from zero.
     """
-    return ZERO * force_scale(t, y, p, mode, mass) + ZERO_TIME * p.period * abs(rate)
+    return ZERO * scale(t, y, p, mode, mass) + ZERO_TIME * p.period * abs(rate)
 
 
 def _field_name(mass: int, domain: int, *, barrier: bool = False) -> str:

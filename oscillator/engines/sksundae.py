@@ -1,4 +1,7 @@
-"""SUNDIALS CVODE through scikit-sundae: every scikit-sundae specific of the package is here.
+"""SUNDIALS CVODE through scikit-sundae's Python API: every scikit-sundae specific of the package is here.
+
+The fallback of the C-level engine (:mod:`oscillator.engines.cvode_c`) where SUNDIALS' libraries
+cannot be loaded directly; the same integrator and settings, a Python call per evaluation.
 
 One CVODE problem per mode (both masses' domains and the contact flags), created on first use and
 re-initialised at every restart; its root functions and their directions are those of
@@ -27,7 +30,7 @@ from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions, root_kernel
 
-__all__ = ["CvodeEngine"]
+__all__ = ["SksundaeEngine"]
 
 #: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
 _ROOT_RETURN = 2
@@ -38,10 +41,10 @@ _TSTOP_RETURN = 1
 _CLOSE_ROOTS = -22
 
 
-class CvodeEngine:
+class SksundaeEngine:
     """CVODE (Adams, dense Newton) with its rootfinding, through scikit-sundae's Python API."""
 
-    name = "cvode"
+    name = "sksundae"
 
     def __init__(self, params: Parameters, options: SolverOptions) -> None:
         self._params = params
@@ -68,6 +71,10 @@ class CvodeEngine:
     @property
     def restarts(self) -> int:
         return self._restarts
+
+    def close(self) -> None:
+        """Nothing to free by hand: scikit-sundae frees its objects with the solvers."""
+        self._problems.clear()
 
     def _problem(self, mode: Mode) -> tuple[CVODE, Any]:
         """The CVODE problem of a mode, created on first use."""

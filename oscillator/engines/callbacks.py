@@ -1,0 +1,82 @@
+"""CVODE's callbacks compiled to C (numba ``@cfunc``): the field and the root functions of a mode.
+
+They call the package's compiled kernels (:func:`oscillator.model.kernels.derivative`,
+:func:`oscillator.model.roots.root_kernel`) on the data of CVODE's serial vectors; what changes
+from mode to mode travels in the user-data vector (:data:`LAYOUT`).  numba caches the compiled
+callbacks on disk (``cache=True``), so the compile cost is paid once per install.
+
+A serial ``N_Vector`` is ``struct {void* content; ...}`` with ``content`` a
+``struct {sunindextype length; sunbooleantype own_data; sunrealtype* data; ...}``
+(nvector_serial.h); :func:`data_offset` finds ``data``'s offset and the engine checks it against
+``N_VGetArrayPointer`` once per process.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from llvmlite import ir
+from numba import carray, cfunc, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from oscillator.model.kernels import derivative
+from oscillator.model.roots import NUM_ROOTS, root_kernel
+
+__all__ = ["COEFFICIENTS", "LAYOUT", "USER_DATA_SIZE", "data_offset", "rhs", "roots"]
+
+#: Positions in the user-data vector.
+LAYOUT = {"t_ref": 0, "s1": 1, "s2": 2, "left": 3, "right": 4, "step": 5, "near": 6}
+#: Where the parameter vector starts in the user data.
+COEFFICIENTS = 7
+#: The user data's length: the layout and the 25 parameters.
+USER_DATA_SIZE = COEFFICIENTS + 25
+#: The state's length: x1, v1, x2, v2 and the four work quadratures.
+SIZE = 8
+#: Byte offset of ``data`` in the serial vector's content: ``sunindextype`` (int32) and
+#: ``sunbooleantype`` (int) before it.
+DATA_OFFSET = 8
+
+
+def _load_pointer_typing(typingctx: Any, address: Any, offset: Any) -> Any:  # pragma: no cover - compiled
+    """The pointer stored at ``address + offset`` bytes (a ``void*`` read from C memory)."""
+    signature = types.voidptr(types.voidptr, types.intp)
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        base = builder.ptrtoint(args[0], ir.IntType(64))
+        where = builder.inttoptr(builder.add(base, args[1]), cgutils.voidptr_t.as_pointer())
+        return builder.load(where)
+
+    return signature, codegen
+
+
+_load_pointer: Any = intrinsic(_load_pointer_typing)
+
+
+def data_offset() -> int:
+    """Byte offset of the data pointer in a serial vector's content (see the module's docstring)."""
+    return DATA_OFFSET
+
+
+_SIGNATURE = types.int32(types.float64, types.voidptr, types.voidptr, types.voidptr)
+
+
+@cfunc(_SIGNATURE, cache=True)
+def rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cover - compiled
+    """``CVRhsFn``: the mode's field at ``t = t_ref + tau`` (CVODE's time is local)."""
+    d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
+    state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
+    rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
+    derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
+    return 0
+
+
+@cfunc(_SIGNATURE, cache=True)
+def roots(tau: float, y: Any, gout: Any, user_data: Any) -> int:  # pragma: no cover - compiled
+    """``CVRootFn``: the mode's root functions (:mod:`oscillator.model.roots`)."""
+    d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
+    state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
+    g = carray(gout, (NUM_ROOTS,), dtype=np.float64)
+    root_kernel(d[0] + tau, state, g, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0, d[5], d[6])
+    return 0

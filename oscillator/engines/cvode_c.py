@@ -1,0 +1,205 @@
+"""CVODE driven at C level: SUNDIALS' C API through ctypes, the callbacks compiled by numba.
+
+The same integrator, settings and root functions as the scikit-sundae engine
+(:mod:`oscillator.engines.sksundae`), without a Python call per field or root evaluation: CVODE
+calls the compiled callbacks of :mod:`oscillator.engines.callbacks` directly.  One CVODE
+problem serves every mode: at each restart the mode's flags go into the user data, and
+``CVodeReInit`` and ``CVodeSetRootDirection`` restart it.  CVODE integrates in a local time
+``tau = t - t_ref`` (see :mod:`oscillator.engines.sksundae` for why).
+
+Every SUNDIALS object is freed by :meth:`CCvodeEngine.close` (also called when the engine is
+garbage-collected); SUNDIALS' error messages go to the engine's failure, not to stderr.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import weakref
+from typing import Any
+
+import numpy as np
+
+from oscillator.engines import EngineFailure, Step, StepKind
+from oscillator.engines import callbacks as cb
+from oscillator.engines.sundials import (
+    CV_ADAMS,
+    CV_NORMAL,
+    CV_ONE_STEP,
+    CV_ROOT_RETURN,
+    CV_TSTOP_RETURN,
+    ERROR_HANDLER,
+    describe,
+    flag_name,
+    load,
+)
+from oscillator.model.fields import coefficients
+from oscillator.model.parameters import Parameters, SolverOptions
+from oscillator.model.phase_space import Mode
+from oscillator.model.roots import NUM_ROOTS, root_directions
+
+__all__ = ["CCvodeEngine"]
+
+#: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" after a root return when a
+#: root function is still exactly 0.0 a rounding step later; a restart at the root clears it.
+_CLOSE_ROOTS = -22
+
+
+def _check(flag: int, call: str) -> None:
+    if flag < 0:
+        raise EngineFailure(f"{call} failed ({flag_name(flag)})", flag)
+
+
+class _Objects:
+    """The SUNDIALS objects of one engine, and their freeing (idempotent)."""
+
+    def __init__(self) -> None:
+        self.api = load().api
+        self.context = ctypes.c_void_p()
+        _check(self.api.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
+        self.y = self.api.N_VNew_Serial(cb.SIZE, self.context)
+        self.out = self.api.N_VNew_Serial(cb.SIZE, self.context)
+        self.matrix = self.api.SUNDenseMatrix(cb.SIZE, cb.SIZE, self.context)
+        self.solver = self.api.SUNLinSol_Dense(self.y, self.matrix, self.context) if self.matrix else None
+        self.memory = self.api.CVodeCreate(CV_ADAMS, self.context)
+        if not (self.y and self.out and self.matrix and self.solver and self.memory):
+            self.free()
+            raise MemoryError("SUNDIALS could not allocate the CVODE problem")
+
+    def free(self) -> None:
+        api = self.api
+        if getattr(self, "memory", None):
+            api.CVodeFree(ctypes.byref(ctypes.c_void_p(self.memory)))
+            self.memory = None
+        if getattr(self, "solver", None):
+            api.SUNLinSolFree(self.solver)
+            self.solver = None
+        if getattr(self, "matrix", None):
+            api.SUNMatDestroy(self.matrix)
+            self.matrix = None
+        for name in ("y", "out"):
+            if getattr(self, name, None):
+                api.N_VDestroy(getattr(self, name))
+                setattr(self, name, None)
+        if self.context:
+            api.SUNContext_Free(ctypes.byref(self.context))
+            self.context = ctypes.c_void_p()
+
+
+class CCvodeEngine:
+    """CVODE (Adams, dense Newton) with its rootfinding, called through its C API."""
+
+    name = "cvode"
+
+    def __init__(self, params: Parameters, options: SolverOptions) -> None:
+        self._objects = _Objects()
+        self._api = self._objects.api
+        self._messages: list[str] = []
+        self._handler = ERROR_HANDLER(self._error)
+        self._data = np.zeros(cb.USER_DATA_SIZE)
+        self._data[cb.COEFFICIENTS :] = coefficients(params)
+        self._data[cb.LAYOUT["step"]] = options.max_step_fraction * params.period
+        self._data[cb.LAYOUT["near"]] = options.grazing_displacement_tolerance
+        self._y = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.y), (cb.SIZE,))
+        self._out = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.out), (cb.SIZE,))
+        self._found = (ctypes.c_int * NUM_ROOTS)()
+        self._directions: dict[Mode, Any] = {}  # mode -> its root directions as a C array
+        self._tret = ctypes.c_double()
+        self._evaluations = ctypes.c_long()
+        self._finalizer = weakref.finalize(self, self._objects.free)
+        self._setup(options)
+        self._t, self._t_ref, self._t_stop, self._after_root = 0.0, 0.0, math.nan, False
+        self._out_at_root: np.ndarray = np.zeros(cb.SIZE)
+        self._done_evaluations, self._restarts = 0, 0
+
+    def _setup(self, options: SolverOptions) -> None:
+        api, memory = self._api, self._objects.memory
+        api.SUNContext_ClearErrHandlers(self._objects.context)
+        api.SUNContext_PushErrHandler(self._objects.context, self._handler, None)
+        _check(api.CVodeInit(memory, ctypes.c_void_p(cb.rhs.address), 0.0, self._objects.y), "CVodeInit")
+        _check(api.CVodeSStolerances(memory, options.rtol, options.atol), "CVodeSStolerances")
+        _check(api.CVodeSetLinearSolver(memory, self._objects.solver, self._objects.matrix), "CVodeSetLinearSolver")
+        _check(api.CVodeSetUserData(memory, self._data.ctypes.data), "CVodeSetUserData")
+        _check(api.CVodeSetMaxNonlinIters(memory, 3), "CVodeSetMaxNonlinIters")
+        _check(api.CVodeSetMaxConvFails(memory, 10), "CVodeSetMaxConvFails")
+        _check(api.CVodeRootInit(memory, NUM_ROOTS, ctypes.c_void_p(cb.roots.address)), "CVodeRootInit")
+        _check(api.CVodeSetInitStep(memory, 0.0), "CVodeSetInitStep")
+        _check(api.CVodeSetMinStep(memory, 0.0), "CVodeSetMinStep")
+        _check(api.CVodeSetMaxStep(memory, float(self._data[cb.LAYOUT["step"]])), "CVodeSetMaxStep")
+        _check(api.CVodeSetMaxOrd(memory, 12), "CVodeSetMaxOrd")
+        _check(api.CVodeSetMaxNumSteps(memory, options.max_num_steps), "CVodeSetMaxNumSteps")
+
+    def _error(self, line: int, function: bytes, file: bytes, message: bytes, code: int, *_: Any) -> None:
+        """SUNDIALS' error handler: keep the message for the failure (nothing is printed)."""
+        said = " ".join((message or b"").decode("utf-8", "replace").replace(", ,", ",").split())
+        self._messages.append(f"[{(function or b'').decode('ascii', 'replace')}, Error: {code}] {said}")
+
+    @property
+    def rhs_evaluations(self) -> int:
+        if self._objects.memory:
+            self._api.CVodeGetNumRhsEvals(self._objects.memory, ctypes.byref(self._evaluations))
+        return self._done_evaluations + self._evaluations.value
+
+    @property
+    def restarts(self) -> int:
+        return self._restarts
+
+    def close(self) -> None:
+        """Free every SUNDIALS object of the engine (it cannot be used afterwards)."""
+        self._finalizer()
+
+    def _initialise(self) -> None:
+        memory = self._objects.memory
+        self._api.CVodeGetNumRhsEvals(memory, ctypes.byref(self._evaluations))  # the counts restart
+        self._done_evaluations += self._evaluations.value
+        self._evaluations.value = 0
+        self._t_ref = self._data[cb.LAYOUT["t_ref"]] = self._t
+        self._messages.clear()
+        _check(self._api.CVodeReInit(memory, 0.0, self._objects.y), "CVodeReInit")
+        self._t_stop = math.nan  # set again before the next step
+        self._restarts += 1
+        self._after_root = False
+
+    def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
+        data = self._data
+        data[cb.LAYOUT["s1"]], data[cb.LAYOUT["s2"]] = mode.sign(1), mode.sign(2)
+        data[cb.LAYOUT["left"]], data[cb.LAYOUT["right"]] = float(mode.left), float(mode.right)
+        directions = self._directions.get(mode)
+        if directions is None:
+            directions = self._directions[mode] = (ctypes.c_int * NUM_ROOTS)(*root_directions(mode))
+        _check(self._api.CVodeSetRootDirection(self._objects.memory, directions), "CVodeSetRootDirection")
+        self._t = t
+        self._y[:] = y
+        self._initialise()
+
+    def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
+        api, memory = self._api, self._objects.memory
+        while True:
+            if t_stop != self._t_stop:  # once per restart: CVODE keeps it until it is reached
+                _check(api.CVodeSetStopTime(memory, t_stop - self._t_ref), "CVodeSetStopTime")
+                self._t_stop = t_stop
+            flag = api.CVode(memory, target - self._t_ref, self._objects.out, ctypes.byref(self._tret),
+                             CV_ONE_STEP if one_step else CV_NORMAL)  # fmt: skip
+            if flag == _CLOSE_ROOTS and self._after_root:
+                self._y[:] = self._out_at_root
+                self._initialise()  # at the root just returned
+                continue
+            if flag < 0:
+                said = " ".join(self._messages)
+                raise EngineFailure(f"{describe(flag)}; CVODE: {said}" if said else describe(flag), flag)
+            break
+        y = self._out.copy()
+        if flag == CV_ROOT_RETURN:
+            found = self._found
+            api.CVodeGetRootInfo(memory, found)
+            fired = tuple(i for i in range(NUM_ROOTS) if found[i])
+            step = Step(self._t_ref + self._tret.value, y, StepKind.ROOT, fired)
+        elif flag == CV_TSTOP_RETURN:
+            step = Step(t_stop, y, StepKind.TARGET)
+        elif one_step:
+            step = Step(self._t_ref + self._tret.value, y, StepKind.STEP)
+        else:
+            step = Step(target, y, StepKind.TARGET)
+        self._t, self._out_at_root = step.t, y
+        self._after_root = step.kind is StepKind.ROOT
+        return step
