@@ -42,9 +42,14 @@ _EXPORTS = {
     "EnergyAudit": "oscillator.hybrid.result",
     "SolverStats": "oscillator.hybrid.result",
     "simulate": "oscillator.hybrid.simulate",
+    "Orbit": "oscillator.orbits.shooting",
+    "find_orbit": "oscillator.orbits.shooting",
+    "Branch": "oscillator.orbits.continuation",
+    "continue_orbit": "oscillator.orbits.continuation",
 }
 
 __all__ = [
+    "Branch",
     "Case",
     "EnergyAudit",
     "Event",
@@ -54,6 +59,7 @@ __all__ = [
     "InputError",
     "Interrupted",
     "Mode",
+    "Orbit",
     "OscillatorError",
     "Parameters",
     "Result",
@@ -63,6 +69,8 @@ __all__ = [
     "Status",
     "SweepSettings",
     "case_names",
+    "continue_orbit",
+    "find_orbit",
     "load_case",
     "resolve_case",
     "simulate",
@@ -76,6 +84,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.events import Event, EventKind
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode
+    from oscillator.orbits.continuation import Branch, continue_orbit
+    from oscillator.orbits.shooting import Orbit, find_orbit
 
 
 def __getattr__(name: str) -> object:

@@ -32,7 +32,7 @@ from oscillator.io.cases import case_to_toml
 ROOT = Path(__file__).resolve().parents[1]
 COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-COMMANDS = ("list", "show", "run", "check", "report", "sweep", "locate")
+COMMANDS = ("list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue")
 
 
 @dataclass
@@ -88,6 +88,8 @@ def shrunk(arguments: list[str]) -> list[str]:
     if command == "sweep":
         for option, value in (("--steps", "3"), ("--transient", "5"), ("--record", "2"), ("--workers", "1")):
             arguments = _set(arguments, option, value)
+    elif command == "continue":  # a coarse branch: the same command, fewer points
+        arguments = _set(arguments, "--step", "0.5")
     elif command == "locate":  # both ends are simulated, and must differ; no bisection
         a, b = (float(v) for v in arguments[arguments.index("--between") + 1 :][:2])
         arguments = _set(arguments, "--tolerance", f"{abs(b - a):.17g}")

@@ -1,4 +1,4 @@
-"""The ``oscillator`` command: list, show, run, check, report, sweep and locate.
+"""The ``oscillator`` command: list, show, run, check, report, sweep, locate, orbit and continue.
 
 The rule for exit codes:
 
@@ -24,7 +24,7 @@ import typer
 from rich.text import Text
 
 from oscillator import __version__
-from oscillator.cli import cases, check, console, run, sweep
+from oscillator.cli import cases, check, console, orbit, run, sweep
 from oscillator.cli.console import err, out
 from oscillator.text import printable
 
@@ -97,4 +97,8 @@ app.command(short_help="Compare a case's switching times with the article's.")(c
 app.command(short_help="Rebuild a run folder's report (and missing figures).")(run.report)
 app.command(short_help="Sweep a parameter: Fig. 14-style switching and Poincaré points.")(sweep.sweep)
 app.command(short_help="Find where a sweep's summary changes, to 1e-8.")(sweep.locate)
+app.command(short_help="Find a periodic orbit and its Floquet multipliers.")(orbit.orbit)
+app.command("continue", short_help="Continue a periodic orbit in a parameter; locate its bifurcations.")(
+    orbit.continue_
+)
 app.callback(invoke_without_command=True)(_version)

@@ -38,28 +38,31 @@ from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions
 
-__all__ = ["CCvodeEngine"]
+__all__ = ["CCvodeEngine", "CvodeObjects", "check"]
 
 #: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" after a root return when a
 #: root function is still exactly 0.0 a rounding step later; a restart at the root clears it.
 _CLOSE_ROOTS = -22
 
 
-def _check(flag: int, call: str) -> None:
+def check(flag: int, call: str) -> None:
+    """Raise :class:`EngineFailure` when a SUNDIALS call returned an error flag."""
     if flag < 0:
         raise EngineFailure(f"{call} failed ({flag_name(flag)})", flag)
 
 
-class _Objects:
-    """The SUNDIALS objects of one engine, and their freeing (idempotent)."""
+class CvodeObjects:
+    """The SUNDIALS objects of one CVODE problem of ``size`` equations (a serial vector for the
+    state and one for the output, a dense matrix and solver, CVODE's memory), and their freeing
+    (idempotent)."""
 
-    def __init__(self) -> None:
+    def __init__(self, size: int = cb.SIZE) -> None:
         self.api = load().api
         self.context = ctypes.c_void_p()
-        _check(self.api.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
-        self.y = self.api.N_VNew_Serial(cb.SIZE, self.context)
-        self.out = self.api.N_VNew_Serial(cb.SIZE, self.context)
-        self.matrix = self.api.SUNDenseMatrix(cb.SIZE, cb.SIZE, self.context)
+        check(self.api.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
+        self.y = self.api.N_VNew_Serial(size, self.context)
+        self.out = self.api.N_VNew_Serial(size, self.context)
+        self.matrix = self.api.SUNDenseMatrix(size, size, self.context)
         self.solver = self.api.SUNLinSol_Dense(self.y, self.matrix, self.context) if self.matrix else None
         self.memory = self.api.CVodeCreate(CV_ADAMS, self.context)
         if not (self.y and self.out and self.matrix and self.solver and self.memory):
@@ -92,7 +95,7 @@ class CCvodeEngine:
     name = "cvode"
 
     def __init__(self, params: Parameters, options: SolverOptions) -> None:
-        self._objects = _Objects()
+        self._objects = CvodeObjects()
         self._api = self._objects.api
         self._messages: list[str] = []
         self._handler = ERROR_HANDLER(self._error)
@@ -116,18 +119,18 @@ class CCvodeEngine:
         api, memory = self._api, self._objects.memory
         api.SUNContext_ClearErrHandlers(self._objects.context)
         api.SUNContext_PushErrHandler(self._objects.context, self._handler, None)
-        _check(api.CVodeInit(memory, ctypes.c_void_p(cb.rhs.address), 0.0, self._objects.y), "CVodeInit")
-        _check(api.CVodeSStolerances(memory, options.rtol, options.atol), "CVodeSStolerances")
-        _check(api.CVodeSetLinearSolver(memory, self._objects.solver, self._objects.matrix), "CVodeSetLinearSolver")
-        _check(api.CVodeSetUserData(memory, self._data.ctypes.data), "CVodeSetUserData")
-        _check(api.CVodeSetMaxNonlinIters(memory, 3), "CVodeSetMaxNonlinIters")
-        _check(api.CVodeSetMaxConvFails(memory, 10), "CVodeSetMaxConvFails")
-        _check(api.CVodeRootInit(memory, NUM_ROOTS, ctypes.c_void_p(cb.roots.address)), "CVodeRootInit")
-        _check(api.CVodeSetInitStep(memory, 0.0), "CVodeSetInitStep")
-        _check(api.CVodeSetMinStep(memory, 0.0), "CVodeSetMinStep")
-        _check(api.CVodeSetMaxStep(memory, float(self._data[cb.LAYOUT["step"]])), "CVodeSetMaxStep")
-        _check(api.CVodeSetMaxOrd(memory, 12), "CVodeSetMaxOrd")
-        _check(api.CVodeSetMaxNumSteps(memory, options.max_num_steps), "CVodeSetMaxNumSteps")
+        check(api.CVodeInit(memory, ctypes.c_void_p(cb.rhs.address), 0.0, self._objects.y), "CVodeInit")
+        check(api.CVodeSStolerances(memory, options.rtol, options.atol), "CVodeSStolerances")
+        check(api.CVodeSetLinearSolver(memory, self._objects.solver, self._objects.matrix), "CVodeSetLinearSolver")
+        check(api.CVodeSetUserData(memory, self._data.ctypes.data), "CVodeSetUserData")
+        check(api.CVodeSetMaxNonlinIters(memory, 3), "CVodeSetMaxNonlinIters")
+        check(api.CVodeSetMaxConvFails(memory, 10), "CVodeSetMaxConvFails")
+        check(api.CVodeRootInit(memory, NUM_ROOTS, ctypes.c_void_p(cb.roots.address)), "CVodeRootInit")
+        check(api.CVodeSetInitStep(memory, 0.0), "CVodeSetInitStep")
+        check(api.CVodeSetMinStep(memory, 0.0), "CVodeSetMinStep")
+        check(api.CVodeSetMaxStep(memory, float(self._data[cb.LAYOUT["step"]])), "CVodeSetMaxStep")
+        check(api.CVodeSetMaxOrd(memory, 12), "CVodeSetMaxOrd")
+        check(api.CVodeSetMaxNumSteps(memory, options.max_num_steps), "CVodeSetMaxNumSteps")
 
     def _error(self, line: int, function: bytes, file: bytes, message: bytes, code: int, *_: Any) -> None:
         """SUNDIALS' error handler: keep the message for the failure (nothing is printed)."""
@@ -155,7 +158,7 @@ class CCvodeEngine:
         self._evaluations.value = 0
         self._t_ref = self._data[cb.LAYOUT["t_ref"]] = self._t
         self._messages.clear()
-        _check(self._api.CVodeReInit(memory, 0.0, self._objects.y), "CVodeReInit")
+        check(self._api.CVodeReInit(memory, 0.0, self._objects.y), "CVodeReInit")
         self._t_stop = math.nan  # set again before the next step
         self._restarts += 1
         self._after_root = False
@@ -167,7 +170,7 @@ class CCvodeEngine:
         directions = self._directions.get(mode)
         if directions is None:
             directions = self._directions[mode] = (ctypes.c_int * NUM_ROOTS)(*root_directions(mode))
-        _check(self._api.CVodeSetRootDirection(self._objects.memory, directions), "CVodeSetRootDirection")
+        check(self._api.CVodeSetRootDirection(self._objects.memory, directions), "CVodeSetRootDirection")
         self._t = t
         self._y[:] = y
         self._initialise()
@@ -176,7 +179,7 @@ class CCvodeEngine:
         api, memory = self._api, self._objects.memory
         while True:
             if t_stop != self._t_stop:  # once per restart: CVODE keeps it until it is reached
-                _check(api.CVodeSetStopTime(memory, t_stop - self._t_ref), "CVodeSetStopTime")
+                check(api.CVodeSetStopTime(memory, t_stop - self._t_ref), "CVodeSetStopTime")
                 self._t_stop = t_stop
             flag = api.CVode(memory, target - self._t_ref, self._objects.out, ctypes.byref(self._tret),
                              CV_ONE_STEP if one_step else CV_NORMAL)  # fmt: skip

@@ -1,0 +1,142 @@
+"""Saltation matrices: how a perturbation passes a switch (docs/orbits.md, Sec. 2).
+
+At a switch the state is continuous (the stops are compliant: no impact law) but the field jumps
+from ``f-`` (the mode before) to ``f+`` (the mode after).  When the switching time ``t_s`` is set
+by one boundary ``h(t, y) = 0`` that the flow crosses transversally, a perturbation ``dy`` just
+before the switch becomes, just after it (Müller 1995; Leine & Nijmeijer 2004, Sec. 3.5;
+di Bernardo et al. 2008, Sec. 2.5),
+
+    S = I + (f+ - f-) n^T / (n . f- + h_t),      n = dh/dy,  h_t = dh/dt.
+
+Which boundary set the time follows from what changed between the two modes
+(:func:`elementary_switches`):
+
+* a contact flag: the left stop ``h = z1 + d = x1 - x2 + d`` or the right stop ``h = x1 - d1``
+  (the domains 1-8 boundaries ``∂Ω13``, ``∂Ω24`` ... of Sec. 4.1);
+* a moving mass's velocity sign (a crossing, Thm 5.1, or an arrival at rest, Thm 5.2/5.3):
+  ``h = v_i``; an arrival's ``f+`` has ``v_i' = 0``, so ``S`` removes ``dv_i`` (the resting mass's
+  velocity is constrained);
+* a resting mass leaving (Thm 5.4): the flow barrier, a time-dependent boundary
+  ``h = A_i(t, y) - s (mu_s g + p_i)`` with ``n = dA_i/dy`` and ``h_t = Q_i Omega cos(Omega t +
+  phi_i) / m_i`` (4.22), (4.24).
+
+A contact's change is the cause when one occurs, since a mass can leave rest *because* the
+contact damper made its force jump; a release is the cause only when nothing else changed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from oscillator.model.fields import state_derivative
+from oscillator.model.parameters import Parameters
+from oscillator.model.phase_space import Mode
+from oscillator.orbits.variational import field_jacobian
+
+__all__ = ["Boundary", "boundary_of", "elementary_switches", "saltation_matrix"]
+
+
+@dataclass(frozen=True, slots=True)
+class Boundary:
+    """The boundary ``h(t, y) = 0`` whose crossing set a switch's time: its gradient and rate.
+
+    Attributes
+    ----------
+    name : str
+        ``"left stop"``, ``"right stop"``, ``"v1 = 0"``, ``"v2 = 0"``, ``"flow barrier of m1"``, ...
+    normal : ndarray
+        ``dh/dy`` (4,).
+    rate : float
+        ``dh/dt`` at fixed ``y`` (non-zero only for the flow barrier).
+    """
+
+    name: str
+    normal: np.ndarray
+    rate: float = 0.0
+
+
+def _unit(index: int) -> np.ndarray:
+    e = np.zeros(4)
+    e[index] = 1.0
+    return e
+
+
+def elementary_switches(before: Mode, after: Mode) -> list[tuple[Mode, Mode, str]]:
+    """The switch ``before -> after`` as a sequence of switches across one boundary each.
+
+    Several boundaries can be crossed at one instant (both masses reversing together in a
+    symmetric case; a contact and a mass leaving rest because of it).  Each contact change and
+    each moving mass's change of sign is a crossing of its own boundary, taken one after the
+    other (their saltation matrices commute: each jump lies in its own mass's rows).  A mass
+    that leaves rest when a contact changes leaves *because* its force jumped: its release is
+    part of the contact's jump, not a crossing of its flow barrier; otherwise it crosses the
+    barrier.  Returns ``(mode before, mode after, boundary)`` triples, boundary one of
+    ``"left"``, ``"right"``, ``"v1"``, ``"v2"``, ``"barrier1"``, ``"barrier2"``.
+    """
+    steps: list[tuple[Mode, Mode, str]] = []
+    current = before
+    released = [mass for mass in (1, 2) if before.sign(mass) == 0 and after.sign(mass) != 0]
+    contacts = [side for side in ("left", "right") if getattr(before, side) != getattr(after, side)]
+    for k, side in enumerate(contacts):
+        flags = {"left": current.left, "right": current.right, side: getattr(after, side)}
+        new = current.with_contacts(**flags)
+        if k == len(contacts) - 1:
+            for mass in released:
+                new = new.with_sign(mass, after.sign(mass))
+        steps.append((current, new, side))
+        current = new
+    for mass in (1, 2):
+        if before.sign(mass) != 0 and after.sign(mass) != before.sign(mass):
+            new = current.with_sign(mass, after.sign(mass))
+            steps.append((current, new, f"v{mass}"))
+            current = new
+    if not contacts:
+        for mass in released:
+            new = current.with_sign(mass, after.sign(mass))
+            steps.append((current, new, f"barrier{mass}"))
+            current = new
+    if current != after:
+        raise ValueError(f"the switch {before} -> {after} is not a sequence of boundary crossings")
+    return steps
+
+
+def boundary_of(name: str, t: float, y: np.ndarray, p: Parameters, mode: Mode, after: Mode) -> Boundary:
+    """The boundary ``name`` (see :func:`elementary_switches`) at ``(t, y)``, left from ``mode``."""
+    if name == "left":
+        return Boundary("left stop", np.array([1.0, 0.0, -1.0, 0.0]))
+    if name == "right":
+        return Boundary("right stop", _unit(0))
+    mass = int(name[-1])
+    if name.startswith("v"):
+        return Boundary(f"v{mass} = 0", _unit(2 * mass - 1))
+    moving = mode.with_sign(mass, after.sign(mass))
+    normal = field_jacobian(y, p, moving)[2 * mass - 1].copy()
+    amplitude, phase = (p.Q1, p.phi1) if mass == 1 else (p.Q2, p.phi2)
+    rate = amplitude * p.Omega * math.cos(p.Omega * t + phase) / p.mass(mass)
+    return Boundary(f"flow barrier of m{mass}", normal, rate)
+
+
+def saltation_matrix(
+    t: float, y_before: np.ndarray, y_after: np.ndarray, p: Parameters, before: Mode, after: Mode
+) -> np.ndarray:
+    """``S = I + (f+ - f-) n^T / (n . f- + h_t)`` of the switch ``before -> after`` at ``t``;
+    the product of those of its :func:`elementary_switches` when it crosses several boundaries.
+
+    ``y_before`` is the state the flow of ``before`` reached, ``y_after`` the state the switch
+    left (they differ only by the rounding a switch settles, e.g. ``v_i = 0`` exactly for an
+    arrival at rest).  A grazing contact (``n . f- + h_t = 0``) has no saltation matrix: the
+    map is not differentiable there, and this raises ``ZeroDivisionError``.
+    """
+    matrix = np.eye(4)
+    for mode, new, name in elementary_switches(before, after):
+        boundary = boundary_of(name, t, y_before, p, mode, new)
+        f_minus = np.array(state_derivative(t, y_before, p, mode))
+        f_plus = np.array(state_derivative(t, y_after, p, new))
+        speed = float(boundary.normal @ f_minus + boundary.rate)
+        if speed == 0.0:
+            raise ZeroDivisionError(f"the flow is tangent to the {boundary.name} at t = {t!r}")
+        matrix = (np.eye(4) + np.outer(f_plus - f_minus, boundary.normal) / speed) @ matrix
+    return matrix
