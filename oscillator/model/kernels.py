@@ -12,7 +12,19 @@ from oscillator.model.energy import power_terms
 from oscillator.model.fields import forces, kinetic
 from oscillator.model.types import Vector
 
-__all__ = ["derivative"]
+__all__ = ["derivative", "state_field"]
+
+
+@njit(cache=True)
+def state_field(  # pragma: no cover - compiled
+    t: float, y: Vector, yp: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool
+) -> None:
+    """Fill ``yp[:4]`` with the mode's field (4.9)-(4.14) at ``y[:4]``."""
+    f1, f2 = forces(t, y[0], y[1], y[2], y[3], left, right, c)
+    yp[0] = y[1]
+    yp[1] = kinetic(c, 1, s1, f1)
+    yp[2] = y[3]
+    yp[3] = kinetic(c, 2, s2, f2)
 
 
 @njit(cache=True)
@@ -20,11 +32,7 @@ def derivative(  # pragma: no cover - compiled
     t: float, y: Vector, yp: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool
 ) -> None:
     """Fill ``yp`` with the mode's field (4.9)-(4.14) and the powers of the energy audit."""
-    f1, f2 = forces(t, y[0], y[1], y[2], y[3], left, right, c)
-    yp[0] = y[1]
-    yp[1] = kinetic(c, 1, s1, f1)
-    yp[2] = y[3]
-    yp[3] = kinetic(c, 2, s2, f2)
+    state_field(t, y, yp, c, s1, s2, left, right)
     forcing, feedback, damping, friction = power_terms(t, y[1], y[3], s1, s2, left, c)
     yp[4] = forcing
     yp[5] = feedback

@@ -20,7 +20,8 @@ from oscillator.engines import EngineFailure
 from oscillator.engines import callbacks as cb
 from oscillator.engines.cvode_c import CvodeObjects, check
 from oscillator.engines.sundials import CV_NORMAL, ERROR_HANDLER, describe
-from oscillator.model.fields import C1, C2, C3, C4, C5, K1, K2, K3, K4, K5, K6, M1, M2, coefficients, forces, kinetic
+from oscillator.model.fields import C1, C2, C3, C4, C5, K1, K2, K3, K4, K5, K6, M1, M2, coefficients
+from oscillator.model.kernels import state_field
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import Vector
@@ -64,11 +65,7 @@ def variational_derivative(  # pragma: no cover - compiled
     t: float, y: Vector, yp: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool
 ) -> None:
     """``(f(t, y), J(t, y) Phi)`` for the 20-vector ``(y, Phi)``."""
-    f1, f2 = forces(t, y[0], y[1], y[2], y[3], left, right, c)
-    yp[0] = y[1]
-    yp[1] = kinetic(c, 1, s1, f1)
-    yp[2] = y[3]
-    yp[3] = kinetic(c, 2, s2, f2)
+    state_field(t, y, yp, c, s1, s2, left, right)
     j = np.empty(16)
     jacobian(y[0], y[1], y[2], y[3], c, s1, s2, left, right, j)
     for row in range(4):
