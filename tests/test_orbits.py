@@ -149,3 +149,23 @@ def test_continuation_locates_where_sliding_sets_in_on_the_q2_branch():
     assert abs(row.Q2 - 71.1577416) < 1e-6
     assert row.jump > 1e-6  # static > kinetic: the rest interval appears with a finite length
     assert branch.points.stable.all()
+
+
+def test_continue_writes_its_tables_figures_and_an_escaped_report(tmp_path):
+    """`oscillator continue` on a case file whose name is markup: the reports show it as text."""
+    from pathlib import Path
+
+    from oscillator.cli.app import main
+
+    hostile = tmp_path / "<img src=x onerror=alert(1)>*x*.toml"
+    hostile.write_text((Path(__file__).parents[1] / "cases" / "instance-1.toml").read_text(encoding="utf-8"))
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exit_:
+        main(["continue", str(hostile), "--param", "Q2", "--from", "71.3", "--to", "71.0", "--step", "0.5",
+              "--out", str(out), "-q"])  # fmt: skip
+    assert exit_.value.code == 0
+    assert {p.name for p in out.iterdir()} >= {"branch.parquet", "bifurcations.parquet", "report.md", "report.html"}
+    assert {p.name for p in (out / "figures").iterdir()} == {"branch.png", "multipliers.png"}
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "<img src=x" not in html and "&lt;img src=x onerror=alert(1)&gt;" in html
+    assert "\\<img src=x onerror=alert(1)\\>\\*x\\*" in (out / "report.md").read_text(encoding="utf-8")

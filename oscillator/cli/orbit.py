@@ -111,7 +111,7 @@ def continue_(
     folds); locate its sliding, grazing, fold, period-doubling and torus bifurcations.
 
     Writes branch.parquet, bifurcations.parquet, figures/branch.png, figures/multipliers.png
-    and report.md into DIR (default runs/<case>-continue-<time>).
+    report.md and report.html into DIR (default runs/<case>-continue-<time>).
 
     \b
     Examples:

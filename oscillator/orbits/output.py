@@ -35,7 +35,8 @@ def draw_branch(branch: Branch, path: Path, coordinate: str, sweep_points: pd.Da
     param, points = branch.param, branch.points
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=150)
     if sweep_points is not None and len(sweep_points):
-        ax.plot(sweep_points[param], sweep_points[coordinate], ".", color="0.6", ms=2, label="sweep (Poincaré points)")
+        ax.plot(sweep_points[param], sweep_points[coordinate], "o", color="k", ms=2.5, zorder=3,
+                label="sweep (Poincaré points)")  # fmt: skip
     stable = points.stable.to_numpy(bool)
     for k, part in enumerate(_runs(stable)):
         is_stable = bool(stable[part.start])
@@ -65,16 +66,18 @@ def draw_multipliers(branch: Branch, path: Path) -> None:
 
     param, points = branch.param, branch.points
     fig, ax = plt.subplots(figsize=(7, 3.5), dpi=150)
+    floor = 1e-16  # a multiplier of 0 (a resting mass's constrained velocity) is drawn here
     for k in range(1, 5):
-        moduli = points[f"mu{k}"].clip(lower=1e-16)
+        moduli = points[f"mu{k}"].clip(lower=floor)
         ax.semilogy(points[param], moduli, "-", lw=1.2, label=f"|mu{k}|")
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
     for value in branch.bifurcations[param]:
         ax.axvline(value, color="C3", lw=0.6, ls="--")
     ax.set_xlabel(param)
     ax.set_ylabel("modulus of multiplier")
-    ax.set_ylim(1e-6, None)
-    ax.legend(fontsize=8, ncol=4)
+    ax.set_ylim(floor / 10, None)
+    ax.text(0.99, 0.02, "0 is drawn at 1e-16", transform=ax.transAxes, ha="right", fontsize=7, color="0.4")
+    ax.legend(fontsize=8, ncol=4, loc="center left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(path)
@@ -120,7 +123,9 @@ def write_branch(
         (folder / "figures").mkdir(exist_ok=True)
         draw_branch(branch, folder / "figures" / "branch.png", coordinate, sweep_points)
         draw_multipliers(branch, folder / "figures" / "multipliers.png")
-        replace_file(folder / "report.md", mk.to_markdown(report_blocks(branch, case)))
+        blocks = report_blocks(branch, case)
+        replace_file(folder / "report.md", mk.to_markdown(blocks))
+        replace_file(folder / "report.html", mk.to_html(blocks, folder=folder, title=f"{case.name}: branch"))
     except (OSError, ValueError, RuntimeError) as failure:
         return folder, f"the figures or the report could not be written ({failure})"
     return folder, ""
