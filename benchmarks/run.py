@@ -16,7 +16,10 @@
 9. the Python work per root return outside the engine (switching decisions, events, recording),
    and the cost of building the event table per event;
 10. start-up: `simulate("instance-1", t_end=2)` in a fresh process with numba's cache empty (the
-   first run after an install) and filled (every later run).
+   first run after an install) and filled (every later run);
+11. periodic orbits on Instance 1's system: one evaluation of the stroboscopic map without and
+   with its monodromy matrix, a Newton step, `find_orbit` from a transient, and continuation
+   (the Q2 and Omega branches of docs/orbits.md): seconds per point, against a sweep's point.
 
 Usage: python benchmarks/run.py [--quick] [--only SECTION ...] [--memory-periods N] [--soak-periods N]
                                 [--json PATH]
@@ -352,7 +355,61 @@ def print_startup(row: dict) -> None:
           f"{row['warm_s']:.1f} s with it filled")  # fmt: skip
 
 
-SECTIONS = ("instances", "throughput", "baseline", "sweep", "memory", "soak", "floor", "engines", "per_root", "startup")
+def orbits(quick: bool) -> dict:
+    """Costs of the periodic-orbit tools (medians of repeats; continuation once)."""
+    from functools import partial
+    from statistics import median
+
+    from oscillator import continue_orbit, find_orbit
+    from oscillator.orbits.shooting import orbit_case, period_map
+
+    row: dict = {"maps": []}
+    repeats = 3 if quick else 15
+    for omega in (1.6, 1.85):
+        orbit = find_orbit("instance-1", Omega=omega)
+        case = orbit_case("instance-1", {"Omega": omega})
+        plain_map = partial(period_map, case, orbit.t0, orbit.state, derivative=False)
+        full_map = partial(period_map, case, orbit.t0, orbit.state)
+        plain = median(best_of(1, plain_map)[0] for _ in range(repeats))
+        full = median(best_of(1, full_map)[0] for _ in range(repeats))
+        newton_wall, again = best_of(1, partial(find_orbit, case, guess=orbit.state + 1e-4))
+        transient_wall, _ = best_of(1, partial(find_orbit, "instance-1", Omega=omega))
+        entry = {"omega": omega, "switches": len(orbit.events), "map_s": plain, "map_with_monodromy_s": full,
+                 "newton_steps": again.iterations, "newton_s_per_step": newton_wall / max(again.iterations, 1),
+                 "find_orbit_from_transient_s": transient_wall}  # fmt: skip
+        say(f"Omega = {omega}: map {plain * 1e3:.1f} ms, with monodromy {full * 1e3:.1f} ms, "
+            f"Newton {entry['newton_s_per_step'] * 1e3:.1f} ms/step, find_orbit {transient_wall:.2f} s")  # fmt: skip
+        row["maps"].append(entry)
+    branches = [("Q2", 71.5, 70.5), ("Omega", 1.59, 1.62)] if not quick else [("Q2", 71.3, 71.1)]
+    row["branches"] = []
+    for param, start, stop in branches:
+        wall, branch = best_of(1, partial(continue_orbit, "instance-1", param=param, start=start, stop=stop))
+        points = len(branch.points)
+        entry = {"param": param, "start": start, "stop": stop, "points": points,
+                 "bifurcations": len(branch.bifurcations), "wall_s": wall, "s_per_point": wall / points}  # fmt: skip
+        say(f"{param} {start} -> {stop}: {points} points, {entry['bifurcations']} bifurcation(s), {wall:.1f} s")
+        row["branches"].append(entry)
+    case = resolve_case("instance-1")
+    t0, period = case.initial.t0, case.parameters.period
+    sweep_point, _ = best_of(1, lambda: simulate(case, t_end=t0 + 150 * period, record_trajectory=False))
+    row["sweep_point_s"] = sweep_point
+    return row
+
+
+def print_orbits(row: dict) -> None:
+    print(f"{'Omega':<7}{'switches':>9}{'map ms':>8}{'+monodromy ms':>15}{'Newton ms/step':>16}{'find_orbit s':>14}")
+    for m in row["maps"]:
+        print(f"{m['omega']:<7}{m['switches']:>9}{m['map_s'] * 1e3:>8.1f}{m['map_with_monodromy_s'] * 1e3:>15.1f}"
+              f"{m['newton_s_per_step'] * 1e3:>16.1f}{m['find_orbit_from_transient_s']:>14.2f}")  # fmt: skip
+    for b in row["branches"]:
+        print(f"continuation in {b['param']} {b['start']} -> {b['stop']}: {b['points']} points, "
+              f"{b['bifurcations']} bifurcation(s) located, {b['wall_s']:.1f} s, {b['s_per_point'] * 1e3:.0f} ms "
+              f"per point")  # fmt: skip
+    print(f"a sweep's point (150 periods simulated, Instance 1): {row['sweep_point_s'] * 1e3:.0f} ms")
+
+
+SECTIONS = ("instances", "throughput", "baseline", "sweep", "memory", "soak", "floor", "engines", "per_root", "startup",
+            "orbits")  # fmt: skip
 
 
 def main() -> None:
@@ -388,6 +445,7 @@ def main() -> None:
         "engines": (lambda: engines(5 if quick else 30), print_engines),
         "per_root": (lambda: per_root(5 if quick else 30), print_per_root),
         "startup": (startup, print_startup),
+        "orbits": (lambda: orbits(quick), print_orbits),
     }
     results = {"machine": machine}
     for section in SECTIONS:

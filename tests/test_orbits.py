@@ -151,6 +151,110 @@ def test_continuation_locates_where_sliding_sets_in_on_the_q2_branch():
     assert branch.points.stable.all()
 
 
+def returns(case, y, periods):
+    """Poincaré points of the simulated motion from ``y`` at the case's section."""
+    points = [np.asarray(y, dtype=float)]
+    for _ in range(periods):
+        points.append(period_map(case, case.initial.t0, points[-1], derivative=False).end)
+    return np.array(points)
+
+
+def test_continuation_finds_the_gap_at_the_top_of_the_omega_sliding_window():
+    """Up in Omega, the resting period-1 orbit ends at 1.6097374 with a rest of finite length,
+    and the non-sliding orbit begins only at 1.6097413, the window's end that ``locate`` finds by
+    brute force: in between no period-1 orbit exists (the motion is period-3).  Each end is
+    checked by simulation 2e-8 inside and outside: inside, the motion started on the end's orbit
+    stays on it; outside, it leaves."""
+    branch = continue_orbit("instance-1", param="Omega", start=1.60973, stop=1.60975, step=0.5)
+    assert branch.complete and branch.points.stable.all()
+    first, last = branch.bifurcations.itertuples()
+    assert first.after == "" and last.before == ""  # the two ends of a gap
+    assert first.before.count("sliding_onset") == 1 and "sliding" not in last.after
+    assert np.isnan(first.jump) and np.isnan(last.jump)
+    assert abs(last.Omega - 1.6097413) < 1e-7 and 1e-6 < last.Omega - first.Omega < 1e-5
+    for row, inside in ((first, -2e-8), (last, 2e-8)):
+        state = [row.x1, row.v1, row.x2, row.v2]
+        stays = returns(resolve_case("instance-1", Omega=row.Omega + inside, rtol=1e-12, atol=1e-12), state, 30)
+        leaves = returns(resolve_case("instance-1", Omega=row.Omega - inside, rtol=1e-12, atol=1e-12), state, 30)
+        assert np.max(np.abs(stays - stays[0])) < 1e-6
+        assert np.max(np.abs(leaves[-10:] - stays[0])) > 1e-4
+    assert branch.points.piece.iloc[-1] == branch.points.piece.iloc[0] + 1
+
+
+def test_going_up_in_q2_the_resting_orbit_ends_where_simulation_says():
+    """The resting orbit, continued up in Q2, ends at 1e-8 from where the simulated motion stops
+    resting: started from an orbit of the branch 1e-3 below the end, the motion still rests twice
+    a period 2e-8 below it and not at all 2e-8 above.  The two orbits coexist in between the
+    two directions' ends (hysteresis)."""
+    branch = continue_orbit("instance-1", param="Q2", start=71.0, stop=71.3, step=0.25)
+    (row,) = branch.bifurcations.itertuples()
+    assert row.before.count("sliding_onset") == 2 and "sliding" not in row.after and row.jump > 1e-3
+    assert 71.1577416 + 1e-3 < row.Q2 < 71.18
+    inside = branch.points[branch.points.Q2 < row.Q2 - 1e-3].iloc[-1]
+    start = inside[["x1", "v1", "x2", "v2"]].to_numpy(float)
+    for offset, rests in ((-2e-8, 2), (2e-8, 0)):
+        case = resolve_case("instance-1", Q2=row.Q2 + offset, rtol=1e-12, atol=1e-12)
+        settled = returns(case, start, 40)[-1]
+        image = period_map(case, case.initial.t0, settled, derivative=False)
+        assert np.max(np.abs(image.end - settled)) < 1e-8
+        assert (image.events.kind == "sliding_onset").sum() == rests
+
+
+def test_the_cyclic_signature_does_not_depend_on_where_the_section_cuts_the_orbit():
+    import pandas as pd
+
+    from oscillator.orbits.shooting import PeriodMap, cyclic_signature
+
+    def image(events):
+        table = pd.DataFrame(events, columns=["t", "mass", "kind"])
+        return PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table)
+
+    a = image([(0.2, 1, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])
+    b = image([(0.1, 2, "sliding_vanish"), (0.6, 2, "passable"), (1.3, 1, "passable"), (1.8, 2, "sliding_onset")])
+    on_section = image([(0.0, 2, "passable"), (0.5, 1, "passable"), (1.0, 2, "sliding_onset"),
+                        (1.2, 2, "sliding_vanish"), (1.2, 1, "grazing"), (2.0, 2, "passable")])  # fmt: skip
+    assert cyclic_signature(a) == cyclic_signature(b) == cyclic_signature(on_section)
+    assert cyclic_signature(a).count(",") == 3
+    reversed_order = image([(0.2, 2, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"),
+                            (1.5, 1, "passable")])  # fmt: skip
+    assert cyclic_signature(reversed_order) != cyclic_signature(a)
+
+
+#: m1 as a hardening (Duffing) oscillator with light friction, the stops out of reach: its
+#: resonance curve bends over, so the period-1 branch in Omega folds twice.
+DUFFING = {"mu_k": 0.01, "mu_s": 0.015, "P1": 0.0, "P2": 0.0, "K1": 1.0, "K2": 0.1, "C1": 0.1, "C2": 0.0,
+           "Q1": 0.6, "Q2": 0.4, "K4": 1.0, "K5": 0.0, "C4": 0.1, "C5": 0.0, "d": 20.0, "d1": 20.0, "x1": 0.0,
+           "x2": 0.0}  # fmt: skip
+
+
+def test_continuation_passes_around_the_two_folds_of_a_hardening_resonance():
+    """Up in Omega the branch climbs the resonance's upper side, turns at a fold, comes back
+    unstable, turns at a second fold and goes on: at each fold a multiplier is 1; between the
+    folds three orbits coexist, and simulation confirms which are stable."""
+    branch = continue_orbit("instance-1", param="Omega", start=1.1, stop=1.7, step=0.25, **DUFFING)
+    assert branch.complete and branch.points.Omega.iloc[-1] == 1.7
+    assert list(branch.bifurcations.kind) == ["fold", "fold"]
+    upper, lower = branch.bifurcations.Omega
+    assert 1.2 < lower < upper < 1.45
+    for row in branch.bifurcations.itertuples():
+        orbit = find_orbit("instance-1", guess=(row.x1, row.v1, row.x2, row.v2), Omega=row.Omega, **DUFFING)
+        assert np.min(np.abs(orbit.multipliers - 1.0)) < 1e-3
+
+    omega = 0.5 * (lower + upper)
+    lam = branch.points.Omega.to_numpy()
+    crossings = np.flatnonzero(np.diff(np.sign(lam - omega)) != 0)
+    assert len(crossings) == 3
+    case = resolve_case("instance-1", Omega=omega, rtol=1e-12, atol=1e-12, **DUFFING)
+    for k, stable in zip(crossings, (True, False, True), strict=True):
+        a, b = branch.points.iloc[k], branch.points.iloc[k + 1]
+        w = (omega - a.Omega) / (b.Omega - a.Omega)
+        guess = [(1 - w) * a[name] + w * b[name] for name in ("x1", "v1", "x2", "v2")]
+        orbit = find_orbit(case, guess=guess)
+        assert orbit.stable is stable and bool(a.stable) is stable
+        after = returns(case, orbit.state + 1e-3, 60)[-1]
+        assert bool(np.max(np.abs(after - orbit.state)) < 1e-6) is stable
+
+
 def test_continue_writes_its_tables_figures_and_an_escaped_report(tmp_path):
     """`oscillator continue` on a case file whose name is markup: the reports show it as text."""
     from pathlib import Path

@@ -151,7 +151,8 @@ def continue_(
     if not quiet:
         say(f"{len(branch.points)} points, {len(branch.bifurcations)} bifurcation(s) in {folder}")
         for row in branch.bifurcations.itertuples(index=False):
-            out.print(Text(f"  {param} = {getattr(row, param):.10g}  {row.kind}"))
+            gap = "  (a gap begins)" if row.after == "" else "  (a gap ends)" if row.before == "" else ""
+            out.print(Text(f"  {param} = {getattr(row, param):.10g}  {row.kind}{gap}"))
         if not branch.complete:
             out.print(Text(f"  the branch ended early: {printable(branch.message)}"))
     if problem:

@@ -8,7 +8,7 @@ central difference of the map.  The branch follows unstable parts and turns at f
 
 Between two points, the branch has a bifurcation where
 
-* the orbit's event signature changes (:func:`~oscillator.orbits.shooting.event_signature`): a
+* the orbit's event signature changes (:func:`~oscillator.orbits.shooting.cyclic_signature`): a
   rest interval appears or disappears (``sliding_onset`` / ``sliding_vanish``, named as the
   parameter increases) or a pair of other switches does (``grazing``): the map is continuous
   but not differentiable there, and its multipliers may jump;
@@ -34,7 +34,7 @@ from oscillator.orbits.shooting import (
     STATE,
     PeriodMap,
     check_count,
-    event_signature,
+    cyclic_signature,
     multipliers_of,
     newton,
     orbit_case,
@@ -64,11 +64,20 @@ class _Point:
 
     @property
     def signature(self) -> str:
-        return event_signature(self.image.events)
+        return cyclic_signature(self.image)
 
     @property
     def unstable(self) -> int:
         return int(np.sum(np.abs(self.multipliers) > 1.0))
+
+
+@dataclass(frozen=True)
+class _Located:
+    """A located bifurcation: its row, and the orbits on either side (None across a gap)."""
+
+    row: dict
+    left: _Point | None
+    right: _Point | None
 
 
 @dataclass(frozen=True)
@@ -80,15 +89,23 @@ class Branch:
     param : str
         The continued parameter.
     points : DataFrame
-        One row per point, in the order of the branch: the parameter under its own name,
-        ``x1, v1, x2, v2`` at ``t0``, ``mu1..mu4`` (the multipliers' moduli, largest first),
-        ``stable``, ``signature`` (the event kinds over one period) and ``iterations``.
+        One row per point, in the order of the branch (including the orbits on either side of each
+        located bifurcation): the parameter under its own name, ``x1, v1, x2, v2`` at ``t0``,
+        ``mu1..mu4`` (the multipliers' moduli, largest first), ``stable``, ``signature`` (the
+        event kinds over one period as a cycle:
+        :func:`~oscillator.orbits.shooting.cyclic_signature`), ``piece`` (the branch's
+        continuous pieces, numbered from 0: a new one begins after a jump or a gap) and
+        ``iterations`` (the corrector's Newton steps; 0 for an orbit found at a bifurcation's
+        side).
     bifurcations : DataFrame
         The parameter under its own name, ``kind`` (:data:`BIFURCATION_KINDS`), the state at the
         bifurcation (on the side the branch came from), ``jump`` (how far the orbit on the other
         side is, at the section: zero for a continuous bifurcation, finite where a rest interval
         appears with a finite length), ``before`` and ``after`` (the signatures on either side,
-        along the branch).
+        along the branch).  Where no period-N orbit lies between the end of one kind and the
+        start of the next (a gap), each end is a row of its own, with ``jump`` NaN and an empty
+        ``after`` (the gap's first end) or ``before`` (its last), and the state of the orbit
+        that ends there.
     t0 : float
         The section's time.
     period : int
@@ -262,7 +279,8 @@ def continue_orbit(
     cont = _Continuer(base, param, t0_, period, sigma, tol)
     direction = 1.0 if stop > start else -1.0
 
-    points, bifurcations = [cont.first(y_start, start, direction)], []
+    trace = _Trace(cont.first(y_start, start, direction), cont.scale)
+    points = trace.points
     ds, ds_min = ds_max / 4, ds_max / 2**12
     complete, message = False, ""
     lo, hi = min(start, stop), max(start, stop)
@@ -278,21 +296,56 @@ def continue_orbit(
         if not lo - 1e-12 * sigma <= b.lam <= hi + 1e-12 * sigma:
             end = _end_point(cont, a, b, stop if (b.lam - stop) * direction > 0 else start)
             if end is not None:
-                bifurcations += _between(cont, a, end, ds, locate_tol)
-                points.append(end)
+                trace.add(_between(cont, a, end, ds, locate_tol), end)
             complete = end is not None and end.lam == stop
             message = "" if complete else f"the branch came back to {param} = {start:g} after a fold"
             break
-        bifurcations += _between(cont, a, b, ds, locate_tol)
-        points.append(b)
+        trace.add(_between(cont, a, b, ds, locate_tol), b)
         if progress is not None:
             progress(min(1.0, abs(b.lam - start) / sigma))
         if b.iterations <= 2:
             ds = min(ds * 1.5, ds_max)
     else:
         message = f"max_points = {max_points} reached at {param} = {points[-1].lam:.10g}"
-    return Branch(param, _points_frame(points, param), _bifurcations_frame(bifurcations, param), t0_, period,
-                  complete, message)  # fmt: skip
+    return Branch(param, trace.points_frame(param), trace.bifurcations_frame(param), t0_, period, complete, message)
+
+
+class _Trace:
+    """The branch as it is traced: its points, where each continuous piece begins, its bifurcations."""
+
+    def __init__(self, first: _Point, scale: float) -> None:
+        self.points, self.piece_starts = [first], [0]
+        self.rows: list[dict] = []
+        self.scale = scale
+
+    def add(self, located: list[_Located], b: _Point) -> None:
+        """The bifurcations between the last point and ``b``, the orbits on their sides (so the
+        branch reaches each bifurcation), then ``b``; a new piece begins after a jump or a gap."""
+        for found in located:
+            self.rows.append(found.row)
+            jump = found.row["jump"]
+            if found.right is not None and (math.isnan(jump) or jump > 1e-6 * self.scale):
+                self.piece_starts.append(len(self.points))
+            for side in (found.left, found.right):
+                last = self.points[-1]
+                if side is not None and side is not b and not (side.lam == last.lam and np.array_equal(side.y, last.y)):
+                    self.points.append(side)
+        self.points.append(b)
+
+    def points_frame(self, param: str) -> pd.DataFrame:
+        pieces = np.zeros(len(self.points), dtype=int)
+        for start in self.piece_starts[1:]:
+            pieces[start:] += 1
+        rows = []
+        for p, piece in zip(self.points, pieces, strict=True):
+            moduli = np.abs(p.multipliers)
+            rows.append({param: p.lam, **dict(zip(STATE, p.y, strict=True)),
+                         **{f"mu{k + 1}": float(moduli[k]) for k in range(4)}, "stable": bool(np.all(moduli < 1.0)),
+                         "signature": p.signature, "piece": int(piece), "iterations": p.iterations})  # fmt: skip
+        return pd.DataFrame(rows)
+
+    def bifurcations_frame(self, param: str) -> pd.DataFrame:
+        return pd.DataFrame(self.rows, columns=[param, "kind", *STATE, "jump", "before", "after"])
 
 
 def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point | None:
@@ -302,14 +355,14 @@ def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point
     return None if end is None else _Point(end.y, lam_end, end.image, b.tangent, end.iterations)
 
 
-def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: float) -> list[dict]:
-    """The bifurcations between two consecutive points, located."""
+def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: float) -> list[_Located]:
+    """The bifurcations between two consecutive points, located, with the orbits on their sides."""
     if a.signature != b.signature:  # one or more changes of the event sequence, in turn
         found, current = [], a
         for _ in range(8):
             left, right = _bisect_signature(cont, current, b, locate_tol)
             kind = _kind_of_change(current.signature, right.signature, increasing=b.lam > a.lam)
-            found.append(_record(cont, kind, left, right, current.signature, right.signature))
+            found += _signature_change(cont, kind, left, right, current.signature, locate_tol)
             if right.signature == b.signature:
                 break
             current = _Point(right.y, right.lam, right.image, b.tangent, 0)
@@ -317,7 +370,7 @@ def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: floa
     if a.tangent[4] * b.tangent[4] < 0:
         sign = np.sign(a.tangent[4])
         left, right = _bisect(cont, a, b, ds, lambda p: np.sign(p.tangent[4]) == sign, locate_tol)
-        return [_record(cont, "fold", left, right, a.signature, b.signature)]
+        return [_Located(_record(cont, "fold", left, right, a.signature, b.signature), left, right)]
     if a.unstable != b.unstable:
         mu = _critical(b) if abs(abs(_critical(b)) - 1) < abs(abs(_critical(a)) - 1) else _critical(a)
         if abs(mu.imag) > 1e-6 * abs(mu):
@@ -328,8 +381,21 @@ def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: floa
             kind = "fold"
         count = a.unstable
         left, right = _bisect(cont, a, b, ds, lambda p: p.unstable == count, locate_tol)
-        return [_record(cont, kind, left, right, a.signature, b.signature)]
+        return [_Located(_record(cont, kind, left, right, a.signature, b.signature), left, right)]
     return []
+
+
+def _signature_change(
+    cont: _Continuer, kind: str, left: _Point, right: _Point, before: str, locate_tol: float
+) -> list[_Located]:
+    """One row where the two sides meet; two where they do not (a gap: no period-N orbit lies
+    between the end of ``left``'s kind and the start of ``right``'s)."""
+    if abs(right.lam - left.lam) <= 3 * locate_tol:
+        return [_Located(_record(cont, kind, left, right, before, right.signature), left, right)]
+    return [
+        _Located(_record(cont, kind, left, None, before, ""), left, None),
+        _Located(_record(cont, kind, right, None, "", right.signature), None, right),
+    ]
 
 
 def _natural(cont: _Continuer, lam: float, guess: np.ndarray) -> _Point | None:
@@ -341,28 +407,48 @@ def _natural(cont: _Continuer, lam: float, guess: np.ndarray) -> _Point | None:
     return _Point(y, lam, image, np.zeros(5), 0)
 
 
-def _bisect_signature(cont: _Continuer, a: _Point, b: _Point, locate_tol: float) -> tuple[_Point, _Point]:
-    """Where the orbit of ``a``'s signature ceases to exist between ``a`` and ``b``, in the
-    parameter: bisection with Newton at fixed parameter from the last orbit like ``a``.
+def _slope(p: _Point, sigma: float) -> np.ndarray:
+    """``dy/dlam`` along the branch at ``p`` (zero where unknown or at a fold)."""
+    return p.tangent[:4] / (p.tangent[4] * sigma) if p.tangent[4] != 0 else np.zeros(4)
 
-    The map is not differentiable there, and with static > kinetic friction not even
-    continuous: a rest interval can appear with a finite length, so that the orbit of ``a``'s
-    kind ends while another orbit exists on both sides (hysteresis).  Following the orbit of
-    ``a`` from its own side finds its end; the other orbit is found from ``b``'s side.
+
+def _bisect_signature(cont: _Continuer, a: _Point, b: _Point, locate_tol: float) -> tuple[_Point, _Point]:
+    """The last orbit of ``a``'s signature and the first of another, between ``a`` and ``b``.
+
+    The map is not differentiable where the signature changes, and with static > kinetic
+    friction not even continuous: a rest interval can appear with a finite length.  So each side
+    is followed from its own side, by bisection in the parameter with Newton at fixed parameter
+    started from the nearest orbit of its kind (moved along the branch's slope):
+
+    * the end of ``a``'s kind, from ``a``;
+    * the start of the other kind, from ``b``.
+
+    They meet where the orbit changes continuously.  Where the two kinds overlap (hysteresis), the
+    first bisection finds where ``a``'s kind ends and the other is found at once beyond it; where
+    neither exists in between, the two ends are apart: a gap in the branch, where the motion is
+    not a period-N orbit (or one this branch does not pass).
     """
-    slope = a.tangent[:4] / (a.tangent[4] * cont.sigma) if a.tangent[4] != 0 else np.zeros(4)
-    left, right = a, b
-    while abs(right.lam - left.lam) > locate_tol:
-        mid = 0.5 * (left.lam + right.lam)
-        p = _natural(cont, mid, left.y + slope * (mid - left.lam))
+    slope_a, slope_b = _slope(a, cont.sigma), _slope(b, cont.sigma)
+    left, beyond = a, b.lam  # the last orbit like a; a parameter where none like a was found
+    while abs(beyond - left.lam) > locate_tol:
+        mid = 0.5 * (left.lam + beyond)
+        p = _natural(cont, mid, left.y + slope_a * (mid - left.lam))
         if p is not None and p.signature == a.signature:
             left = p
-            continue
-        other = _natural(cont, mid, right.y)
-        if other is not None and other.signature != a.signature:
-            right = other
-        else:  # no orbit of the other kind found at mid: keep b's as the other side's
-            right = _Point(right.y, mid, right.image, right.tangent, 0)
+        else:
+            beyond = mid
+    right, short = b, left.lam  # the first orbit of another kind; where none was found
+    if beyond != b.lam:  # most often the other kind exists right there
+        p = _natural(cont, beyond, b.y + slope_b * (beyond - b.lam))
+        if p is not None and p.signature != a.signature:
+            right = p
+    while abs(right.lam - short) > locate_tol:
+        mid = 0.5 * (short + right.lam)
+        p = _natural(cont, mid, right.y + slope_b * (mid - right.lam))
+        if p is not None and p.signature != a.signature:
+            right = p
+        else:
+            short = mid
     return left, right
 
 
@@ -388,23 +474,17 @@ def _bisect(
     return left, right
 
 
-def _record(cont: _Continuer, kind: str, left: _Point, right: _Point, before: str, after: str) -> dict:
-    """A bifurcation row: the parameter between the two sides, the state on ``left``'s side and
-    ``jump``, the distance (max norm) between the two sides' states at the section."""
-    return {cont.param: 0.5 * (left.lam + right.lam), "kind": kind, **dict(zip(STATE, left.y, strict=True)),
-            "jump": float(np.max(np.abs(right.y - left.y))), "before": before, "after": after}  # fmt: skip
-
-
-def _points_frame(points: list[_Point], param: str) -> pd.DataFrame:
-    rows = []
-    for p in points:
-        moduli = np.abs(p.multipliers)
-        rows.append({param: p.lam, **dict(zip(STATE, p.y, strict=True)),
-                     **{f"mu{k + 1}": float(moduli[k]) for k in range(4)}, "stable": bool(np.all(moduli < 1.0)),
-                     "signature": p.signature, "iterations": p.iterations})  # fmt: skip
-    return pd.DataFrame(rows)
-
-
-def _bifurcations_frame(rows: list[dict], param: str) -> pd.DataFrame:
-    columns = [param, "kind", *STATE, "jump", "before", "after"]
-    return pd.DataFrame(rows, columns=columns)
+def _record(cont: _Continuer, kind: str, at: _Point, other: _Point | None, before: str, after: str) -> dict:
+    """A bifurcation row: the parameter (between ``at`` and ``other``, or at ``at`` where no
+    orbit lies on the other side), the state at ``at`` and ``jump``, the distance (max norm)
+    between the two sides' states at the section (NaN without an ``other``; 0 at a fold,
+    period doubling or torus, where the branch is smooth)."""
+    lam = at.lam if other is None else 0.5 * (at.lam + other.lam)
+    if other is None:
+        jump = math.nan
+    elif kind in ("fold", "period_doubling", "torus"):
+        jump = 0.0
+    else:
+        jump = float(np.max(np.abs(other.y - at.y)))
+    return {cont.param: lam, "kind": kind, **dict(zip(STATE, at.y, strict=True)), "jump": jump,
+            "before": before, "after": after}  # fmt: skip

@@ -33,7 +33,7 @@ from oscillator.model.phase_space import Mode
 from oscillator.orbits.saltation import saltation_matrix
 from oscillator.orbits.variational import ModeFlow
 
-__all__ = ["Orbit", "PeriodMap", "event_signature", "find_orbit", "multipliers_of", "period_map"]
+__all__ = ["Orbit", "PeriodMap", "cyclic_signature", "event_signature", "find_orbit", "multipliers_of", "period_map"]
 
 #: Forcing periods simulated before Newton starts, when the case has no sweep settings.
 TRANSIENT = 100
@@ -134,6 +134,27 @@ def event_signature(events: pd.DataFrame) -> str:
     (grazing contacts are not switches and are left out)."""
     kinds = events[events.kind != EventKind.GRAZING.value]
     return ", ".join(f"m{mass} {kind}" for mass, kind in zip(kinds["mass"], kinds["kind"], strict=True))
+
+
+def cyclic_signature(image: PeriodMap) -> str:
+    """The signature of an orbit through ``image``, whatever the section: the same events in
+    the same cyclic order give the same text.
+
+    The events are read as a cycle (one switch at both ends of ``[t0, t1]``, there because the
+    orbit is on a boundary at the section, counted once) and written from the rotation whose
+    text sorts first.  Along a branch, an event passing through the section then does not
+    change the signature; only a change of the cycle does.
+    """
+    kinds = image.events[image.events.kind != EventKind.GRAZING.value]
+    tokens = [f"m{mass} {kind}" for mass, kind in zip(kinds["mass"], kinds["kind"], strict=True)]
+    times = kinds["t"].to_numpy(float)
+    if len(tokens) > 1 and tokens[0] == tokens[-1]:
+        if abs((times[-1] - times[0]) - (image.t1 - image.t0)) <= 1e-6 * (image.t1 - image.t0):
+            tokens.pop()
+    if not tokens:
+        return ""
+    rotations = [tokens[k:] + tokens[:k] for k in range(len(tokens))]
+    return ", ".join(min(rotations))
 
 
 @dataclass(frozen=True)
