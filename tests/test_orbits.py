@@ -200,24 +200,28 @@ def test_going_up_in_q2_the_resting_orbit_ends_where_simulation_says():
         assert (image.events.kind == "sliding_onset").sum() == rests
 
 
-def test_the_cyclic_signature_does_not_depend_on_where_the_section_cuts_the_orbit():
+def test_the_cyclic_signature_is_each_mass_s_own_cycle_of_switches():
+    """Neither where the section cuts the orbit nor how the masses' events interleave changes
+    the signature; a mass's own cycle of switches does."""
     import pandas as pd
 
     from oscillator.orbits.shooting import PeriodMap, cyclic_signature
 
-    def image(events):
+    def signature(events):
         table = pd.DataFrame(events, columns=["t", "mass", "kind"])
-        return PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table)
+        return cyclic_signature(PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table))
 
-    a = image([(0.2, 1, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])
-    b = image([(0.1, 2, "sliding_vanish"), (0.6, 2, "passable"), (1.3, 1, "passable"), (1.8, 2, "sliding_onset")])
-    on_section = image([(0.0, 2, "passable"), (0.5, 1, "passable"), (1.0, 2, "sliding_onset"),
-                        (1.2, 2, "sliding_vanish"), (1.2, 1, "grazing"), (2.0, 2, "passable")])  # fmt: skip
-    assert cyclic_signature(a) == cyclic_signature(b) == cyclic_signature(on_section)
-    assert cyclic_signature(a).count(",") == 3
-    reversed_order = image([(0.2, 2, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"),
-                            (1.5, 1, "passable")])  # fmt: skip
-    assert cyclic_signature(reversed_order) != cyclic_signature(a)
+    a = signature([(0.2, 1, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])
+    rotated = signature([(0.1, 2, "sliding_vanish"), (0.6, 2, "passable"), (1.3, 1, "passable"),
+                         (1.8, 2, "sliding_onset")])  # fmt: skip
+    on_section = signature([(0.0, 2, "passable"), (0.5, 1, "passable"), (1.0, 2, "sliding_onset"),
+                            (1.2, 2, "sliding_vanish"), (1.2, 1, "grazing"), (2.0, 2, "passable")])  # fmt: skip
+    interleaved = signature([(0.2, 2, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"),
+                             (1.5, 1, "passable")])  # fmt: skip
+    assert a == rotated == on_section == interleaved == "m1: passable; m2: passable, sliding_onset, sliding_vanish"
+    extra_pair = signature([(0.2, 1, "passable"), (0.5, 2, "passable"), (0.6, 2, "passable"),
+                            (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])  # fmt: skip
+    assert extra_pair != a and signature([]) == "m1: none; m2: none"
 
 
 #: m1 as a hardening (Duffing) oscillator with light friction, the stops out of reach: its
@@ -253,6 +257,30 @@ def test_continuation_passes_around_the_two_folds_of_a_hardening_resonance():
         assert orbit.stable is stable and bool(a.stable) is stable
         after = returns(case, orbit.state + 1e-3, 60)[-1]
         assert bool(np.max(np.abs(after - orbit.state)) < 1e-6) is stable
+
+
+#: m1 as a bilinear oscillator: a free spring and a stiff one-sided stop at x1 = 0 (K6), no
+#: friction; m2 a damped linear oscillator far from it.
+BILINEAR = {"mu_k": 0.0, "mu_s": 0.0, "P1": 0.0, "P2": 0.0, "K1": 1.0, "K2": 0.0, "C1": 0.05, "C2": 0.0, "K6": 20.0,
+            "d1": 0.0, "Q1": 1.0, "Q2": 0.4, "K4": 1.0, "K5": 0.0, "C4": 0.1, "C5": 0.0, "d": 50.0, "x1": -0.5,
+            "x2": 0.0}  # fmt: skip
+
+
+def test_continuation_locates_the_period_doubling_of_an_oscillator_against_a_stop():
+    """The period-1 orbit of m1 striking its stop loses stability through -1 (a multiplier of
+    the located orbit is -1); beyond, the simulated motion is period-2."""
+    branch = continue_orbit("instance-1", param="Omega", start=1.9, stop=2.5, step=0.5, **BILINEAR)
+    assert branch.complete
+    (row,) = branch.bifurcations.itertuples()
+    assert row.kind == "period_doubling" and "right_contact_onset" in row.before
+    orbit = find_orbit("instance-1", guess=(row.x1, row.v1, row.x2, row.v2), Omega=row.Omega, **BILINEAR)
+    assert np.min(np.abs(orbit.multipliers + 1.0)) < 1e-3
+    beyond = row.Omega + 0.01
+    doubled = find_orbit("instance-1", period=2, Omega=beyond, **BILINEAR)
+    single = find_orbit("instance-1", guess=doubled.state, Omega=beyond, **BILINEAR)
+    assert doubled.stable and not single.stable
+    half = period_map(doubled.case, doubled.t0, doubled.state, derivative=False).end
+    assert np.max(np.abs(half - doubled.state)) > 1e-2  # two distinct points: period 2, not 1
 
 
 def test_continue_writes_its_tables_figures_and_an_escaped_report(tmp_path):

@@ -372,15 +372,16 @@ def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: floa
         left, right = _bisect(cont, a, b, ds, lambda p: np.sign(p.tangent[4]) == sign, locate_tol)
         return [_Located(_record(cont, "fold", left, right, a.signature, b.signature), left, right)]
     if a.unstable != b.unstable:
-        mu = _critical(b) if abs(abs(_critical(b)) - 1) < abs(abs(_critical(a)) - 1) else _critical(a)
+        count = a.unstable
+        left, right = _bisect(cont, a, b, ds, lambda p: p.unstable == count, locate_tol)
+        # the multiplier on the unit circle, read where it crosses (between the located sides)
+        mu = min((_critical(left), _critical(right)), key=lambda value: abs(abs(value) - 1))
         if abs(mu.imag) > 1e-6 * abs(mu):
             kind = "torus"
         elif mu.real < 0:
             kind = "period_doubling"
         else:
             kind = "fold"
-        count = a.unstable
-        left, right = _bisect(cont, a, b, ds, lambda p: p.unstable == count, locate_tol)
         return [_Located(_record(cont, kind, left, right, a.signature, b.signature), left, right)]
     return []
 

@@ -137,24 +137,27 @@ def event_signature(events: pd.DataFrame) -> str:
 
 
 def cyclic_signature(image: PeriodMap) -> str:
-    """The signature of an orbit through ``image``, whatever the section: the same events in
-    the same cyclic order give the same text.
+    """The signature of an orbit through ``image``, whatever the section and however the two
+    masses' events interleave: ``"m1: passable, passable; m2: passable, sliding_onset, ..."``.
 
-    The events are read as a cycle (one switch at both ends of ``[t0, t1]``, there because the
-    orbit is on a boundary at the section, counted once) and written from the rotation whose
-    text sorts first.  Along a branch, an event passing through the section then does not
-    change the signature; only a change of the cycle does.
+    Each mass's events over one period are read as a cycle (a switch at both ends of
+    ``[t0, t1]``, there because the orbit is on a boundary at the section, counted once) and
+    written from the rotation whose text sorts first.  Along a branch an event passing through
+    the section, or one mass's event passing another's, then does not change the signature;
+    only a change of a mass's own cycle of switches does (a rest interval or a pair of
+    switches appearing or vanishing).
     """
-    kinds = image.events[image.events.kind != EventKind.GRAZING.value]
-    tokens = [f"m{mass} {kind}" for mass, kind in zip(kinds["mass"], kinds["kind"], strict=True)]
-    times = kinds["t"].to_numpy(float)
-    if len(tokens) > 1 and tokens[0] == tokens[-1]:
-        if abs((times[-1] - times[0]) - (image.t1 - image.t0)) <= 1e-6 * (image.t1 - image.t0):
-            tokens.pop()
-    if not tokens:
-        return ""
-    rotations = [tokens[k:] + tokens[:k] for k in range(len(tokens))]
-    return ", ".join(min(rotations))
+    events = image.events[image.events.kind != EventKind.GRAZING.value]
+    span = image.t1 - image.t0
+    parts = []
+    for mass in (1, 2):
+        own = events[events["mass"] == mass]
+        kinds, times = list(own["kind"]), own["t"].to_numpy(float)
+        if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((times[-1] - times[0]) - span) <= 1e-6 * span:
+            kinds.pop()
+        cycle = min((kinds[k:] + kinds[:k] for k in range(len(kinds))), default=[])
+        parts.append(f"m{mass}: {', '.join(cycle)}" if cycle else f"m{mass}: none")
+    return "; ".join(parts)
 
 
 @dataclass(frozen=True)
