@@ -447,6 +447,27 @@ def test_an_exception_of_the_progress_callback_reaches_the_caller_unchanged():
         simulate("instance-1", progress=progress)
 
 
+def test_a_ctrl_c_in_the_progress_callback_leaves_the_trajectory_ending_at_the_last_point():
+    """The progress callback runs after the supervisor notes a point and before its row is
+    kept; a Ctrl-C there must still give a partial result whose trajectory ends at t_final."""
+    from oscillator.errors import Interrupted
+
+    calls = []
+
+    def progress(t):
+        calls.append(t)
+        if len(calls) == 50:
+            raise KeyboardInterrupt
+
+    with pytest.raises(Interrupted) as caught:
+        simulate("instance-1", t_end=40.0, progress=progress)
+    partial = caught.value.result
+    assert partial.status is Status.INTERRUPTED
+    t_final = partial.final_state[0]
+    assert t_final == calls[-1] and partial.trajectory.t.iloc[-1] == t_final
+    assert np.all(np.diff(partial.trajectory.t.to_numpy()) >= 0)
+
+
 def test_numpy_numbers_are_numbers():
     plain = simulate("instance-1", Omega=1.5, max_events=10**6, record_trajectory=False)
     numpy = simulate("instance-1", Omega=np.float32(1.5), max_events=np.int64(10**6), record_trajectory=False)

@@ -59,6 +59,9 @@ class Recording:
     def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         """The mode switched at ``t`` to ``mode``, with the state ``y`` after the switch."""
 
+    def stopped(self, record: RunRecord) -> None:
+        """The run stopped early (a failure or Ctrl-C) at ``record``'s last point."""
+
     def events(self, record: RunRecord, t: float, events: Sequence[Event]) -> None:
         """Count events at ``t`` and keep them if they are late enough."""
         record.event_count += len(events)
@@ -97,6 +100,13 @@ class AtSteps(Recording):
 
     def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         self.row(record, t, y, mode)
+
+    def stopped(self, record: RunRecord) -> None:
+        """End the rows at the last point reached: a Ctrl-C can land between the supervisor's
+        note of a point and its row (in the progress callback, say)."""
+        t, y, mode = record.last
+        if y is not None and mode is not None and (not record.rows or record.rows[-1][0] < t):
+            record.rows.append((t, y[:4].copy(), mode))
 
 
 @dataclass

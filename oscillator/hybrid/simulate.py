@@ -165,12 +165,14 @@ def simulate(
         raise raised.error from None
     except SimulationFailed as error:
         if record.started:
+            policy.stopped(record)
             error.result = Result.from_record(case, record, engine=integrator.name, status=Status.FAILED,
                                               message=str(error))  # fmt: skip
         raise
     except KeyboardInterrupt:
         if not record.started:
             raise
+        policy.stopped(record)
         partial = Result.from_record(case, record, engine=integrator.name, status=Status.INTERRUPTED,
                                      message="interrupted by the user")  # fmt: skip
         raise Interrupted(partial) from None
