@@ -103,9 +103,11 @@ class AtSteps(Recording):
 
     def stopped(self, record: RunRecord) -> None:
         """End the rows at the last point reached: a Ctrl-C can land between the supervisor's
-        note of a point and its row (in the progress callback, say)."""
+        note of a point and its row (in the progress callback, say).  Not past ``max_rows``
+        (a run stopped for that keeps its rows as they are)."""
         t, y, mode = record.last
-        if y is not None and mode is not None and (not record.rows or record.rows[-1][0] < t):
+        behind = not record.rows or record.rows[-1][0] < t
+        if y is not None and mode is not None and behind and len(record.rows) < self.max_rows:
             record.rows.append((t, y[:4].copy(), mode))
 
 
