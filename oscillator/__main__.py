@@ -6,6 +6,7 @@ interrupt while the command is still starting prints one line, not a traceback.
 
 import atexit
 import os
+import signal
 import sys
 
 
@@ -18,6 +19,12 @@ def main() -> None:
     except KeyboardInterrupt:  # before the command could catch it (the command catches its own)
         sys.stderr.write("error: interrupted\n")
         interrupted_exit()
+    except SystemExit:
+        # The command is done and has said so: a Ctrl-C now, while the interpreter shuts down
+        # (multiprocessing's exit handlers join the workers), would end the process by SIGINT
+        # (exit code -2) with its work complete.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        raise
 
 
 def interrupted_exit() -> None:
