@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -49,7 +50,8 @@ BIFURCATION_KINDS = ("sliding_onset", "sliding_vanish", "grazing", "fold", "peri
 
 @dataclass(frozen=True)
 class _Point:
-    """One corrected point of the branch."""
+    """One corrected point of the branch (its multipliers and signature computed once: the
+    bisections ask for them again and again)."""
 
     y: np.ndarray
     lam: float
@@ -57,16 +59,16 @@ class _Point:
     tangent: np.ndarray  # in (y, lam / sigma)
     iterations: int
 
-    @property
+    @cached_property
     def multipliers(self) -> np.ndarray:
         assert self.image.monodromy is not None
         return multipliers_of(self.image.monodromy)
 
-    @property
+    @cached_property
     def signature(self) -> str:
         return cyclic_signature(self.image)
 
-    @property
+    @cached_property
     def unstable(self) -> int:
         return int(np.sum(np.abs(self.multipliers) > 1.0))
 
