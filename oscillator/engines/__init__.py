@@ -69,6 +69,14 @@ class Step:
     kind: StepKind
     roots: tuple[int, ...] = ()
 
+    @property
+    def fired(self) -> int:
+        """The roots as the bits ``1 << root`` (what the switching rules take)."""
+        bits = 0
+        for root in self.roots:
+            bits |= 1 << root
+        return bits
+
 
 class EngineFailure(Exception):
     """The integrator failed; ``flag`` is its code and the message says what it reported."""

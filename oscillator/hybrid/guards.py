@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import collections
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
 from oscillator.errors import OscillatorError, SimulationFailed
 from oscillator.model.energy import mechanical_energy
-from oscillator.model.events import Event
+from oscillator.model.events import COLUMN, decode, event_of_row
 from oscillator.model.fields import coefficients
 from oscillator.model.kernels import derivative
 from oscillator.model.parameters import Parameters, SolverOptions
@@ -135,7 +134,8 @@ class StallGuard:
         self.stalls = 0
         self.last_root = -math.inf
 
-    def count(self, t: float, events: Sequence[Event], mode: Mode) -> None:
+    def count(self, t: float, events: int, mode: Mode) -> None:
+        """A root return at ``t`` that gave ``events`` events and left the run in ``mode``."""
         same_instant = t - self.last_root <= SAME_INSTANT * (1.0 + abs(t))
         self.stalls = self.stalls + 1 if same_instant and not events else 0
         self.last_root = t
@@ -147,34 +147,43 @@ class StallGuard:
             )
 
 
+#: The columns of an event row the storm guard tells events apart by, after the time.
+_STORM_COLUMNS = [COLUMN[name] for name in ("t", "mass", "kind", "boundary")]
+
+
 class EventGuard:
     """More than ``max_events`` events in all, or more than ``storm_events`` within ``storm_window`` s."""
 
     def __init__(self, options: SolverOptions) -> None:
         self.options = options
-        self.recent: collections.deque[Event] = collections.deque(maxlen=options.storm_events + 1)
+        #: ``(t, mass, kind, boundary)`` of the latest events (codes, as in an event row).
+        self.recent: collections.deque[tuple[float, ...]] = collections.deque(maxlen=options.storm_events + 1)
 
-    def count(self, events: Sequence[Event], total: int, t: float) -> None:
-        self._storm(events)
+    def count(self, rows: np.ndarray, total: int, t: float) -> None:
+        """New events (event rows) at ``t``, ``total`` events in all so far."""
+        if not len(rows):
+            return
+        self._storm(rows)
         if total > self.options.max_events:
-            last = events[-1]
+            last = event_of_row(rows[-1])
             raise SimulationFailed(
                 f"more than max_events = {self.options.max_events} switching events by t = {t:.10g} s (last: mass "
                 f"{last.mass} {last.kind} on {last.boundary}); raise max_events or shorten t_end",
                 field="max_events",
             )
 
-    def _storm(self, events: Sequence[Event]) -> None:
+    def _storm(self, rows: np.ndarray) -> None:
         recent = self.recent
-        recent.extend(events)
-        if len(recent) < (recent.maxlen or 0) or recent[-1].t - recent[0].t > self.options.storm_window:
+        recent.extend(map(tuple, rows[:, _STORM_COLUMNS].tolist()))
+        if len(recent) < (recent.maxlen or 0) or recent[-1][0] - recent[0][0] > self.options.storm_window:
             return
-        tally = collections.Counter((e.mass, e.kind, e.boundary) for e in recent)
+        tally = collections.Counter(entry[1:] for entry in recent)
         (mass, kind, boundary), count = tally.most_common(1)[0]
+        what = f"{decode('kind', kind, mass)} on {decode('boundary', boundary, mass)}"
         raise SimulationFailed(
-            f"event storm: {len(recent)} events within {recent[-1].t - recent[0].t:.3g} s up to "
-            f"t = {recent[-1].t:.10g} s, {count} of them mass {mass} {kind} on {boundary}; the motion chatters "
-            f"there. Change the case, or raise storm_events (now {self.options.storm_events}) or lower "
-            f"storm_window (now {self.options.storm_window:g} s) if such a rate is meant",
+            f"event storm: {len(recent)} events within {recent[-1][0] - recent[0][0]:.3g} s up to "
+            f"t = {recent[-1][0]:.10g} s, {count} of them mass {mass:.0f} {what}; the "
+            f"motion chatters there. Change the case, or raise storm_events (now {self.options.storm_events}) or "
+            f"lower storm_window (now {self.options.storm_window:g} s) if such a rate is meant",
             field="storm_events",
         )

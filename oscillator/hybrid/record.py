@@ -6,17 +6,62 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from oscillator.model.events import Event
+from oscillator.model.events import WIDTH, Event, event_of_row
 from oscillator.model.phase_space import Mode
 
-__all__ = ["RunRecord"]
+__all__ = ["EventLog", "RunRecord"]
+
+
+class EventLog:
+    """A run's events as rows of numbers (:data:`oscillator.model.events.COLUMN`) in one array
+    that grows by doubling: the switching rules write new events straight into its free rows,
+    and :meth:`keep` makes them part of the log (a Ctrl-C before that leaves the log as it was).
+    """
+
+    def __init__(self, capacity: int = 256) -> None:
+        self._rows = np.empty((capacity, WIDTH))
+        self._size = 0
+
+    def __len__(self) -> int:
+        return self._size
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The events so far, one row each (a view)."""
+        return self._rows[: self._size]
+
+    def free(self, count: int) -> np.ndarray:
+        """The array to write up to ``count`` new rows into, from row ``len(self)`` on."""
+        needed = self._size + count
+        if needed > len(self._rows):
+            grown = np.empty((max(needed, 2 * len(self._rows)), WIDTH))
+            grown[: self._size] = self._rows[: self._size]
+            self._rows = grown
+        return self._rows
+
+    def stage(self, rows: np.ndarray) -> int:
+        """Write ``rows`` into the free rows (not yet kept); how many."""
+        self.free(len(rows))[self._size : self._size + len(rows)] = rows
+        return len(rows)
+
+    def staged(self, count: int) -> np.ndarray:
+        """The ``count`` rows written past the log's end."""
+        return self._rows[self._size : self._size + count]
+
+    def keep(self, count: int) -> None:
+        """Make the ``count`` rows written past the end part of the log."""
+        self._size += count
+
+    def events(self) -> list[Event]:
+        """The events as :class:`~oscillator.model.events.Event` records."""
+        return [event_of_row(row) for row in self.rows]
 
 
 @dataclass
 class RunRecord:
     """The supervisor's record of a run: events, trajectory rows, the last point and the counts."""
 
-    events: list[Event] = field(default_factory=list)
+    events: EventLog = field(default_factory=EventLog)
     #: Trajectory rows ``(t, (x1, v1, x2, v2), mode)``, each appended whole (a Ctrl-C between two
     #: appends of separate columns would leave them of different lengths).
     rows: list[tuple[float, np.ndarray, Mode]] = field(default_factory=list)

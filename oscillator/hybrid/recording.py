@@ -8,7 +8,6 @@ the supervisor itself knows nothing of the three ways.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +15,6 @@ import numpy as np
 from oscillator.engines import Step, StepKind
 from oscillator.errors import SimulationFailed
 from oscillator.hybrid.record import RunRecord
-from oscillator.model.events import Event
 from oscillator.model.phase_space import Mode
 
 __all__ = ["AtSteps", "NoTrajectory", "OnGrid", "Recording", "recording"]
@@ -62,11 +60,12 @@ class Recording:
     def stopped(self, record: RunRecord) -> None:
         """The run stopped early (a failure or Ctrl-C) at ``record``'s last point."""
 
-    def events(self, record: RunRecord, t: float, events: Sequence[Event]) -> None:
-        """Count events at ``t`` and keep them if they are late enough."""
-        record.event_count += len(events)
+    def events(self, record: RunRecord, t: float, count: int) -> None:
+        """Count the ``count`` events at ``t`` written past the end of the log, and keep them if
+        they are late enough."""
+        record.event_count += count
         if t >= self.keep_events_from:
-            record.events.extend(events)
+            record.events.keep(count)
 
     def row(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         """Keep one trajectory row; refuse past ``max_rows``."""

@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from oscillator.hybrid.record import RunRecord
 from oscillator.io.cases import Case
-from oscillator.io.tables import events_frame, trajectory_frame
 from oscillator.model.energy import POWER_NAMES, mechanical_energy
+from oscillator.model.phase_space import Mode
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["EnergyAudit", "Result", "SolverStats", "Status"]
 
@@ -73,6 +77,31 @@ class SolverStats:
         return dataclasses.asdict(self)
 
 
+class _Records:
+    """A run's records until its tables are asked for: the tables are built then, once, and the
+    records let go (a run that nobody reads a table of never imports pandas)."""
+
+    def __init__(self, events: np.ndarray, rows: list[tuple[float, np.ndarray, Mode]]) -> None:
+        self.events: np.ndarray | None = events
+        self.rows: list[tuple[float, np.ndarray, Mode]] | None = rows
+
+    def events_frame(self) -> pd.DataFrame:
+        from oscillator.io.tables import events_frame
+
+        assert self.events is not None
+        frame, self.events = events_frame(self.events), None
+        return frame
+
+    def trajectory_frame(self) -> pd.DataFrame:
+        from oscillator.io.tables import trajectory_frame
+
+        rows = self.rows
+        assert rows is not None
+        frame = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
+        self.rows = None
+        return frame
+
+
 @dataclass(frozen=True)
 class Result:
     """The outcome of :func:`oscillator.simulate`.
@@ -84,10 +113,12 @@ class Result:
     events : pandas.DataFrame
         Switching events, columns ``t, mass, kind, boundary, from_domain, to_domain, theorem,
         equation, branch, x1, v1, x2, v2, G0_alpha, G1_alpha, G0_beta, G1_beta, G_alpha, G_beta,
-        distance, state_from, state_to`` (see :class:`oscillator.model.events.Event`).
+        distance, state_from, state_to`` (see :class:`oscillator.model.events.Event`).  Built
+        when first asked for.
     trajectory : pandas.DataFrame
         ``t, x1, v1, x2, v2, domain1, domain2, system_state`` at the solver's steps (an event
-        time appears twice, before and after the switch) or on the requested grid.
+        time appears twice, before and after the switch) or on the requested grid.  Built when
+        first asked for.
     energy : EnergyAudit
         The work-energy audit.
     stats : SolverStats
@@ -101,13 +132,20 @@ class Result:
     """
 
     case: Case
-    events: pd.DataFrame
-    trajectory: pd.DataFrame
     energy: EnergyAudit
     stats: SolverStats
     final_state: tuple[float, float, float, float, float]
     status: Status = Status.COMPLETE
     message: str = ""
+    _records: _Records = field(default_factory=lambda: _Records(np.empty((0, 0)), []), repr=False, compare=False)
+
+    @cached_property
+    def events(self) -> pd.DataFrame:
+        return self._records.events_frame()
+
+    @cached_property
+    def trajectory(self) -> pd.DataFrame:
+        return self._records.trajectory_frame()
 
     @property
     def success(self) -> bool:
@@ -129,15 +167,12 @@ class Result:
             wall_time=record.wall_time,
         )
         x1, v1, x2, v2 = (float(v) for v in np.asarray(record.y_final[:4]))
-        rows = record.rows
-        trajectory = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
         return cls(
             case,
-            events_frame(record.events),
-            trajectory,
             EnergyAudit.of(record, case),
             stats,
             (record.t_final, x1, v1, x2, v2),
             status,
             message,
+            _Records(record.events.rows.copy(), record.rows),
         )

@@ -34,8 +34,7 @@ from oscillator.hybrid.record import RunRecord
 from oscillator.hybrid.recording import Recording
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
-from oscillator.model.roots import Root
-from oscillator.model.switching import Resolution, initial_mode, resolve
+from oscillator.model.switching import MAX_ROWS, initial_mode, resolve_rows
 
 __all__ = ["CallbackRaised", "Supervisor"]
 
@@ -105,7 +104,8 @@ class Supervisor:
     def _run(self, record: RunRecord, t0: float, y0: tuple[float, float, float, float], t_end: float) -> None:
         start = initial_mode(t0, y0, self.params)
         mode = record.mode_initial = start.mode
-        self.recording.events(record, t0, start.events)
+        self.recording.events(record, t0, record.events.stage(start.rows))
+        self._events.count(start.rows, record.event_count, t0)
         y = np.zeros(8)
         y[:4] = start.y
         t = t0
@@ -132,14 +132,14 @@ class Supervisor:
                 steps.count(step.kind is StepKind.ROOT, t, y, mode)
             if step.kind is StepKind.ROOT:
                 record.root_returns += 1
-                resolution = self._resolve_root(record, step, mode)
-                if resolution.mode != mode:
-                    y[:4] = resolution.y
-                    mode = resolution.mode
+                after, state, events = self._resolve_root(record, step, mode)
+                if after != mode:
+                    y[:4] = state
+                    mode = after
                     record.reached(t, y, mode)
                     self.recording.switched(record, t, y, mode)
                     return t, y, mode
-                stalls.count(t, resolution.events, mode)
+                stalls.count(t, events, mode)
             if t >= t_end:
                 return t, y, mode
 
@@ -162,11 +162,17 @@ class Supervisor:
             except Exception as exc:
                 raise CallbackRaised(exc) from exc
 
-    def _resolve_root(self, record: RunRecord, step: Step, mode: Mode) -> Resolution:
-        """Hand the roots that fired to :func:`~oscillator.model.switching.resolve`; record the events."""
+    def _resolve_root(self, record: RunRecord, step: Step, mode: Mode) -> tuple[Mode, np.ndarray, int]:
+        """Hand the roots that fired to :func:`~oscillator.model.switching.resolve_rows`, which
+        writes the events into the run's log; keep them.  The next mode, the projected state and the
+        number of events."""
         t, y = step.t, step.y
         check_consistent(t, y, self.params, mode)
-        resolution = resolve(t, y, self.params, mode, [Root(i) for i in step.roots], self.options)
-        self.recording.events(record, t, resolution.events)
-        self._events.count(resolution.events, record.event_count, t)
-        return resolution
+        state = y[:4].copy()
+        log = record.events
+        after, count = resolve_rows(t, state, self.params, mode, step.fired, self.options,
+                                    log.free(MAX_ROWS), len(log))  # fmt: skip
+        new = log.staged(count)
+        self.recording.events(record, t, count)
+        self._events.count(new, record.event_count, t)
+        return after, state, count

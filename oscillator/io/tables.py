@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.errors import InputError
-from oscillator.model.events import Event, EventKind
+from oscillator.model.events import COLUMN, Event, EventKind, decode_column
 from oscillator.model.phase_space import Mode, system_state
 
 __all__ = [
@@ -37,17 +37,23 @@ _STATES = {system_state(left, right, r1, r2) for left in (False, True) for right
 EVENT_DTYPES = {f.name: {"float": "float64", "int": "int64"}.get(str(f.type), "str") for f in dataclasses.fields(Event)}
 
 
-def events_frame(events: Sequence[Event]) -> pd.DataFrame:
-    """``Result.events``: one row per event and mass, columns :meth:`Event.columns`.
+def events_frame(rows: np.ndarray) -> pd.DataFrame:
+    """``Result.events`` from event rows (:data:`oscillator.model.events.COLUMN`): one row per
+    event and mass, columns :meth:`Event.columns`, each in its dtype.
 
-    Built column by column, each in its dtype (no row tuples, no deep copies, no conversion
-    after the fact: the table of a run is built once per run, and a sweep builds thousands).
+    Built column by column from the array: the numbers as they are, the codes read as text
+    (a sweep builds thousands of these tables).
     """
+    rows = np.asarray(rows, dtype=float).reshape(-1, len(COLUMN))
+    masses = rows[:, COLUMN["mass"]]
     data = {}
     for name in Event.columns():
-        values = [getattr(event, name) for event in events]
         dtype = EVENT_DTYPES[name]
-        data[name] = np.array(values, dtype=dtype) if dtype != "str" else pd.array(list(map(str, values)), dtype="str")
+        values = rows[:, COLUMN[name]]
+        if dtype == "str":
+            data[name] = pd.array(decode_column(name, values, masses), dtype="str")
+        else:
+            data[name] = values.astype(dtype)
     return pd.DataFrame(data, columns=list(Event.columns()))
 
 

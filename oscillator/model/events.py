@@ -8,10 +8,16 @@ state at that instant.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass, fields
 
-__all__ = ["Event", "EventKind"]
+import numpy as np
+
+from oscillator.model.phase_space import system_state
+from oscillator.model.theorems import branch_text, equation_text, theorem_text
+
+__all__ = ["COLUMN", "Event", "EventKind", "decode", "decode_column", "event_of_row"]
 
 
 class EventKind(enum.StrEnum):
@@ -98,3 +104,91 @@ class Event:
     def text_columns(cls) -> tuple[str, ...]:
         """The columns that hold text (``"5.1"`` is a theorem, not a number)."""
         return tuple(f.name for f in fields(cls) if f.type in ("str", "EventKind"))
+
+
+# --------------------------------------------------------------------------- events as rows of numbers
+#
+# The compiled switching rules write each event as one row of float64 numbers, the columns of
+# Event in order; the text columns hold codes (exact small integers), read by :func:`decode`.
+
+#: Column of each field of :class:`Event` in an event row.
+COLUMN = {f.name: index for index, f in enumerate(fields(Event))}
+#: Number of columns of an event row.
+WIDTH = len(COLUMN)
+#: Event kinds by code (their order in :class:`EventKind`).
+KINDS = tuple(EventKind)
+#: Boundary codes of the two stops; a domain boundary ``∂Ω{lo}{hi}(mass)`` is ``100 lo + 10 hi + mass``.
+RIGHT_STOP_LABEL, LEFT_STOP_LABEL = 0, 1
+#: G-function name codes: none, ``v1``, ``zdot1``; ``F{mass}^(delta)`` is ``FIELD + delta`` and
+#: ``F{mass}^(0>0_delta)`` (a flow barrier) ``BARRIER + delta``.
+NO_NAME, V1_NAME, ZDOT1_NAME, FIELD, BARRIER = 0, 1, 2, 10, 20
+
+
+def _boundary_text(code: int) -> str:
+    if code == RIGHT_STOP_LABEL:
+        return "x1 = d1"
+    if code == LEFT_STOP_LABEL:
+        return "z1 = -d"
+    return f"∂Ω{code // 100}{code // 10 % 10}({code % 10})"
+
+
+def _name_text(code: int, mass: int) -> str:
+    if code >= BARRIER:
+        return f"F{mass}^(0>0_{code - BARRIER})"
+    if code >= FIELD:
+        return f"F{mass}^({code - FIELD})"
+    return ("", "v1", "zdot1")[code]
+
+
+def _state_text(code: int) -> str:
+    """System state of the code ``8 left + 4 right + 2 (m1 at rest) + (m2 at rest)``."""
+    return system_state(bool(code & 8), bool(code & 4), bool(code & 2), bool(code & 1))
+
+
+@functools.cache
+def _text(column: str, code: int, mass: int) -> str:
+    if column == "kind":
+        return KINDS[code].value
+    if column == "boundary":
+        return _boundary_text(code)
+    if column == "theorem":
+        return theorem_text(code)
+    if column == "equation":
+        return equation_text(code)
+    if column == "branch":
+        return branch_text(code)
+    if column in ("G_alpha", "G_beta"):
+        return _name_text(code, mass)
+    return _state_text(code)
+
+
+def decode(column: str, code: float, mass: float) -> str:
+    """The text of the code ``code`` in the column ``column`` of an event row of mass ``mass``."""
+    return _text(column, int(code), int(mass))
+
+
+def decode_column(column: str, codes: np.ndarray, masses: np.ndarray) -> np.ndarray:
+    """The text of a coded column of event rows (``masses``: the rows' masses), as an object
+    array; each distinct code is read once."""
+    keys = 4 * codes.astype(np.int64) + masses.astype(np.int64)
+    distinct, where = np.unique(keys, return_inverse=True)
+    texts = np.array([_text(column, key // 4, key % 4) for key in distinct.tolist()] + [""], dtype=object)
+    return texts[:-1][where] if len(keys) else texts[:0]
+
+
+#: The columns of an event row that hold numbers, and those that hold codes.
+NUMBER_COLUMNS = tuple(f.name for f in fields(Event) if f.type in ("float", "int"))
+CODE_COLUMNS = tuple(f.name for f in fields(Event) if f.name not in NUMBER_COLUMNS)
+
+
+def event_of_row(row: np.ndarray) -> Event:
+    """The :class:`Event` an event row stands for."""
+    mass = int(row[COLUMN["mass"]])
+    values: dict[str, object] = {}
+    for name in NUMBER_COLUMNS:
+        value = float(row[COLUMN[name]])
+        values[name] = int(value) if name in ("mass", "from_domain", "to_domain") else value
+    for name in CODE_COLUMNS:
+        values[name] = _text(name, int(row[COLUMN[name]]), mass)
+    values["kind"] = EventKind(str(values["kind"]))
+    return Event(**values)  # type: ignore[arg-type]

@@ -31,6 +31,7 @@ __all__ = [
     "kinetic_threshold",
     "non_friction_force",
     "non_friction_force_rate",
+    "scale_of",
     "state_derivative",
     "static_threshold",
 ]
@@ -169,22 +170,30 @@ def non_friction_force_rate(
     return rates[0], rates[1]
 
 
+@njit(cache=True)
+def scale_of(
+    x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, mass: int, c: Vector
+) -> float:  # pragma: no cover - compiled
+    """:func:`force_scale` on the parameter vector."""
+    if mass == 1:
+        terms = abs(c[Q1]) + c[K1] * abs(x1) + c[K2] * abs(x1) ** 3 + c[C1] * abs(v1) + c[C2] * abs(v1) ** 3
+        if right:
+            terms += c[K6] * abs(x1 - c[D1])
+    else:
+        terms = abs(c[Q2]) + c[K4] * abs(x2) + c[K5] * abs(x2) ** 3 + c[C4] * abs(v2) + c[C5] * abs(v2) ** 3
+    if left:
+        terms += c[K3] * abs(x1 - x2 + c[D]) + c[C3] * abs(v1 - v2)
+    return float(terms / (c[M1] if mass == 1 else c[M2]) + threshold(c, mass, True))
+
+
 def force_scale(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int) -> float:
     """The size of the terms that make up ``A_i``, plus the static threshold (per unit mass).
 
     A force-like G-function counts as zero when it is small against this (rounding and the
     solver's tolerance act on each term), whatever the units and magnitudes of the case.
     """
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
-    if mass == 1:
-        terms = abs(p.Q1) + p.K1 * abs(x1) + p.K2 * abs(x1) ** 3 + p.C1 * abs(v1) + p.C2 * abs(v1) ** 3
-        if mode.right:
-            terms += p.K6 * abs(x1 - p.d1)
-    else:
-        terms = abs(p.Q2) + p.K4 * abs(x2) + p.K5 * abs(x2) ** 3 + p.C4 * abs(v2) + p.C5 * abs(v2) ** 3
-    if mode.left:
-        terms += p.K3 * abs(x1 - x2 + p.d) + p.C3 * abs(v1 - v2)
-    return float(terms / p.mass(mass) + static_threshold(p, mass))
+    return float(scale_of(float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right, mass,
+                          coefficients(p)))  # fmt: skip
 
 
 def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:

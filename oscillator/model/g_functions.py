@@ -11,17 +11,13 @@ domain number of that side is ``phase_space.domain_of(mass, s, ...)``.  Normals 
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numba import njit
 
 from oscillator.model.fields import (
-    accelerations,
     barrier,
     coefficients,
     force_rates,
-    force_scale,
     forces,
     kinetic,
 )
@@ -29,27 +25,39 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import StateLike, Vector
 
-__all__ = ["displacement_g", "flow_barrier_g", "g_values", "scale", "velocity_g"]
-
-
-#: Positions in the vector of :func:`g_values`: ``(G0, G1)`` of ``velocity_g(mass, sign)`` and of
-#: ``flow_barrier_g(mass, sign)``, for mass 1, 2 and side +1, -1.
-_VELOCITY = {(1, 1): 0, (1, -1): 2, (2, 1): 4, (2, -1): 6}
-_BARRIER = {(1, 1): 8, (1, -1): 10, (2, 1): 12, (2, -1): 14}
+__all__ = [
+    "barrier_index",
+    "displacement_g",
+    "displacement_values",
+    "flow_barrier_g",
+    "g_values",
+    "velocity_g",
+    "velocity_index",
+]
 
 
 @njit(cache=True)
 def g_values(  # pragma: no cover - compiled
-    t: float, x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, s1: int, s2: int, c: Vector
-) -> Vector:
-    """Every velocity and flow-barrier G-function of both masses at one point under one mode.
+    t: float,
+    x1: float,
+    v1: float,
+    x2: float,
+    v2: float,
+    left: bool,
+    right: bool,
+    s1: int,
+    s2: int,
+    c: Vector,
+    out: Vector,
+) -> None:
+    """Every velocity and flow-barrier G-function of both masses at one point under one mode, into
+    ``out`` (16 values; see :func:`velocity_index` and :func:`barrier_index`).
 
     The same formulas in the same order as evaluated one at a time, so the same numbers: the
     field of the side (4.13)-(4.14) or the barrier's (4.22), and its rate along the flow with
     the other mass following the mode's field and the mass itself accelerating at ``G0``
     (velocity boundary) or resting (flow barrier).
     """
-    out = np.empty(16)
     f1, f2 = forces(t, x1, v1, x2, v2, left, right, c)
     a1, a2 = kinetic(c, 1, s1, f1), kinetic(c, 2, s2, f2)
     k = 0
@@ -63,35 +71,47 @@ def g_values(  # pragma: no cover - compiled
                                     a2 if mass == 1 else own, c)  # fmt: skip
                 out[k], out[k + 1] = g0, rates[0] if mass == 1 else rates[1]
                 k += 2
-    return out
 
 
-#: The last point's values and force scales: the switching rules ask for several G-functions at
-#: one instant (the key's Modes are the interned ones of ``Mode.from_signs``: compared by identity).
-_last: dict[str, Any] = {"key": None, "p": None, "values": None, "scales": {}, "scales_p": None}
+@njit(cache=True)
+def velocity_index(mass: int, sign: int) -> int:  # pragma: no cover - compiled
+    """Position of ``(G0, G1)`` of ``velocity_g(mass, sign)`` in the vector of :func:`g_values`."""
+    return 4 * (mass - 1) + (0 if sign > 0 else 2)
+
+
+@njit(cache=True)
+def barrier_index(mass: int, sign: int) -> int:  # pragma: no cover - compiled
+    """Position of ``(G0, G1)`` of ``flow_barrier_g(mass, sign)`` in the vector of :func:`g_values`."""
+    return 8 + velocity_index(mass, sign)
+
+
+@njit(cache=True)
+def displacement_values(
+    t: float,
+    x1: float,
+    v1: float,
+    x2: float,
+    v2: float,
+    left: bool,
+    right: bool,
+    s1: int,
+    s2: int,
+    c: Vector,
+    right_stop: bool,
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """:func:`displacement_g` on the parameter vector: ``(v1, a1)`` or ``(zdot1, a1 - a2)``."""
+    f1, f2 = forces(t, x1, v1, x2, v2, left, right, c)
+    a1, a2 = kinetic(c, 1, s1, f1), kinetic(c, 2, s2, f2)
+    if right_stop:
+        return v1, a1
+    return v1 - v2, a1 - a2
 
 
 def _values(t: float, y: StateLike, p: Parameters, mode: Mode) -> Vector:
-    key = (t, y[0], y[1], y[2], y[3], mode)
-    if _last["p"] is not p or _last["key"] != key:
-        _last["values"] = g_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left,
-                                   mode.right, mode.sign(1), mode.sign(2), coefficients(p))  # fmt: skip
-        _last["key"], _last["p"] = key, p
-    values: Vector = _last["values"]
+    values = np.empty(16)
+    g_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right, mode.sign(1),
+             mode.sign(2), coefficients(p), values)  # fmt: skip
     return values
-
-
-def scale(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int) -> float:
-    """:func:`~oscillator.model.fields.force_scale` at the point, computed once per instant."""
-    key = (t, y[0], y[1], y[2], y[3], mode.left, mode.right, mass)
-    scales: dict[tuple[Any, ...], float] = _last["scales"]
-    if _last["scales_p"] is not p or len(scales) > 64:
-        scales = _last["scales"] = {}
-        _last["scales_p"] = p
-    found = scales.get(key)
-    if found is None:
-        found = scales[key] = force_scale(t, y, p, mode, mass)
-    return found
 
 
 def velocity_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, sign: int) -> tuple[float, float]:
@@ -101,7 +121,7 @@ def velocity_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, sig
     ``G^(1,delta) = D F_i^(delta)``, the field of side ``delta`` evaluated at ``y`` under the
     mode's contacts; the other mass follows the mode's field.
     """
-    k = _VELOCITY[mass, sign]
+    k = velocity_index(mass, sign)
     values = _values(t, y, p, mode)
     return float(values[k]), float(values[k + 1])
 
@@ -113,7 +133,7 @@ def flow_barrier_g(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int,
     zero.  Side ``s = +1`` is reached when ``A_i`` rises to ``mu_s g + p_i``, side ``s = -1``
     when it falls to ``-(mu_s g + p_i)``.
     """
-    k = _BARRIER[mass, sign]
+    k = barrier_index(mass, sign)
     values = _values(t, y, p, mode)
     return float(values[k]), float(values[k + 1])
 
@@ -124,9 +144,8 @@ def displacement_g(t: float, y: StateLike, p: Parameters, mode: Mode, boundary: 
     ``boundary = "right"`` (``x1 = d1``, absolute coordinates): ``(v1, a1)``.
     ``boundary = "left"`` (``z1 = -d``, relative coordinates): ``(zdot1, a1 - a2)``.
     """
-    a1, a2 = accelerations(t, y, p, mode)
-    if boundary == "right":
-        return y[1], a1
-    if boundary == "left":
-        return y[1] - y[3], a1 - a2
-    raise ValueError(f"boundary must be 'right' or 'left', got {boundary!r}")
+    if boundary not in ("right", "left"):
+        raise ValueError(f"boundary must be 'right' or 'left', got {boundary!r}")
+    g0, g1 = displacement_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right,
+                                 mode.sign(1), mode.sign(2), coefficients(p), boundary == "right")  # fmt: skip
+    return float(g0), float(g1)

@@ -51,11 +51,10 @@ from oscillator.model.fields import (
     barrier,
     coefficients,
     force_rates,
-    force_scale,
     forces,
     kinetic,
-    non_friction_force,
-    static_threshold,
+    scale_of,
+    threshold,
 )
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
@@ -170,6 +169,38 @@ def root_values(
     return g
 
 
+@njit(cache=True)
+def violation_code(
+    t: float, y: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool, tolerance: float
+) -> int:  # pragma: no cover - compiled
+    """:func:`mode_violation` as a code: 0 none, 1/2 ``v1``/``v2 = 0``, 3/4 the flow barrier of
+    m1/m2, 5 ``x1 = d1``, 6 ``z1 = -d``."""
+    f1, f2 = forces(t, y[0], y[1], y[2], y[3], left, right, c)
+    for mass in (1, 2):
+        s = s1 if mass == 1 else s2
+        v = y[2 * mass - 1]
+        if s != 0 and s * v < -tolerance * (1.0 + abs(v)):
+            return mass
+        if s == 0:
+            # relative to the size of the force's terms, like every force-like zero: the
+            # forcing is evaluated at a time good to eps |t| (2.9e-11 s past 2^17 s), which moves
+            # A_i by Q_i Omega / m_i times that
+            force = f1 if mass == 1 else f2
+            scale = scale_of(y[0], y[1], y[2], y[3], left, right, mass, c)
+            if abs(force) > threshold(c, mass, True) + tolerance * scale:
+                return 2 + mass
+    gap = y[0] - c[D1]
+    if (gap < -tolerance * (1.0 + abs(c[D1]))) if right else (gap > tolerance * (1.0 + abs(c[D1]))):
+        return 5
+    gap = (y[0] - y[2]) + c[D]
+    if (gap > tolerance * (1.0 + abs(c[D]))) if left else (gap < -tolerance * (1.0 + abs(c[D]))):
+        return 6
+    return 0
+
+
+_VIOLATIONS = (None, "v1 = 0", "v2 = 0", "flow barrier of m1", "flow barrier of m2", "x1 = d1", "z1 = -d")
+
+
 def mode_violation(t: float, y: StateLike, p: Parameters, mode: Mode, tolerance: float) -> str | None:
     """Which boundary the state is on the wrong side of, for its mode, or ``None``.
 
@@ -177,23 +208,7 @@ def mode_violation(t: float, y: StateLike, p: Parameters, mode: Mode, tolerance:
     and the contact flags must agree with ``x1 - d1`` and ``z1 + d``; each within ``tolerance``
     (relative to the size of the quantity).
     """
-    forces = None
-    for mass in (1, 2):
-        s = mode.sign(mass)
-        v = y[2 * mass - 1]
-        if s and s * v < -tolerance * (1.0 + abs(v)):
-            return f"v{mass} = 0"
-        if not s:
-            forces = forces or non_friction_force(t, y, p, mode.left, mode.right)
-            # relative to the size of the force's terms, like every force-like zero: the
-            # forcing is evaluated at a time good to eps |t| (2.9e-11 s past 2^17 s), which moves
-            # A_i by Q_i Omega / m_i times that
-            if abs(forces[mass - 1]) > static_threshold(p, mass) + tolerance * force_scale(t, y, p, mode, mass):
-                return f"flow barrier of m{mass}"
-    right = y[0] - p.d1
-    if (right < -tolerance * (1.0 + abs(p.d1))) if mode.right else (right > tolerance * (1.0 + abs(p.d1))):
-        return "x1 = d1"
-    left = (y[0] - y[2]) + p.d
-    if (left > tolerance * (1.0 + abs(p.d))) if mode.left else (left < -tolerance * (1.0 + abs(p.d))):
-        return "z1 = -d"
-    return None
+    state = np.asarray(y, dtype=np.float64)
+    code = violation_code(float(t), state, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right,
+                          float(tolerance))  # fmt: skip
+    return _VIOLATIONS[code]

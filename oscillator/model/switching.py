@@ -9,6 +9,12 @@ instant in a fixed order, re-checking until the domains are consistent:
 4. every resting mass re-checked against its flow barrier (a contact makes the force jump),
    and every mass standing on its velocity boundary against its field, until nothing changes;
 5. grazing reports (Thm 5.5 and rule 6), which switch nothing.
+
+The rules are compiled (numba), as the fields and theorems they call are: the supervisor calls
+them at every root through :func:`resolve_rows`, which writes the events as rows of numbers
+(:data:`oscillator.model.events.COLUMN`) into the run's event log and builds no Python object
+per event.  Inside, a mode is the tuple ``(s1, s2, left, right)`` of the velocity signs
+(0 = at rest) and the contact flags (0 or 1).
 """
 
 from __future__ import annotations
@@ -17,61 +23,163 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+import numpy as np
+from numba import njit, types
+
 from oscillator.errors import SimulationFailed
-from oscillator.model.events import Event, EventKind
-from oscillator.model.g_functions import displacement_g, flow_barrier_g, scale, velocity_g
-from oscillator.model.parameters import Parameters, SolverOptions
-from oscillator.model.phase_space import Mode, displacement_boundary_label, domain_of
-from oscillator.model.roots import Root
-from oscillator.model.theorems import (
-    Decision,
-    is_zero,
-    theorem_5_1_passable,
-    theorem_5_2_sliding_exists,
-    theorem_5_3_sliding_appears,
-    theorem_5_4_sliding_vanishes,
-    theorem_5_5_grazing,
-    theorem_5_6_right_contact,
-    theorem_5_7_right_contact_in_left_contact,
-    theorem_5_8_left_contact,
-    theorem_5_9_left_contact_in_right_contact,
+from oscillator.model.events import (
+    BARRIER,
+    COLUMN,
+    FIELD,
+    KINDS,
+    LEFT_STOP_LABEL,
+    NO_NAME,
+    RIGHT_STOP_LABEL,
+    V1_NAME,
+    WIDTH,
+    ZDOT1_NAME,
+    Event,
+    EventKind,
+    event_of_row,
 )
-from oscillator.model.types import StateLike
+from oscillator.model.fields import D1, D, coefficients, scale_of
+from oscillator.model.g_functions import barrier_index, displacement_values, g_values, velocity_index
+from oscillator.model.parameters import Parameters, SolverOptions
+from oscillator.model.phase_space import Mode
+from oscillator.model.theorems import (
+    DECISION,
+    DEFINITION_5_2,
+    DEFINITION_5_4,
+    NO_BRANCH,
+    grazing,
+    is_zero,
+    left_contact,
+    left_contact_in_right_contact,
+    passable,
+    right_contact,
+    right_contact_in_left_contact,
+    sliding_appears,
+    sliding_exists,
+    sliding_vanishes,
+)
+from oscillator.model.types import StateLike, Vector
 
-__all__ = ["Resolution", "initial_mode", "resolve", "settle"]
+__all__ = ["MAX_ROWS", "Resolution", "initial_mode", "resolve", "resolve_rows"]
 
-_NAN = math.nan
 #: Rounds of re-checking at one instant before the instant is declared an event storm.
 MAX_ROUNDS = 8
-_VELOCITY = {1: Root.VELOCITY_1, 2: Root.VELOCITY_2}
-_EXTREMUM = {1: Root.EXTREMUM_1, 2: Root.EXTREMUM_2}
-_BARRIERS = {
-    1: ((Root.BARRIER_1_POSITIVE, 1), (Root.BARRIER_1_NEGATIVE, -1)),
-    2: ((Root.BARRIER_2_POSITIVE, 1), (Root.BARRIER_2_NEGATIVE, -1)),
-}
-
-
-@dataclass(frozen=True, slots=True)
-class Resolution:
-    """What one instant resolved to: the next mode, the events, and the (projected) state."""
-
-    mode: Mode
-    events: tuple[Event, ...]
-    y: tuple[float, float, float, float]
-
+#: The most events one instant can write (a storm stops at ``MAX_ROUNDS`` rounds well before).
+MAX_ROWS = 64
 
 #: Relative size, against :func:`~oscillator.model.fields.force_scale`, below which a force-like
 #: G-function counts as zero: a root located by CVODE leaves about ``rtol`` of the scale.
 ZERO = 1e-9
-
 
 #: The time resolution of a located root, relative to the forcing period: CVODE locates a root
 #: to about ``100 eps`` times the span it integrated since its last restart (a few periods at
 #: most), 1e-13 periods; this is ten times that.
 ZERO_TIME = 1e-12
 
+# Bits of the fired roots (oscillator.model.roots.Root), and the event-row columns and kind codes,
+# as module constants (numba freezes them into the compiled code).
+_VELOCITY_1, _EXTREMUM_1, _BARRIER_1_POSITIVE, _BARRIER_1_NEGATIVE = 1 << 0, 1 << 1, 1 << 2, 1 << 3
+_VELOCITY_2, _EXTREMUM_2, _BARRIER_2_POSITIVE, _BARRIER_2_NEGATIVE = 1 << 4, 1 << 5, 1 << 6, 1 << 7
+_RIGHT_STOP, _LEFT_STOP, _RELATIVE_VELOCITY = 1 << 8, 1 << 9, 1 << 10
+(_T, _MASS, _KIND, _BOUNDARY, _FROM, _TO, _THEOREM, _EQUATION, _BRANCH, _X1, _G0A, _G1A, _G0B, _G1B, _NAME_A, _NAME_B,
+ _DISTANCE, _STATE_FROM, _STATE_TO) = (
+    COLUMN[name] for name in ("t", "mass", "kind", "boundary", "from_domain", "to_domain", "theorem", "equation",
+                              "branch", "x1", "G0_alpha", "G1_alpha", "G0_beta", "G1_beta", "G_alpha", "G_beta",
+                              "distance", "state_from", "state_to")
+)  # fmt: skip
+(_PASSABLE, _SLIDING_ONSET, _SLIDING_VANISH, _GRAZING, _RIGHT_ONSET, _RIGHT_RELEASE, _LEFT_ONSET, _LEFT_RELEASE) = (
+    KINDS.index(kind)
+    for kind in (EventKind.PASSABLE, EventKind.SLIDING_ONSET, EventKind.SLIDING_VANISH, EventKind.GRAZING,
+                 EventKind.RIGHT_CONTACT_ONSET, EventKind.RIGHT_CONTACT_RELEASE, EventKind.LEFT_CONTACT_ONSET,
+                 EventKind.LEFT_CONTACT_RELEASE)
+)  # fmt: skip
+_NAN = math.nan
 
-def zero_tolerance(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, rate: float) -> float:
+# Every kernel carries its signature: one compiled version each, whatever literal constants the
+# callers pass (numba would compile one per literal otherwise, and the compile time doubles).
+_i, _f, _b = types.int64, types.float64, types.boolean
+_MODE = types.UniTuple(_i, 4)
+_VECTOR = types.Array(_f, 1, "C")
+_PARAMS = types.Array(_f, 1, "C", readonly=True)
+_ROWS = types.Array(_f, 2, "C")
+_PAIR = types.UniTuple(_f, 2)
+_STEP = types.Tuple((_MODE, _i))
+_SETTLED = types.Tuple((_MODE, _i, _b))
+_NAMES = types.UniTuple(_i, 2)
+
+
+# --------------------------------------------------------------------------- modes as numbers
+
+
+@njit(_i(_i, _i, _i, _i), cache=True)
+def _domain(mass: int, sign: int, left: int, right: int) -> int:  # pragma: no cover - compiled
+    """:func:`oscillator.model.phase_space.domain_of`."""
+    if sign == 0:
+        return 0
+    if mass == 1:
+        return 1 + 4 * left + 2 * right + (0 if sign > 0 else 1)
+    return 1 + 4 * left + (0 if sign < 0 else 1)
+
+
+@njit(_i(_MODE, _i), cache=True)
+def _domain_in(mode: tuple[int, int, int, int], mass: int) -> int:  # pragma: no cover - compiled
+    return _domain(mass, mode[mass - 1], mode[2], mode[3])
+
+
+@njit(_MODE(_MODE, _i, _i), cache=True)
+def _with_sign(mode: tuple[int, int, int, int], mass: int, sign: int) -> tuple[int, int, int, int]:  # pragma: no cover
+    if mass == 1:
+        return (sign, mode[1], mode[2], mode[3])
+    return (mode[0], sign, mode[2], mode[3])
+
+
+@njit(_i(_MODE), cache=True)
+def _state_code(mode: tuple[int, int, int, int]) -> int:  # pragma: no cover - compiled
+    """``8 left + 4 right + 2 (m1 at rest) + (m2 at rest)``: the system state (events.py)."""
+    return 8 * mode[2] + 4 * mode[3] + 2 * (mode[0] == 0) + (mode[1] == 0)
+
+
+@njit(_i(_i, _i, _i), cache=True)
+def _velocity_boundary(mass: int, left: int, right: int) -> int:  # pragma: no cover - compiled
+    """The code of the velocity boundary ``∂Ω{a}{b}(mass)`` the mass rests on or crosses."""
+    low = _domain(mass, 1 if mass == 1 else -1, left, right)
+    return 100 * low + 10 * (low + 1) + mass
+
+
+@njit(_i(_i, _i, _i), cache=True)
+def _displacement_boundary(mass: int, domain_a: int, domain_b: int) -> int:  # pragma: no cover - compiled
+    """The code of the displacement boundary between two domains; a resting mass crosses none
+    of its own phase plane, its contact change is named by the constraint ``z1 = -d``."""
+    if domain_a == 0 or domain_b == 0:
+        return LEFT_STOP_LABEL
+    return 100 * min(domain_a, domain_b) + 10 * max(domain_a, domain_b) + mass
+
+
+# --------------------------------------------------------------------------- G-functions at the instant
+
+
+@njit(_VECTOR(_f, _VECTOR, _PARAMS, _MODE), cache=True)
+def _g(t: float, y: Vector, c: Vector, mode: tuple[int, int, int, int]) -> Vector:  # pragma: no cover - compiled
+    values = np.empty(16)
+    g_values(t, y[0], y[1], y[2], y[3], mode[2] == 1, mode[3] == 1, mode[0], mode[1], c, values)
+    return values
+
+
+@njit(_PAIR(_f, _VECTOR, _PARAMS, _MODE, _b), cache=True)
+def _displacement(
+    t: float, y: Vector, c: Vector, mode: tuple[int, int, int, int], right_stop: bool
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    return displacement_values(t, y[0], y[1], y[2], y[3], mode[2] == 1, mode[3] == 1, mode[0], mode[1], c, right_stop)
+
+
+@njit(_f(_VECTOR, _PARAMS, _f, _MODE, _i, _f), cache=True)
+def _zero_tolerance(
+    y: Vector, c: Vector, period: float, mode: tuple[int, int, int, int], mass: int, rate: float
+) -> float:  # pragma: no cover - compiled
     """How close to zero a force-like G-function of mass ``mass`` counts as zero at ``(t, y)``.
 
     Within the rounding of the terms that make it up (:data:`ZERO` of
@@ -80,185 +188,308 @@ def zero_tolerance(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int,
     (:data:`ZERO_TIME`).  The second matters where every term is small but the function moves
     fast: a resting mass struck by the other one, whose contact force starts from zero.
     """
-    return ZERO * scale(t, y, p, mode, mass) + ZERO_TIME * p.period * abs(rate)
+    scale = scale_of(y[0], y[1], y[2], y[3], mode[2] == 1, mode[3] == 1, mass, c)
+    return ZERO * scale + ZERO_TIME * period * abs(rate)
 
 
-def _field_name(mass: int, domain: int, *, barrier: bool = False) -> str:
-    """``F2^(1)``, or ``F2^(0>0_1)`` for the flow barrier on the side of domain 1."""
-    return f"F{mass}^(0>0_{domain})" if barrier else f"F{mass}^({domain})"
-
-
-def _event(
+@njit(_i(_ROWS, _i, _f, _VECTOR, _i, _i, _i, _MODE, _MODE, DECISION, _PAIR, _PAIR, _NAMES, _f), cache=True)
+def _write(
+    out: np.ndarray,
+    n: int,
     t: float,
-    y: StateLike,
+    y: Vector,
     mass: int,
-    kind: EventKind,
-    boundary: str,
-    before: Mode,
-    after: Mode,
-    decision: Decision,
-    alpha: tuple[float, float] = (_NAN, _NAN),
-    beta: tuple[float, float] = (_NAN, _NAN),
-    names: tuple[str, str] = ("", ""),
-    distance: float = _NAN,
-) -> Event:
-    return Event(
-        t=t,
-        mass=mass,
-        kind=kind,
-        boundary=boundary,
-        from_domain=before.domain(mass),
-        to_domain=after.domain(mass),
-        theorem=decision.theorem,
-        equation=decision.equation,
-        branch=decision.branch,
-        x1=y[0],
-        v1=y[1],
-        x2=y[2],
-        v2=y[3],
-        G0_alpha=alpha[0],
-        G1_alpha=alpha[1],
-        G0_beta=beta[0],
-        G1_beta=beta[1],
-        G_alpha=names[0],
-        G_beta=names[1],
-        distance=distance,
-        state_from=before.system_state,
-        state_to=after.system_state,
-    )
+    kind: int,
+    boundary: int,
+    before: tuple[int, int, int, int],
+    after: tuple[int, int, int, int],
+    decision: tuple[bool, int, int, int],
+    alpha: tuple[float, float],
+    beta: tuple[float, float],
+    names: tuple[int, int],
+    distance: float,
+) -> int:  # pragma: no cover - compiled
+    """Write one event as row ``n`` of ``out``; the next row."""
+    if n >= out.shape[0]:
+        raise IndexError("more events at one instant than the event buffer holds")
+    row = out[n]
+    row[_T], row[_MASS], row[_KIND], row[_BOUNDARY] = t, mass, kind, boundary
+    row[_FROM], row[_TO] = _domain_in(before, mass), _domain_in(after, mass)
+    row[_THEOREM], row[_EQUATION], row[_BRANCH] = decision[1], decision[2], decision[3]
+    for k in range(4):
+        row[_X1 + k] = y[k]
+    row[_G0A], row[_G1A], row[_G0B], row[_G1B] = alpha[0], alpha[1], beta[0], beta[1]
+    row[_NAME_A], row[_NAME_B], row[_DISTANCE] = names[0], names[1], distance
+    row[_STATE_FROM], row[_STATE_TO] = _state_code(before), _state_code(after)
+    return n + 1
 
 
 # --------------------------------------------------------------------------- contacts
 
 
-def _switch_right_contact(t: float, y: StateLike, p: Parameters, mode: Mode, events: list[Event]) -> Mode:
+@njit(_STEP(_f, _VECTOR, _PARAMS, _MODE, _ROWS, _i), cache=True)
+def _switch_right_contact(
+    t: float, y: Vector, c: Vector, mode: tuple[int, int, int, int], out: np.ndarray, n: int
+) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """Theorems 5.6/5.7 at ``x1 = d1``; m1 moves (a resting m1 cannot change ``x1``)."""
-    after = mode.with_contacts(left=mode.left, right=not mode.right)
-    before_g = displacement_g(t, y, p, mode, "right")
-    after_g = displacement_g(t, y, p, after, "right")
-    theorem = theorem_5_7_right_contact_in_left_contact if mode.left else theorem_5_6_right_contact
-    decision = theorem(mode.domain1, after.domain1, before_g[0], after_g[0])
-    if not decision:
-        return mode  # touched and turned back: reported as grazing, if close, by rule 6
-    kind = EventKind.RIGHT_CONTACT_ONSET if after.right else EventKind.RIGHT_CONTACT_RELEASE
-    boundary = displacement_boundary_label(1, mode.domain1, after.domain1)
-    names = ("v1", "v1")
-    events.append(_event(t, y, 1, kind, boundary, mode, after, decision, before_g, after_g, names))
-    return after
+    after = (mode[0], mode[1], mode[2], 1 - mode[3])
+    before_g = _displacement(t, y, c, mode, True)
+    after_g = _displacement(t, y, c, after, True)
+    from_domain, to_domain = _domain_in(mode, 1), _domain_in(after, 1)
+    if mode[2]:
+        decision = right_contact_in_left_contact(from_domain, to_domain, before_g[0], after_g[0])
+    else:
+        decision = right_contact(from_domain, to_domain, before_g[0], after_g[0])
+    if not decision[0]:
+        return mode, n  # touched and turned back: reported as grazing, if close, by rule 6
+    kind = _RIGHT_ONSET if after[3] else _RIGHT_RELEASE
+    boundary = _displacement_boundary(1, from_domain, to_domain)
+    n = _write(out, n, t, y, 1, kind, boundary, mode, after, decision, before_g, after_g, (V1_NAME, V1_NAME), _NAN)
+    return after, n
 
 
-def _switch_left_contact(t: float, y: StateLike, p: Parameters, mode: Mode, events: list[Event]) -> Mode:
+@njit(_STEP(_f, _VECTOR, _PARAMS, _MODE, _ROWS, _i), cache=True)
+def _switch_left_contact(
+    t: float, y: Vector, c: Vector, mode: tuple[int, int, int, int], out: np.ndarray, n: int
+) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """Theorems 5.8/5.9 at ``z1 = -d`` (relative coordinates); both masses' domains change."""
-    onset = not mode.left
-    after = mode.with_contacts(left=onset, right=mode.right)
-    before_g = displacement_g(t, y, p, mode, "left")
-    after_g = displacement_g(t, y, p, after, "left")
-    theorem = theorem_5_9_left_contact_in_right_contact if mode.right else theorem_5_8_left_contact
-    decision = theorem(onset, before_g[0], after_g[0])
-    if not decision:
-        return mode
-    kind = EventKind.LEFT_CONTACT_ONSET if onset else EventKind.LEFT_CONTACT_RELEASE
-    names = ("zdot1", "zdot1")
+    onset = mode[2] == 0
+    after = (mode[0], mode[1], 1 - mode[2], mode[3])
+    before_g = _displacement(t, y, c, mode, False)
+    after_g = _displacement(t, y, c, after, False)
+    if mode[3]:
+        decision = left_contact_in_right_contact(onset, before_g[0], after_g[0])
+    else:
+        decision = left_contact(onset, before_g[0], after_g[0])
+    if not decision[0]:
+        return mode, n
+    kind = _LEFT_ONSET if onset else _LEFT_RELEASE
     for mass in (1, 2):
-        boundary = displacement_boundary_label(mass, mode.domain(mass), after.domain(mass))
-        events.append(_event(t, y, mass, kind, boundary, mode, after, decision, before_g, after_g, names))
-    return after
+        boundary = _displacement_boundary(mass, _domain_in(mode, mass), _domain_in(after, mass))
+        n = _write(out, n, t, y, mass, kind, boundary, mode, after, decision, before_g, after_g,
+                   (ZDOT1_NAME, ZDOT1_NAME), _NAN)  # fmt: skip
+    return after, n
 
 
 # --------------------------------------------------------------------------- velocity boundaries
 
 
-def _arrive(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, events: list[Event]) -> Mode:
+@njit(_STEP(_f, _VECTOR, _PARAMS, _f, _MODE, _i, _ROWS, _i), cache=True)
+def _arrive(
+    t: float, y: Vector, c: Vector, period: float, mode: tuple[int, int, int, int], mass: int, out: np.ndarray, n: int
+) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """A moving mass on its velocity boundary: passes (Thm 5.1) or comes to rest (5.2/5.3)."""
-    s = mode.sign(mass)
-    alpha = mode.domain(mass)
-    beta = domain_of(mass, -s, left=mode.left, right=mode.right)
-    g_alpha = velocity_g(t, y, p, mode, mass, s)
-    g_beta = velocity_g(t, y, p, mode, mass, -s)
-    tol = zero_tolerance(t, y, p, mode, mass, g_beta[1])
-    names = (_field_name(mass, alpha), _field_name(mass, beta))
-    boundary = mode.boundary_label(mass)
+    s = mode[mass - 1]
+    alpha, beta = _domain(mass, s, mode[2], mode[3]), _domain(mass, -s, mode[2], mode[3])
+    g = _g(t, y, c, mode)
+    k_alpha, k_beta = velocity_index(mass, s), velocity_index(mass, -s)
+    g_alpha, g_beta = (g[k_alpha], g[k_alpha + 1]), (g[k_beta], g[k_beta + 1])
+    tol = _zero_tolerance(y, c, period, mode, mass, g_beta[1])
+    names = (FIELD + alpha, FIELD + beta)
+    boundary = _velocity_boundary(mass, mode[2], mode[3])
 
-    passable = theorem_5_1_passable(mass, alpha, beta, g_alpha[0], g_beta[0])
-    if passable:
-        after = mode.with_sign(mass, -s)
-        events.append(_event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, passable, g_alpha, g_beta, names))
-        return after
+    decision = passable(mass, alpha, beta, g_alpha[0], g_beta[0])
+    if decision[0]:
+        after = _with_sign(mode, mass, -s)
+        n = _write(out, n, t, y, mass, _PASSABLE, boundary, mode, after, decision, g_alpha, g_beta, names, _NAN)
+        return after, n
 
-    pair = (min(alpha, beta), max(alpha, beta))
     g_odd, g_even = (g_alpha[0], g_beta[0]) if alpha % 2 else (g_beta[0], g_alpha[0])
-    decision = theorem_5_2_sliding_exists(mass, pair, g_odd, g_even)
-    if not decision:
-        decision = theorem_5_3_sliding_appears(mass, alpha, beta, g_alpha[0], g_beta[0], g_beta[1], tolerance=tol)
-    if not decision and is_zero(g_beta[0], tol) and -s * g_beta[1] > 0:
+    decision = sliding_exists(mass, min(alpha, beta), g_odd, g_even)
+    if not decision[0]:
+        decision = sliding_appears(mass, alpha, beta, g_alpha[0], g_beta[0], g_beta[1], tol)
+    if not decision[0] and is_zero(g_beta[0], tol) and -s * g_beta[1] > 0:
         # The field across vanishes and turns outward: the flow passes (Thm 5.3 fails).
-        after = mode.with_sign(mass, -s)
-        events.append(_event(t, y, mass, EventKind.PASSABLE, boundary, mode, after, decision, g_alpha, g_beta, names))
-        return after
-    after = mode.with_sign(mass, 0)
-    events.append(_event(t, y, mass, EventKind.SLIDING_ONSET, boundary, mode, after, decision, g_alpha, g_beta, names))
-    return after
+        after = _with_sign(mode, mass, -s)
+        n = _write(out, n, t, y, mass, _PASSABLE, boundary, mode, after, decision, g_alpha, g_beta, names, _NAN)
+        return after, n
+    after = _with_sign(mode, mass, 0)
+    n = _write(out, n, t, y, mass, _SLIDING_ONSET, boundary, mode, after, decision, g_alpha, g_beta, names, _NAN)
+    return after, n
 
 
-def _leave_rest(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int, s: int, events: list[Event]) -> Mode:
+@njit(_STEP(_f, _VECTOR, _PARAMS, _f, _MODE, _i, _i, _ROWS, _i), cache=True)
+def _leave_rest(
+    t: float,
+    y: Vector,
+    c: Vector,
+    period: float,
+    mode: tuple[int, int, int, int],
+    mass: int,
+    s: int,
+    out: np.ndarray,
+    n: int,
+) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """A resting mass leaves into the side ``s`` if Theorem 5.4 holds."""
-    delta = domain_of(mass, s, left=mode.left, right=mode.right)
-    barrier = flow_barrier_g(t, y, p, mode, mass, s)
-    field = velocity_g(t, y, p, mode, mass, s)
-    decision = theorem_5_4_sliding_vanishes(
-        mass, delta, barrier[0], barrier[1], field[0], tolerance=zero_tolerance(t, y, p, mode, mass, barrier[1])
-    )
-    if not decision:
-        return mode
-    after = mode.with_sign(mass, s)
-    names = (_field_name(mass, delta, barrier=True), _field_name(mass, delta))
-    events.append(
-        _event(
-            t,
-            y,
-            mass,
-            EventKind.SLIDING_VANISH,
-            mode.boundary_label(mass),
-            mode,
-            after,
-            decision,
-            barrier,
-            field,
-            names,
-        )
-    )
-    return after
+    delta = _domain(mass, s, mode[2], mode[3])
+    g = _g(t, y, c, mode)
+    k_barrier, k_field = barrier_index(mass, s), velocity_index(mass, s)
+    barrier, field = (g[k_barrier], g[k_barrier + 1]), (g[k_field], g[k_field + 1])
+    tolerance = _zero_tolerance(y, c, period, mode, mass, barrier[1])
+    decision = sliding_vanishes(mass, delta, barrier[0], barrier[1], field[0], tolerance)
+    if not decision[0]:
+        return mode, n
+    after = _with_sign(mode, mass, s)
+    names = (BARRIER + delta, FIELD + delta)
+    boundary = _velocity_boundary(mass, mode[2], mode[3])
+    n = _write(out, n, t, y, mass, _SLIDING_VANISH, boundary, mode, after, decision, barrier, field, names, _NAN)
+    return after, n
 
 
-def settle(t: float, y: StateLike, p: Parameters, mode: Mode, events: list[Event]) -> Mode:
+@njit(_SETTLED(_f, _VECTOR, _PARAMS, _f, _MODE, _ROWS, _i), cache=True)
+def _settle(
+    t: float, y: Vector, c: Vector, period: float, mode: tuple[int, int, int, int], out: np.ndarray, n: int
+) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
     """Re-check every mass at one instant until the domains are consistent (docs/model.md, rule 7).
 
     A resting mass leaves if Theorem 5.4 holds on either side: its force is past the flow
     barrier (after a contact made it jump, or at the start), or on it and turning outward (a
     root exactly at a restart, which the integrator does not report).  A moving mass standing
     on its velocity boundary (``v_i = 0``) whose field points back at it is decided as an
-    arrival (Thm 5.1-5.3).
+    arrival (Thm 5.1-5.3).  The flag is false when the rounds run out (an event storm).
     """
     for _ in range(MAX_ROUNDS):
         changed = False
         for mass in (1, 2):
-            if mode.resting(mass):
+            s = mode[mass - 1]
+            if s == 0:
                 for side in (1, -1):
-                    new = _leave_rest(t, y, p, mode, mass, side, events)
+                    new, n = _leave_rest(t, y, c, period, mode, mass, side, out, n)
                     if new != mode:
                         mode, changed = new, True
                         break
             elif y[2 * mass - 1] == 0.0:
-                s = mode.sign(mass)
-                g0, g1 = velocity_g(t, y, p, mode, mass, s)
-                tol = zero_tolerance(t, y, p, mode, mass, g1)
+                g = _g(t, y, c, mode)
+                k = velocity_index(mass, s)
+                g0, g1 = g[k], g[k + 1]
+                tol = _zero_tolerance(y, c, period, mode, mass, g1)
                 if s * g0 < -tol or (is_zero(g0, tol) and s * g1 < 0):
-                    new = _arrive(t, y, p, mode, mass, events)
-                    changed |= new != mode
+                    new, n = _arrive(t, y, c, period, mode, mass, out, n)
+                    changed = changed or new != mode
                     mode = new
         if not changed:
-            return mode
-    raise SimulationFailed(
+            return mode, n, True
+    return mode, n, False
+
+
+# --------------------------------------------------------------------------- grazing reports
+
+
+@njit(_i(_f, _VECTOR, _PARAMS, _MODE, _b, _i, _ROWS, _i), cache=True)
+def _stop_grazing(
+    t: float,
+    y: Vector,
+    c: Vector,
+    mode: tuple[int, int, int, int],
+    right_stop: bool,
+    equation: int,
+    out: np.ndarray,
+    n: int,
+) -> int:  # pragma: no cover - compiled
+    """Report grazing of a stop (docs/model.md, rule 6): ``G^(0)`` (``v1`` or ``zdot1``) is zero on
+    it; decided by Definition 5.2 (right stop) or 5.4 (left stop)."""
+    g = _displacement(t, y, c, mode, right_stop)
+    if right_stop:
+        distance, boundary, name = abs(y[0] - c[D1]), RIGHT_STOP_LABEL, V1_NAME
+        decision = (True, DEFINITION_5_2, equation, NO_BRANCH)
+        flipped = (mode[0], mode[1], mode[2], 1 - mode[3])
+    else:
+        distance, boundary, name = abs(y[0] - y[2] + c[D]), LEFT_STOP_LABEL, ZDOT1_NAME
+        decision = (True, DEFINITION_5_4, equation, NO_BRANCH)
+        flipped = (mode[0], mode[1], 1 - mode[2], mode[3])
+    if mode[0] != 0:
+        boundary = _displacement_boundary(1, _domain_in(mode, 1), _domain_in(flipped, 1))
+    return _write(out, n, t, y, 1, _GRAZING, boundary, mode, mode, decision, g, (_NAN, _NAN), (name, NO_NAME),
+                  distance)  # fmt: skip
+
+
+@njit(_i(_f, _VECTOR, _PARAMS, _f, _MODE, _MODE, _i, _f, _f, _ROWS, _i), cache=True)
+def _grazing_reports(
+    t: float,
+    y: Vector,
+    c: Vector,
+    period: float,
+    before: tuple[int, int, int, int],
+    mode: tuple[int, int, int, int],
+    fired: int,
+    velocity_tolerance: float,
+    displacement_tolerance: float,
+    out: np.ndarray,
+    n: int,
+) -> int:  # pragma: no cover - compiled
+    """Grazing of a velocity boundary (Thm 5.5) within ``velocity_tolerance`` and of a stop
+    (rule 6) within ``displacement_tolerance``."""
+    for mass in (1, 2):
+        s = mode[mass - 1]
+        extremum = _EXTREMUM_1 if mass == 1 else _EXTREMUM_2
+        if fired & extremum and s != 0 and _domain_in(before, mass) == _domain_in(mode, mass):
+            alpha = _domain_in(mode, mass)
+            g = _g(t, y, c, mode)
+            k = velocity_index(mass, s)
+            tolerance = _zero_tolerance(y, c, period, mode, mass, g[k + 1])
+            decision = grazing(mass, alpha, g[k], g[k + 1], tolerance)
+            speed = abs(y[2 * mass - 1])
+            if decision[0] and speed <= velocity_tolerance:
+                boundary = _velocity_boundary(mass, mode[2], mode[3])
+                n = _write(out, n, t, y, mass, _GRAZING, boundary, mode, mode, decision, (g[k], g[k + 1]),
+                           (_NAN, _NAN), (FIELD + alpha, NO_NAME), speed)  # fmt: skip
+    if fired & _VELOCITY_1 and abs(y[0] - c[D1]) <= displacement_tolerance:
+        # v1 = 0 within tol of x1 = d1: the flow touched the right stop in m1's domain before.
+        n = _stop_grazing(t, y, c, before, True, 7 if mode[2] else 6, out, n)
+    if fired & _RELATIVE_VELOCITY and abs(y[0] - y[2] + c[D]) <= displacement_tolerance:
+        n = _stop_grazing(t, y, c, mode, False, 11 if mode[2] else 10, out, n)
+    return n
+
+
+# --------------------------------------------------------------------------- the instant
+
+
+@njit(_SETTLED(_f, _VECTOR, _PARAMS, _f, _MODE, _i, _f, _f, _ROWS, _i), cache=True)
+def _resolve(
+    t: float,
+    y: Vector,
+    c: Vector,
+    period: float,
+    mode: tuple[int, int, int, int],
+    fired: int,
+    velocity_tolerance: float,
+    displacement_tolerance: float,
+    out: np.ndarray,
+    n: int,
+) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
+    """The steps of the module's docstring at one instant; ``y`` is projected in place."""
+    before = mode
+    if fired & _RIGHT_STOP:
+        mode, n = _switch_right_contact(t, y, c, mode, out, n)
+    if fired & _LEFT_STOP:
+        mode, n = _switch_left_contact(t, y, c, mode, out, n)
+    for mass in (1, 2):
+        if fired & (_VELOCITY_1 if mass == 1 else _VELOCITY_2) and mode[mass - 1] != 0:
+            y[2 * mass - 1] = 0.0
+            mode, n = _arrive(t, y, c, period, mode, mass, out, n)
+    for mass in (1, 2):
+        for side in (1, -1):
+            if mass == 1:
+                root = _BARRIER_1_POSITIVE if side == 1 else _BARRIER_1_NEGATIVE
+            else:
+                root = _BARRIER_2_POSITIVE if side == 1 else _BARRIER_2_NEGATIVE
+            if fired & root and mode[mass - 1] == 0 and before[mass - 1] == 0:
+                mode, n = _leave_rest(t, y, c, period, mode, mass, side, out, n)
+    mode, n, settled = _settle(t, y, c, period, mode, out, n)
+    if settled:
+        n = _grazing_reports(t, y, c, period, before, mode, fired, velocity_tolerance, displacement_tolerance, out, n)
+    return mode, n, settled
+
+
+# --------------------------------------------------------------------------- entry points
+
+
+def _numbers(mode: Mode) -> tuple[int, int, int, int]:
+    return (mode.sign(1), mode.sign(2), int(mode.left), int(mode.right))
+
+
+def _storm(t: float, mode: Mode) -> SimulationFailed:
+    return SimulationFailed(
         f"event storm at t = {t:.10g} s: the masses keep switching at one instant "
         f"(mode {mode}); the flow barrier and the fields contradict each other here — check "
         f"mu_s >= mu_k and the contact parameters",
@@ -266,67 +497,51 @@ def settle(t: float, y: StateLike, p: Parameters, mode: Mode, events: list[Event
     )
 
 
-# --------------------------------------------------------------------------- grazing reports
-
-
-def _grazing_reports(
+def resolve_rows(
     t: float,
-    y: StateLike,
+    y: np.ndarray,
     p: Parameters,
-    before: Mode,
     mode: Mode,
-    fired: set[Root],
+    fired: int,
     options: SolverOptions,
-    events: list[Event],
-) -> None:
-    for mass in (1, 2):
-        s = mode.sign(mass)
-        if _EXTREMUM[mass] in fired and s and before.domain(mass) == mode.domain(mass):
-            alpha = mode.domain(mass)
-            g = velocity_g(t, y, p, mode, mass, s)
-            tolerance = zero_tolerance(t, y, p, mode, mass, g[1])
-            decision = theorem_5_5_grazing(mass, alpha, g[0], g[1], tolerance=tolerance)
-            speed = abs(y[2 * mass - 1])
-            if decision and speed <= options.grazing_velocity_tolerance:
-                events.append(
-                    _event(
-                        t,
-                        y,
-                        mass,
-                        EventKind.GRAZING,
-                        mode.boundary_label(mass),
-                        mode,
-                        mode,
-                        decision,
-                        g,
-                        names=(_field_name(mass, alpha), ""),
-                        distance=speed,
-                    )
-                )
-    tol = options.grazing_displacement_tolerance
-    if _VELOCITY[1] in fired and abs(y[0] - p.d1) <= tol:
-        # v1 = 0 within tol of x1 = d1: the flow touched the right stop in m1's domain before.
-        _stop_grazing(t, y, p, before, "right", Decision(True, "Def. 5.2", "(5.7)" if mode.left else "(5.6)"), events)
-    if Root.RELATIVE_VELOCITY in fired and abs(y[0] - y[2] + p.d) <= tol:
-        _stop_grazing(t, y, p, mode, "left", Decision(True, "Def. 5.4", "(5.11)" if mode.left else "(5.10)"), events)
+    out: np.ndarray,
+    start: int,
+) -> tuple[Mode, int]:
+    """Resolve the roots that fired at ``t`` (the bits ``1 << root``) into the next mode.
+
+    The events are written as rows ``out[start:]`` (:data:`oscillator.model.events.COLUMN`;
+    ``out`` must have :data:`MAX_ROWS` rows free); returns the next mode and how many events.
+    ``y[:4]`` is projected in place: the velocity of a mass that reached its velocity boundary
+    is set to exactly zero (it is zero to the solver's accuracy), so that a resting mass has
+    ``v_i = 0`` identically.
+
+    Raises
+    ------
+    SimulationFailed
+        The masses keep switching at the instant (an event storm).
+    """
+    (s1, s2, left, right), end, settled = _resolve(
+        float(t), y, coefficients(p), p.period, _numbers(mode), fired, options.grazing_velocity_tolerance,
+        options.grazing_displacement_tolerance, out, start,
+    )  # fmt: skip
+    after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
+    if not settled:
+        raise _storm(t, after)
+    return after, end - start
 
 
-def _stop_grazing(
-    t: float, y: StateLike, p: Parameters, mode: Mode, stop: str, decision: Decision, events: list[Event]
-) -> None:
-    """Report grazing of a stop (docs/model.md, rule 6): ``G^(0)`` (``v1`` or ``zdot1``) is zero on it."""
-    g = displacement_g(t, y, p, mode, stop)
-    distance = abs(y[0] - p.d1) if stop == "right" else abs(y[0] - y[2] + p.d)
-    boundary = "x1 = d1" if stop == "right" else "z1 = -d"
-    if mode.sign(1):
-        flags = {"left": mode.left, "right": mode.right}
-        flags[stop] = not flags[stop]
-        boundary = displacement_boundary_label(1, mode.domain1, domain_of(1, mode.sign(1), **flags))
-    names = ("v1" if stop == "right" else "zdot1", "")
-    events.append(_event(t, y, 1, EventKind.GRAZING, boundary, mode, mode, decision, g, names=names, distance=distance))
+@dataclass(frozen=True, slots=True)
+class Resolution:
+    """What one instant resolved to: the next mode, the events (as rows), and the (projected) state."""
 
+    mode: Mode
+    rows: np.ndarray
+    y: tuple[float, float, float, float]
 
-# --------------------------------------------------------------------------- entry points
+    @property
+    def events(self) -> tuple[Event, ...]:
+        """The events as :class:`~oscillator.model.events.Event` records."""
+        return tuple(event_of_row(row) for row in self.rows)
 
 
 def resolve(
@@ -334,33 +549,16 @@ def resolve(
     y: StateLike,
     p: Parameters,
     mode: Mode,
-    fired: Iterable[Root],
+    fired: Iterable[int],
     options: SolverOptions,
 ) -> Resolution:
-    """Resolve the roots that fired at ``t`` into the next mode and the event records.
-
-    The velocity of a mass that reached its velocity boundary is set to exactly zero (it is
-    zero to the solver's accuracy), so that a resting mass has ``v_i = 0`` identically.
-    """
-    fired = set(fired)
-    state = [float(v) for v in y[:4]]
-    events: list[Event] = []
-    before = mode
-    if Root.RIGHT_STOP in fired:
-        mode = _switch_right_contact(t, state, p, mode, events)
-    if Root.LEFT_STOP in fired:
-        mode = _switch_left_contact(t, state, p, mode, events)
-    for mass in (1, 2):
-        if _VELOCITY[mass] in fired and not mode.resting(mass):
-            state[2 * mass - 1] = 0.0
-            mode = _arrive(t, state, p, mode, mass, events)
-    for mass in (1, 2):
-        for root, side in _BARRIERS[mass]:
-            if root in fired and mode.resting(mass) and before.resting(mass):
-                mode = _leave_rest(t, state, p, mode, mass, side, events)
-    mode = settle(t, state, p, mode, events)
-    _grazing_reports(t, state, p, before, mode, fired, options, events)
-    return Resolution(mode, tuple(events), (state[0], state[1], state[2], state[3]))
+    """Resolve the roots that fired at ``t`` into the next mode and the event records
+    (:func:`resolve_rows` on a copy of the state)."""
+    state = np.array([float(v) for v in y[:4]])
+    out = np.empty((MAX_ROWS, WIDTH))
+    bits = sum(1 << int(root) for root in set(fired))
+    after, count = resolve_rows(t, state, p, mode, bits, options, out, 0)
+    return Resolution(after, out[:count].copy(), (float(state[0]), float(state[1]), float(state[2]), float(state[3])))
 
 
 def initial_mode(t0: float, y: StateLike, p: Parameters) -> Resolution:
@@ -373,18 +571,31 @@ def initial_mode(t0: float, y: StateLike, p: Parameters) -> Resolution:
     reports a crossing that starts exactly at its initial time).
     """
     x1, v1, x2, v2 = (float(v) for v in y[:4])
-    state = (x1, v1, x2, v2)
+    state = np.array([x1, v1, x2, v2])
     z1, zdot1 = x1 - x2, v1 - v2
     left = z1 < -p.d or (z1 == -p.d and zdot1 < 0)
     right = x1 > p.d1 or (x1 == p.d1 and v1 > 0)
     signs = [int(math.copysign(1, v)) if v != 0 else 0 for v in (v1, v2)]
     mode = Mode.from_signs(signs[0], signs[1], left=left, right=right)
-    events: list[Event] = []
-    mode = settle(t0, state, p, mode, events)
+    c, out = coefficients(p), np.empty((2 * MAX_ROWS, WIDTH))
+    mode, count = _settle_from(t0, state, p, mode, out, 0)
     on_left, on_right = z1 == -p.d and zdot1 == 0, x1 == p.d1 and v1 == 0
     if on_left or on_right:
-        rel, a1 = displacement_g(t0, state, p, mode, "left")[1], displacement_g(t0, state, p, mode, "right")[1]
+        numbers = _numbers(mode)
+        rel = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, False)[1]
+        a1 = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, True)[1]
         contacts = {"left": (rel < 0) if on_left else mode.left, "right": (a1 > 0) if on_right else mode.right}
         if (contacts["left"], contacts["right"]) != (mode.left, mode.right):
-            mode = settle(t0, state, p, mode.with_contacts(**contacts), events)
-    return Resolution(mode, tuple(events), state)
+            mode, count = _settle_from(t0, state, p, mode.with_contacts(**contacts), out, count)
+    return Resolution(mode, out[:count].copy(), (x1, v1, x2, v2))
+
+
+def _settle_from(t: float, y: np.ndarray, p: Parameters, mode: Mode, out: np.ndarray, start: int) -> tuple[Mode, int]:
+    # no root fired: the instant is only settled (one compiled entry point, compiled once)
+    (s1, s2, left, right), end, settled = _resolve(
+        float(t), y, coefficients(p), p.period, _numbers(mode), 0, 0.0, 0.0, out, start
+    )
+    after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
+    if not settled:
+        raise _storm(t, after)
+    return after, end
