@@ -147,8 +147,8 @@ class StallGuard:
             )
 
 
-#: The columns of an event row the storm guard tells events apart by, after the time.
-_STORM_COLUMNS = [COLUMN[name] for name in ("t", "mass", "kind", "boundary")]
+# The storm guard reads an event row's first four columns: the time, then what tells events apart.
+assert [COLUMN[name] for name in ("t", "mass", "kind", "boundary")] == [0, 1, 2, 3]
 
 
 class EventGuard:
@@ -156,8 +156,8 @@ class EventGuard:
 
     def __init__(self, options: SolverOptions) -> None:
         self.options = options
-        #: ``(t, mass, kind, boundary)`` of the latest events (codes, as in an event row).
-        self.recent: collections.deque[tuple[float, ...]] = collections.deque(maxlen=options.storm_events + 1)
+        #: ``[t, mass, kind, boundary]`` of the latest events (codes, as in an event row).
+        self.recent: collections.deque[list[float]] = collections.deque(maxlen=options.storm_events + 1)
 
     def count(self, rows: np.ndarray, total: int, t: float) -> None:
         """New events (event rows) at ``t``, ``total`` events in all so far."""
@@ -174,10 +174,10 @@ class EventGuard:
 
     def _storm(self, rows: np.ndarray) -> None:
         recent = self.recent
-        recent.extend(map(tuple, rows[:, _STORM_COLUMNS].tolist()))
+        recent.extend(rows[:, :4].tolist())
         if len(recent) < (recent.maxlen or 0) or recent[-1][0] - recent[0][0] > self.options.storm_window:
             return
-        tally = collections.Counter(entry[1:] for entry in recent)
+        tally = collections.Counter((mass, kind, boundary) for _, mass, kind, boundary in recent)
         (mass, kind, boundary), count = tally.most_common(1)[0]
         what = f"{decode('kind', kind, mass)} on {decode('boundary', boundary, mass)}"
         raise SimulationFailed(
