@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from oscillator.model.events import WIDTH, Event, event_of_row
+from oscillator.model.events import WIDTH
 from oscillator.model.phase_space import Mode
 
 __all__ = ["EventLog", "RunRecord"]
@@ -51,10 +51,6 @@ class EventLog:
     def keep(self, count: int) -> None:
         """Make the ``count`` rows written past the end part of the log."""
         self._size += count
-
-    def events(self) -> list[Event]:
-        """The events as :class:`~oscillator.model.events.Event` records."""
-        return [event_of_row(row) for row in self.rows]
 
 
 @dataclass
