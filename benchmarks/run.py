@@ -390,8 +390,8 @@ def orbits(quick: bool) -> dict:
     for omega in (1.6, 1.85):
         orbit = find_orbit("instance-1", Omega=omega)
         case = orbit_case("instance-1", {"Omega": omega})
-        plain_map = partial(period_map, case, orbit.t0, orbit.state, derivative=False)
-        full_map = partial(period_map, case, orbit.t0, orbit.state)
+        plain_map = partial(period_map, case, orbit.section, orbit.state, derivative=False)
+        full_map = partial(period_map, case, orbit.section, orbit.state)
         plain = median(best_of(1, plain_map)[0] for _ in range(repeats))
         full = median(best_of(1, full_map)[0] for _ in range(repeats))
         newton_wall, again = best_of(1, partial(find_orbit, case, guess=orbit.state + 1e-4))

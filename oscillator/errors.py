@@ -8,8 +8,8 @@ it in one line instead of a traceback.  Two kinds are told apart by type:
 * :class:`SimulationFailed` - a run started and stopped (a solver failure or a guard); it carries
   the partial :class:`~oscillator.hybrid.result.Result` up to the last point reached.
 
-A Ctrl-C during a run raises :class:`Interrupted`, a ``KeyboardInterrupt`` that carries the
-partial result the same way.
+A Ctrl-C during a run or a continuation raises :class:`Interrupted`, a ``KeyboardInterrupt`` that
+carries the partial result the same way (a ``Result``, or the ``Branch`` traced so far).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
+    from oscillator.orbits.continuation import Branch
 
 __all__ = ["InputError", "Interrupted", "OscillatorError", "SimulationFailed"]
 
@@ -60,8 +61,10 @@ class SimulationFailed(OscillatorError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """Ctrl-C during a run; ``result`` is the partial result (``Status.INTERRUPTED``)."""
+    """Ctrl-C during a run or a continuation; ``result`` is what was computed so far: the partial
+    ``Result`` of :func:`~oscillator.simulate` (``Status.INTERRUPTED``), or the ``Branch`` of
+    :func:`~oscillator.continue_orbit` traced so far (``complete`` False)."""
 
-    def __init__(self, result: Result) -> None:
+    def __init__(self, result: Result | Branch) -> None:
         super().__init__("interrupted by the user")
         self.result = result

@@ -96,7 +96,7 @@ def test_the_orbit_is_a_fixed_point_of_the_simulation():
     orbit = find_orbit("instance-1", Q2=70.5)
     assert orbit.signature.count("sliding_onset") == 2
     assert orbit.stable and np.max(np.abs(orbit.multipliers)) < 1
-    image = period_map(orbit.case, orbit.t0, orbit.state, derivative=False)
+    image = period_map(orbit.case, orbit.section, orbit.state, derivative=False)
     assert np.max(np.abs(image.end - orbit.state)) < 1e-9
     # m2 rests: its velocity is constrained there, so one multiplier is zero
     assert np.min(np.abs(orbit.multipliers)) < 1e-12
@@ -125,15 +125,57 @@ def test_a_switch_splits_into_one_crossing_per_boundary(before, after, expected)
     assert steps[0][0] == before and steps[-1][1] == after
 
 
-def test_bad_orbit_input_is_refused():
-    with pytest.raises(InputError, match="period"):
-        find_orbit("instance-1", period=0)
-    with pytest.raises(InputError, match="guess"):
-        find_orbit("instance-1", guess=(1.0, 2.0))
-    with pytest.raises(InputError, match="param"):
-        continue_orbit("instance-1", param="nope", start=1, stop=2)
-    with pytest.raises(InputError, match="start and stop"):
-        continue_orbit("instance-1", param="Q2", start=1, stop=1)
+@pytest.mark.parametrize(
+    ("call", "field"),
+    [
+        (lambda: find_orbit("instance-1", period=0), "period"),
+        (lambda: find_orbit("instance-1", period=1001), "period"),  # a motion to simulate, not shoot
+        (lambda: find_orbit("instance-1", period=True), "period"),
+        (lambda: find_orbit("instance-1", guess=(1.0, 2.0)), "guess"),
+        (lambda: find_orbit("instance-1", guess="abcd"), "guess"),
+        (lambda: find_orbit("instance-1", guess=(1.0, 2.0, "x", 4.0)), "guess"),
+        (lambda: find_orbit("instance-1", tol="x"), "tol"),
+        (lambda: find_orbit("instance-1", tol=0), "tol"),
+        (lambda: find_orbit("instance-1", tol=-1), "tol"),
+        (lambda: find_orbit("instance-1", tol=float("nan")), "tol"),
+        (lambda: find_orbit("instance-1", max_iterations=0), "max_iterations"),
+        (lambda: find_orbit("instance-1", transient=-1), "transient"),
+        (lambda: find_orbit("instance-1", section=1.5), "guess"),  # another section needs a guess
+        (lambda: find_orbit("instance-1", section="1.5", guess=(0, 0, 0, 0)), "section"),
+        (lambda: continue_orbit("instance-1", param="nope", start=1, stop=2), "param"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=1, stop=1), "stop"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=np.nextafter(71.5, 72)), "stop"),
+        (lambda: continue_orbit("instance-1", param="Q2", start="71.5", stop=70.5), "start"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=1e308), "stop"),
+        (lambda: continue_orbit("instance-1", param="mu_s", start=0.2, stop=0.05), "stop"),  # below mu_k
+        (lambda: continue_orbit("instance-1", param="Omega", start=1.6, stop=0), "stop"),
+        (lambda: continue_orbit("instance-1", param="m1", start=1, stop=-1), "stop"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, Q2=3), "Q2"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, step=True), "step"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, step=1e-300), "step"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, locate_tol=0), "locate_tol"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, locate_tol=-1), "locate_tol"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, progress="x"), "progress"),
+        (lambda: continue_orbit("instance-1", param="Q2", start=71.5, stop=70.5, max_points=1), "max_points"),
+    ],
+)
+def test_bad_orbit_input_is_refused_naming_the_argument(call, field):
+    """Each misuse: the library's InputError naming the argument, before anything runs (none of
+    these hangs, computes, or raises NumPy's or Python's own error)."""
+    with pytest.raises(InputError) as refused:
+        call()
+    assert refused.value.field == field
+
+
+def test_t0_moves_the_case_s_start_and_section_names_the_section():
+    """``t0`` is the case's start time (as for ``simulate``), never the orbit's section; a new
+    start without an end keeps the run's length."""
+    moved = resolve_case("instance-1", t0=1.91)
+    assert moved.initial.t0 == 1.91 and abs(moved.t_end - (1.9 + 0.91)) < 1e-12
+    period = 2 * np.pi / 1.85
+    orbit = find_orbit("instance-1", Omega=1.85, t0=1.0 + period)  # the same section, a period later
+    assert orbit.section == 1.0 + period
+    np.testing.assert_allclose(orbit.state, find_orbit("instance-1", Omega=1.85).state, atol=1e-7)
 
 
 def test_continuation_locates_where_sliding_sets_in_on_the_q2_branch():
@@ -279,7 +321,7 @@ def test_continuation_locates_the_period_doubling_of_an_oscillator_against_a_sto
     doubled = find_orbit("instance-1", period=2, Omega=beyond, **BILINEAR)
     single = find_orbit("instance-1", guess=doubled.state, Omega=beyond, **BILINEAR)
     assert doubled.stable and not single.stable
-    half = period_map(doubled.case, doubled.t0, doubled.state, derivative=False).end
+    half = period_map(doubled.case, doubled.section, doubled.state, derivative=False).end
     assert np.max(np.abs(half - doubled.state)) > 1e-2  # two distinct points: period 2, not 1
 
 
@@ -301,3 +343,23 @@ def test_continue_writes_its_tables_figures_and_an_escaped_report(tmp_path):
     html = (out / "report.html").read_text(encoding="utf-8")
     assert "<img src=x" not in html and "&lt;img src=x onerror=alert(1)&gt;" in html
     assert "\\<img src=x onerror=alert(1)\\>\\*x\\*" in (out / "report.md").read_text(encoding="utf-8")
+
+
+def test_near_a_branch_end_the_branch_keeps_its_own_orbit():
+    """Up in Q2 to 2e-5 below the resting orbit's end (71.1702569), where the orbit without
+    rest coexists: the branch ends on the resting orbit, with no bifurcation (it used to jump
+    to the other orbit at its last point and report a sliding bifurcation there)."""
+    branch = continue_orbit("instance-1", param="Q2", start=70.5, stop=71.1702369)
+    assert branch.complete and branch.bifurcations.empty
+    assert (branch.points.signature.str.count("sliding_onset") == 2).all()
+    assert branch.points.Q2.iloc[-1] == 71.1702369
+
+
+def test_newton_says_when_it_went_from_one_kind_of_motion_to_another():
+    """A guess on the resting orbit's side at a Q2 where that orbit no longer exists: Newton
+    converges to the orbit without rest, and says that it changed kind."""
+    resting = find_orbit("instance-1", Q2=71.1)
+    assert resting.signature.count("sliding_onset") == 2 and resting.note == ""
+    other = find_orbit("instance-1", Q2=71.2, guess=resting.state)
+    assert "sliding" not in other.signature
+    assert "another cycle of switches" in other.note and "sliding_onset" in other.note

@@ -8,6 +8,7 @@ errors (``folder``, ``formats``, ``window``); :func:`message` names the flags in
 from __future__ import annotations
 
 import importlib
+import re
 
 import typer
 from rich.console import Console
@@ -29,6 +30,18 @@ FLAGS = {
     "tolerance": "--tolerance",
     "workers": "--workers",
     "scheduler": "--scheduler",
+    "param": "--param",
+    "start": "--from",
+    "stop": "--to",
+    "step": "--step",
+    "period": "--period",
+    "max_points": "--max-points",
+    "guess": "--guess",
+    "transient": "--transient",
+    "max_iterations": "--max-iterations",
+    "section": "--section",
+    "over": "--over",
+    "keep_events_from": "--keep-events-from",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.
@@ -71,9 +84,11 @@ def load(*modules: str) -> None:
 
 
 def message(error: OscillatorError) -> str:
-    """The error's message, with the library's name of the argument replaced by its flag."""
+    """The error's message, with the library's names of arguments replaced by their flags: the
+    field's name where the message begins with it, and every name the message quotes in
+    backticks (```guess```)."""
     text = str(error)
     flag = FLAGS.get(error.field or "")
     if flag is not None and text.startswith(error.field or ""):
-        return flag + text[len(error.field or "") :]
-    return text
+        text = flag + text[len(error.field or "") :]
+    return re.sub(r"`(\w+)`", lambda m: FLAGS.get(m.group(1), m.group(1)), text)

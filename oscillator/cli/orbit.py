@@ -1,10 +1,17 @@
-"""``oscillator orbit`` and ``oscillator continue``: periodic orbits, their multipliers, branches."""
+"""``oscillator orbit`` and ``oscillator continue``: periodic orbits, their multipliers, branches.
+
+``continue`` follows the exit codes of :mod:`oscillator.cli.app`: 0 when the branch reached the
+end of the range; 1 when it ended early (the corrector failed, ``--max-points`` was reached, it
+came back after a fold) or a figure could not be drawn, the branch so far kept in its folder
+marked ``"incomplete"``; 130 on Ctrl-C, the branch so far kept marked ``"interrupted"``.
+"""
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich import box
@@ -13,9 +20,16 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from
-from oscillator.errors import InputError, OscillatorError, SimulationFailed
+from oscillator.cli.inputs import case_from, overrides
+from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
+from oscillator.io.expressions import parse_value
+from oscillator.io.signals import interrupts_deferred
 from oscillator.text import printable, shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.io.cases import Case
+    from oscillator.io.files import FolderClaim
+    from oscillator.orbits.continuation import Branch
 
 __all__ = ["continue_", "orbit"]
 
@@ -23,14 +37,49 @@ SetOption = Annotated[
     list[str] | None,
     typer.Option("--set", metavar="NAME=VALUE", help="Override a parameter, initial value or solver option."),
 ]
-PeriodOption = Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return.")]
+PeriodOption = Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return (1 to 1000).")]
+GuessOption = Annotated[
+    str | None,
+    typer.Option("--guess", metavar="X1,V1,X2,V2", help="Start Newton from this state at the section."),
+]
+TransientOption = Annotated[
+    int | None,
+    typer.Option("--transient", metavar="N", help="Forcing periods simulated before Newton (default 100)."),
+]
+SectionOption = Annotated[
+    float | None,
+    typer.Option("--section", metavar="T", help="The section's time in s (default: the case's t0; needs --guess)."),
+]
 COORDINATES = ("x1", "v1", "x2", "v2")
+
+
+def _guess(text: str | None) -> tuple[float, ...] | None:  # four numbers
+    """``--guess X1,V1,X2,V2`` as four numbers."""
+    if text is None:
+        return None
+    parts = text.split(",")
+    if len(parts) != 4:
+        raise InputError(f"--guess must be four numbers X1,V1,X2,V2, got {shown(text)}", field="--guess")
+    values = tuple(parse_value(part.strip(), field="--guess") for part in parts)
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        raise InputError(f"--guess must be four numbers X1,V1,X2,V2, got {shown(text)}", field="--guess")
+    return tuple(float(v) for v in values)
+
+
+def _code(error: OscillatorError) -> int:
+    return 1 if isinstance(error, SimulationFailed) else 2
 
 
 def orbit(
     case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
     set_: SetOption = None,
     period: PeriodOption = 1,
+    guess: GuessOption = None,
+    transient: TransientOption = None,
+    section: SectionOption = None,
+    max_iterations: Annotated[
+        int, typer.Option("--max-iterations", metavar="N", help="Newton steps before giving up (1 to 200).")
+    ] = 20,
 ) -> None:
     """Find the periodic orbit of the stroboscopic map by Newton's method; print it, its events
     and its Floquet multipliers.
@@ -39,24 +88,28 @@ def orbit(
     Examples:
       oscillator orbit instance-1
       oscillator orbit instance-1 --set Q2=70.5
+      oscillator orbit instance-1 --set Q2=70.5 --transient 20 --max-iterations 40
     """
     try:
         resolved = case_from(case, None, set_)
+        start = _guess(guess)
         load("oscillator.orbits.shooting")
         from oscillator.orbits.shooting import find_orbit
 
-        found = find_orbit(resolved, period=period)
+        found = find_orbit(resolved, period=period, guess=start, transient=transient, section=section,  # type: ignore[arg-type]
+                           max_iterations=max_iterations)  # fmt: skip
     except OscillatorError as error:
-        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+        raise fail(message(error), code=_code(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted", code=130) from None
     from oscillator.cli.run import _events_table
 
     state = ", ".join(f"{name} = {value:.10g}" for name, value in zip(COORDINATES, found.state, strict=True))
-    out.print(Text(f"{printable(resolved.name)}: period-{found.period} orbit at t0 = {found.t0:g} s"))
+    out.print(Text(f"{printable(resolved.name)}: period-{found.period} orbit at t = {found.section:g} s (the section)"))
     out.print(Text(f"  {state}"))
-    out.print(Text(f"  residual {found.residual:.1e} after {found.iterations} Newton step(s); "
-                   f"{'stable' if found.stable else 'unstable'}"))  # fmt: skip
+    out.print(Text(f"  residual {found.residual:.1e} after {found.iterations} Newton step(s); {found.verdict}"))
+    if found.note:
+        out.print(Text(f"  note: {found.note}"))
     table = Table(title="Floquet multipliers", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
     for column in ("multiplier", "modulus"):
         table.add_column(column, justify="right")
@@ -98,63 +151,149 @@ def continue_(
     set_: SetOption = None,
     period: PeriodOption = 1,
     step: Annotated[
-        float | None, typer.Option("--step", metavar="S", help="Largest step, as a fraction of the range.")
+        float | None,
+        typer.Option("--step", metavar="S", help="Largest step, as a fraction of the range (1e-6 to 1; 1/40)."),
     ] = None,
-    coordinate: Annotated[str, typer.Option("--coordinate", help="The coordinate at t0 drawn.")] = "x2",
+    max_points: Annotated[
+        int, typer.Option("--max-points", metavar="N", help="The most points computed (2 to 100000).")
+    ] = 400,
+    guess: GuessOption = None,
+    transient: TransientOption = None,
+    section: SectionOption = None,
+    coordinate: Annotated[str, typer.Option("--coordinate", help="The coordinate at the section drawn.")] = "x2",
     over: Annotated[
         Path | None, typer.Option("--over", metavar="SWEEP_DIR", help="Draw the branch over this sweep's points.")
     ] = None,
     out_dir: Annotated[Path | None, typer.Option("--out", metavar="DIR", help="Output folder.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
 ) -> None:
     """Continue a periodic orbit in a parameter (pseudo-arclength, through unstable parts and
     folds); locate its sliding, grazing, fold, period-doubling and torus bifurcations.
 
-    Writes branch.parquet, bifurcations.parquet, figures/branch.png, figures/multipliers.png
-    report.md and report.html into DIR (default runs/<case>-continue-<time>).
+    Writes branch.parquet, bifurcations.parquet, run.json, figures/branch.png,
+    figures/multipliers.png, report.md and report.html into DIR (default
+    runs/<case>-continue-<time>). Exit 1 if the branch ended before --to (the branch so far is
+    kept), 130 if interrupted (likewise).
 
     \b
     Examples:
       oscillator continue instance-1 --param Q2 --from 70.5 --to 71.5 --out runs/q2-branch
     """
     try:
-        if coordinate not in COORDINATES:
-            raise InputError(f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}",
-                             field="--coordinate")  # fmt: skip
-        resolved = case_from(case, None, set_)
-        load("oscillator.orbits.continuation", "oscillator.io.runs", "oscillator.analysis.sweeps")
-        from oscillator.analysis.sweeps import read_sweep
-        from oscillator.io.files import check_name
-        from oscillator.io.runs import claim_output
-        from oscillator.orbits.continuation import continue_orbit
-
-        sweep_points = read_sweep(over)["poincare"] if over is not None else None
-        if sweep_points is not None and param not in sweep_points.columns:
-            raise InputError(f"the sweep in {shown(str(over))} is not a sweep of {shown(param)}", field="--over")
-        if out_dir is not None:
-            check_name(out_dir, option="--out")
-        claim = claim_output(out_dir, f"{resolved.name}-continue")
+        resolved, settings, sweep_points, claim = _prepare_continue(case, set_, coordinate, over, out_dir, {
+            "param": param, "start": start, "stop": stop, "period": period, "step": step, "max_points": max_points,
+            "guess": _guess(guess), "transient": transient, "section": section,
+        })  # fmt: skip
     except OscillatorError as error:
-        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+        raise fail(message(error), code=_code(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", code=130) from None
+    branch = _compute(resolved, settings, claim, quiet)
+    _summary(branch, quiet)
+    folder = _write(branch, resolved, claim, coordinate, sweep_points)
+    problem = _finish(folder)
+    if quiet:
+        out.print(printable(str(folder)))
+    else:
+        say("written to ", (str(folder), "bold"))
+    _exit(branch, folder, problem)
+
+
+def _prepare_continue(case: str, set_: list[str] | None, coordinate: str, over: Path | None, out_dir: Path | None,
+                      settings: dict[str, Any]) -> tuple[Case, dict[str, Any], Any, FolderClaim]:  # fmt: skip
+    """Every check of ``continue`` before anything is computed, then the output folder claimed."""
+    if coordinate not in COORDINATES:
+        raise InputError(f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}",
+                         field="--coordinate")  # fmt: skip
+    param = settings["param"]
+    if param in overrides(set_ or []):
+        raise InputError(f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
+                         "range with --from and --to", field="--set")  # fmt: skip
+    resolved = case_from(case, None, set_)
+    load("oscillator.orbits.continuation", "oscillator.orbits.output", "oscillator.io.runs")
+    from oscillator.io.files import check_name
+    from oscillator.io.runs import claim_output
+    from oscillator.orbits.continuation import check_settings
+    from oscillator.orbits.output import read_sweep_points
+
+    check_settings(resolved, **settings)
+    sweep_points = read_sweep_points(over, param, coordinate) if over is not None else None
+    if out_dir is not None:
+        check_name(out_dir, option="--out")
+    return resolved, settings, sweep_points, claim_output(out_dir, f"{resolved.name}-continue")
+
+
+def _compute(case: Case, settings: dict[str, Any], claim: FolderClaim, quiet: bool) -> Branch:
+    """The branch; on Ctrl-C the branch traced so far (nothing, if the first orbit was not found)."""
+    from oscillator.orbits.continuation import continue_orbit
+
     try:
-        settings = {"param": param, "start": start, "stop": stop, "period": period, "step": step}
-        branch = _continue_with_progress(continue_orbit, resolved, settings, quiet)
+        return _continue_with_progress(continue_orbit, case, settings, quiet)
     except OscillatorError as error:
         claim.abandon()
-        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+        raise fail(message(error), code=_code(error)) from None
+    except Interrupted as interrupt:
+        partial = interrupt.result
+        if partial is not None and hasattr(partial, "points"):
+            return partial  # type: ignore[return-value]
+        claim.abandon()
+        raise fail("interrupted before the first orbit was found; nothing was written", code=130) from None
     except KeyboardInterrupt:
         claim.abandon()
-        raise fail("interrupted; nothing was written", code=130) from None
+        raise fail("interrupted before the first orbit was found; nothing was written", code=130) from None
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+def _summary(branch: Branch, quiet: bool) -> None:
+    """The branch in a few lines (before it is written: what is seen is never lost)."""
+    if quiet:
+        return
+    param = branch.param
+    say(f"{len(branch.points)} points, {len(branch.bifurcations)} bifurcation(s)")
+    for row in branch.bifurcations.itertuples(index=False):
+        gap = "  (a gap begins)" if row.after == "" else "  (a gap ends)" if row.before == "" else ""
+        out.print(Text(f"  {param} = {getattr(row, param):.10g}  {row.kind}{gap}"))
+
+
+def _write(branch: Branch, case: Case, claim: FolderClaim, coordinate: str, sweep_points: Any) -> Path:
+    """The branch's tables, case and run.json written whole into the claimed folder."""
     from oscillator.orbits.output import write_branch
 
-    folder, problem = write_branch(branch, resolved, claim, coordinate=coordinate, sweep_points=sweep_points)
-    if not quiet:
-        say(f"{len(branch.points)} points, {len(branch.bifurcations)} bifurcation(s) in {folder}")
-        for row in branch.bifurcations.itertuples(index=False):
-            gap = "  (a gap begins)" if row.after == "" else "  (a gap ends)" if row.before == "" else ""
-            out.print(Text(f"  {param} = {getattr(row, param):.10g}  {row.kind}{gap}"))
-        if not branch.complete:
-            out.print(Text(f"  the branch ended early: {printable(branch.message)}"))
+    try:
+        with interrupts_deferred():  # Ctrl-C waits until the tables are written whole
+            return write_branch(branch, case, claim, coordinate=coordinate, sweep_points=sweep_points,
+                                command=["oscillator", *sys.argv[1:]])  # fmt: skip
+    except KeyboardInterrupt:  # it came while the tables were written: they are whole
+        raise fail(f"interrupted; the branch is in {claim.target}; `oscillator report {claim.target}` makes its "
+                   "figures and report", 130) from None  # fmt: skip
+    except (OSError, OscillatorError) as error:
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        raise fail(f"cannot write the branch to {claim.target}: {reason}; nothing was written; free the space or "
+                   "give another --out, and continue again", 1) from None  # fmt: skip
+
+
+def _finish(folder: Path) -> str:
+    """The figures and the report; what went wrong, if anything (the tables stay either way)."""
+    from oscillator.orbits.output import finish_branch
+
+    kept = f"the branch's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
+    try:
+        load("oscillator.orbits.output")
+        finish_branch(folder)
+    except KeyboardInterrupt:
+        raise fail(f"interrupted; {kept}", 130) from None
+    except Exception as error:  # a later step failed: the branch itself is safe
+        return f"the figures or report could not be made ({type(error).__name__}: {error}); {kept}"
+    return ""
+
+
+def _exit(branch: Branch, folder: Path, problem: str) -> None:
+    """Exit 130 for an interrupted branch, 1 for one that ended early or lacks its figures."""
+    if branch.message.startswith("interrupted"):
+        raise fail(f"{branch.message}; the branch so far is in {folder}", 130)
+    if not branch.complete:
+        raise fail(f"the branch ended early: {branch.message}; the branch so far is in {folder}", 1)
     if problem:
-        err.print(Text.assemble(("error:", "bold red"), f" {printable(problem)}; the tables are kept in {folder}"))
-        raise typer.Exit(1)
+        raise fail(problem, 1)

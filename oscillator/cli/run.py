@@ -88,10 +88,11 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine:
 
 def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> str:
     """Write the error's partial result (``error.result``) into the claimed folder; say where."""
+    from oscillator.hybrid.result import Result
     from oscillator.io.runs import write_run
 
     partial = error.result if isinstance(error, (SimulationFailed, Interrupted)) else None
-    if partial is None:
+    if not isinstance(partial, Result):
         claim.abandon()
         return "nothing was written"
     try:
@@ -265,16 +266,18 @@ def _print_run(case: Case, result: Result, folder: Path, quiet: bool) -> None:
 
 
 def report(
-    folder: Annotated[Path, typer.Argument(metavar="DIR", help="A folder written by oscillator run.")],
+    folder: Annotated[
+        Path, typer.Argument(metavar="DIR", help="A folder written by oscillator run or oscillator continue.")
+    ],
     window: Annotated[
         tuple[float, float] | None,
         typer.Option("--window", metavar="T0 T1", help="Redraw the figures for this time window."),
     ] = None,
 ) -> None:
-    """Rebuild the report of a run folder; draw its figures if they are missing.
+    """Rebuild the report of a run or branch folder; draw its figures if they are missing.
 
-    Finishes a run whose figures or report were interrupted. With --window, redraws the
-    figures for that time window.
+    Finishes a run (or a continued branch) whose figures or report were interrupted. With
+    --window, redraws a run's figures for that time window.
 
     \b
     Examples:
@@ -282,12 +285,19 @@ def report(
       oscillator report runs/long --window 1990 2000
     """
     try:
-        load("oscillator.io.runs", "oscillator.report.figures", "oscillator.report.transitions")
+        load("oscillator.io.runs", "oscillator.report.figures", "oscillator.report.transitions",
+             "oscillator.orbits.output")  # fmt: skip
         from oscillator.io.runs import finish_run
+        from oscillator.orbits.output import finish_branch, is_branch_folder
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
-        finish_run(folder, window=window)
+        if is_branch_folder(folder):
+            if window is not None:
+                raise InputError("--window chooses a run's time window; a branch folder has none", field="--window")
+            finish_branch(folder)
+        else:
+            finish_run(folder, window=window)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import enum
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -78,28 +77,33 @@ class SolverStats:
 
 
 class _Records:
-    """A run's records until its tables are asked for: the tables are built then, once, and the
-    records let go (a run that nobody reads a table of never imports pandas)."""
+    """A run's records until its tables are asked for: each table is built then, once, and its
+    records let go (a run that nobody reads a table of never imports pandas).  The tables are
+    kept here, so every copy of the result (``dataclasses.replace``) reads the same tables."""
 
     def __init__(self, events: np.ndarray, rows: list[tuple[float, np.ndarray, Mode]]) -> None:
-        self.events: np.ndarray | None = events
-        self.rows: list[tuple[float, np.ndarray, Mode]] | None = rows
+        self._events: np.ndarray | None = events
+        self._rows: list[tuple[float, np.ndarray, Mode]] | None = rows
+        self._events_frame: pd.DataFrame | None = None
+        self._trajectory_frame: pd.DataFrame | None = None
 
     def events_frame(self) -> pd.DataFrame:
-        from oscillator.io.tables import events_frame
+        if self._events_frame is None:
+            from oscillator.io.tables import events_frame
 
-        assert self.events is not None
-        frame, self.events = events_frame(self.events), None
-        return frame
+            assert self._events is not None
+            self._events_frame, self._events = events_frame(self._events), None
+        return self._events_frame
 
     def trajectory_frame(self) -> pd.DataFrame:
-        from oscillator.io.tables import trajectory_frame
+        if self._trajectory_frame is None:
+            from oscillator.io.tables import trajectory_frame
 
-        rows = self.rows
-        assert rows is not None
-        frame = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
-        self.rows = None
-        return frame
+            rows = self._rows
+            assert rows is not None
+            self._trajectory_frame = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
+            self._rows = None
+        return self._trajectory_frame
 
 
 @dataclass(frozen=True)
@@ -139,11 +143,11 @@ class Result:
     message: str = ""
     _records: _Records = field(default_factory=lambda: _Records(np.empty((0, 0)), []), repr=False, compare=False)
 
-    @cached_property
+    @property
     def events(self) -> pd.DataFrame:
         return self._records.events_frame()
 
-    @cached_property
+    @property
     def trajectory(self) -> pd.DataFrame:
         return self._records.trajectory_frame()
 

@@ -392,7 +392,8 @@ def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **ov
     A change of a parameter or of the start makes another case: its ``expected`` events (the
     article's times for the case as written) are dropped, and ``modified`` lists the changes.
     Solver options change no physics and keep them; an earlier ``t_end`` drops the expected
-    events after it.
+    events after it.  A new start ``t0`` without a ``t_end`` keeps the run's length: the end
+    moves with the start (``resolve_case("instance-1", t0=2.0)`` runs from 2.0 to 2.9 s).
     """
     if not isinstance(case, Case):
         case = load_case(case)
@@ -406,7 +407,9 @@ def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **ov
         parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
         initial=dataclasses.replace(case.initial, **groups["initial"]),
         options=dataclasses.replace(case.options, **groups["options"]),
-        t_end=case.t_end if t_end is None else t_end,
+        t_end=case.t_end + (groups["initial"]["t0"] - case.initial.t0 if "t0" in groups["initial"] else 0.0)
+        if t_end is None
+        else t_end,
     )
     changes = tuple(
         f"{name} {getattr(old, name):.10g} → {getattr(new, name):.10g}"

@@ -55,6 +55,7 @@ __all__ = [
     "finish_run",
     "read_events_csv",
     "read_run",
+    "run_metadata",
     "write_run",
 ]
 
@@ -114,6 +115,16 @@ _INTEGRATORS = {
 }
 
 
+def run_metadata(command: list[str] | None = None) -> dict:
+    """When, how and with what a folder was made: ``created``, ``command``, ``versions``, ``platform``."""
+    return {
+        "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        "command": command if command is not None else sys.argv,
+        "versions": _versions(),
+        "platform": platform.platform(),
+    }
+
+
 def run_info(result: Result, *, command: list[str] | None = None, pending: tuple[str, ...] = PENDING) -> dict:
     """What ``run.json`` holds."""
     case = result.case
@@ -126,10 +137,7 @@ def run_info(result: Result, *, command: list[str] | None = None, pending: tuple
         "status": str(result.status),
         "failure": result.message or None,
         "pending": list(pending),
-        "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-        "command": command if command is not None else sys.argv,
-        "versions": _versions(),
-        "platform": platform.platform(),
+        **run_metadata(command),
         "solver": {
             "integrator": _INTEGRATORS.get(result.stats.engine, result.stats.engine),
             "engine": result.stats.engine,

@@ -16,7 +16,16 @@ from typing import Any
 from oscillator.errors import InputError
 from oscillator.text import shown
 
-__all__ = ["InitialState", "Parameters", "SolverOptions", "SweepSettings", "as_float", "is_number", "is_whole_number"]
+__all__ = [
+    "InitialState",
+    "Parameters",
+    "SolverOptions",
+    "SweepSettings",
+    "as_float",
+    "is_number",
+    "is_whole_number",
+    "real_argument",
+]
 
 
 #: The largest magnitude a parameter or initial value may have.  The fields raise states to the
@@ -49,6 +58,18 @@ def as_float(value: Any) -> float:
         return float(value)
     except OverflowError:
         return math.inf
+
+
+def real_argument(value: Any, name: str, *, positive: bool = False) -> float:
+    """A function's argument that must be a finite real number (``positive``: ``> 0``), as a float.
+
+    Text, booleans, ``nan`` and infinities are refused with :class:`InputError` naming ``name``.
+    """
+    number = as_float(value)
+    if not math.isfinite(number) or (positive and not number > 0):
+        kind = "a positive finite number" if positive else "a finite number"
+        raise InputError(f"{name} must be {kind}, got {shown(value)}", field=name)
+    return number
 
 
 def _require_finite(owner: str, name: str, value: Any) -> float:

@@ -28,24 +28,36 @@ from functools import cached_property
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError, OscillatorError
+from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import Parameters
+from oscillator.model.parameters import Parameters, real_argument
 from oscillator.orbits.shooting import (
+    MAX_TRANSIENT,
     STATE,
     PeriodMap,
     check_count,
+    check_guess,
+    check_orbit_settings,
     cyclic_signature,
+    fixed_point_system,
+    moving_multipliers,
     multipliers_of,
     newton,
     orbit_case,
     period_map,
+    pinned_rows,
     start_of,
+    verdict_of,
 )
+from oscillator.text import shown
 
-__all__ = ["BIFURCATION_KINDS", "Branch", "continue_orbit"]
+__all__ = ["BIFURCATION_KINDS", "Branch", "check_settings", "continue_orbit"]
 
 BIFURCATION_KINDS = ("sliding_onset", "sliding_vanish", "grazing", "fold", "period_doubling", "torus")
+#: The default largest step, the smallest allowed and the most points (``continue_orbit``).
+DEFAULT_STEP = 1 / 40
+MIN_STEP = 1e-6
+MAX_POINTS = 100_000
 
 
 @dataclass(frozen=True)
@@ -69,8 +81,29 @@ class _Point:
         return cyclic_signature(self.image)
 
     @cached_property
+    def rest_positions(self) -> tuple[tuple[int, float], ...]:
+        """``(mass, x_i)`` of each mass at rest all period: where it stuck."""
+        return tuple((mass, float(self.y[2 * mass - 2])) for mass in self.image.resting)
+
+    def same_kind(self, other: _Point) -> bool:
+        """The same cycle of switches, and every mass at rest all period resting at the same place
+        (a family of such orbits is followed at that place; where static friction cannot hold
+        the mass there any more, the orbit ends even if the signature does not change)."""
+        if self.signature != other.signature or self.image.resting != other.image.resting:
+            return False
+        return all(abs(x - y) <= 1e-9 * max(1.0, abs(x)) for (_, x), (_, y) in
+                   zip(self.rest_positions, other.rest_positions, strict=True))  # fmt: skip
+
+    @cached_property
     def unstable(self) -> int:
-        return int(np.sum(np.abs(self.multipliers) > 1.0))
+        """Multipliers outside the unit circle (a mass at rest all period adds none: its 1 is neutral)."""
+        assert self.image.monodromy is not None
+        return int(np.sum(np.abs(moving_multipliers(self.image.monodromy, self.image.resting)) > 1.0))
+
+    @cached_property
+    def stable(self) -> bool:
+        assert self.image.monodromy is not None
+        return verdict_of(self.image.monodromy, self.image.resting)
 
 
 @dataclass(frozen=True)
@@ -92,7 +125,7 @@ class Branch:
         The continued parameter.
     points : DataFrame
         One row per point, in the order of the branch (including the orbits on either side of each
-        located bifurcation): the parameter under its own name, ``x1, v1, x2, v2`` at ``t0``,
+        located bifurcation): the parameter under its own name, ``x1, v1, x2, v2`` at the section,
         ``mu1..mu4`` (the multipliers' moduli, largest first), ``stable``, ``signature`` (the
         event kinds over one period as a cycle:
         :func:`~oscillator.orbits.shooting.cyclic_signature`), ``piece`` (the branch's
@@ -108,7 +141,7 @@ class Branch:
         start of the next (a gap), each end is a row of its own, with ``jump`` NaN and an empty
         ``after`` (the gap's first end) or ``before`` (its last), and the state of the orbit
         that ends there.
-    t0 : float
+    section : float
         The section's time.
     period : int
         Forcing periods per return.
@@ -120,7 +153,7 @@ class Branch:
     param: str
     points: pd.DataFrame
     bifurcations: pd.DataFrame
-    t0: float
+    section: float
     period: int
     complete: bool = True
     message: str = ""
@@ -143,17 +176,19 @@ class _Continuer:
         return _Point(y, lam, image, self.tangent(self.jacobian(y, lam, image), None, direction), 0)
 
     def residual(self, y: np.ndarray, lam: float) -> tuple[np.ndarray, PeriodMap]:
+        """``P(y) - y`` (zero in the displacement of a mass at rest all period) and the map."""
         image = period_map(self.at(lam), self.t0, y, self.period)
-        return image.end - y, image
+        return fixed_point_system(image)[1], image
 
     def jacobian(self, y: np.ndarray, lam: float, image: PeriodMap) -> np.ndarray:
-        """``[M - I, sigma dP/dlam]`` (4 x 5)."""
-        assert image.monodromy is not None
+        """``[M - I, sigma dP/dlam]`` (4 x 5); a mass at rest all period keeps its displacement:
+        its row is ``[e_(x_i), 0]`` (:func:`~oscillator.orbits.shooting.fixed_point_system`)."""
         h = 1e-6 * max(1.0, abs(lam))
         plus = period_map(self.at(lam + h), self.t0, y, self.period, derivative=False).end
         minus = period_map(self.at(lam - h), self.t0, y, self.period, derivative=False).end
         column = self.sigma * (plus - minus) / (2 * h)
-        return np.column_stack([image.monodromy - np.eye(4), column])
+        column[pinned_rows(image.settled)] = 0.0
+        return np.column_stack([fixed_point_system(image)[0], column])
 
     def tangent(self, jacobian: np.ndarray, previous: np.ndarray | None, direction: float) -> np.ndarray:
         """The unit null vector of ``jacobian``, oriented along ``previous`` (or ``direction`` in lam)."""
@@ -196,6 +231,10 @@ class _Continuer:
 
 
 def _kind_of_change(before: str, after: str, increasing: bool) -> str:
+    """The kind of a change of the orbit's cycle of switches, named as the parameter increases;
+    with the cycle unchanged, a mass at rest all period could no longer be held where it stuck."""
+    if before == after:
+        return "sliding_vanish" if increasing else "sliding_onset"
     rests_before, rests_after = before.count("sliding_onset"), after.count("sliding_onset")
     if rests_before == rests_after:
         return "grazing"
@@ -208,17 +247,27 @@ def _critical(point: _Point) -> complex:
     return complex(values[np.argmin(np.abs(np.abs(values) - 1.0))])
 
 
-def _check_range(param: str, start: float, stop: float, overrides: dict) -> tuple[float, float]:
+def _check_range(
+    case: Case | str, param: str, start: object, stop: object, overrides: dict, locate_tol: float
+) -> tuple[float, float]:
+    """``start`` and ``stop`` as valid values of ``param``, far enough apart to continue."""
     if param not in Parameters.names():
-        raise InputError(f"param must be one of the parameters {', '.join(Parameters.names())}, got {param!r}",
+        raise InputError(f"param must be one of the parameters {', '.join(Parameters.names())}, got {shown(param)}",
                          field="param")  # fmt: skip
     if param in overrides:
         raise InputError(f"{param} is the continued parameter; give its range with start and stop", field=param)
-    start, stop = float(start), float(stop)
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise InputError(f"start and stop must be two different finite numbers, got {start!r}, {stop!r}",
-                         field="start")  # fmt: skip
-    return start, stop
+    values = real_argument(start, "start"), real_argument(stop, "stop")
+    for name, value in zip(("start", "stop"), values, strict=True):
+        try:
+            resolve_case(case, **{**overrides, param: value})
+        except InputError as error:
+            raise InputError(f"{name} = {value!r} is not a valid {param}: {error}", field=name) from None
+    width = abs(values[1] - values[0])
+    if width < 10 * locate_tol or width < 1e-12 * max(abs(values[0]), abs(values[1])):
+        least = max(10 * locate_tol, 1e-12 * abs(values[0]))
+        raise InputError(f"`stop` must be at least {least:.3g} away from `start` (10 times the location "
+                         f"tolerance), got {values[1]!r} and {values[0]!r}", field="stop")  # fmt: skip
+    return values
 
 
 def continue_orbit(
@@ -228,7 +277,7 @@ def continue_orbit(
     start: float,
     stop: float,
     period: int = 1,
-    t0: float | None = None,
+    section: float | None = None,
     guess: tuple[float, float, float, float] | np.ndarray | None = None,
     transient: int | None = None,
     step: float | None = None,
@@ -248,19 +297,38 @@ def continue_orbit(
     start, stop : float
         The parameter's range; the branch starts at the orbit found at ``start`` (as
         :func:`~oscillator.find_orbit` finds it) and ends when it passes ``stop`` (or comes back
-        past ``start`` after folds).
-    period, t0, guess, transient, tol
+        past ``start`` after folds).  Both must be valid values of ``param`` with the case's
+        other parameters, and at least ``10 locate_tol`` apart.
+    period, section, guess, transient, tol
         As for :func:`~oscillator.find_orbit`.
     step : float, optional
-        The largest step along the branch, in units of ``|stop - start|`` (default 1/40).
+        The largest step along the branch, in units of ``|stop - start|``, in ``[1e-6, 1]``
+        (default 1/40).
     max_points : int
-        The most points computed.
+        The most points computed (2 to 100000).
     locate_tol : float
-        Bifurcations are located to this in the parameter.
+        Bifurcations are located to this in the parameter (``> 0``).
     progress : callable, optional
         Called with the fraction of ``[start, stop]`` covered after each point.
     **overrides
         Any other parameter, initial value or solver option.
+
+    Returns
+    -------
+    Branch
+        ``complete`` is False when the branch ended before ``stop`` (the corrector failed,
+        ``max_points`` was reached, or the branch came back past ``start``), and ``message``
+        says where and why; the points so far are kept.
+
+    Raises
+    ------
+    InputError
+        Bad input.
+    SimulationFailed
+        No orbit at ``start`` (Newton failed there, or the simulation did).
+    Interrupted
+        Ctrl-C: a ``KeyboardInterrupt`` whose ``result`` is the branch so far (``complete``
+        False, ``message`` saying where it was interrupted).
 
     Examples
     --------
@@ -269,47 +337,119 @@ def continue_orbit(
     >>> branch.bifurcations[["Q2", "kind"]].round(6).values.tolist()
     [[71.157742, 'sliding_vanish']]
     """
-    start, stop = _check_range(param, start, stop, overrides)
-    max_points = check_count(max_points, "max_points", 2)
-    period = check_count(period, "period", 1)
+    start, stop, period, tol, locate_tol, max_points, ds_max = check_settings(
+        case, param=param, start=start, stop=stop, period=period, section=section, guess=guess,
+        transient=transient, step=step, max_points=max_points, tol=tol, locate_tol=locate_tol, progress=progress,
+        **overrides,
+    )  # fmt: skip
     base = orbit_case(case, {**overrides, param: start})
-    t0_, y_start = start_of(base, t0, guess, transient)
+    section_, y_start = start_of(base, section, guess, transient)
     sigma = abs(stop - start)
-    ds_max = (1 / 40) if step is None else float(step)
-    if not (0 < ds_max <= 1):
-        raise InputError(f"step must be in (0, 1] (a fraction of |stop - start|), got {step!r}", field="step")
-    cont = _Continuer(base, param, t0_, period, sigma, tol)
+    cont = _Continuer(base, param, section_, period, sigma, tol)
     direction = 1.0 if stop > start else -1.0
 
     trace = _Trace(cont.first(y_start, start, direction), cont.scale)
-    points = trace.points
+    try:
+        complete, message = _trace_branch(cont, trace, start, stop, ds_max, max_points, locate_tol, progress)
+    except KeyboardInterrupt:
+        last = trace.points[-1].lam
+        partial = trace.branch(param, section_, period, False, f"interrupted at {param} = {last:.10g}")
+        raise Interrupted(partial) from None
+    return trace.branch(param, section_, period, complete, message)
+
+
+def check_settings(
+    case: Case | str,
+    *,
+    param: str,
+    start: object,
+    stop: object,
+    period: object = 1,
+    section: object = None,
+    guess: object = None,
+    transient: object = None,
+    step: object = None,
+    max_points: object = 400,
+    tol: object = 1e-9,
+    locate_tol: object = 1e-9,
+    progress: object = None,
+    **overrides: object,
+) -> tuple[float, float, int, float, float, int, float]:
+    """Check :func:`continue_orbit`'s arguments without computing anything (the command line
+    does so before it creates its folder); ``(start, stop, period, tol, locate_tol, max_points,
+    step)`` as numbers.
+
+    Raises
+    ------
+    InputError
+        The first argument that is refused, named.
+    """
+    period_, tol_, _ = check_orbit_settings(period, tol, 1)
+    locate_tol_ = real_argument(locate_tol, "locate_tol", positive=True)
+    start_, stop_ = _check_range(case, param, start, stop, overrides, locate_tol_)
+    max_points_ = check_count(max_points, "max_points", 2, MAX_POINTS)
+    step_ = DEFAULT_STEP if step is None else real_argument(step, "step", positive=True)
+    if not MIN_STEP <= step_ <= 1:
+        raise InputError(f"step must be from {MIN_STEP:g} to 1 (a fraction of |stop - start|), got {shown(step)}",
+                         field="step")  # fmt: skip
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress must be a function of the fraction done, got {shown(progress)}", field="progress")
+    if guess is not None:
+        check_guess(guess)
+    if transient is not None:
+        check_count(transient, "transient", 0, MAX_TRANSIENT)
+    if section is not None:
+        real_argument(section, "section")
+    return start_, stop_, period_, tol_, locate_tol_, max_points_, step_
+
+
+def _trace_branch(
+    cont: _Continuer,
+    trace: _Trace,
+    start: float,
+    stop: float,
+    ds_max: float,
+    max_points: int,
+    locate_tol: float,
+    progress: Callable[[float], None] | None,
+) -> tuple[bool, str]:
+    """Step along the branch from its first point to ``stop``; ``(complete, why it ended)``."""
+    param, sigma, points = cont.param, cont.sigma, trace.points
+    direction = 1.0 if stop > start else -1.0
     ds, ds_min = ds_max / 4, ds_max / 2**12
-    complete, message = False, ""
     lo, hi = min(start, stop), max(start, stop)
     while len(points) < max_points:
         a = points[-1]
         b = cont.along(a, ds)
-        if b is None or b.iterations > 5:
+        if b is None or b.iterations > 5 or (not b.same_kind(a) and _jumped(cont, a, b)):
             if ds <= ds_min:
-                message = f"the corrector failed at {param} = {a.lam:.10g} with the smallest step"
-                break
+                return False, f"the corrector failed at {param} = {a.lam:.10g} with the smallest step"
             ds /= 2
             continue
         if not lo - 1e-12 * sigma <= b.lam <= hi + 1e-12 * sigma:
             end = _end_point(cont, a, b, stop if (b.lam - stop) * direction > 0 else start)
             if end is not None:
                 trace.add(_between(cont, a, end, ds, locate_tol), end)
-            complete = end is not None and end.lam == stop
-            message = "" if complete else f"the branch came back to {param} = {start:g} after a fold"
-            break
+            if end is not None and end.lam == stop:
+                return True, ""
+            if end is None:
+                return False, f"no orbit found at {param} = {stop:.10g}, the end of the range"
+            return False, f"the branch came back to {param} = {start:.10g} after a fold"
         trace.add(_between(cont, a, b, ds, locate_tol), b)
         if progress is not None:
             progress(min(1.0, abs(b.lam - start) / sigma))
         if b.iterations <= 2:
             ds = min(ds * 1.5, ds_max)
-    else:
-        message = f"max_points = {max_points} reached at {param} = {points[-1].lam:.10g}"
-    return Branch(param, trace.points_frame(param), trace.bifurcations_frame(param), t0_, period, complete, message)
+    return False, (f"max_points = {max_points} reached at {param} = {points[-1].lam:.10g}, "
+                   f"{abs(points[-1].lam - start) / sigma:.0%} of the range")  # fmt: skip
+
+
+def _jumped(cont: _Continuer, a: _Point, b: _Point) -> bool:
+    """Whether the corrector left ``a``'s kind of orbit for another although ``a``'s still exists
+    at ``b``'s parameter (two orbits coexist there): then the step is retried shorter, so that
+    the branch follows its own orbit to where it ends."""
+    own = _natural(cont, b.lam, a.y + _slope(a, cont.sigma) * (b.lam - a.lam))
+    return own is not None and own.same_kind(a)
 
 
 class _Trace:
@@ -342,30 +482,41 @@ class _Trace:
         for p, piece in zip(self.points, pieces, strict=True):
             moduli = np.abs(p.multipliers)
             rows.append({param: p.lam, **dict(zip(STATE, p.y, strict=True)),
-                         **{f"mu{k + 1}": float(moduli[k]) for k in range(4)}, "stable": bool(np.all(moduli < 1.0)),
+                         **{f"mu{k + 1}": float(moduli[k]) for k in range(4)}, "stable": p.stable,
                          "signature": p.signature, "piece": int(piece), "iterations": p.iterations})  # fmt: skip
         return pd.DataFrame(rows)
 
     def bifurcations_frame(self, param: str) -> pd.DataFrame:
-        return pd.DataFrame(self.rows, columns=[param, "kind", *STATE, "jump", "before", "after"])
+        numbers = dict.fromkeys([param, *STATE, "jump"], float)
+        frame = pd.DataFrame(self.rows, columns=[param, "kind", *STATE, "jump", "before", "after"])
+        return frame.astype({**numbers, "kind": object, "before": object, "after": object})
+
+    def branch(self, param: str, section: float, period: int, complete: bool, message: str) -> Branch:
+        """The :class:`Branch` traced so far."""
+        return Branch(param, self.points_frame(param), self.bifurcations_frame(param), section, period, complete,
+                      message)  # fmt: skip
 
 
 def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point | None:
-    """The orbit at ``lam = lam_end``, between ``a`` and ``b`` (Newton from their interpolation)."""
-    weight = (lam_end - a.lam) / (b.lam - a.lam)
-    end = _natural(cont, lam_end, a.y + weight * (b.y - a.y))
-    return None if end is None else _Point(end.y, lam_end, end.image, b.tangent, end.iterations)
+    """The orbit at ``lam = lam_end``, between ``a`` and ``b``: of ``a``'s kind where that still
+    exists (Newton from ``a`` moved along the branch's slope), else Newton from the
+    interpolation of ``a`` and ``b``."""
+    own = _natural(cont, lam_end, a.y + _slope(a, cont.sigma) * (lam_end - a.lam))
+    if own is None or not own.same_kind(a):
+        weight = (lam_end - a.lam) / (b.lam - a.lam)
+        own = _natural(cont, lam_end, a.y + weight * (b.y - a.y))
+    return None if own is None else _Point(own.y, lam_end, own.image, b.tangent, own.iterations)
 
 
 def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: float) -> list[_Located]:
     """The bifurcations between two consecutive points, located, with the orbits on their sides."""
-    if a.signature != b.signature:  # one or more changes of the event sequence, in turn
+    if not a.same_kind(b):  # one or more changes of the event sequence, in turn
         found, current = [], a
         for _ in range(8):
             left, right = _bisect_signature(cont, current, b, locate_tol)
             kind = _kind_of_change(current.signature, right.signature, increasing=b.lam > a.lam)
             found += _signature_change(cont, kind, left, right, current.signature, locate_tol)
-            if right.signature == b.signature:
+            if right.same_kind(b):
                 break
             current = _Point(right.y, right.lam, right.image, b.tangent, 0)
         return found
@@ -436,19 +587,19 @@ def _bisect_signature(cont: _Continuer, a: _Point, b: _Point, locate_tol: float)
     while abs(beyond - left.lam) > locate_tol:
         mid = 0.5 * (left.lam + beyond)
         p = _natural(cont, mid, left.y + slope_a * (mid - left.lam))
-        if p is not None and p.signature == a.signature:
+        if p is not None and p.same_kind(a):
             left = p
         else:
             beyond = mid
     right, short = b, left.lam  # the first orbit of another kind; where none was found
     if beyond != b.lam:  # most often the other kind exists right there
         p = _natural(cont, beyond, b.y + slope_b * (beyond - b.lam))
-        if p is not None and p.signature != a.signature:
+        if p is not None and not p.same_kind(a):
             right = p
     while abs(right.lam - short) > locate_tol:
         mid = 0.5 * (short + right.lam)
         p = _natural(cont, mid, right.y + slope_b * (mid - right.lam))
-        if p is not None and p.signature != a.signature:
+        if p is not None and not p.same_kind(a):
             right = p
         else:
             short = mid

@@ -1,20 +1,51 @@
-"""A branch on disk: its tables, its figures (Fig. 14 with the unstable parts) and a report."""
+"""A branch on disk: its tables, its figures (Fig. 14 with the unstable parts) and a report.
+
+A branch folder is made like a run folder (:mod:`oscillator.io.runs`), in two steps, so that a
+computed branch is never lost to a later step:
+
+1. :func:`write_branch` writes ``branch.parquet``, ``bifurcations.parquet``, the sweep's points
+   it is drawn over (``sweep_points.parquet``, a copy: nothing outside the folder is read
+   again), ``case.toml`` and ``run.json`` (``"kind": "branch"``, the status and what is still
+   ``"pending"``) into the claimed folder and renames it into place.
+2. :func:`finish_branch` draws the figures and writes the report, each file atomically, and
+   takes them off ``"pending"``; ``oscillator report DIR`` runs it again on a folder whose
+   figures or report were interrupted.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from oscillator.io.cases import Case
-from oscillator.io.files import FolderClaim, replace_file
+from oscillator.errors import InputError
+from oscillator.io.cases import Case, case_to_toml, load_case
+from oscillator.io.files import FolderClaim, atomic_path, read_untrusted, replace_file
 from oscillator.orbits.continuation import Branch
+from oscillator.orbits.shooting import STATE
 from oscillator.report import markup as mk
+from oscillator.text import printable, shown
 
-__all__ = ["draw_branch", "draw_multipliers", "write_branch"]
+__all__ = [
+    "BranchFolder",
+    "branch_status",
+    "draw_branch",
+    "draw_multipliers",
+    "finish_branch",
+    "is_branch_folder",
+    "read_branch",
+    "read_sweep_points",
+    "write_branch",
+]
+
+#: What :func:`finish_branch` makes after the tables are safe.
+PENDING = ("figures", "report")
+_MAX_RUN_JSON = 1 << 20
 
 _MARKERS = {"sliding_onset": "v", "sliding_vanish": "^", "grazing": "s", "fold": "o", "period_doubling": "D",
             "torus": "*"}  # fmt: skip
@@ -88,8 +119,18 @@ def draw_branch(branch: Branch, path: Path, coordinate: str, sweep_points: pd.Da
     ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _save(fig, path)
+
+
+def _save(fig, path: Path) -> None:
+    """Save ``fig`` atomically (a temporary name, then rename) and close it."""
+    import matplotlib.pyplot as plt
+
+    try:
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, format=path.suffix[1:])
+    finally:
+        plt.close(fig)
 
 
 def draw_multipliers(branch: Branch, path: Path) -> None:
@@ -120,8 +161,7 @@ def draw_multipliers(branch: Branch, path: Path) -> None:
     ax.legend(fontsize=8, ncol=4, loc="center left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
@@ -130,8 +170,9 @@ def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
     lo, hi = branch.points[param].min(), branch.points[param].max()
     blocks: list[mk.Block] = [
         mk.Heading(1, (f"{case.name}: period-{branch.period} orbit continued in {param}",)),
-        mk.Paragraph((f"{len(branch.points)} points from {param} = {lo:.10g} to {hi:.10g}; section t0 = "
-                      f"{branch.t0:g} s. ", "Complete." if branch.complete else f"Ended early: {branch.message}.")),
+        mk.Paragraph((f"{len(branch.points)} points from {param} = {lo:.10g} to {hi:.10g}; section at t = "
+                      f"{branch.section:g} s. ",
+                      "Complete." if branch.complete else f"Ended early: {branch.message}.")),
     ]  # fmt: skip
     if case.modified:
         blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
@@ -157,21 +198,218 @@ def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
     return blocks
 
 
+def branch_status(branch: Branch) -> str:
+    """``"complete"``, ``"interrupted"`` or ``"incomplete"`` (it ended before ``stop``)."""
+    if branch.complete:
+        return "complete"
+    return "interrupted" if branch.message.startswith("interrupted") else "incomplete"
+
+
 def write_branch(
-    branch: Branch, case: Case, claim: FolderClaim, *, coordinate: str, sweep_points: pd.DataFrame | None
-) -> tuple[Path, str]:
-    """Write the tables, then the figures and the report; ``(folder, problem)`` with ``problem``
-    empty unless a figure or the report failed (the tables are kept either way)."""
-    branch.points.to_parquet(claim.temporary / "branch.parquet", index=False)
-    branch.bifurcations.to_parquet(claim.temporary / "bifurcations.parquet", index=False)
-    folder = claim.commit()
+    branch: Branch,
+    case: Case,
+    claim: FolderClaim,
+    *,
+    coordinate: str,
+    sweep_points: pd.DataFrame | None,
+    command: list[str],
+) -> Path:
+    """Write the tables, ``case.toml`` and ``run.json`` into the claimed folder and put it in place.
+
+    Returns the folder's path.  On any failure the claim is abandoned (nothing is left behind)
+    and the error raised.
+    """
+    from oscillator.io.runs import json_text, run_metadata
+
+    temporary = claim.temporary
     try:
-        (folder / "figures").mkdir(exist_ok=True)
-        draw_branch(branch, folder / "figures" / "branch.png", coordinate, sweep_points)
-        draw_multipliers(branch, folder / "figures" / "multipliers.png")
-        blocks = report_blocks(branch, case)
-        replace_file(folder / "report.md", mk.to_markdown(blocks))
-        replace_file(folder / "report.html", mk.to_html(blocks, folder=folder, title=f"{case.name}: branch"))
-    except (OSError, ValueError, RuntimeError) as failure:
-        return folder, f"the figures or the report could not be written ({failure})"
-    return folder, ""
+        branch.points.to_parquet(temporary / "branch.parquet", index=False)
+        branch.bifurcations.to_parquet(temporary / "bifurcations.parquet", index=False)
+        if sweep_points is not None:
+            sweep_points.to_parquet(temporary / "sweep_points.parquet", index=False)
+        (temporary / "case.toml").write_text(case_to_toml(case), encoding="utf-8")
+        info = {
+            "kind": "branch",
+            "case": case.name,
+            "title": case.full_title,
+            "modified": list(case.modified),
+            "param": branch.param,
+            "period": branch.period,
+            "section": branch.section,
+            "coordinate": coordinate,
+            "complete": branch.complete,
+            "status": branch_status(branch),
+            "failure": branch.message or None,
+            "pending": list(PENDING),
+            **run_metadata(command),
+        }
+        (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+@dataclass(frozen=True)
+class BranchFolder:
+    """A branch folder read back: the branch, the case, ``run.json`` and the sweep's points."""
+
+    path: Path
+    branch: Branch
+    case: Case
+    run: dict
+    sweep_points: pd.DataFrame | None
+
+
+def _damaged(path: Path, what: str) -> InputError:
+    return InputError(f"{printable(str(path))} is damaged: {what}; continue the case again to remake the folder",
+                      field=path.name)  # fmt: skip
+
+
+def _table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
+    """A Parquet table with these columns, of these kinds (``"number"``, ``"text"``, ``"flag"``)."""
+    if not path.is_file():
+        raise InputError(f"{printable(str(path.parent))} is not a complete branch folder: {path.name} is missing",
+                         field=path.name)  # fmt: skip
+    try:
+        frame = pd.read_parquet(path)
+    except Exception as exc:  # pyarrow raises many types for a damaged file
+        if isinstance(exc, MemoryError):
+            raise
+        raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})") from exc
+    for name, kind in columns.items():
+        if name not in frame.columns:
+            raise _damaged(path, f"it has no column {shown(name)}")
+        column = frame[name]
+        types = pd.api.types
+        fits = {
+            "number": types.is_numeric_dtype(column) and not types.is_bool_dtype(column),
+            "flag": types.is_bool_dtype(column),
+            "text": all(isinstance(value, str) for value in column),
+        }[kind]
+        if not fits:
+            raise _damaged(path, f"its column {shown(name)} is not {kind}s")
+    return frame
+
+
+def read_sweep_points(folder: Path, param: str, coordinate: str) -> pd.DataFrame:
+    """A sweep folder's Poincaré points: ``param`` and ``coordinate``, both numbers, checked.
+
+    Raises
+    ------
+    InputError
+        Not a sweep folder, ``poincare.parquet`` missing or damaged, or not a sweep of ``param``.
+    """
+    folder = Path(folder)
+    path = folder / "poincare.parquet"
+    if not folder.is_dir():
+        raise InputError(f"{printable(str(folder))} is not a folder; give a folder written by 'oscillator sweep'",
+                         field="over")  # fmt: skip
+    if not path.is_file():
+        raise InputError(f"{printable(str(folder))} holds no finished sweep (no poincare.parquet); give a folder "
+                         "written by 'oscillator sweep'", field="over")  # fmt: skip
+    frame = _table(path, {})
+    if param not in frame.columns:
+        raise InputError(f"the sweep in {printable(str(folder))} is not a sweep of {shown(param)}", field="over")
+    frame = _table(path, {param: "number", coordinate: "number"})
+    return frame[[param, coordinate]].reset_index(drop=True)
+
+
+def _run_info(folder: Path) -> dict:
+    path = folder / "run.json"
+    info = _json(path)
+    if info.get("kind") != "branch":
+        raise _damaged(path, "it does not describe a branch")
+    checks = {"param": str, "coordinate": str, "period": int, "complete": bool, "pending": list}
+    for key, kind in checks.items():
+        if not isinstance(info.get(key), kind) or (kind is int and isinstance(info.get(key), bool)):
+            raise _damaged(path, f"{key} is not {kind.__name__}")
+    if info["coordinate"] not in STATE:
+        raise _damaged(path, f"coordinate must be one of {', '.join(STATE)}")
+    if not set(info["pending"]) <= set(PENDING):
+        raise _damaged(path, f"pending must be a list of {', '.join(PENDING)}")
+    section = info.get("section")
+    if isinstance(section, bool) or not isinstance(section, (int, float)) or not math.isfinite(section):
+        raise _damaged(path, "section is not a finite number")
+    for key in ("failure", "case", "title"):
+        if info.get(key) is not None and not isinstance(info[key], str):
+            raise _damaged(path, f"{key} is not text")
+    modified = info.get("modified", [])
+    if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
+        raise _damaged(path, "modified must be a list of texts")
+    return info
+
+
+def is_branch_folder(folder: Path) -> bool:
+    """Whether ``folder``'s ``run.json`` says ``"kind": "branch"`` (one that cannot be read says
+    no: the run folder's reader then names what is wrong)."""
+    try:
+        return _json(Path(folder) / "run.json").get("kind") == "branch"
+    except InputError:
+        return False
+
+
+def _json(path: Path) -> dict:
+    import json
+
+    text = read_untrusted(path, what="run file", field="run.json", limit=_MAX_RUN_JSON)
+    try:
+        info = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise _damaged(path, "it is not JSON") from exc
+    if not isinstance(info, dict):
+        raise _damaged(path, "it is not a JSON object")
+    return info
+
+
+def read_branch(folder: Path) -> BranchFolder:
+    """Read a branch folder back (for ``oscillator report``), checking every file it reads."""
+    folder = Path(folder)
+    info = _run_info(folder)
+    param = info["param"]
+    moduli = {f"mu{k}": "number" for k in range(1, 5)}
+    numbers = {param: "number", **dict.fromkeys(STATE, "number")}
+    points = _table(folder / "branch.parquet",
+                    {**numbers, **moduli, "stable": "flag", "signature": "text", "piece": "number"})  # fmt: skip
+    rows = _table(folder / "bifurcations.parquet",
+                  {**numbers, "kind": "text", "jump": "number", "before": "text", "after": "text"})  # fmt: skip
+    if points.empty:
+        raise _damaged(folder / "branch.parquet", "it has no points")
+    sweep = None
+    if (folder / "sweep_points.parquet").exists():
+        sweep = _table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})
+    case = load_case(folder / "case.toml")
+    case = dataclasses.replace(case, name=info.get("case") or folder.name, modified=tuple(info.get("modified", ())))
+    branch = Branch(param, points, rows, float(info["section"]), info["period"], info["complete"],
+                    info.get("failure") or "")  # fmt: skip
+    return BranchFolder(folder, branch, case, info, sweep)
+
+
+def finish_branch(folder: Path) -> BranchFolder:
+    """Draw the branch's figures and write its report, each atomically; ``run.json``'s
+    ``"pending"`` says what is still to be made, so an interrupted finish is finished by calling
+    this again.  A figure file that is missing or empty is drawn again."""
+    from oscillator.io.runs import json_text
+
+    found = read_branch(folder)
+    info, figures = found.run, folder / "figures"
+    names = ("branch", "multipliers")
+    if "figures" in info["pending"] or any(not _drawn(figures / f"{name}.png") for name in names):
+        figures.mkdir(exist_ok=True)
+        draw_branch(found.branch, figures / "branch.png", info["coordinate"], found.sweep_points)
+        draw_multipliers(found.branch, figures / "multipliers.png")
+        info["pending"] = [item for item in info["pending"] if item != "figures"]
+        replace_file(folder / "run.json", json_text(info))
+    blocks = report_blocks(found.branch, found.case)
+    replace_file(folder / "report.md", mk.to_markdown(blocks))
+    replace_file(folder / "report.html", mk.to_html(blocks, folder=folder, title=f"{found.case.name}: branch"))
+    info["pending"] = []
+    replace_file(folder / "run.json", json_text(info))
+    return found
+
+
+def _drawn(path: Path) -> bool:
+    try:
+        return path.is_file() and path.stat().st_size > 0
+    except OSError:
+        return False

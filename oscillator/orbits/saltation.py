@@ -22,6 +22,15 @@ Which boundary set the time follows from what changed between the two modes
 
 A contact's change is the cause when one occurs, since a mass can leave rest *because* the
 contact damper made its force jump; a release is the cause only when nothing else changed.
+
+A resting mass's velocity is constrained to zero (4.12).  A velocity disturbance ``dv_i`` given
+to it while it rests sets it sliding against kinetic friction.  Where ``|A_i| < mu_k g + p_i``
+friction brings it back to zero velocity after a time of order ``|dv_i|``, displaced by
+``O(dv_i^2)``, and there it stops (Thm 5.2: the field beyond also points back): to first order
+the disturbance is removed (:func:`rest_projection`, the arrival's saltation matrix in the limit
+of a zero-length slide).  Where ``mu_k g + p_i < |A_i| < mu_s g + p_i`` only static friction
+holds the mass: a disturbance along the force grows, one against it is reversed and passes zero
+velocity (Thm 5.1), and the mass slides away either way; the map is discontinuous in ``v_i``.
 """
 
 from __future__ import annotations
@@ -36,7 +45,7 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.variational import field_jacobian
 
-__all__ = ["Boundary", "boundary_of", "elementary_switches", "saltation_matrix"]
+__all__ = ["Boundary", "boundary_of", "elementary_switches", "rest_projection", "saltation_matrix"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,6 +126,21 @@ def boundary_of(name: str, t: float, y: np.ndarray, p: Parameters, mode: Mode, a
     amplitude, phase = (p.Q1, p.phi1) if mass == 1 else (p.Q2, p.phi2)
     rate = amplitude * p.Omega * math.cos(p.Omega * t + phase) / p.mass(mass)
     return Boundary(f"flow barrier of m{mass}", normal, rate)
+
+
+def rest_projection(mode: Mode) -> np.ndarray:
+    """The identity with the velocity rows of ``mode``'s resting masses zeroed.
+
+    Applied where a segment at rest begins (at the section, when a mass rests there): a
+    velocity disturbance of a resting mass dies in finite time with a displacement of second
+    order, so its first-order effect is nil (the module's docstring).  After an arrival the
+    saltation matrix has already zeroed that row, and this changes nothing.
+    """
+    matrix = np.eye(4)
+    for mass in (1, 2):
+        if mode.sign(mass) == 0:
+            matrix[2 * mass - 1, 2 * mass - 1] = 0.0
+    return matrix
 
 
 def saltation_matrix(

@@ -14,7 +14,7 @@ A period-``N`` orbit is a fixed point of ``P``, found by Newton's method ``y <- 
 from __future__ import annotations
 
 import dataclasses
-import math
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,14 +29,22 @@ from oscillator.hybrid.simulate import admit, simulate
 from oscillator.hybrid.supervisor import Supervisor
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.events import EventKind
+from oscillator.model.fields import kinetic_threshold, non_friction_force
+from oscillator.model.parameters import is_whole_number, real_argument
 from oscillator.model.phase_space import Mode
-from oscillator.orbits.saltation import saltation_matrix
+from oscillator.orbits.saltation import rest_projection, saltation_matrix
 from oscillator.orbits.variational import ModeFlow
+from oscillator.text import shown
 
 __all__ = ["Orbit", "PeriodMap", "cyclic_signature", "event_signature", "find_orbit", "multipliers_of", "period_map"]
 
 #: Forcing periods simulated before Newton starts, when the case has no sweep settings.
 TRANSIENT = 100
+#: The longest return looked for, in forcing periods: a longer one is a motion to simulate.
+MAX_PERIOD = 1000
+#: The most Newton steps allowed, and the longest transient (forcing periods).
+MAX_ITERATIONS = 200
+MAX_TRANSIENT = 1_000_000
 #: CVODE's tolerances for orbits unless the caller sets them.
 ORBIT_RTOL = 1e-12
 STATE = ("x1", "v1", "x2", "v2")
@@ -78,6 +86,62 @@ class PeriodMap:
     events: pd.DataFrame
     monodromy: np.ndarray | None = None
 
+    @property
+    def resting(self) -> tuple[int, ...]:
+        """The masses at rest over the whole map (in every mode it passed)."""
+        return tuple(mass for mass in (1, 2) if all(mode.sign(mass) == 0 for _, _, mode in self.switches))
+
+    @property
+    def settled(self) -> tuple[int, ...]:
+        """The masses at rest at the end of the map that never left rest during it: at rest all
+        along, or moving at first and then stuck for good."""
+        modes = [mode for _, _, mode in self.switches]
+        return tuple(
+            mass
+            for mass in (1, 2)
+            if modes[-1].sign(mass) == 0
+            and not any(a.sign(mass) == 0 and b.sign(mass) != 0 for a, b in itertools.pairwise(modes))
+        )
+
+
+def pinned_rows(masses: tuple[int, ...]) -> list[int]:
+    """The state rows of these masses' displacements (:func:`fixed_point_system`)."""
+    return [2 * mass - 2 for mass in masses]
+
+
+def fixed_point_system(image: PeriodMap) -> tuple[np.ndarray, np.ndarray]:
+    """``(J, F)`` for a Newton step ``J dy = -F`` towards a fixed point from ``y = image.start``:
+    ``J = M - I`` and ``F = P(y) - y``, but for the masses that settle (:attr:`PeriodMap.settled`).
+
+    A mass at rest over the whole period stays where it is put: ``P`` leaves its ``x_i``
+    unchanged (row ``x_i`` of ``M`` is ``e_(x_i)``), so ``M - I`` has a zero row and every nearby
+    ``x_i`` is an orbit too, a continuum; a mass that moves at first and then sticks for good
+    makes that row nearly zero.  Its row becomes ``(e_(x_i), y_i - P_i(y))``: the step puts
+    the mass where it stuck (nowhere else for one at rest all period) and the system is regular.
+    """
+    assert image.monodromy is not None
+    matrix, residual = image.monodromy - np.eye(4), image.end - image.start
+    for row in pinned_rows(image.settled):
+        matrix[row] = 0.0
+        matrix[row, row] = 1.0
+        residual[row] = -residual[row]
+    return matrix, residual
+
+
+def solve_step(matrix: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
+    """``matrix^-1 rhs``; a singular system is the library's error, with the reason."""
+    try:
+        step = np.linalg.solve(matrix, rhs)
+    except np.linalg.LinAlgError:
+        step = np.full(len(rhs), np.nan)
+    if not np.isfinite(step).all():
+        raise SimulationFailed(
+            f"{what}: the Newton system is singular (a Floquet multiplier of the map at this guess is 1: "
+            "an orbit at a fold, or a family of orbits); give another guess or a longer transient",
+            field="guess",
+        )
+    return step
+
 
 def period_map(case: Case, t0: float, y: np.ndarray, periods: int = 1, *, derivative: bool = True) -> PeriodMap:
     """``P(y)`` over ``periods`` forcing periods from ``t0``, and its derivative if asked.
@@ -116,7 +180,7 @@ def _monodromy(case: Case, switches: list[tuple[float, np.ndarray, Mode]], t1: f
         for k, (t_a, y_a, mode) in enumerate(switches):
             t_b = switches[k + 1][0] if k + 1 < len(switches) else t1
             y_b, phi = flow(mode, t_a, y_a, t_b)
-            matrix = phi @ matrix
+            matrix = phi @ rest_projection(mode) @ matrix
             if k + 1 < len(switches):
                 _, y_next, mode_next = switches[k + 1]
                 try:
@@ -168,10 +232,10 @@ class Orbit:
     ----------
     case : Case
         The case, with the overrides the orbit was found for.
-    t0 : float
-        The section's time: the orbit passes ``state`` at ``t0 + k N T``.
+    section : float
+        The section's time: the orbit passes ``state`` at ``section + k N T``.
     state : ndarray
-        ``(x1, v1, x2, v2)`` at ``t0``.
+        ``(x1, v1, x2, v2)`` at ``section``.
     period : int
         ``N``: forcing periods per return.
     monodromy : ndarray
@@ -179,7 +243,8 @@ class Orbit:
     multipliers : ndarray
         Its eigenvalues (complex), largest modulus first.
     stable : bool
-        Every multiplier inside the unit circle.
+        No disturbance grows: every multiplier inside the unit circle, but for the exact
+        multiplier 1 of each mass at rest all period (:attr:`resting`), which is neutral.
     residual : float
         ``|P(state) - state|`` (max norm).
     iterations : int
@@ -188,10 +253,23 @@ class Orbit:
         The event table over one period of the orbit.
     history : tuple of float
         The residual before each Newton step and after the last.
+    resting : tuple of int
+        The masses at rest over the whole period.  Each rests where it stuck: a nearby
+        displacement at rest is an orbit too (a continuum), so ``M`` has the multiplier 1 in
+        ``x_i`` (and 0 in ``v_i``); Newton keeps ``x_i`` where it was.
+    discontinuous : tuple of str
+        The velocities at the section in which the map is discontinuous, e.g. ``("v2",)``: a
+        mass resting there with its force between the kinetic and the static thresholds is held
+        by static friction only, and any velocity disturbance sets it sliding (one against the
+        force is reversed by it, and kinetic friction cannot stop it at zero velocity).  ``M``
+        is then the derivative along the states where it rests (docs/orbits.md).
+    note : str
+        What Newton met on the way, when it matters: the guess's motion had another cycle of
+        switches than the orbit found (another orbit may exist near the guess).
     """
 
     case: Case
-    t0: float
+    section: float
     state: np.ndarray
     period: int
     monodromy: np.ndarray
@@ -201,17 +279,66 @@ class Orbit:
     iterations: int
     events: pd.DataFrame
     history: tuple[float, ...] = ()
+    resting: tuple[int, ...] = ()
+    discontinuous: tuple[str, ...] = ()
+    note: str = ""
 
     @property
     def signature(self) -> str:
         """The kinds of the events over one period, in order (:func:`event_signature`)."""
         return event_signature(self.events)
 
+    @property
+    def verdict(self) -> str:
+        """The stability in words: ``"stable"``, ``"unstable"``, with what is neutral and where
+        the map is discontinuous."""
+        words = ["stable" if self.stable else "unstable"]
+        for mass in self.resting:
+            words.append(f"neutral in x{mass}: m{mass} rests all period where it stuck (multiplier 1)")
+        for velocity in self.discontinuous:
+            words.append(
+                f"discontinuous in {velocity}: m{velocity[1]} rests between its kinetic and static "
+                "thresholds, and any push sets it sliding"
+            )
+        return "; ".join(words)
+
+
+def moving_multipliers(monodromy: np.ndarray, resting: tuple[int, ...]) -> np.ndarray:
+    """The multipliers of the coordinates of the masses that move.
+
+    A mass at rest all period contributes the exact multipliers 1 (in ``x_i``, neutral) and 0
+    (in ``v_i``): its row ``x_i`` of ``M`` is ``e_(x_i)``, its row and column ``v_i`` are zero, so
+    ``M`` is block triangular and its other multipliers are those of the block left.
+    """
+    free = [k for k in range(4) if (k // 2 + 1) not in resting]
+    return np.linalg.eigvals(monodromy[np.ix_(free, free)]) if free else np.empty(0, dtype=complex)
+
+
+def verdict_of(monodromy: np.ndarray, resting: tuple[int, ...]) -> bool:
+    """Whether no disturbance grows: every multiplier of the moving masses inside the unit circle."""
+    return bool(np.all(np.abs(moving_multipliers(monodromy, resting)) < 1.0))
+
+
+def discontinuities(case: Case, image: PeriodMap) -> tuple[str, ...]:
+    """The velocities ``"v1"``, ``"v2"`` in which the map is discontinuous at its start: those of
+    the masses resting there with ``|A_i| > mu_k g + p_i``.  Static friction holds such a mass;
+    pushed along its force it slides on, pushed against it it is stopped, reversed and slides
+    on, since the kinetic field beyond zero velocity leaves the boundary too (Thm 5.1)."""
+    t, y, mode = image.switches[0]
+    p = case.parameters
+    forces = non_friction_force(t, y, p, mode.left, mode.right)
+    return tuple(f"v{mass}" for mass in (1, 2)
+                 if mode.sign(mass) == 0 and abs(forces[mass - 1]) > kinetic_threshold(p, mass))  # fmt: skip
+
 
 def multipliers_of(monodromy: np.ndarray) -> np.ndarray:
     """The eigenvalues of the monodromy matrix, largest modulus first."""
     values = np.linalg.eigvals(monodromy)
     return values[np.argsort(-np.abs(values), kind="stable")]
+
+
+def _state_text(y: np.ndarray) -> str:
+    return "(" + ", ".join(f"{name} = {value:.6g}" for name, value in zip(STATE, y, strict=True)) + ")"
 
 
 def _scale(case: Case) -> float:
@@ -221,28 +348,42 @@ def _scale(case: Case) -> float:
 
 
 def newton(
-    case: Case, t0: float, y: np.ndarray, periods: int, *, tol: float, max_iterations: int
+    case: Case,
+    t0: float,
+    y: np.ndarray,
+    periods: int,
+    *,
+    tol: float,
+    max_iterations: int,
+    first_signature: list[str] | None = None,
 ) -> tuple[np.ndarray, PeriodMap, list[float]]:
-    """Newton's method on ``P(y) - y``; the fixed point, the map there and the residuals."""
+    """Newton's method on ``P(y) - y``; the fixed point, the map there and the residuals.
+
+    ``first_signature``, when given, receives the :func:`cyclic_signature` of the map at the
+    guess (to tell whether Newton went from one kind of motion to another).
+    """
     history: list[float] = []
     y = np.array(y, dtype=float)
     for _ in range(max_iterations + 1):
         image = period_map(case, t0, y, periods)
+        if first_signature is not None and not first_signature:
+            first_signature.append(cyclic_signature(image))
         residual = image.end - y
         history.append(float(np.max(np.abs(residual))))
         if history[-1] <= tol * _scale(case):
             return y, image, history
         if len(history) > max_iterations:
             break
-        assert image.monodromy is not None
-        step = np.linalg.solve(image.monodromy - np.eye(4), -residual)
+        matrix, residual = fixed_point_system(image)
+        step = solve_step(matrix, -residual, f"Newton's method at {_state_text(y)}")
         y = y + step
         for mass in (1, 2):  # a mass at rest at t0 stays exactly at rest (v_i = 0 is its domain)
             if image.start[2 * mass - 1] == 0.0 and abs(y[2 * mass - 1]) <= 1e-9 * _scale(case):
                 y[2 * mass - 1] = 0.0
     raise SimulationFailed(
         f"Newton's method did not converge in {max_iterations} steps (residuals "
-        f"{', '.join(f'{r:.2e}' for r in history)}); give a better guess, a longer transient or more iterations",
+        f"{', '.join(f'{r:.2e}' for r in history)}); give a better `guess`, a longer `transient` or a larger "
+        "`max_iterations`",
         field="guess",
     )
 
@@ -257,14 +398,26 @@ def orbit_case(case: Case | str, overrides: dict[str, float]) -> Case:
     return resolve_case(resolved, **tight) if tight else resolved
 
 
-def check_count(value: object, name: str, least: int) -> int:
-    """A whole number ``>= least`` (a bool is not one)."""
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < least:
-        raise InputError(f"{name} must be a whole number >= {least}, got {value!r}", field=name)
-    return int(value)
+def check_count(value: object, name: str, least: int, most: int | None = None) -> int:
+    """A whole number ``>= least`` (and ``<= most``); a bool is not one."""
+    if not is_whole_number(value) or value < least or (most is not None and value > most):  # type: ignore[operator]
+        bounds = f">= {least}" if most is None else f"from {least} to {most}"
+        raise InputError(f"{name} must be a whole number {bounds}, got {shown(value)}", field=name)
+    return int(value)  # type: ignore[call-overload]
 
 
-def start_of(case: Case, t0: float | None, guess: object, transient: int | None) -> tuple[float, np.ndarray]:
+def check_guess(guess: object) -> np.ndarray:
+    """``guess`` as four finite floats ``(x1, v1, x2, v2)``."""
+    try:
+        values = [real_argument(v, "guess") for v in guess]  # type: ignore[attr-defined]
+    except (TypeError, InputError):
+        values = []
+    if len(values) != 4:
+        raise InputError(f"guess must be four finite numbers (x1, v1, x2, v2), got {shown(guess)}", field="guess")
+    return np.array(values)
+
+
+def start_of(case: Case, section: object, guess: object, transient: object) -> tuple[float, np.ndarray]:
     """The section's time and Newton's first state: ``guess``, or the state a transient reaches.
 
     The section defaults to the case's start ``t0``; the transient runs a whole number of
@@ -272,59 +425,67 @@ def start_of(case: Case, t0: float | None, guess: object, transient: int | None)
     """
     if transient is None:
         transient = case.sweep.transient if case.sweep is not None else TRANSIENT
-    transient = check_count(transient, "transient", 0)
-    if t0 is None:
-        t0 = case.initial.t0
-    t0 = float(t0)
-    if not math.isfinite(t0):
-        raise InputError(f"t0 must be a finite time in s, got {t0!r}", field="t0")
+    transient = check_count(transient, "transient", 0, MAX_TRANSIENT)
+    section = case.initial.t0 if section is None else real_argument(section, "section")
     if guess is not None:
-        start = np.asarray(guess, dtype=float)
-        if start.shape != (4,) or not np.isfinite(start).all():
-            raise InputError("guess must be four finite numbers (x1, v1, x2, v2)", field="guess")
-        return t0, start
-    if t0 != case.initial.t0:
-        raise InputError("with t0 other than the case's start, give a guess (x1, v1, x2, v2 at t0)", field="guess")
+        return section, check_guess(guess)
+    if section != case.initial.t0:
+        raise InputError(
+            f"with a section (t = {section:g} s) other than the case's start t0 = {case.initial.t0:g} s, give a "
+            "`guess` (x1, v1, x2, v2 there), or move the case's start with t0",
+            field="guess",
+        )
     if transient == 0:
-        return t0, np.array(case.initial.y, dtype=float)
-    end = t0 + transient * case.parameters.period
+        return section, np.array(case.initial.y, dtype=float)
+    end = section + transient * case.parameters.period
     warm = simulate(case, t_end=end, record_trajectory=False, keep_events_from=end)
-    return t0, np.asarray(warm.final_state[1:], dtype=float)
+    return section, np.asarray(warm.final_state[1:], dtype=float)
+
+
+def check_orbit_settings(period: object, tol: object, max_iterations: object) -> tuple[int, float, int]:
+    """``period``, ``tol`` and ``max_iterations`` checked (:func:`find_orbit`)."""
+    return (
+        check_count(period, "period", 1, MAX_PERIOD),
+        real_argument(tol, "tol", positive=True),
+        check_count(max_iterations, "max_iterations", 1, MAX_ITERATIONS),
+    )
 
 
 def find_orbit(
     case: Case | str,
     *,
     period: int = 1,
-    t0: float | None = None,
+    section: float | None = None,
     guess: tuple[float, float, float, float] | np.ndarray | None = None,
     transient: int | None = None,
     tol: float = 1e-9,
     max_iterations: int = 20,
     **overrides: float,
 ) -> Orbit:
-    """A period-``period`` orbit of the stroboscopic map ``y(t0) -> y(t0 + period T)``.
+    """A period-``period`` orbit of the stroboscopic map ``y(section) -> y(section + period T)``.
 
     Parameters
     ----------
     case : Case or str
         A case or a shipped case's name.
     period : int
-        Forcing periods per return (1 for a period-1 orbit).
-    t0 : float, optional
-        The section's time; the case's start by default (the sweeps' Poincaré section).
+        Forcing periods per return, 1 to 1000 (1 for a period-1 orbit).
+    section : float, optional
+        The section's time (s); the case's start ``t0`` by default (the sweeps' Poincaré
+        section).  Another section needs a ``guess``.
     guess : sequence of 4 floats, optional
-        ``(x1, v1, x2, v2)`` at ``t0`` to start Newton from; by default the state after
+        ``(x1, v1, x2, v2)`` at ``section`` to start Newton from; by default the state after
         ``transient`` forcing periods simulated from the case's start.
     transient : int, optional
         Forcing periods simulated to find the guess (the case's sweep transient, else 100).
     tol : float
         Converged when ``max |P(y) - y| <= tol`` (times the larger of 1 and the stops' distances).
     max_iterations : int
-        Newton steps before giving up.
+        Newton steps before giving up (1 to 200).
     **overrides
-        Any parameter, initial value or solver option, as for :func:`oscillator.simulate`.
-        CVODE's ``rtol`` and ``atol`` are at most 1e-12 unless given here.
+        Any parameter, initial value (``t0`` moves the case's start, and so the default section)
+        or solver option, as for :func:`oscillator.simulate`.  CVODE's ``rtol`` and ``atol``
+        are at most 1e-12 unless given here.
 
     Raises
     ------
@@ -340,27 +501,42 @@ def find_orbit(
     >>> orbit.stable, orbit.residual < 1e-9
     (True, True)
     """
+    period, tol, max_iterations = check_orbit_settings(period, tol, max_iterations)
     case = orbit_case(case, overrides)
-    period = check_count(period, "period", 1)
-    max_iterations = check_count(max_iterations, "max_iterations", 1)
-    t0, start = start_of(case, t0, guess, transient)
-    return _orbit(case, t0, start, period, tol=tol, max_iterations=max_iterations)
+    section, start = start_of(case, section, guess, transient)
+    return _orbit(case, section, start, period, tol=tol, max_iterations=max_iterations)
 
 
-def _orbit(case: Case, t0: float, start: np.ndarray, period: int, *, tol: float, max_iterations: int) -> Orbit:
-    state, image, history = newton(case, t0, start, period, tol=tol, max_iterations=max_iterations)
+def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, history: list[float]) -> Orbit:
+    """The :class:`Orbit` through ``state``, from the map ``image`` there and Newton's residuals."""
     assert image.monodromy is not None
-    values = multipliers_of(image.monodromy)
+    resting = image.resting
     return Orbit(
         case=case,
-        t0=t0,
+        section=section,
         state=state,
-        period=period,
+        period=round((image.t1 - image.t0) / case.parameters.period),
         monodromy=image.monodromy,
-        multipliers=values,
-        stable=bool(np.all(np.abs(values) < 1.0)),
+        multipliers=multipliers_of(image.monodromy),
+        stable=verdict_of(image.monodromy, resting),
         residual=history[-1],
         iterations=len(history) - 1,
         events=image.events,
         history=tuple(history),
+        resting=resting,
+        discontinuous=discontinuities(case, image),
     )
+
+
+def _orbit(case: Case, section: float, start: np.ndarray, period: int, *, tol: float, max_iterations: int) -> Orbit:
+    first: list[str] = []
+    state, image, history = newton(case, section, start, period, tol=tol, max_iterations=max_iterations,
+                                   first_signature=first)  # fmt: skip
+    orbit = orbit_of(case, section, state, image, history)
+    found = cyclic_signature(image)
+    if first and first[0] != found:
+        note = (f"Newton started from a motion with another cycle of switches ({first[0]}) than the orbit it "
+                f"found ({found}): another orbit may exist near the guess (an orbit ending nearby, or two "
+                "coexisting); continue from a parameter value where it is clear, or give another guess")  # fmt: skip
+        orbit = dataclasses.replace(orbit, note=note)
+    return orbit

@@ -38,21 +38,23 @@ def jacobian(  # pragma: no cover - compiled
 ) -> None:
     """Fill ``out`` (16, row by row) with ``df/dy`` of the mode's field.
 
-    Rows 0 and 2 are ``dx_i' / dy = e_(v_i)``; rows 1 and 3 are ``dA_i/dy`` for a moving mass
-    and zero for a resting one (its field is zero, (4.12)); the friction term ``s_i (mu_k g +
-    p_i)`` is constant in a mode.
+    For a moving mass, row ``x_i`` is ``dx_i'/dy = e_(v_i)`` and row ``v_i`` is ``dA_i/dy`` (the
+    friction term ``s_i (mu_k g + p_i)`` is constant in a mode).  A resting mass's field is
+    ``(0, 0)`` whatever the state (4.12): both its rows are zero, so a displacement of a resting
+    mass stays as it is (it rests where it was put) and nothing moves it.  Its velocity
+    perturbation is removed where the rest begins (:func:`oscillator.orbits.saltation.rest_projection`).
     """
     for k in range(16):
         out[k] = 0.0
-    out[1] = 1.0
-    out[11] = 1.0
     if s1 != 0:
+        out[1] = 1.0
         out[4] = (-c[K1] - 3.0 * c[K2] * x1 * x1 - (c[K3] if left else 0.0) - (c[K6] if right else 0.0)) / c[M1]
         out[5] = (-c[C1] - 3.0 * c[C2] * v1 * v1 - (c[C3] if left else 0.0)) / c[M1]
         if left:
             out[6] = c[K3] / c[M1]
             out[7] = c[C3] / c[M1]
     if s2 != 0:
+        out[11] = 1.0
         out[14] = (-c[K4] - 3.0 * c[K5] * x2 * x2 - (c[K3] if left else 0.0)) / c[M2]
         out[15] = (-c[C4] - 3.0 * c[C5] * v2 * v2 - (c[C3] if left else 0.0)) / c[M2]
         if left:
