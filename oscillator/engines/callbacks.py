@@ -17,10 +17,11 @@ from typing import Any
 
 import numpy as np
 from llvmlite import ir
-from numba import carray, cfunc, types
+from numba import carray, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from oscillator.compiled import cfunc
 from oscillator.model.kernels import derivative
 from oscillator.model.roots import NUM_ROOTS, root_kernel
 

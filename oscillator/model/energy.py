@@ -16,8 +16,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from oscillator.compiled import njit
 from oscillator.model.fields import C1, C2, C3, C4, C5, M1, M2, MU_K, OMEGA, P1, P2, PHI1, PHI2, Q1, Q2, G
 from oscillator.model.parameters import Parameters
 from oscillator.model.types import StateLike, Vector

@@ -16,8 +16,8 @@ import functools
 import math
 
 import numpy as np
-from numba import njit
 
+from oscillator.compiled import njit
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import StateLike, Vector

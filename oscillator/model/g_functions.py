@@ -12,8 +12,8 @@ domain number of that side is ``phase_space.domain_of(mass, s, ...)``.  Normals 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from oscillator.compiled import njit
 from oscillator.model.fields import (
     barrier,
     coefficients,

@@ -6,8 +6,7 @@ The state is ``(x1, v1, x2, v2)`` followed by the four work integrals of
 
 from __future__ import annotations
 
-from numba import njit
-
+from oscillator.compiled import njit
 from oscillator.model.energy import power_terms
 from oscillator.model.fields import forces, kinetic
 from oscillator.model.types import Vector

@@ -41,8 +41,8 @@ from __future__ import annotations
 import enum
 
 import numpy as np
-from numba import njit
 
+from oscillator.compiled import njit
 from oscillator.model.fields import (
     D1,
     Q1,

@@ -24,8 +24,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, types
+from numba import types
 
+from oscillator.compiled import njit
 from oscillator.errors import SimulationFailed
 from oscillator.model.events import (
     BARRIER,

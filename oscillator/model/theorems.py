@@ -17,7 +17,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from numba import njit, types
+from numba import types
+
+from oscillator.compiled import njit
 
 __all__ = [
     "Decision",

@@ -14,8 +14,9 @@ import weakref
 from typing import Any
 
 import numpy as np
-from numba import carray, cfunc, njit
+from numba import carray
 
+from oscillator.compiled import cfunc, njit
 from oscillator.engines import EngineFailure
 from oscillator.engines import callbacks as cb
 from oscillator.engines.cvode_c import CvodeObjects, check

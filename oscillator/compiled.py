@@ -1,0 +1,100 @@
+"""numba, set up once for the package: compiled code is cached where it can be, and a damaged cache
+is compiled afresh instead of breaking every command.
+
+Every module with compiled kernels takes ``njit`` and ``cfunc`` from here, not from numba:
+
+* **Where the cache lives.**  numba caches compiled code next to the source (``__pycache__``) or,
+  where that is read-only (a shared install), in the user's cache folder.  When neither can be
+  written (a read-only install run by a user without a writable home, as on many clusters), the
+  cache goes to the temporary folder (``oscillator-numba-<uid>``), and if even that cannot be
+  written, the kernels are compiled without a cache.  A ``NUMBA_CACHE_DIR`` set by the user is
+  used as given.
+* **A damaged cache file** (an interrupted write, a full disk, an emptied or corrupted ``.nbi`` or
+  ``.nbc`` file) is read as a cache miss: the kernel is compiled again and the file rewritten.
+  numba 0.68 raises ``EOFError``/``UnpicklingError`` instead (numba issue #10434; the fix,
+  numba PR #10656, is not released yet); :func:`_read_damaged_as_missing` backports it.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numba
+from numba.core import caching
+
+from oscillator.folders import private_scratch, writable
+
+__all__ = ["CACHE", "cfunc", "njit"]
+
+
+def _cache_location() -> str | None:
+    """Where numba's cache goes (``""``: numba's own choice), or None for no cache at all."""
+    given = getattr(numba.config, "CACHE_DIR", "")  # NUMBA_CACHE_DIR, as numba read it
+    if given:
+        return str(given)
+    if writable(Path(__file__).parent / "__pycache__"):
+        return ""
+    try:
+        from numba.misc.appdirs import user_cache_dir
+
+        if writable(Path(user_cache_dir(appname="numba"))):
+            return ""
+    except (ImportError, OSError, KeyError):
+        pass
+    fallback = private_scratch("oscillator-numba")
+    return None if fallback is None else str(fallback)
+
+
+def _read_damaged_as_missing() -> None:
+    """Make numba treat a cache file it cannot unpickle as missing (numba PR #10656)."""
+    files = getattr(caching, "IndexDataCacheFile", None)
+    if files is None or getattr(files, "_oscillator_guarded", False):
+        return
+    load_index, load_data = files._load_index, files._load_data
+
+    def guarded_index(self: Any) -> Any:
+        try:
+            return load_index(self)
+        except Exception:  # an unreadable index: as if there were none
+            return {}
+
+    def guarded_data(self: Any, name: str) -> Any:
+        try:
+            return load_data(self, name)
+        except OSError:
+            raise  # numba's own handling (a removed file)
+        except Exception as damaged:  # an unreadable data file: as if it had been removed
+            raise OSError(f"damaged cache file {name}") from damaged
+
+    files._load_index, files._load_data = guarded_index, guarded_data
+    files._oscillator_guarded = True
+
+
+_location = _cache_location()
+if _location:
+    setattr(numba.config, "CACHE_DIR", _location)  # noqa: B010 - numba's config module, read when it caches
+_read_damaged_as_missing()
+
+#: Whether compiled kernels are cached on disk.
+CACHE = _location is not None
+
+
+def _cached(decorator: Callable[..., Any]) -> Callable[..., Any]:
+    @functools.wraps(decorator)
+    def wrapped(*args: Any, **options: Any) -> Any:
+        if not CACHE:
+            options.pop("cache", None)
+        return decorator(*args, **options)
+
+    return wrapped
+
+
+if TYPE_CHECKING:  # numba's own, as the type checker knows them
+    from numba import cfunc, njit
+else:
+    #: ``numba.njit`` and ``numba.cfunc``, with ``cache=True`` dropped when no cache can be written.
+    njit = _cached(numba.njit)
+    cfunc = _cached(numba.cfunc)
