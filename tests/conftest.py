@@ -88,3 +88,38 @@ def random_case(seed, t_end=12.0):
     v1 = rng.choice([0.0, rng.uniform(-2, 2)])
     v2 = rng.choice([0.0, rng.uniform(-2, 2)])
     return make_case(t_end, initial=(0.0, x1, v1, x2, v2), name=f"random-{seed}", **p)
+
+
+#: Run the command with ``simulate`` wrapped so that it prints "running" (on stderr) once the
+#: integration has taken its first step: a test sends its signal then, whatever the machine's
+#: speed, instead of after a sleep that a loaded machine may not have finished importing in.
+RUNNING = """
+import sys
+import oscillator.hybrid.simulate as simulation
+original = simulation.simulate
+def simulate(*args, progress=None, **kwargs):
+    said = []
+    def report(t):
+        if not said:
+            said.append(t)
+            print("running", file=sys.stderr, flush=True)
+        if progress is not None:
+            progress(t)
+    return original(*args, progress=report, **kwargs)
+simulation.simulate = simulate
+from oscillator.cli.app import main
+main(sys.argv[1:])
+"""
+
+
+def start_running(args, **options):
+    """``oscillator ARGS`` in a subprocess (pipes for its streams), returned once it says it is
+    integrating (see :data:`RUNNING`)."""
+    import subprocess
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-c", RUNNING, *map(str, args)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, **options)  # fmt: skip
+    line = process.stderr.readline()
+    assert line.strip() == "running", line + process.stderr.read()
+    return process

@@ -1,7 +1,8 @@
 """numba's cache of the compiled kernels: an install that cannot be written, and damaged files.
 
-Each test runs the command in a subprocess with its own cache folder, so that the shared one
-is never touched.  They compile the kernels from scratch (about 15 s each): marked slow.
+The end-to-end test runs the command in subprocesses with their own cache folder, so that the
+shared one is never touched; it compiles the kernels from scratch twice (about 20 s each):
+marked slow.  Where the cache goes when nothing can be written is checked in this process.
 """
 
 from __future__ import annotations
@@ -15,9 +16,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-pytestmark = pytest.mark.slow
-
-RUN = ["run", "instance-1", "--no-plots", "--no-report", "-q"]
+RUN = ["run", "instance-1", "--no-report", "-q"]
 
 #: The command with every folder but the allowed ones read-only to it (as for a user of a shared,
 #: read-only install): creating a file anywhere else fails with EACCES, as numba's and our own
@@ -37,63 +36,81 @@ main(sys.argv[1:])
 """
 
 
-def command(args, *, env, cwd, script=None):
-    base = [sys.executable, "-c", script, *args] if script else [sys.executable, "-m", "oscillator", *args]
-    return subprocess.run(base, cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
+def command(args, *, env, cwd):
+    return subprocess.run([sys.executable, "-c", READ_ONLY, *map(str, args)], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=600)  # fmt: skip
 
 
 def events(folder: Path) -> pd.DataFrame:
     return pd.read_parquet(folder / "events.parquet")
 
 
-def test_a_damaged_cache_is_compiled_afresh(tmp_path):
-    """Emptied, truncated and garbage cache files: the next run compiles what it cannot read,
-    gives the same events, and leaves files that the run after reads."""
-    cache = tmp_path / "cache"
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    first = command([*RUN, "--out", "a"], env=env, cwd=tmp_path)
+@pytest.mark.slow
+def test_a_read_only_install_caches_privately_and_a_damaged_cache_is_compiled_afresh(tmp_path):
+    """The package's folder and the home cannot be written: the cache goes to
+    ``$TMPDIR/oscillator-numba-<uid>`` (private to the user), matplotlib's folder likewise, and
+    nothing is printed but the result.  Then the cache files are emptied, truncated and
+    overwritten with garbage: the next run compiles what it cannot read, gives the same events
+    and rewrites the files, and the run after reads them."""
+    scratch, out = tmp_path / "tmp", tmp_path / "out"
+    scratch.mkdir()
+    out.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "MPLCONFIGDIR", "XDG_"))}
+    env.update(TMPDIR=str(scratch), HOME=str(tmp_path / "home"), ALLOWED=os.pathsep.join([str(scratch), str(out)]))
+
+    first = command([*RUN, "--out", out / "a"], env=env, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
+    assert first.stderr == "" and first.stdout.strip() == str(out / "a")  # no warning of numba or matplotlib
+    cache = scratch / f"oscillator-numba-{os.getuid()}"
     index, data = sorted(cache.rglob("*.nbi")), sorted(cache.rglob("*.nbc"))
-    assert len(index) > 20 and len(data) > 20
+    assert len(index) > 20 and len(data) > 20 and oct(cache.stat().st_mode & 0o777) == "0o700"
+    assert (scratch / f"oscillator-matplotlib-{os.getuid()}").is_dir()
+    assert json.loads((out / "a" / "run.json").read_text())["pending"] == []
+    assert (out / "a" / "figures" / "fig-a-displacement.png").stat().st_size > 0  # drawn, matplotlib quiet
+
     for k, path in enumerate(index):
         path.write_bytes(b"" if k % 2 else path.read_bytes()[:20])
     for path in data[::2]:
         path.write_bytes(b"not a pickle at all")
-    second = command([*RUN, "--out", "b"], env=env, cwd=tmp_path)
+    second = command([*RUN, "--out", out / "b"], env=env, cwd=tmp_path)
     assert second.returncode == 0 and "Traceback" not in second.stderr, second.stderr
-    pd.testing.assert_frame_equal(events(tmp_path / "a"), events(tmp_path / "b"))
+    pd.testing.assert_frame_equal(events(out / "a"), events(out / "b"))
     assert all(path.stat().st_size > 20 for path in index)  # rewritten whole
     assert not any(path.read_bytes() == b"not a pickle at all" for path in data[::2])
-    third = command([*RUN, "--out", "c"], env=env, cwd=tmp_path)
+
+    third = command([*RUN, "--out", out / "c"], env=env, cwd=tmp_path)
     assert third.returncode == 0, third.stderr
-    pd.testing.assert_frame_equal(events(tmp_path / "a"), events(tmp_path / "c"))
+    pd.testing.assert_frame_equal(events(out / "a"), events(out / "c"))
 
 
-def test_a_read_only_install_caches_in_a_private_temporary_folder(tmp_path):
-    """The package's folder and the home cannot be written: the cache goes to
-    ``$TMPDIR/oscillator-numba-<uid>`` (private to the user), and matplotlib's folder likewise;
-    nothing is printed but the result."""
-    scratch, home = tmp_path / "tmp", tmp_path / "home"
-    scratch.mkdir()
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "MPLCONFIGDIR", "XDG_"))}
-    env.update(TMPDIR=str(scratch), HOME=str(home), ALLOWED=os.pathsep.join([str(scratch), str(tmp_path / "out")]))
-    done = command([*RUN[:2], "-q", "--out", str(tmp_path / "out")], env=env, cwd=tmp_path, script=READ_ONLY)
-    assert done.returncode == 0, done.stderr
-    assert done.stderr == "" and done.stdout.strip() == str(tmp_path / "out")
-    cache = scratch / f"oscillator-numba-{os.getuid()}"
-    assert len(list(cache.rglob("*.nbi"))) > 20 and oct(cache.stat().st_mode & 0o777) == "0o700"
-    assert (scratch / f"oscillator-matplotlib-{os.getuid()}").is_dir()  # and matplotlib did not warn (stderr)
-    assert json.loads((tmp_path / "out" / "run.json").read_text())["pending"] == []
-    helped = command(["--help"], env=env, cwd=tmp_path, script=READ_ONLY)
-    assert helped.returncode == 0 and "Usage" in helped.stdout
+def test_with_nowhere_to_write_the_kernels_compile_without_a_cache(monkeypatch):
+    """Not even the temporary folder can be written: no cache location, and ``cache=True`` is
+    dropped from the kernels' decorators (numba would refuse it: "cannot cache function ... no
+    locator available")."""
+    import numba
+
+    from oscillator import compiled
+
+    monkeypatch.setattr(numba.config, "CACHE_DIR", "", raising=False)
+    monkeypatch.setattr(compiled, "writable", lambda folder: False)
+    monkeypatch.setattr(compiled, "private_scratch", lambda name: None)
+    assert compiled._cache_location() is None
+    seen = {}
+    monkeypatch.setattr(compiled, "CACHE", False)
+    compiled._cached(lambda *args, **options: seen.update(options))(cache=True, nogil=True)
+    assert seen == {"nogil": True}
 
 
-def test_with_nowhere_to_write_a_cache_the_kernels_are_compiled_each_time(tmp_path):
-    """Not even the temporary folder can be written: the run compiles without a cache and
-    finishes, instead of numba's "cannot cache function ... no locator available"."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
-    env.update(HOME="/nonexistent", TMPDIR=str(tmp_path / "tmp-missing"), ALLOWED=str(tmp_path / "out"))
-    done = command([*RUN, "--out", str(tmp_path / "out")], env=env, cwd=tmp_path, script=READ_ONLY)
-    assert done.returncode == 0, done.stderr
-    assert "Traceback" not in done.stderr and "cannot cache" not in done.stderr
-    assert len(events(tmp_path / "out")) == 2
+def test_a_private_scratch_folder_refuses_one_others_can_write(tmp_path, monkeypatch):
+    """A cache folder in a shared temporary folder that another user made, or left writable to
+    all, is not used (its pickles would run their code)."""
+    from oscillator.folders import private_scratch
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    folder = private_scratch("probe")
+    assert folder == tmp_path / f"probe-{os.getuid()}" and oct(folder.stat().st_mode & 0o777) == "0o700"
+    folder.chmod(0o777)
+    assert private_scratch("probe") is None

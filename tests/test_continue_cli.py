@@ -20,6 +20,9 @@ import pytest
 
 from test_hostile import TIMEOUT, _limit_file_size, oscillator, refused, snapshot
 
+#: Every test runs the installed command in a subprocess: slow.
+pytestmark = pytest.mark.slow
+
 #: A short continuation: Instance 1's system down in Q2 across its sliding bifurcation.
 CONTINUE = ["continue", "instance-1", "--param", "Q2", "--from", "71.3", "--to", "71.0", "--step", "0.5"]
 
@@ -46,11 +49,14 @@ def test_a_branch_that_ends_early_exits_1_and_keeps_what_it_traced(work):
     assert "Ended early: max\\_points = 3 reached" in (work / "x" / "report.md").read_text(encoding="utf-8")
 
 
-def test_quiet_prints_the_folder(work):
+def test_quiet_prints_the_folder_and_report_redraws_an_empty_figure(work):
     done = oscillator(*CONTINUE, "--out", "x", "-q", cwd=work)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "x" and done.stderr == ""
     assert run_json(work / "x")["status"] == "complete"
+    (work / "x" / "figures" / "branch.png").write_bytes(b"")  # as a full disk leaves one
+    assert oscillator("report", "x", cwd=work).returncode == 0
+    assert (work / "x" / "figures" / "branch.png").read_bytes()[:4] == b"\x89PNG"
 
 
 #: Run the command with one library function wrapped: it says when it is reached (on stderr),
@@ -104,13 +110,6 @@ def test_ctrl_c_while_the_figures_are_drawn_keeps_the_branch_and_report_finishes
     assert run_json(work / "x")["pending"] == []
     html = (work / "x" / "report.html").read_text(encoding="utf-8")
     assert html.count("data:image/png;base64,") == 2
-
-
-def test_report_redraws_an_empty_figure(work):
-    assert oscillator(*CONTINUE, "--out", "x", "-q", cwd=work).returncode == 0
-    (work / "x" / "figures" / "branch.png").write_bytes(b"")
-    assert oscillator("report", "x", cwd=work).returncode == 0
-    assert (work / "x" / "figures" / "branch.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_a_full_disk_is_one_message_and_leaves_nothing(work):
@@ -180,11 +179,11 @@ def test_continue_settings_are_refused_before_anything_runs(work, args, fragment
             base[base.index(flag) + 1] = value
         else:
             base += [flag, value]
-    refused(work, *base, "--out", "x", fragments=(fragment,), timeout=30)
+    refused(work, *base, "--out", "x", fragments=(fragment,))
 
 
 def test_orbit_refuses_an_absurd_period_at_once(work):
-    refused(work, "orbit", "instance-1", "--period", "1000000", fragments=("--period",), timeout=30)
+    refused(work, "orbit", "instance-1", "--period", "1000000", fragments=("--period",))
 
 
 def test_orbit_advice_names_options_the_command_has(work):
@@ -230,6 +229,6 @@ def test_the_python_api_raises_interrupted_with_the_partial_branch():
 def test_snapshot_is_unchanged_by_a_refused_over(tmp_path, work):
     """A sweep folder that does not exist is refused with the flag named."""
     before = snapshot(work)
-    done = oscillator(*CONTINUE, "--over", tmp_path / "missing", cwd=work, timeout=30)
+    done = oscillator(*CONTINUE, "--over", tmp_path / "missing", cwd=work)
     assert done.returncode == 2 and done.stderr.startswith("error: ") and "is not a folder" in done.stderr
     assert snapshot(work) == before and os.listdir(work) == []

@@ -35,7 +35,13 @@ def assert_same_switching(case, t_tol=1e-7):
     assert np.max(np.abs([a[0] - b[0] for a, b in zip(ours, theirs, strict=True)]), initial=0.0) < t_tol
 
 
-@pytest.mark.parametrize("name", case_names())
+#: The two scenes of Sec. 7 run 600 s each through the independent implementation: slow.
+LONG_SCENES = ("bifurcation-omega", "bifurcation-q2")
+
+
+@pytest.mark.parametrize(
+    "name", [pytest.param(n, marks=pytest.mark.slow) if n in LONG_SCENES else n for n in case_names()]
+)
 def test_instances_agree_with_the_independent_implementation(name):
     assert_same_switching(load_case(name))
 

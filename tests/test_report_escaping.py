@@ -28,7 +28,8 @@ from oscillator.report.markup import Bullets, Heading, Paragraph, Span, Table, t
 TITLE = "<script>alert(1)</script> [l](javascript:alert(2)) **bold** [/nope] $x$"
 DESCRIPTION = (
     '<img src=x onerror=alert(3)> <iframe src="javascript:alert(4)"></iframe> '
-    "![p](figures/../../../../PLANTED) <a href='javascript:alert(5)'>x</a> &lt;b&gt; \n- a list item\n# a heading"
+    "![p](figures/../../../../PLANTED) <a href='javascript:alert(5)'>x</a> &lt;b&gt; \n- a list item\n# a heading\n"
+    "see https://evil.example/x, WWW.evil.example and ftp://evil.example/f"
 )
 LABEL = "<script>alert(6)</script> [/x] bad"
 NOTE = "<svg onload=alert(7)> [y](javascript:alert(8)) `code` _em_"
@@ -121,6 +122,20 @@ def test_the_markdown_report_rendered_by_commonmark_shows_the_text_and_links_not
     text = html.unescape(rendered)
     for payload in (*PAYLOADS, "- a list item # a heading", "**bold**", "`code` _em_"):
         assert payload in text, payload
+
+
+def test_the_markdown_report_rendered_as_on_github_makes_no_live_link(hostile_run):
+    """GitHub's own renderer (cmark-gfm, with its extended autolinks) shows the URLs of a
+    description as text: no link to them.  (An e-mail address it links whatever the escapes,
+    github/cmark-gfm#278: docs/robustness.md.)"""
+    import cmarkgfm
+
+    folder, _ = hostile_run
+    rendered = cmarkgfm.github_flavored_markdown_to_html((folder / "report.md").read_text(encoding="utf-8"))
+    page = Page(rendered)
+    assert not [attributes for tag, attributes in page.tags if tag == "a"]
+    text = html.unescape("".join(page.text))
+    assert "see https://evil.example/x, WWW.evil.example and ftp://evil.example/f" in text
 
 
 def test_the_svg_figures_escape_the_case_name(hostile_run):

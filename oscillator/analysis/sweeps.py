@@ -46,7 +46,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
-from oscillator.io.signals import interrupts_ignored, prepare_worker
+from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.model.parameters import SweepSettings, is_whole_number
 from oscillator.text import printable, shown
 
@@ -150,6 +150,19 @@ def _rest_time(
     return sum(b - a for a, b in intervals), intervals
 
 
+def _point_case(case: Case, settings: SweepSettings, value: float) -> tuple[Case, np.ndarray]:
+    """The case of one swept value, and its Poincaré times: one at the start of each recorded
+    period (the run ends with the last period)."""
+    param = settings.param
+    point = resolve_case(case, **{param: value})
+    period, t0 = point.parameters.period, point.initial.t0
+    marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
+    if not (np.isfinite(marks).all() and np.all(np.diff(marks) > 0) and marks[0] >= t0 and marks[-1] > t0):
+        raise InputError(f"{param} = {value!r}: its forcing period, {period:.3g} s, is lost beside t0 = {t0:g} s in "
+                         f"floating point; give a {param} of physical size", field=param)  # fmt: skip
+    return point, marks
+
+
 def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> PointTables:
     """Simulate one parameter value and tabulate what the sweep keeps of it.
 
@@ -160,11 +173,7 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
     columns = _columns(param)
     started = time.perf_counter()
     try:
-        point = resolve_case(case, **{param: value})
-        period = point.parameters.period
-        t0 = point.initial.t0
-        # one Poincaré point at the start of each recorded period; the run ends with the last period
-        marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
+        point, marks = _point_case(case, settings, value)
         result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
     except OscillatorError as error:
         failed = PointSummary(index, "failed", str(error), wall_time=time.perf_counter() - started)
@@ -172,7 +181,7 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
         empty_switches, empty_poincare = _frame([], columns["switches"]), _frame([], columns["poincare"])
         return PointTables(index, value, empty_switches, empty_poincare, _frame(summary, columns["summary"]))
 
-    start, stop = float(marks[0]), float(marks[-1])
+    start, stop, period = float(marks[0]), float(marks[-1]), point.parameters.period
     events = result.events
     window = events[(events.mass == mass) & (events.t >= start) & (events.t <= stop)]
     omega = point.parameters.Omega
@@ -363,6 +372,7 @@ def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
     interrupt or an error here they are stopped at once, so nothing outlives the sweep.
     """
     context = multiprocessing.get_context("spawn")
+    quiet_resource_tracker()
     pending = iter(tasks)
     running: set[cf.Future] = set()
     with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
@@ -393,11 +403,11 @@ def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
 
 def _scheduler_address(scheduler: str) -> str:
     """Refuse an address that is not ``tcp://HOST:PORT`` (or tls://, ucx://, inproc://)."""
-    parsed = urllib.parse.urlsplit(scheduler)
     try:
+        parsed = urllib.parse.urlsplit(scheduler)
         port = parsed.port
-    except ValueError:
-        port = None
+    except ValueError:  # "tcp://[::1": an unclosed IPv6 bracket; a port that is no number
+        parsed, port = urllib.parse.urlsplit(""), None
     if (
         parsed.scheme not in ("tcp", "tls", "ucx", "inproc")
         or not parsed.hostname
@@ -523,6 +533,21 @@ class Sweep:
         return SweepOutcome(store.folder, len(values), computed, len(done), failed, wall)
 
 
+def _check_values(case: Case, settings: SweepSettings) -> None:
+    """Every swept value finite, and both ends valid values of the parameter (the constraints
+    on a parameter are intervals: ``m1 > 0``, ``mu_s >= mu_k``, magnitudes; so the values
+    between are valid too)."""
+    if not all(math.isfinite(value) for value in settings.values):
+        raise InputError(f"stop: the values from {settings.start!r} to {settings.stop!r} leave floating point; "
+                         "give a range of physical size", field="stop")  # fmt: skip
+    for name in ("start", "stop"):
+        value = getattr(settings, name)
+        try:
+            _point_case(case, settings, value)
+        except InputError as error:
+            raise InputError(f"{name} = {value!r} is not a valid {settings.param}: {error}", field=name) from None
+
+
 def open_sweep(
     case: Case,
     settings: SweepSettings,
@@ -542,6 +567,7 @@ def open_sweep(
         number of workers out of range, or a scheduler that is not an address or cannot be
         reached.
     """
+    _check_values(case, settings)
     store = _Store(Path(folder), case, settings)
     store.check()
     most = MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)

@@ -66,10 +66,24 @@ def _usage_error(error: Exception, args: list[str]) -> int:
     return int(getattr(error, "exit_code", 2))
 
 
+def _tolerant_streams() -> None:
+    """A terminal or pipe that cannot encode every character (``PYTHONIOENCODING=ascii``, the
+    POSIX locale) gets ``\\u2192``-style escapes for the characters it lacks (→, Ω, μ in the
+    tables), never a UnicodeEncodeError that loses a finished result."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and (stream.encoding or "").lower().replace("-", "") not in ("utf8", "utf16"):
+            try:
+                reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a closed or detached stream: nothing to print to anyway
+                pass
+
+
 def main(args: list[str] | None = None) -> None:
     """Entry point of the ``oscillator`` command: every outcome is an exit code and at most one
     line of error, never a traceback (see the module docstring for the codes)."""
     args = sys.argv[1:] if args is None else list(args)
+    _tolerant_streams()
     try:
         command = typer.main.get_command(app)
         code = command.main(args=args, prog_name="oscillator", standalone_mode=False)

@@ -60,8 +60,10 @@ def overrides(assignments: list[str]) -> dict:
     return values
 
 
-def case_from(case: str, t_end: float | None = None, assignments: list[str] | None = None) -> Case:
-    return resolve_case(load_case(case), t_end=t_end, **overrides(assignments or []))
+def case_from(
+    case: str, t_end: float | None = None, assignments: list[str] | None = None, keep_events_from: float | None = None
+) -> Case:
+    return resolve_case(load_case(case), t_end=t_end, keep_events_from=keep_events_from, **overrides(assignments or []))
 
 
 def sample_grid(case: Case, sample: float | None):

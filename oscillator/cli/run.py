@@ -15,6 +15,7 @@ from rich.console import JustifyMethod
 from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import EngineOption, case_from, check_engine, sample_grid
@@ -108,16 +109,19 @@ def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: 
     )
 
 
-def _prepare_run(case: str, t_end, set_, out_dir, fmt: str, sample, window) -> tuple[Case, object, FolderClaim]:
+def _prepare_run(
+    case: str, t_end, set_, out_dir, fmt: str, sample, window, engine: str | None, keep: float | None
+) -> tuple[Case, object, FolderClaim]:
     """Every check of ``run`` before anything is created, then the output folder claimed."""
     if fmt not in FORMATS:
         raise InputError(f"--format must be one of {', '.join(FORMATS)}, got {shown(fmt)}", field="--format")
-    resolved = case_from(case, t_end, set_)
+    resolved = case_from(case, t_end, set_, keep)
     grid = sample_grid(resolved, sample)
 
     if out_dir is not None:
         check_name(out_dir, option="--out")
     load("oscillator.io.runs", "oscillator.hybrid.simulate", "oscillator.report.figures")
+    from oscillator.engines import build_engine
     from oscillator.hybrid.simulate import admit
     from oscillator.io.runs import claim_output
     from oscillator.report.figures import figure_window
@@ -127,6 +131,7 @@ def _prepare_run(case: str, t_end, set_, out_dir, fmt: str, sample, window) -> t
 
     with interrupts_deferred():  # the first call of the compiled formulas loads them
         admit(resolved)
+        build_engine(engine, resolved.parameters, resolved.options).close()  # an engine's own refusals
     return resolved, grid, claim_output(out_dir, resolved.name)
 
 
@@ -167,6 +172,10 @@ def run(
         ),
     ] = None,
     engine: EngineOption = None,
+    keep: Annotated[
+        float | None,
+        typer.Option("--keep-events-from", metavar="T", help="Keep only the events at or after T s (a long run)."),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
 ) -> None:
     """Run a case, print its switching events, and write tables, figures and a report.
@@ -178,12 +187,13 @@ def run(
       oscillator run my-case.toml --format parquet --no-plots --quiet --out runs/mine
       oscillator run instance-1 --t-end 2000 --sample 0.05 --out runs/long
       oscillator run instance-1 --t-end 2000 --sample 0.05 --window 1000 1010 --out runs/long-window
+      oscillator run instance-1 --t-end 4000 --sample 1 --keep-events-from 3990 --out runs/longer
     """
     try:
         if window is not None and no_plots:
             raise InputError("--window chooses what the figures show; it has no use with --no-plots", field="--window")
         check_engine(engine)
-        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window)
+        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window, engine, keep)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:
@@ -191,9 +201,11 @@ def run(
     pending = tuple(step for step, skipped in (("figures", no_plots), ("report", no_report)) if not skipped)
     result = _simulate_or_keep_partial(resolved, grid, claim, fmt, pending, quiet, engine)
     folder = _write_tables(result, claim, fmt, pending)
+    summary = [] if quiet else _run_summary(resolved, result)
+    del result  # the figures and the report read the folder: a long run's tables are not held twice
     if pending:
         _finish(folder, figures=not no_plots, report=not no_report, window=window)
-    _print_run(resolved, result, folder, quiet)
+    _print_summary(summary, folder, quiet)
 
 
 def _simulate_or_keep_partial(
@@ -246,23 +258,33 @@ def _tables_kept(folder: Path) -> str:
     return f"the run's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
 
 
-def _print_run(case: Case, result: Result, folder: Path, quiet: bool) -> None:
+def _print_summary(summary: list, folder: Path, quiet: bool) -> None:
+    for line in summary:
+        out.print(line)
     if quiet:
         out.print(printable(str(folder)))
-        return
-    say((case.name, "bold"), f": {case.full_title}")
-    out.print(_events_table(result.events) if len(result.events) else "no switching events")
+    else:
+        say("written to ", (str(folder), "bold"))
+
+
+def _run_summary(case: Case, result: Result) -> list[Text | Table | str]:
+    """What ``run`` prints of a finished run: its events, the energy audit, the comparison."""
     energy = result.energy
-    say(f"energy audit residual {energy.residual:.2e} J (E0 = {energy.E0:.4f} J, E1 = {energy.E1:.4f} J)")
+    lines: list[Text | Table | str] = [
+        Text.assemble((printable(case.name), "bold"), printable(f": {case.full_title}")),
+        _events_table(result.events) if len(result.events) else "no switching events",
+        Text(f"energy audit residual {energy.residual:.2e} J (E0 = {energy.E0:.4f} J, E1 = {energy.E1:.4f} J)"),
+    ]
     if case.expected:
         from oscillator.analysis.reproduction import compare
 
         comparison = compare(case, result.events)
         ok = int((comparison.within_article & comparison.within_reference).sum())
-        say(f"expected events within tolerance: {ok}/{len(comparison)}")
+        lines.append(Text(f"expected events within tolerance: {ok}/{len(comparison)}"))
     elif case.modified:
-        say(f"modified case ({', '.join(case.modified)}): the expected times of the case as written are not compared")
-    say("written to ", (str(folder), "bold"))
+        lines.append(Text(printable(f"modified case ({', '.join(case.modified)}): the expected times of the case as "
+                                    "written are not compared")))  # fmt: skip
+    return lines
 
 
 def report(
@@ -285,19 +307,22 @@ def report(
       oscillator report runs/long --window 1990 2000
     """
     try:
-        load("oscillator.io.runs", "oscillator.report.figures", "oscillator.report.transitions",
-             "oscillator.orbits.output")  # fmt: skip
-        from oscillator.io.runs import finish_run
-        from oscillator.orbits.output import finish_branch, is_branch_folder
+        load("oscillator.io.runs")
+        from oscillator.io.runs import finish_run, folder_kind, read_run
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
-        if is_branch_folder(folder):
+        if folder_kind(folder) == "branch":
             if window is not None:
                 raise InputError("--window chooses a run's time window; a branch folder has none", field="--window")
+            load("oscillator.orbits.output")
+            from oscillator.orbits.output import finish_branch
+
             finish_branch(folder)
         else:
-            finish_run(folder, window=window)
+            checked = read_run(folder)  # a damaged folder is refused before the drawing libraries load
+            load("oscillator.report.figures", "oscillator.report.transitions")
+            finish_run(folder, window=window, run=checked)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:

@@ -119,16 +119,16 @@ def sweep(
 
 def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, workers, scheduler):
     """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
-    from oscillator.io.files import FolderTaken
+    from oscillator.io.files import FolderTaken, default_name
 
     load("oscillator.analysis.sweeps")
     from oscillator.analysis.sweeps import open_sweep
 
     if out_dir is not None:
         return open_sweep(case, settings, out_dir, workers=workers, scheduler=scheduler)
-    stamp = time.strftime("%Y%m%d-%H%M%S")
+    stamp, name = time.strftime("%Y%m%d-%H%M%S"), default_name(case.name)
     for n in range(1, 10_000):
-        folder = Path("runs") / (f"{case.name}-sweep-{stamp}" if n == 1 else f"{case.name}-sweep-{stamp}-{n}")
+        folder = Path("runs") / (f"{name}-sweep-{stamp}" if n == 1 else f"{name}-sweep-{stamp}-{n}")
         if os.path.lexists(folder):
             continue
         try:
@@ -153,10 +153,11 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
         except Exception as error:  # the sweep itself is safe
             raise fail(f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
                         f"are in {folder}", 1) from None  # fmt: skip
+    summary = tables["summary"]
     if quiet:
         out.print(printable(str(folder)))
+        _fail_if_every_point_failed(summary, folder)
         return
-    summary = tables["summary"]
     ranges = sliding_ranges(summary, settings.param)
     say(
         (case.name, "bold"),
@@ -166,11 +167,21 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
     )
     for a, b in ranges:
         say(f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]")
-    if not ranges:
+    if not ranges and (summary.status == "ok").any():
         say(f"m{settings.mass} never slides in this range")
     periods = summary[summary.status == "ok"].period.value_counts().sort_index()
-    say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
+    if len(periods):
+        say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
     say("written to ", (str(folder), "bold"))
+    _fail_if_every_point_failed(summary, folder)
+
+
+def _fail_if_every_point_failed(summary, folder: Path) -> None:
+    """Exit 1 when no point of the sweep could be computed, with the first point's reason."""
+    failed = summary[summary.status == "failed"]
+    if len(summary) and len(failed) == len(summary):
+        raise fail(f"every point of the sweep failed; the first: {failed.message.iloc[0]} (summary.parquet in "
+                   f"{folder} has each point's reason)", 1)  # fmt: skip
 
 
 def locate(

@@ -32,6 +32,25 @@ WATCH_ONLY = (Root.EXTREMUM_1, Root.EXTREMUM_2, Root.RELATIVE_VELOCITY)
 
 Field = Callable[[float, Vector, Mode], StateLike]
 
+#: SciPy's explicit Runge-Kutta methods raise a smaller ``rtol`` to this, with a warning.
+SCIPY_MIN_RTOL = 100 * float(np.finfo(float).eps)
+#: Below this ``atol``, SciPy's error norm (``err / (atol + rtol |y|)``, squared) overflows where a
+#: state component is zero (a mass at rest).
+SCIPY_MIN_ATOL = 1e-100
+
+
+def _check_tolerances(options: SolverOptions) -> None:
+    """Refuse tolerances that SciPy would change behind the caller's back, or overflow on."""
+    from oscillator.errors import InputError
+
+    if options.rtol < SCIPY_MIN_RTOL:
+        raise InputError(f"rtol = {options.rtol:g} is below what SciPy's solve_ivp accepts ({SCIPY_MIN_RTOL:.3g}: it "
+                         "would raise it to that); give a larger rtol, or the cvode engine", field="rtol")  # fmt: skip
+    if options.atol < SCIPY_MIN_ATOL:
+        raise InputError(f"atol = {options.atol:g} is too small for SciPy's error norm (it overflows at a state "
+                         f"component of 0); give atol >= {SCIPY_MIN_ATOL:g}, or the cvode engine",
+                         field="atol")  # fmt: skip
+
 
 class ScipyEngine:
     """``solve_ivp`` with events, behind the :class:`~oscillator.engines.Engine` interface.
@@ -65,6 +84,7 @@ class ScipyEngine:
         roots: Field | None = None,
         quadratures: bool = True,
     ) -> None:
+        _check_tolerances(options)
         self._params, self._options, self._method = params, options, method
         self._max_step = options.max_step_fraction * params.period
         c, near = coefficients(params), options.grazing_displacement_tolerance

@@ -110,7 +110,8 @@ def simulate(
         raises stops the run and reaches the caller unchanged.
     keep_events_from : float, optional
         Keep only the events at or after this time in ``Result.events`` (``stats.events``
-        counts them all). With the trajectory off too, memory stays flat in the run's length.
+        counts them all); the case's own (``[run] keep_events_from``) by default. With the
+        trajectory off or on a grid too, memory stays flat in the run's length.
     engine : str or callable, optional
         The integrator (:mod:`oscillator.engines`): ``"cvode"`` (CVODE through its C API, the
         default where SUNDIALS' libraries load), ``"sksundae"`` (CVODE through scikit-sundae's
@@ -143,7 +144,9 @@ def simulate(
     >>> result.events[["t", "mass", "kind", "to_domain"]].round(4).values.tolist()
     [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
     """
-    case = resolve_case(case, t_end=t_end, **overrides)
+    if keep_events_from is not None:
+        _time(keep_events_from, "keep_events_from")
+    case = resolve_case(case, t_end=t_end, keep_events_from=keep_events_from, **overrides)
     if not isinstance(record_trajectory, (bool, np.bool_)):
         raise InputError(
             f"record_trajectory must be True or False, got {shown(record_trajectory)}", field="record_trajectory"
@@ -151,7 +154,7 @@ def simulate(
     if progress is not None and not callable(progress):
         raise InputError(f"progress must be a function of the time (or None), got {shown(progress)}", field="progress")
     grid = None if t_eval is None else _grid(t_eval, case)
-    keep_from = -math.inf if keep_events_from is None else _time(keep_events_from, "keep_events_from")
+    keep_from = -math.inf if case.keep_events_from is None else case.keep_events_from
     admit(case)
     p, options = case.parameters, case.options
     integrator = build_engine(engine, p, options)

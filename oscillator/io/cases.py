@@ -90,6 +90,9 @@ class Case:
     sweep: SweepSettings | None = None
     source: Path | None = None
     modified: tuple[str, ...] = ()
+    #: Keep only the events at or after this time (``[run] keep_events_from``; all when None):
+    #: a long run's memory and report stay bounded.  The counts still count every event.
+    keep_events_from: float | None = None
 
     @property
     def full_title(self) -> str:
@@ -102,6 +105,12 @@ class Case:
     def __post_init__(self) -> None:
         t_end = _finite("run.t_end", self.t_end)
         object.__setattr__(self, "t_end", t_end)
+        if self.keep_events_from is not None:
+            keep = as_float(self.keep_events_from)
+            if math.isnan(keep):
+                raise InputError(f"run.keep_events_from must be a time in s, got {shown(self.keep_events_from)}",
+                                 field="keep_events_from")  # fmt: skip
+            object.__setattr__(self, "keep_events_from", keep)
         if t_end <= self.initial.t0:
             raise InputError(
                 f"run.t_end = {t_end!r} must be after initial.t0 = {self.initial.t0!r}; "
@@ -182,7 +191,7 @@ def _required(cls: type) -> set[str]:
     }
 
 
-_RUN_KEYS = ("t_end", *SolverOptions.names())
+_RUN_KEYS = ("t_end", "keep_events_from", *SolverOptions.names())
 
 
 def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path | None = None) -> Case:
@@ -201,12 +210,14 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
     if "t_end" not in run:
         raise InputError(f"{source}: [run] needs t_end = <end time in s>", field="t_end")
     t_end = parse_value(run.pop("t_end"), field="run.t_end")
+    keep = parse_value(run.pop("keep_events_from"), field="run.keep_events_from") if "keep_events_from" in run else None
     option_values = {k: parse_value(v, field=f"run.{k}") for k, v in run.items()}
     try:
         options = SolverOptions(**option_values)
     except OscillatorError as exc:
         raise InputError(f"{source}: {exc}", field=exc.field) from exc
     expected = _expected_list(data, source)
+    _check_expected_times(expected, initial.t0, t_end, source)
     sweep = _sweep(_table(data, "sweep", source), source) if "sweep" in data else None
     title, description = _text(data, "title", source), _text(data, "description", source)
     try:
@@ -215,6 +226,7 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
             parameters=params,
             initial=initial,
             t_end=t_end,
+            keep_events_from=keep,
             options=options,
             title=title,
             description=description,
@@ -224,6 +236,20 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
         )
     except OscillatorError as exc:
         raise InputError(f"{source}: {exc}", field=exc.field) from exc
+
+
+def _check_expected_times(expected: tuple[ExpectedEvent, ...], t0: float, t_end: object, source: str) -> None:
+    """Refuse an expected event whose time lies outside the run: it could never be checked
+    (``check`` would report every event within tolerance without looking at it)."""
+    if not (isinstance(t_end, (int, float)) and not isinstance(t_end, bool) and math.isfinite(t_end)):
+        return  # Case refuses the end time itself, naming it
+    for item in expected:
+        time = _expected_time(item)
+        if time is not None and not t0 <= time <= t_end:
+            what = f"{item.label!r}" if item.label else f"m{item.mass} {item.kind}"
+            raise InputError(f"{source}: [[expected]] {printable(what)} at t = {time:g} s lies outside the run "
+                             f"[t0, t_end] = [{t0:g}, {t_end:g}] s and could never be checked; raise run.t_end or "
+                             "remove the entry", field="expected")  # fmt: skip
 
 
 def _text(table: dict, key: str, source: str, *, where: str = "") -> str:
@@ -356,6 +382,7 @@ def load_case(name_or_path: str | Path) -> Case:
     except UnicodeEncodeError:
         raise InputError(f"case file {shown}: its name is not UTF-8 text; rename the file", field="case") from None
     text = read_untrusted(path, what="case file", field="case", limit=MAX_CASE_BYTES)
+    text = text.removeprefix("\ufeff")  # a byte-order mark, as some Windows editors save UTF-8
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -386,7 +413,14 @@ def check_setting(name: str) -> None:
         )
 
 
-def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **overrides: float) -> Case:
+def resolve_case(
+    case: Case | str | Path,
+    /,
+    *,
+    t_end: float | None = None,
+    keep_events_from: float | None = None,
+    **overrides: float,
+) -> Case:
     """The case with overrides applied: parameter, initial-state and solver-option names.
 
     A change of a parameter or of the start makes another case: its ``expected`` events (the
@@ -394,6 +428,7 @@ def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **ov
     Solver options change no physics and keep them; an earlier ``t_end`` drops the expected
     events after it.  A new start ``t0`` without a ``t_end`` keeps the run's length: the end
     moves with the start (``resolve_case("instance-1", t0=2.0)`` runs from 2.0 to 2.9 s).
+    ``keep_events_from`` replaces the case's own (``[run] keep_events_from``).
     """
     if not isinstance(case, Case):
         case = load_case(case)
@@ -410,6 +445,7 @@ def resolve_case(case: Case | str | Path, /, *, t_end: float | None = None, **ov
         t_end=case.t_end + (groups["initial"]["t0"] - case.initial.t0 if "t0" in groups["initial"] else 0.0)
         if t_end is None
         else t_end,
+        keep_events_from=case.keep_events_from if keep_events_from is None else keep_events_from,
     )
     changes = tuple(
         f"{name} {getattr(old, name):.10g} → {getattr(new, name):.10g}"
@@ -441,6 +477,8 @@ def case_to_toml(case: Case) -> str:
     data["parameters"] = dataclasses.asdict(case.parameters)
     data["initial"] = dataclasses.asdict(case.initial)
     data["run"] = {"t_end": case.t_end, **dataclasses.asdict(case.options)}
+    if case.keep_events_from is not None:
+        data["run"]["keep_events_from"] = case.keep_events_from
     expected = []
     for item in case.expected:
         entry = {k: v for k, v in dataclasses.asdict(item).items() if v is not None and v != ""}

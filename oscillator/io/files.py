@@ -40,6 +40,7 @@ __all__ = [
     "atomic_folder",
     "atomic_path",
     "claim_folder",
+    "default_name",
     "lock_name",
     "read_untrusted",
     "replace_file",
@@ -232,6 +233,23 @@ def lock_name(folder: Path, *, busy: str, option: str = "folder") -> NameLock:
             f"({exc.strerror or exc}); choose a writable folder",
             field=option,
         ) from exc
+
+
+#: The longest case name a default folder name keeps (bytes), before its time stamp.
+_DEFAULT_NAME_MAX = 100
+
+
+def default_name(text: str) -> str:
+    """A folder name made from ``text`` (a case's name, which comes from a file name and may
+    hold anything): control characters, path separators and a leading dot replaced by ``_``,
+    and cut to :data:`_DEFAULT_NAME_MAX` bytes of UTF-8, so that the default folder of a run
+    can always be written."""
+    name = "".join("_" if unsafe_characters(c) or c in "/\\" else c for c in text)
+    name = name.encode("utf-8", "replace").decode("utf-8", "replace")
+    if name.startswith("."):
+        name = "_" + name[1:]
+    cut = name.encode("utf-8")[:_DEFAULT_NAME_MAX].decode("utf-8", "ignore")
+    return cut or "case"
 
 
 def check_name(folder: Path, *, option: str) -> None:

@@ -38,7 +38,7 @@ import pandas as pd
 
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, case_to_toml, load_case
-from oscillator.io.files import FolderClaim, FolderTaken, claim_folder, read_untrusted, replace_file
+from oscillator.io.files import FolderClaim, FolderTaken, claim_folder, default_name, read_untrusted, replace_file
 from oscillator.io.tables import check_events, check_trajectory
 from oscillator.model.events import Event
 from oscillator.model.parameters import is_number
@@ -53,6 +53,7 @@ __all__ = [
     "RunFolder",
     "claim_output",
     "finish_run",
+    "folder_kind",
     "read_events_csv",
     "read_run",
     "run_metadata",
@@ -80,7 +81,8 @@ class RunFolder:
 
 
 def claim_output(folder: Path | None, case_name: str, *, root: Path = Path("runs")) -> FolderClaim:
-    """Claim the output folder before a run: ``folder``, or ``runs/<case>-<YYYYmmdd-HHMMSS>``.
+    """Claim the output folder before a run: ``folder``, or ``runs/<case>-<YYYYmmdd-HHMMSS>`` (the
+    case's name made safe as a folder name: :func:`~oscillator.io.files.default_name`).
 
     A default name taken by another run (a folder, or one being written now) gets the first free
     suffix ``-2``, ``-3``, ...; an explicit ``folder`` that is taken is refused
@@ -89,9 +91,10 @@ def claim_output(folder: Path | None, case_name: str, *, root: Path = Path("runs
     if folder is not None:
         return claim_folder(folder)
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    name = default_name(case_name)
     for n in range(1, 10_000):
         try:
-            return claim_folder(root / (f"{case_name}-{stamp}" if n == 1 else f"{case_name}-{stamp}-{n}"))
+            return claim_folder(root / (f"{name}-{stamp}" if n == 1 else f"{name}-{stamp}-{n}"))
         except FolderTaken:
             continue
     raise InputError(f"no free folder name under {root} for {case_name}; give a folder", field="folder")
@@ -331,17 +334,35 @@ def _update(folder: Path, info: dict, *, done: str | None = None, **changes: Any
     replace_file(folder / "run.json", json_text(info))
 
 
+def folder_kind(folder: Path) -> str:
+    """``"branch"`` for a folder that ``oscillator continue`` wrote (its ``run.json`` says
+    ``"kind": "branch"``), else ``"run"`` (also when ``run.json`` cannot be read: the run
+    folder's reader then names what is wrong)."""
+    try:
+        text = read_untrusted(Path(folder) / "run.json", what="run file", field="run.json", limit=_MAX_RUN_JSON)
+        data = json.loads(text)
+    except (OSError, ValueError, RecursionError):  # InputError is a ValueError
+        return "run"
+    return "branch" if isinstance(data, dict) and data.get("kind") == "branch" else "run"
+
+
 def finish_run(
-    folder: Path, *, figures: bool = True, report: bool = True, window: tuple[float, float] | None = None
+    folder: Path,
+    *,
+    figures: bool = True,
+    report: bool = True,
+    window: tuple[float, float] | None = None,
+    run: RunFolder | None = None,
 ) -> RunFolder:
     """Draw the run's missing figures (``figures``) and write its report (``report``).
 
     The figures show the whole run, or the last forcing periods of a long one; ``window``
     redraws them all for that time window (``run.json``'s ``"figures"`` records which).  Each
     file is written atomically, and ``run.json``'s ``"pending"`` says what is still to be made,
-    so an interrupted finish is finished by calling this again.
+    so an interrupted finish is finished by calling this again.  ``run`` is the folder as
+    :func:`read_run` read it, if the caller has it already.
     """
-    run = read_run(folder)  # checked before the drawing libraries are loaded
+    run = read_run(folder) if run is None else run  # checked before the drawing libraries are loaded
     from oscillator.analysis.reproduction import compare
     from oscillator.report.figures import figure_window, missing_figures, write_figures
     from oscillator.report.transitions import available_figures, report_document, write_report

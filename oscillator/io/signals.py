@@ -8,6 +8,9 @@
 * :func:`prepare_worker` runs first in each worker: it ignores SIGINT (the parent alone decides
   what an interrupt does, and stops the workers) and exits when the parent dies, so that a
   killed sweep leaves no orphan processes behind.
+* :func:`quiet_resource_tracker` starts multiprocessing's resource tracker so that, when a
+  killed sweep leaves the pool's semaphores to it, it removes them without a warning on the
+  user's terminal.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import threading
 import time
 from collections.abc import Iterator
 
-__all__ = ["interrupts_deferred", "interrupts_ignored", "prepare_worker"]
+__all__ = ["interrupts_deferred", "interrupts_ignored", "prepare_worker", "quiet_resource_tracker"]
 
 #: How often a worker checks that its parent is alive (s).
 _WATCH_INTERVAL = 0.25
@@ -76,3 +79,28 @@ def prepare_worker(parent: int) -> None:
     """A worker's initializer: ignore SIGINT, and exit as soon as process ``parent`` is gone."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_watch_parent, args=(parent,), name="parent-watch", daemon=True).start()
+
+
+#: The warning multiprocessing's resource tracker prints for the semaphores of a killed parent.
+_LEAK_WARNING = "ignore:resource_tracker:UserWarning"
+
+
+def quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (if it is not running) with its leak warning off.
+
+    When the parent of a process pool is killed (SIGKILL), the tracker removes the pool's
+    semaphores, as it should, but also prints "There appear to be N leaked semaphore objects"
+    to the user's terminal.  The tracker is a process of its own, started with the
+    interpreter's ``-W`` options: the filter given here is its only change.
+    """
+    import sys
+    from multiprocessing import resource_tracker
+
+    if _LEAK_WARNING in sys.warnoptions:
+        resource_tracker.ensure_running()
+        return
+    sys.warnoptions.append(_LEAK_WARNING)
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        sys.warnoptions.remove(_LEAK_WARNING)

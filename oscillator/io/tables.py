@@ -117,6 +117,11 @@ def check_events(frame: pd.DataFrame, source: str) -> pd.DataFrame:
         _check_domains(rows, source, {"from_domain": mass, "to_domain": mass})
     if not frame["state_from"].isin(_STATES | {""}).all() or not frame["state_to"].isin(_STATES | {""}).all():
         raise _damaged(source, "a system state is not one of I-a ... IV-d")
+    times = frame["t"].to_numpy(dtype=float)
+    if not np.isfinite(times).all():
+        raise _damaged(source, "column 't' must hold finite times")
+    if np.any(np.diff(times) < 0):
+        raise _damaged(source, "column 't' must hold times in order")
     return frame.astype({"mass": int, "from_domain": int, "to_domain": int})
 
 

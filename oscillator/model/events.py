@@ -15,7 +15,6 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from oscillator.model.phase_space import system_state
-from oscillator.model.theorems import branch_text, equation_text, theorem_text
 
 __all__ = ["COLUMN", "Event", "EventKind", "decode", "decode_column", "event_of_row"]
 
@@ -147,6 +146,10 @@ def _state_text(code: int) -> str:
 
 @functools.cache
 def _text(column: str, code: int, mass: int) -> str:
+    # the theorems' module holds compiled kernels: imported when an event is read, so that the
+    # command's start, its --help and its refusals do not wait for numba
+    from oscillator.model.theorems import branch_text, equation_text, theorem_text
+
     if column == "kind":
         return KINDS[code].value
     if column == "boundary":

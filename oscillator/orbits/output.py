@@ -37,7 +37,6 @@ __all__ = [
     "draw_branch",
     "draw_multipliers",
     "finish_branch",
-    "is_branch_folder",
     "read_branch",
     "read_sweep_points",
     "write_branch",
@@ -338,15 +337,6 @@ def _run_info(folder: Path) -> dict:
     if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
         raise _damaged(path, "modified must be a list of texts")
     return info
-
-
-def is_branch_folder(folder: Path) -> bool:
-    """Whether ``folder``'s ``run.json`` says ``"kind": "branch"`` (one that cannot be read says
-    no: the run folder's reader then names what is wrong)."""
-    try:
-        return _json(Path(folder) / "run.json").get("kind") == "branch"
-    except InputError:
-        return False
 
 
 def _json(path: Path) -> dict:

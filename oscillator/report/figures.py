@@ -289,8 +289,16 @@ def _save(fig, directory: Path, name: str) -> list[Path]:
 
 
 def missing_figures(directory: Path) -> list[str]:
-    """The figures of :data:`FIGURES` of which ``directory`` lacks the PNG or the SVG file."""
-    return [name for name in FIGURES if not all((directory / f"{name}{s}").is_file() for s in (".png", ".svg"))]
+    """The figures of :data:`FIGURES` of which ``directory`` lacks the PNG or the SVG file, or
+    holds an empty one (left by a full disk)."""
+
+    def drawn(path: Path) -> bool:
+        try:
+            return path.is_file() and path.stat().st_size > 0
+        except OSError:
+            return False
+
+    return [name for name in FIGURES if not all(drawn(directory / f"{name}{s}") for s in (".png", ".svg"))]
 
 
 _PANELS = {
@@ -302,8 +310,24 @@ _PANELS = {
 
 
 def _clipped(trajectory: pd.DataFrame, events: pd.DataFrame, window: Window) -> tuple[pd.DataFrame, pd.DataFrame]:
-    inside = (trajectory.t >= window.start) & (trajectory.t <= window.stop)
-    return trajectory[inside].reset_index(drop=True), events[(events.t >= window.start) & (events.t <= window.stop)]
+    """The rows inside the window, and the state at its two ends interpolated between the rows
+    around them: the curves reach the window's edges, even when no row (a coarse ``--sample``
+    grid) falls inside it."""
+    t = trajectory.t.to_numpy(float)
+    inside = (t >= window.start) & (t <= window.stop)
+
+    def at(edge: float) -> list[pd.DataFrame]:
+        k = int(np.searchsorted(t, edge))
+        if not 0 < k < len(t) or t[k] == edge:
+            return []
+        w = (edge - t[k - 1]) / (t[k] - t[k - 1])
+        row = trajectory.iloc[[k - 1]].copy()
+        for column in ("t", "x1", "v1", "x2", "v2"):
+            row[column] = (1 - w) * trajectory[column].iloc[k - 1] + w * trajectory[column].iloc[k]
+        return [row]
+
+    clipped = pd.concat([*at(window.start), trajectory[inside], *at(window.stop)])
+    return clipped.reset_index(drop=True), events[(events.t >= window.start) & (events.t <= window.stop)]
 
 
 def draw_figures(

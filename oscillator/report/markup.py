@@ -100,6 +100,9 @@ def _flat(text: str) -> str:
 #: backslash): emphasis, code, links and images, raw HTML and entities, table cells,
 #: strikethrough, math, and headings' closing sequences.
 _MD_SPECIAL = re.compile(r"([\\`*_\[\]<>&|~$#])")
+#: GitHub's extended autolinks make a live link of ``scheme://...`` and ``www....`` in text: the
+#: colon before ``//`` and the dot after ``www`` are escaped (``http\\://`` is not autolinked).
+_MD_AUTOLINK = re.compile(r"(?i)(:)(?=//)|(?<=\bwww)(\.)")
 #: Line starts that would open a block: lists (``-``, ``+``), thematic breaks and setext
 #: underlines (``-``, ``=``), and ordered lists (``1.``, ``1)``).
 _MD_BULLET_START = re.compile(r"^([-+=])")
@@ -107,7 +110,7 @@ _MD_NUMBER_START = re.compile(r"^(\d+)([.)])")
 
 
 def _md_text(text: str, *, line_start: bool = False) -> str:
-    escaped = _MD_SPECIAL.sub(r"\\\1", _flat(text))
+    escaped = _MD_AUTOLINK.sub(lambda m: "\\" + m.group(0), _MD_SPECIAL.sub(r"\\\1", _flat(text)))
     if line_start:
         escaped = _MD_NUMBER_START.sub(r"\1\\\2", _MD_BULLET_START.sub(r"\\\1", escaped))
     return escaped

@@ -20,7 +20,14 @@ from oscillator.model.phase_space import domain_label
 from oscillator.report.figures import FIGURES
 from oscillator.report.markup import Block, Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
 
-__all__ = ["available_figures", "domain_intervals", "report_document", "transition_log", "write_report"]
+__all__ = [
+    "LOGGED_EVENTS",
+    "available_figures",
+    "domain_intervals",
+    "report_document",
+    "transition_log",
+    "write_report",
+]
 
 
 def _f(value: float, digits: int = 5) -> str:
@@ -103,6 +110,30 @@ def transition_log(events: pd.DataFrame) -> list[str]:
             i += 1
         lines.append(f"t = {row.t:.4f} s — {text}")
     return lines
+
+
+#: The most events a report lists one by one; a longer run's log shows the first and the last
+#: half of this many, and counts the events between by kind.
+LOGGED_EVENTS = 200
+
+
+def _summarised_log(events: pd.DataFrame) -> list[str]:
+    """The transition log, or for a long run its beginning and end and a count of the rest."""
+    if len(events) <= LOGGED_EVENTS:
+        return transition_log(events)
+    half = LOGGED_EVENTS // 2
+    middle = events.iloc[half:-half]
+    counts = ", ".join(f"{kind} {count:,}" for kind, count in middle.kind.value_counts().items())
+    gap = (f"… {len(middle):,} events from t = {middle.t.iloc[0]:.4f} s to t = {middle.t.iloc[-1]:.4f} s are not "
+           f"listed here ({counts}); events.parquet holds them all")  # fmt: skip
+    return [*transition_log(events.iloc[:half]), gap, *transition_log(events.iloc[-half:])]
+
+
+def _time_in_each_domain(intervals: pd.DataFrame) -> pd.DataFrame:
+    """The intervals summed per mass and domain: how many, how long in all."""
+    total = intervals.groupby(["mass", "where"], sort=True).agg(intervals=("duration", "size"),
+                                                                 duration=("duration", "sum"))  # fmt: skip
+    return total.reset_index()
 
 
 def domain_intervals(events: pd.DataFrame, case: Case, t_final: float) -> pd.DataFrame:
@@ -257,12 +288,19 @@ def report_document(
     """
     blocks = _header(case, run)
     blocks.append(Heading(2, ("Transition log",)))
-    log = transition_log(events)
+    if case.keep_events_from is not None and math.isfinite(case.keep_events_from):
+        blocks.append(Paragraph((f"Only the events at or after t = {case.keep_events_from:.10g} s were kept "
+                                 "(keep_events_from); the log and the times below start there.",)))  # fmt: skip
+    log = _summarised_log(events)
     none = Paragraph(("No switching event: each mass stays in its domain.",))
     blocks.append(Bullets(tuple((line,) for line in log)) if log else none)
     blocks.append(Heading(2, ("Time in each domain",)))
     intervals = domain_intervals(events, case, run.get("t_final", case.t_end))
-    blocks.append(Paragraph(("No domain change.",)) if intervals.empty else _cells(intervals))
+    if len(intervals) > LOGGED_EVENTS:
+        blocks.append(Paragraph((f"{len(intervals):,} intervals; in all, per mass and domain:",)))
+        blocks.append(_cells(_time_in_each_domain(intervals)))
+    else:
+        blocks.append(Paragraph(("No domain change.",)) if intervals.empty else _cells(intervals))
     if run.get("energy"):
         blocks += _energy(run["energy"])
     if comparison is not None and not comparison.empty:
