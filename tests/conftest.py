@@ -66,6 +66,14 @@ def build():
     return make_case
 
 
+@pytest.fixture
+def work(tmp_path):
+    """An empty working folder for one command (a case file can be written beside it)."""
+    folder = tmp_path / "work"
+    folder.mkdir()
+    return folder
+
+
 def random_case(seed, t_end=12.0):
     """A random valid system with stops close by, so that contacts, rest and re-sticking occur."""
     import numpy as np
@@ -122,4 +130,36 @@ def start_running(args, **options):
                                stderr=subprocess.PIPE, text=True, **options)  # fmt: skip
     line = process.stderr.readline()
     assert line.strip() == "running", line + process.stderr.read()
+    return process
+
+
+#: Run the command with one library function wrapped: at its ``n``-th call it says "reached" (on
+#: stderr) and waits there for the signal the test sends (or carries on after a minute).
+REACHED = """
+import sys, time, importlib
+module, name = sys.argv[1].rsplit(".", 1)
+target, n, calls = importlib.import_module(module), int(sys.argv[2]), []
+original = getattr(target, name)
+def reached(*args, **kwargs):
+    calls.append(1)
+    if len(calls) == n:
+        print("reached", file=sys.stderr, flush=True)
+        time.sleep(60)
+    return original(*args, **kwargs)
+setattr(target, name, reached)
+from oscillator.cli.app import main
+main(sys.argv[3:])
+"""
+
+
+def start_reaching(function: str, args, *, call: int = 1, **options):
+    """``oscillator ARGS`` in a subprocess, returned once it has reached the ``call``-th call of
+    ``function`` (``"module.name"``, looked up in its module when called) and waits there."""
+    import subprocess
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-c", REACHED, function, str(call), *map(str, args)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **options)  # fmt: skip
+    line = process.stderr.readline()
+    assert line.strip() == "reached", line + process.stderr.read()
     return process

@@ -11,13 +11,12 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import start_reaching
 from test_hostile import TIMEOUT, _limit_file_size, oscillator, refused, snapshot
 
 #: Every test runs the installed command in a subprocess: slow.
@@ -25,13 +24,6 @@ pytestmark = pytest.mark.slow
 
 #: A short continuation: Instance 1's system down in Q2 across its sliding bifurcation.
 CONTINUE = ["continue", "instance-1", "--param", "Q2", "--from", "71.3", "--to", "71.0", "--step", "0.5"]
-
-
-@pytest.fixture
-def work(tmp_path):
-    folder = tmp_path / "work"
-    folder.mkdir()
-    return folder
 
 
 def run_json(folder):
@@ -59,29 +51,9 @@ def test_quiet_prints_the_folder_and_report_redraws_an_empty_figure(work):
     assert (work / "x" / "figures" / "branch.png").read_bytes()[:4] == b"\x89PNG"
 
 
-#: Run the command with one library function wrapped: it says when it is reached (on stderr),
-#: then waits for the signal (or carries on after a pause that no test waits for).
-REACHED = """
-import sys, time, importlib
-module, name = sys.argv[1].rsplit(".", 1)
-target = importlib.import_module(module)
-original = getattr(target, name)
-def reached(*args, **kwargs):
-    print("reached", file=sys.stderr, flush=True)
-    time.sleep({pause})
-    return original(*args, **kwargs)
-setattr(target, name, reached)
-from oscillator.cli.app import main
-main(sys.argv[2:])
-"""
-
-
-def interrupted_at(function: str, args: list[str], cwd, pause: float = 60.0) -> tuple[int, str]:
+def interrupted_at(function: str, args: list[str], cwd) -> tuple[int, str]:
     """Run ``oscillator ARGS`` with ``function`` wrapped; Ctrl-C once it is reached."""
-    script = REACHED.replace("{pause}", repr(pause))
-    process = subprocess.Popen([sys.executable, "-c", script, function, *args], cwd=cwd, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)  # fmt: skip
-    assert process.stderr.readline().strip() == "reached"
+    process = start_reaching(function, args, cwd=cwd)
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=TIMEOUT)
     return process.returncode, stderr
@@ -207,23 +179,6 @@ def test_orbit_of_a_parked_mass_reads_neutral_not_unstable(work):
     assert done.returncode == 0, done.stderr
     assert "stable; neutral in x2: m2 rests all period where it stuck" in done.stdout
     assert "unstable" not in done.stdout
-
-
-def test_the_python_api_raises_interrupted_with_the_partial_branch():
-    from oscillator import Interrupted, continue_orbit
-
-    calls = []
-
-    def progress(fraction):
-        calls.append(fraction)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-
-    with pytest.raises(Interrupted) as stopped:
-        continue_orbit("instance-1", param="Q2", start=71.3, stop=71.0, step=0.1, progress=progress)
-    branch = stopped.value.result
-    assert branch.complete is False and branch.message.startswith("interrupted at Q2 = ")
-    assert len(branch.points) == 3 and branch.points.Q2.iloc[0] == 71.3
 
 
 def test_snapshot_is_unchanged_by_a_refused_over(tmp_path, work):

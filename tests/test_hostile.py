@@ -83,14 +83,6 @@ def write_case(folder: Path, data: dict, name: str = "hostile.toml") -> Path:
     return path
 
 
-@pytest.fixture
-def work(tmp_path):
-    """An empty working folder for one command, and a case file outside it."""
-    folder = tmp_path / "work"
-    folder.mkdir()
-    return folder
-
-
 # ----------------------------------------------------------------------------- case files
 
 

@@ -18,13 +18,6 @@ from test_hostile import COMMAND, ENVIRONMENT, TIMEOUT, case_data, oscillator, r
 pytestmark = pytest.mark.slow
 
 
-@pytest.fixture
-def work(tmp_path):
-    folder = tmp_path / "work"
-    folder.mkdir()
-    return folder
-
-
 def test_a_window_between_two_samples_draws_the_interpolated_state(work):
     """--window inside one --sample step: the figures show the state interpolated at the window's
     ends (it was an internal AttributeError in run, a traceback in report)."""

@@ -363,3 +363,20 @@ def test_newton_says_when_it_went_from_one_kind_of_motion_to_another():
     other = find_orbit("instance-1", Q2=71.2, guess=resting.state)
     assert "sliding" not in other.signature
     assert "another cycle of switches" in other.note and "sliding_onset" in other.note
+
+
+def test_the_python_api_raises_interrupted_with_the_partial_branch():
+    from oscillator import Interrupted, continue_orbit
+
+    calls = []
+
+    def progress(fraction):
+        calls.append(fraction)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(Interrupted) as stopped:
+        continue_orbit("instance-1", param="Q2", start=71.3, stop=71.0, step=0.1, progress=progress)
+    branch = stopped.value.result
+    assert branch.complete is False and branch.message.startswith("interrupted at Q2 = ")
+    assert len(branch.points) == 3 and branch.points.Q2.iloc[0] == 71.3

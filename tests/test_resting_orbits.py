@@ -146,6 +146,7 @@ def test_continuing_a_parked_mass_ends_where_static_friction_lets_go():
     assert branch.complete
     p = branch.points
     assert (p.x2[p.K4 < 4.45] == 0.5).all() and (p.x2[p.K4 > 4.46] != 0.5).all()
+    assert (p.piece[p.x2 == 0.5] == 0).all() and (p.piece[p.x2 != 0.5] == 1).all()  # the figure breaks there
     (row,) = branch.bifurcations.itertuples()
     expected = (0.2 * 9.8 * 1.0 + np.pi / 8 - 1.0 * 0.5**3) / 0.5
     assert row.kind == "sliding_vanish" and abs(row.K4 - expected) < 1e-8 and row.jump > 0.1

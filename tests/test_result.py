@@ -81,3 +81,21 @@ def test_events_can_be_kept_from_a_time_on():
     assert late.stats.events == full.stats.events == 8
     pd.testing.assert_frame_equal(late.events.reset_index(drop=True),
                                   full.events[full.events.t >= 3.0].reset_index(drop=True))  # fmt: skip
+
+
+def test_the_tables_read_any_number_of_times_and_from_copies():
+    """A frozen Result is immutable in use: its tables read twice, and read from a copy made by
+    ``dataclasses.replace`` before or after the original's, are the same tables (reading them
+    consumed the records before: the second read raised AssertionError)."""
+    import dataclasses
+
+    result = simulate("instance-3")
+    early_copy = dataclasses.replace(result, message="a copy made before any table was read")
+    events, trajectory = result.events, result.trajectory
+    pd.testing.assert_frame_equal(result.events, events)
+    pd.testing.assert_frame_equal(result.trajectory, trajectory)
+    late_copy = dataclasses.replace(result, message="a copy made after")
+    for copy in (early_copy, late_copy):
+        pd.testing.assert_frame_equal(copy.events, events)
+        pd.testing.assert_frame_equal(copy.trajectory, trajectory)
+    assert len(events) == 8 and len(trajectory) > 100

@@ -21,7 +21,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from conftest import CHATTER, assert_same_tables, chatter_case, start_running
+from conftest import CHATTER, assert_same_tables, chatter_case, start_reaching, start_running
 from oscillator import OscillatorError, Parameters, SolverOptions, Status, load_case, simulate
 from oscillator.analysis.sweeps import read_sweep
 from oscillator.cli.app import app
@@ -268,16 +268,15 @@ def test_a_sweep_interrupted_with_sigint_resumes_to_the_same_tables(tmp_path):
     reference = invoke("sweep", "bifurcation-omega", *arguments, "--out", tmp_path / "reference")
     assert reference.exit_code == 0, reference.stderr
     folder = tmp_path / "interrupted"
-    command = [sys.executable, "-m", "oscillator", "sweep", "bifurcation-omega", *arguments, "--out", str(folder)]
-    process = _start(command)
-    deadline = time.monotonic() + TIMEOUT
-    while time.monotonic() < deadline and len(list(folder.glob("parts/*.summary.parquet"))) < 2:
-        time.sleep(0.05)
+    # interrupted in its third point (in this process: --workers 1), two points finished
+    process = start_reaching("oscillator.analysis.sweeps.run_point", ["sweep", "bifurcation-omega", *arguments,
+                             "--out", folder], call=3)  # fmt: skip
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=TIMEOUT)
     assert process.returncode == 130, stderr
     assert "run the same command to resume" in stderr and "Traceback" not in stderr
     assert json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["status"] != "complete"
+    assert len(list(folder.glob("parts/*.summary.parquet"))) == 2
     resumed = invoke("sweep", "bifurcation-omega", *arguments, "--out", folder)
     assert resumed.exit_code == 0, resumed.stderr
     assert_same_tables(read_sweep(tmp_path / "reference"), read_sweep(folder))

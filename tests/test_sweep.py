@@ -2,17 +2,12 @@
 
 import dataclasses
 import math
-import os
-import signal
-import subprocess
-import sys
-import time
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import assert_same_tables, make_case
+from conftest import assert_same_tables, make_case, start_reaching
 from oscillator import OscillatorError, SweepSettings, load_case
 from oscillator.analysis.locate import locate
 from oscillator.analysis.sweeps import TABLES, detect_period, read_sweep, run_point, run_sweep, sliding_ranges
@@ -73,17 +68,14 @@ def test_a_killed_sweep_resumes_to_the_same_result(case, tmp_path):
     reference = tmp_path / "reference"
     run_sweep(case, SweepSettings(**settings), reference, workers=1)
     folder = tmp_path / "killed"
-    command = [sys.executable, "-m", "oscillator", "sweep", "bifurcation-omega", "--param", "Omega", "--from", "1.5",
-               "--to", "1.7", "--steps", "10", "--transient", "6", "--record", "3", "--workers", "1", "--quiet",
-               "--no-plots", "--out", str(folder)]  # fmt: skip
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 300  # only against a hang
-    while time.monotonic() < deadline and len(list(folder.glob("parts/*.summary.parquet"))) < 3:
-        time.sleep(0.05)
-    os.kill(process.pid, signal.SIGKILL)
-    process.wait()
+    arguments = ["sweep", "bifurcation-omega", "--param", "Omega", "--from", "1.5", "--to", "1.7", "--steps", "10",
+                 "--transient", "6", "--record", "3", "--workers", "1", "--quiet", "--no-plots",
+                 "--out", folder]  # fmt: skip
+    process = start_reaching("oscillator.analysis.sweeps.run_point", arguments, call=4)  # 3 points done
+    process.kill()
+    process.communicate()
     finished_before = len(list(folder.glob("parts/*.summary.parquet")))
-    assert 3 <= finished_before < 10, finished_before
+    assert finished_before == 3, finished_before
     outcome = run_sweep(case, SweepSettings(**settings), folder, workers=1)
     assert outcome.resumed == finished_before and outcome.computed == 10 - finished_before
     assert_same_tables(read_sweep(reference), read_sweep(folder))

@@ -225,20 +225,17 @@ def _prepare_continue(case: str, set_: list[str] | None, coordinate: str, over: 
 
 def _compute(case: Case, settings: dict[str, Any], claim: FolderClaim, quiet: bool) -> Branch:
     """The branch; on Ctrl-C the branch traced so far (nothing, if the first orbit was not found)."""
-    from oscillator.orbits.continuation import continue_orbit
+    from oscillator.orbits.continuation import Branch, continue_orbit
 
     try:
         return _continue_with_progress(continue_orbit, case, settings, quiet)
     except OscillatorError as error:
         claim.abandon()
         raise fail(message(error), code=_code(error)) from None
-    except Interrupted as interrupt:
-        partial = interrupt.result
-        if partial is not None and hasattr(partial, "points"):
-            return partial  # type: ignore[return-value]
-        claim.abandon()
-        raise fail("interrupted before the first orbit was found; nothing was written", code=130) from None
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as interrupt:  # Interrupted carries the branch so far
+        partial = interrupt.result if isinstance(interrupt, Interrupted) else None
+        if isinstance(partial, Branch):
+            return partial
         claim.abandon()
         raise fail("interrupted before the first orbit was found; nothing was written", code=130) from None
     except BaseException:

@@ -51,7 +51,7 @@ from oscillator.orbits.shooting import (
 )
 from oscillator.text import shown
 
-__all__ = ["BIFURCATION_KINDS", "Branch", "check_settings", "continue_orbit"]
+__all__ = ["BIFURCATION_KINDS", "Branch", "ContinuationSettings", "check_settings", "continue_orbit"]
 
 BIFURCATION_KINDS = ("sliding_onset", "sliding_vanish", "grazing", "fold", "period_doubling", "torus")
 #: The default largest step, the smallest allowed and the most points (``continue_orbit``).
@@ -337,25 +337,38 @@ def continue_orbit(
     >>> branch.bifurcations[["Q2", "kind"]].round(6).values.tolist()
     [[71.157742, 'sliding_vanish']]
     """
-    start, stop, period, tol, locate_tol, max_points, ds_max = check_settings(
+    settings = check_settings(
         case, param=param, start=start, stop=stop, period=period, section=section, guess=guess,
         transient=transient, step=step, max_points=max_points, tol=tol, locate_tol=locate_tol, progress=progress,
         **overrides,
     )  # fmt: skip
+    start, stop = settings.start, settings.stop
     base = orbit_case(case, {**overrides, param: start})
     section_, y_start = start_of(base, section, guess, transient)
-    sigma = abs(stop - start)
-    cont = _Continuer(base, param, section_, period, sigma, tol)
+    cont = _Continuer(base, param, section_, settings.period, abs(stop - start), settings.tol)
     direction = 1.0 if stop > start else -1.0
 
     trace = _Trace(cont.first(y_start, start, direction), cont.scale)
     try:
-        complete, message = _trace_branch(cont, trace, start, stop, ds_max, max_points, locate_tol, progress)
+        complete, message = _trace_branch(cont, trace, settings, progress)
     except KeyboardInterrupt:
         last = trace.points[-1].lam
-        partial = trace.branch(param, section_, period, False, f"interrupted at {param} = {last:.10g}")
+        partial = trace.branch(param, section_, settings.period, False, f"interrupted at {param} = {last:.10g}")
         raise Interrupted(partial) from None
-    return trace.branch(param, section_, period, complete, message)
+    return trace.branch(param, section_, settings.period, complete, message)
+
+
+@dataclass(frozen=True)
+class ContinuationSettings:
+    """:func:`continue_orbit`'s numeric settings, checked (:func:`check_settings`)."""
+
+    start: float
+    stop: float
+    period: int
+    tol: float
+    locate_tol: float
+    max_points: int
+    step: float  #: the largest step, as a fraction of ``|stop - start|``
 
 
 def check_settings(
@@ -374,10 +387,9 @@ def check_settings(
     locate_tol: object = 1e-9,
     progress: object = None,
     **overrides: object,
-) -> tuple[float, float, int, float, float, int, float]:
+) -> ContinuationSettings:
     """Check :func:`continue_orbit`'s arguments without computing anything (the command line
-    does so before it creates its folder); ``(start, stop, period, tol, locate_tol, max_points,
-    step)`` as numbers.
+    does so before it creates its folder).
 
     Raises
     ------
@@ -400,28 +412,27 @@ def check_settings(
         check_count(transient, "transient", 0, MAX_TRANSIENT)
     if section is not None:
         real_argument(section, "section")
-    return start_, stop_, period_, tol_, locate_tol_, max_points_, step_
+    return ContinuationSettings(start_, stop_, period_, tol_, locate_tol_, max_points_, step_)
 
 
 def _trace_branch(
-    cont: _Continuer,
-    trace: _Trace,
-    start: float,
-    stop: float,
-    ds_max: float,
-    max_points: int,
-    locate_tol: float,
-    progress: Callable[[float], None] | None,
+    cont: _Continuer, trace: _Trace, settings: ContinuationSettings, progress: Callable[[float], None] | None
 ) -> tuple[bool, str]:
     """Step along the branch from its first point to ``stop``; ``(complete, why it ended)``."""
     param, sigma, points = cont.param, cont.sigma, trace.points
+    start, stop, ds_max = settings.start, settings.stop, settings.step
+    max_points, locate_tol = settings.max_points, settings.locate_tol
     direction = 1.0 if stop > start else -1.0
     ds, ds_min = ds_max / 4, ds_max / 2**12
     lo, hi = min(start, stop), max(start, stop)
     while len(points) < max_points:
         a = points[-1]
         b = cont.along(a, ds)
-        if b is None or b.iterations > 5 or (not b.same_kind(a) and _jumped(cont, a, b)):
+        own = _own_kind(cont, a, b) if b is not None and b.iterations <= 5 and not b.same_kind(a) else None
+        if own is not None and ds <= ds_min:  # the corrector keeps jumping: take a's kind there
+            b = _Point(own.y, own.lam, own.image, cont.tangent(cont.jacobian(own.y, own.lam, own.image), a.tangent,
+                                                                1.0), own.iterations)  # fmt: skip
+        elif b is None or b.iterations > 5 or own is not None:
             if ds <= ds_min:
                 return False, f"the corrector failed at {param} = {a.lam:.10g} with the smallest step"
             ds /= 2
@@ -444,12 +455,13 @@ def _trace_branch(
                    f"{abs(points[-1].lam - start) / sigma:.0%} of the range")  # fmt: skip
 
 
-def _jumped(cont: _Continuer, a: _Point, b: _Point) -> bool:
-    """Whether the corrector left ``a``'s kind of orbit for another although ``a``'s still exists
-    at ``b``'s parameter (two orbits coexist there): then the step is retried shorter, so that
-    the branch follows its own orbit to where it ends."""
+def _own_kind(cont: _Continuer, a: _Point, b: _Point) -> _Point | None:
+    """The orbit of ``a``'s kind at ``b``'s parameter, if there is one although the corrector
+    went to ``b``, of another kind (two orbits coexist there): then the step is retried shorter
+    (or, at the smallest step, this orbit is taken), so that the branch follows its own orbit
+    to where it ends."""
     own = _natural(cont, b.lam, a.y + _slope(a, cont.sigma) * (b.lam - a.lam))
-    return own is not None and own.same_kind(a)
+    return own if own is not None and own.same_kind(a) else None
 
 
 class _Trace:
@@ -466,13 +478,16 @@ class _Trace:
         for found in located:
             self.rows.append(found.row)
             jump = found.row["jump"]
+            self._append(found.left, b)
             if found.right is not None and (math.isnan(jump) or jump > 1e-6 * self.scale):
-                self.piece_starts.append(len(self.points))
-            for side in (found.left, found.right):
-                last = self.points[-1]
-                if side is not None and side is not b and not (side.lam == last.lam and np.array_equal(side.y, last.y)):
-                    self.points.append(side)
+                self.piece_starts.append(len(self.points))  # the orbit beyond the jump starts a piece
+            self._append(found.right, b)
         self.points.append(b)
+
+    def _append(self, side: _Point | None, b: _Point) -> None:
+        last = self.points[-1]
+        if side is not None and side is not b and not (side.lam == last.lam and np.array_equal(side.y, last.y)):
+            self.points.append(side)
 
     def points_frame(self, param: str) -> pd.DataFrame:
         pieces = np.zeros(len(self.points), dtype=int)

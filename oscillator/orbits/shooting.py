@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ from oscillator.hybrid.supervisor import Supervisor
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
-from oscillator.model.parameters import is_whole_number, real_argument
+from oscillator.model.parameters import real_argument
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.saltation import rest_projection, saltation_matrix
 from oscillator.orbits.variational import ModeFlow
@@ -400,10 +401,11 @@ def orbit_case(case: Case | str, overrides: dict[str, float]) -> Case:
 
 def check_count(value: object, name: str, least: int, most: int | None = None) -> int:
     """A whole number ``>= least`` (and ``<= most``); a bool is not one."""
-    if not is_whole_number(value) or value < least or (most is not None and value > most):  # type: ignore[operator]
+    number = int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else None
+    if number is None or number < least or (most is not None and number > most):
         bounds = f">= {least}" if most is None else f"from {least} to {most}"
         raise InputError(f"{name} must be a whole number {bounds}, got {shown(value)}", field=name)
-    return int(value)  # type: ignore[call-overload]
+    return number
 
 
 def check_guess(guess: object) -> np.ndarray:
