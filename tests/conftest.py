@@ -5,6 +5,7 @@ property instead of the default fixed 100.
 """
 
 import os
+import signal
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -18,6 +19,12 @@ settings.register_profile(
 )
 settings.register_profile("thorough", max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
+
+# A shell without job control starts a background command ('pytest ... &') with SIGINT ignored,
+# and every process the tests start would inherit that: the tests of Ctrl-C would then see a
+# command that cannot be interrupted.  They need the disposition a terminal gives.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 #: A system with every nonlinear and contact term off; stops far away.
 LINEAR = dict(
@@ -130,6 +137,7 @@ def start_running(args, **options):
                                stderr=subprocess.PIPE, text=True, **options)  # fmt: skip
     line = process.stderr.readline()
     assert line.strip() == "running", line + process.stderr.read()
+    assert signals_heard(process.pid), _signal_state(process.pid)
     return process
 
 
@@ -162,4 +170,25 @@ def start_reaching(function: str, args, *, call: int = 1, **options):
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **options)  # fmt: skip
     line = process.stderr.readline()
     assert line.strip() == "reached", line + process.stderr.read()
+    assert signals_heard(process.pid), _signal_state(process.pid)
     return process
+
+
+def _signal_state(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/status") as status:
+            return "".join(line for line in status if line.startswith(("SigBlk", "SigIgn", "SigCgt")))
+    except OSError:
+        return "(no /proc)"
+
+
+def signals_heard(pid: int) -> bool:
+    """Whether process ``pid`` neither blocks nor ignores SIGINT (where /proc tells)."""
+    import signal
+
+    state = _signal_state(pid)
+    if not state.startswith("Sig"):
+        return True
+    bit = 1 << (signal.SIGINT - 1)
+    masks = {line.split(":")[0]: int(line.split(":")[1], 16) for line in state.splitlines()}
+    return not (masks.get("SigBlk", 0) & bit or masks.get("SigIgn", 0) & bit)
