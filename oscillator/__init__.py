@@ -42,6 +42,7 @@ _EXPORTS = {
     "EnergyAudit": "oscillator.hybrid.result",
     "SolverStats": "oscillator.hybrid.result",
     "simulate": "oscillator.hybrid.simulate",
+    "read_run": "oscillator.saved",
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
     "Branch": "oscillator.orbits.continuation",
@@ -72,6 +73,7 @@ __all__ = [
     "continue_orbit",
     "find_orbit",
     "load_case",
+    "read_run",
     "resolve_case",
     "simulate",
 ]
@@ -86,6 +88,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.phase_space import Mode
     from oscillator.orbits.continuation import Branch, continue_orbit
     from oscillator.orbits.shooting import Orbit, find_orbit
+    from oscillator.saved import read_run
 
 
 def __getattr__(name: str) -> object:

@@ -406,3 +406,43 @@ def test_the_event_table_fits_a_narrow_terminal_without_cutting_a_time(tmp_path)
         table = lines[1 : lines.index(next(line for line in lines if line.startswith("energy audit")))]
         assert max(len(line) for line in table) <= width, (width, table)
         assert re.findall(r"\d\.\d{6}", "\n".join(table)) == expected, width
+
+
+def test_a_branch_traced_down_says_so_and_names_bifurcations_as_the_parameter_increases(tmp_path):
+    """Down in Q2 across 71.1577: the rest interval appears going down, so it vanishes as Q2
+    increases: ``sliding_vanish``, with the rests on the lower side."""
+    folder = tmp_path / "down"
+    result = invoke("continue", "instance-1", "--param", "Q2", "--from", "71.3", "--to", "71.0", "--step", "0.5",
+                    "--out", folder)  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    assert "from Q2 = 71.3 down to 71" in result.stdout and "named as Q2 increases" in result.stdout
+    report = (folder / "report.md").read_text(encoding="utf-8")
+    assert "traced from Q2 = 71.3 down to 71 N" in report
+    row = next(line for line in report.splitlines() if "sliding\\_vanish" in line and line.startswith("| 71.15"))
+    lower, higher = [cell.strip() for cell in row.strip("|").split("|")][-2:]
+    assert "sliding\\_onset" in lower and "sliding\\_onset" not in higher  # m2 rests below 71.1577 only
+    assert "| events at lower Q2 | events at higher Q2 |" in report
+    fixed = report.split("## Fixed parameters", 1)[1]
+    assert "| Omega | 1.6 | rad/s |" in fixed and "| Q1 | 30 | N |" in fixed and "| Q2 |" not in fixed
+    assert json.loads((folder / "run.json").read_text())["coordinate"] == "x2"
+
+
+def test_check_of_a_user_case_heads_its_times_expected_not_article(tmp_path):
+    path = tmp_path / "mine.toml"
+    path.write_text(load_case("instance-3").source.read_text(), encoding="utf-8")
+    mine, shipped = invoke("check", path), invoke("check", "instance-3")
+    assert mine.exit_code == shipped.exit_code == 0
+    header = next(line for line in mine.stdout.splitlines() if "event" in line and "ours" in line)
+    assert "expected" in header and "article" not in header
+    assert "article" in next(line for line in shipped.stdout.splitlines() if "event" in line and "ours" in line)
+
+
+def test_a_sweep_summary_names_grid_values_and_how_to_locate_the_ends(tmp_path):
+    result = invoke("sweep", "bifurcation-omega", "--from", "1.595", "--to", "1.615", "--steps", "5", "--transient",
+                    "5", "--record", "3", "--workers", "1", "--no-plots", "--out", tmp_path / "s")  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    assert "m2 slides (rests on its velocity boundary) at the grid values Omega = 1.6 to 1.605" in result.stdout
+    assert ("where it begins (between two grid values): oscillator locate bifurcation-omega --param Omega "
+            "--between 1.595 1.6 --what sliding") in result.stdout  # fmt: skip
+    assert "where it ends (between two grid values): oscillator locate bifurcation-omega" in result.stdout
+    assert "--between 1.605 1.61 --what sliding" in result.stdout

@@ -25,13 +25,18 @@ def test_model_page_names_every_theorem_function():
             assert f"`{name}`" in text, name
 
 
-def test_readme_python_example_runs_and_prints_what_it_says(capsys):
+def test_readme_python_example_runs_and_prints_what_it_says(capsys, tmp_path, monkeypatch):
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     block = text.split("```python\n", 1)[1].split("```", 1)[0]
-    exec(compile(block, "README.md", "exec"), {})
+    monkeypatch.chdir(tmp_path)  # it saves a run folder under runs/
+    names: dict = {}
+    exec(compile(block, "README.md", "exec"), names)
     out = capsys.readouterr().out
     assert "1.174583     2  sliding_vanish  ∂Ω12(2)          1     5.4   (5.28)" in out
     assert "1.289000     1  sliding_vanish  ∂Ω12(1)          2     5.4   (5.28)" in out
+    assert (tmp_path / "runs" / "omega-1.7-python" / "report.md").is_file()
+    assert names["again"].events.equals(names["longer"].events)
+    assert names["figure"].axes[0].get_xlim()[0] >= 19.0
 
 
 def test_docstring_examples_run():

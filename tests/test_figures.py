@@ -2,8 +2,11 @@
 
 import re
 
+import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PathCollection
+from matplotlib.figure import Figure
 
 from oscillator import SweepSettings, load_case, simulate
 from oscillator.analysis.sweeps import run_point
@@ -56,7 +59,7 @@ def test_every_kind_has_its_own_marker_the_same_in_every_figure(figures):
     assert all(len(shapes) == 1 for shapes in kinds_seen.values()), kinds_seen  # one marker per kind everywhere
     shapes = [next(iter(s)) for s in kinds_seen.values()]
     assert len(set(shapes)) == len(shapes)  # and no two kinds share one
-    assert len({marker for marker, _ in KIND_STYLE.values()}) == len(KIND_STYLE)
+    assert len({marker for marker, _, _ in KIND_STYLE.values()}) == len(KIND_STYLE)
 
 
 def test_legends_hide_no_data(figures):
@@ -130,3 +133,73 @@ def test_the_sweep_diagrams_name_their_units():
         for ax in figure.axes:
             assert ax.get_xlabel() in ("Omega (rad/s)", ""), name
             assert UNIT.search(ax.get_ylabel()), (name, ax.get_ylabel())
+
+
+def hidden_markers(figure) -> list[str]:
+    """The markers no pixel of the image shows: for each scatter (the start's star, each kind of
+    event), the image drawn without it is compared with the whole image within each of its
+    markers' extent; a marker wholly covered by others changes nothing there."""
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    whole = np.asarray(canvas.buffer_rgba()).copy()
+    height, width = whole.shape[:2]
+    hidden = []
+    for ax in figure.axes:
+        box = ax.get_window_extent()
+        for collection in ax.collections:
+            if not isinstance(collection, PathCollection) or not len(collection.get_offsets()):
+                continue
+            points = collection.get_offset_transform().transform(collection.get_offsets())
+            collection.set_visible(False)
+            canvas.draw()
+            without = np.asarray(canvas.buffer_rgba())
+            collection.set_visible(True)
+            changed = np.any(whole != without, axis=2)
+            radius = max(1, int(np.sqrt(collection.get_sizes()[0]) / 2 * figure.dpi / 72))
+            for x, y in points:
+                if not box.contains(x, y):
+                    continue  # outside the axes: clipped
+                row, column = round(height - y), round(x)
+                around = changed[max(row - radius, 0):min(row + radius + 1, height),
+                                 max(column - radius, 0):min(column + radius + 1, width)]  # fmt: skip
+                if not around.any():
+                    hidden.append(f"{ax.get_title() or figure.get_suptitle()}: {collection.get_label()} at "
+                                  f"{ax.transData.inverted().transform((x, y))}")  # fmt: skip
+    return hidden
+
+
+@pytest.mark.parametrize("label", ["instance-4", "instance-5", "instance-1 at Omega = 1.6 for 6 periods"])
+def test_every_marker_shows_where_markers_coincide(label):
+    """Instances 4 and 5 leave rest at their start (the diamond on the star); at Omega = 1.6 m2
+    stops and leaves rest at one displacement (square and diamond on one point of panel c)."""
+    result = simulate(label.split()[0], **RUNS.get(label, {}))
+    case = result.case
+    drawn = draw_figures(result.trajectory, result.events, case.parameters, (case.initial.t0, *case.initial.y),
+                         title=case.name)  # fmt: skip
+    for name in ("fig-a-displacement", "fig-c-phase"):
+        assert hidden_markers(drawn[name]) == [], name
+
+
+def test_a_marker_under_another_is_found():
+    """The check above can fail: a small marker drawn under a large one is reported."""
+    figure = Figure()
+    ax = figure.subplots()
+    ax.scatter([1.0], [1.0], s=30, marker="D", zorder=2, label="small")
+    ax.scatter([1.0], [1.0], s=300, marker="s", zorder=3, label="large")
+    ax.scatter([2.0], [2.0], s=30, marker="o", label="apart")
+    assert [text.split(" at ")[0] for text in hidden_markers(figure)] == [": small"]
+
+
+def test_sweep_markers_show_where_onset_and_vanish_coincide():
+    """A resting mass starts and leaves its rest at one displacement: in the sweep diagram the
+    onset's square and the vanish's diamond lie on one point, and both show."""
+    case = load_case("bifurcation-omega")
+    settings = SweepSettings(param="Omega", start=1.6, stop=1.605, steps=2, transient=3, record=2)
+    points = [run_point(case, settings, i, v) for i, v in enumerate(settings.values)]
+    import pandas as pd
+
+    tables = {name: pd.concat([p.table(name) for p in points], ignore_index=True)
+              for name in ("switches", "poincare", "summary")}  # fmt: skip
+    assert {"sliding_onset", "sliding_vanish"} <= set(tables["switches"].kind)
+    figure = draw_sweep_figures(tables, "Omega", 2, title="scene")["fig-14-bifurcation"]
+    assert hidden_markers(figure) == []

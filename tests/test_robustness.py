@@ -26,7 +26,7 @@ from oscillator import OscillatorError, Parameters, SolverOptions, Status, load_
 from oscillator.analysis.sweeps import read_sweep
 from oscillator.cli.app import app
 from oscillator.io.cases import case_to_toml
-from oscillator.io.runs import read_events_csv, read_run
+from oscillator.io.runs import read_events_csv, read_run_folder
 
 runner = CliRunner()
 #: Only against a hang: a loaded machine may take many times the usual seconds.
@@ -162,7 +162,7 @@ def test_a_failed_run_writes_its_partial_result_marked_failed(tmp_path):
     rebuilt = invoke("report", folder)
     assert rebuilt.exit_code == 0, rebuilt.stderr
     assert "**Incomplete run (failed)" in (folder / "report.md").read_text(encoding="utf-8")
-    assert read_run(folder).run["status"] == "failed"
+    assert read_run_folder(folder).run["status"] == "failed"
 
 
 def test_a_complete_run_says_so(tmp_path):
@@ -188,7 +188,7 @@ def test_sigint_keeps_the_run_so_far_marked_interrupted(tmp_path):
     _, stderr = process.communicate(timeout=TIMEOUT)
     assert process.returncode == 130, stderr
     assert stderr.startswith("error: interrupted; the partial result up to t = ") and "Traceback" not in stderr
-    run = read_run(folder)
+    run = read_run_folder(folder)
     assert run.run["status"] == "interrupted" and run.run["failure"] == "interrupted by the user"
     t_final = run.run["t_final"]
     assert 1.0 < t_final < 40000 and run.trajectory.t.iloc[-1] == t_final
@@ -393,7 +393,7 @@ def test_fuzzed_set_values_on_the_command_line_run_or_are_refused(tmp_path_facto
     )  # fmt: skip
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     if result.exit_code == 0:
-        assert read_run(folder).run["status"] == "complete"
+        assert read_run_folder(folder).run["status"] == "complete"
     else:
         assert result.exit_code in (1, 2) and result.stderr.startswith("error: "), result.stderr
         assert "Traceback" not in result.stderr

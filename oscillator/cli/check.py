@@ -11,6 +11,7 @@ from rich.text import Text
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import EngineOption, case_from, check_engine
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
+from oscillator.io.cases import is_shipped
 from oscillator.text import printable, shown
 
 __all__ = ["check"]
@@ -43,7 +44,7 @@ def check(
             )
         if not resolved.expected:
             raise InputError(f"case {shown(resolved.name)} has no [[expected]] events to check against", field="case")
-        load("oscillator.analysis.reproduction", "oscillator.hybrid.simulate")
+        load("oscillator.analysis.reproduction", "oscillator.hybrid.simulate", notice=True)
         from oscillator.analysis.reproduction import compare
         from oscillator.hybrid.simulate import simulate
 
@@ -54,8 +55,9 @@ def check(
         raise fail("interrupted", code=130) from None
     view = Table(title=f"{printable(resolved.name)}: expected switching times", title_justify="left",
                  header_style="bold")  # fmt: skip
-    for column in ("event", "article", "reference", "ours", "ours − article", "ours − reference", "ok"):
-        view.add_column(column)
+    source = "article" if resolved.source is None or is_shipped(resolved.source) else "expected"
+    for column in ("event", source, "reference", "ours", f"ours − {source}", "ours − reference", "ok"):
+        view.add_column(column, overflow="fold")
     for row in table.itertuples(index=False):
         ok = row.within_article and row.within_reference
         view.add_row(

@@ -71,16 +71,50 @@ def say(*parts: str | tuple[str, str]) -> None:
     out.print(Text.assemble(*((printable(p[0]), p[1]) if isinstance(p, tuple) else printable(p) for p in parts)))
 
 
-def load(*modules: str) -> None:
+#: What a command says when numba compiles the kernels (the first run after an install).
+COMPILING = "compiling the numerical kernels once (about 30 s); later runs start in about a second"
+#: Seconds of loading after which the command says so even if the cache seemed full (stale).
+SLOW_LOAD = 3.0
+#: Whether the notice was printed in this process.
+_noticed = False
+
+
+def _notice() -> None:
+    global _noticed
+    if not _noticed:
+        _noticed = True
+        err.print(Text(COMPILING + " ...", style="dim"))
+
+
+def load(*modules: str, notice: bool = False) -> None:
     """Import the numerical modules a command needs, holding Ctrl-C until they are in.
 
     Some libraries they import catch every exception while importing (a ``KeyboardInterrupt``
     among them: SciPy's array-API layer probes NumPy's attributes), which would lose the
     interrupt and let the command run on.
+
+    With ``notice``, a first run that compiles the kernels says so on stderr at once (numba's
+    cache is empty) or after :data:`SLOW_LOAD` seconds (the cache was stale).
     """
+    import threading
+
+    timer = None
     with interrupts_deferred():
-        for name in modules:
-            importlib.import_module(name)
+        if notice and not _noticed:
+            from oscillator.compiled import kernels_cached
+
+            if not kernels_cached():
+                _notice()
+            else:
+                timer = threading.Timer(SLOW_LOAD, _notice)
+                timer.daemon = True
+                timer.start()
+        try:
+            for name in modules:
+                importlib.import_module(name)
+        finally:
+            if timer is not None:
+                timer.cancel()
 
 
 def message(error: OscillatorError) -> str:

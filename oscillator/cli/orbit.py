@@ -93,7 +93,7 @@ def orbit(
     try:
         resolved = case_from(case, None, set_)
         start = _guess(guess)
-        load("oscillator.orbits.shooting")
+        load("oscillator.orbits.shooting", notice=True)
         from oscillator.orbits.shooting import find_orbit
 
         found = find_orbit(resolved, period=period, guess=start, transient=transient, section=section,  # type: ignore[arg-type]
@@ -160,7 +160,10 @@ def continue_(
     guess: GuessOption = None,
     transient: TransientOption = None,
     section: SectionOption = None,
-    coordinate: Annotated[str, typer.Option("--coordinate", help="The coordinate at the section drawn.")] = "x2",
+    coordinate: Annotated[
+        str | None,
+        typer.Option("--coordinate", help="The coordinate at the section drawn (default x2, or x1 if m2 is parked)."),
+    ] = None,
     over: Annotated[
         Path | None, typer.Option("--over", metavar="SWEEP_DIR", help="Draw the branch over this sweep's points.")
     ] = None,
@@ -190,7 +193,7 @@ def continue_(
         raise fail("interrupted; nothing was written", code=130) from None
     branch = _compute(resolved, settings, claim, quiet)
     _summary(branch, quiet)
-    folder = _write(branch, resolved, claim, coordinate, sweep_points)
+    folder = _write(branch, resolved, claim, coordinate or branch.coordinate, sweep_points)
     problem = _finish(folder)
     if quiet:
         out.print(printable(str(folder)))
@@ -199,10 +202,12 @@ def continue_(
     _exit(branch, folder, problem)
 
 
-def _prepare_continue(case: str, set_: list[str] | None, coordinate: str, over: Path | None, out_dir: Path | None,
-                      settings: dict[str, Any]) -> tuple[Case, dict[str, Any], Any, FolderClaim]:  # fmt: skip
+def _prepare_continue(
+    case: str, set_: list[str] | None, coordinate: str | None, over: Path | None, out_dir: Path | None,
+    settings: dict[str, Any],
+) -> tuple[Case, dict[str, Any], Any, FolderClaim]:  # fmt: skip
     """Every check of ``continue`` before anything is computed, then the output folder claimed."""
-    if coordinate not in COORDINATES:
+    if coordinate is not None and coordinate not in COORDINATES:
         raise InputError(f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}",
                          field="--coordinate")  # fmt: skip
     param = settings["param"]
@@ -210,14 +215,14 @@ def _prepare_continue(case: str, set_: list[str] | None, coordinate: str, over: 
         raise InputError(f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
                          "range with --from and --to", field="--set")  # fmt: skip
     resolved = case_from(case, None, set_)
-    load("oscillator.orbits.continuation", "oscillator.orbits.output", "oscillator.io.runs")
+    load("oscillator.orbits.continuation", "oscillator.orbits.output", "oscillator.io.runs", notice=True)
     from oscillator.io.files import check_name
     from oscillator.io.runs import claim_output
     from oscillator.orbits.continuation import check_settings
     from oscillator.orbits.output import read_sweep_points
 
     check_settings(resolved, **settings)
-    sweep_points = read_sweep_points(over, param, coordinate) if over is not None else None
+    sweep_points = read_sweep_points(over, param, coordinate or "x2") if over is not None else None
     if out_dir is not None:
         check_name(out_dir, option="--out")
     return resolved, settings, sweep_points, claim_output(out_dir, f"{resolved.name}-continue")
@@ -248,7 +253,11 @@ def _summary(branch: Branch, quiet: bool) -> None:
     if quiet:
         return
     param = branch.param
-    say(f"{len(branch.points)} points, {len(branch.bifurcations)} bifurcation(s)")
+    first, last = branch.points[param].iloc[0], branch.points[param].iloc[-1]
+    say(
+        f"{len(branch.points)} points from {param} = {first:.10g} {'up' if last > first else 'down'} to {last:.10g}, "
+        f"{len(branch.bifurcations)} bifurcation(s), named as {param} increases"
+    )
     for row in branch.bifurcations.itertuples(index=False):
         gap = "  (a gap begins)" if row.after == "" else "  (a gap ends)" if row.before == "" else ""
         out.print(Text(f"  {param} = {getattr(row, param):.10g}  {row.kind}{gap}"))

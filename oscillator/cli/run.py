@@ -110,7 +110,7 @@ def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: 
 
 
 def _prepare_run(
-    case: str, t_end, set_, out_dir, fmt: str, sample, window, engine: str | None, keep: float | None
+    case: str, t_end, set_, out_dir, fmt: str, sample, window, engine: str | None, keep: float | None, quiet: bool
 ) -> tuple[Case, object, FolderClaim]:
     """Every check of ``run`` before anything is created, then the output folder claimed."""
     if fmt not in FORMATS:
@@ -120,7 +120,7 @@ def _prepare_run(
 
     if out_dir is not None:
         check_name(out_dir, option="--out")
-    load("oscillator.io.runs", "oscillator.hybrid.simulate", "oscillator.report.figures")
+    load("oscillator.io.runs", "oscillator.hybrid.simulate", "oscillator.report.figures", notice=not quiet)
     from oscillator.engines import build_engine
     from oscillator.hybrid.simulate import admit
     from oscillator.io.runs import claim_output
@@ -183,7 +183,7 @@ def run(
     \b
     Examples:
       oscillator run instance-3
-      oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7
+      oscillator run instance-1 --t-end 30 --set Omega=1.7 --set Q2=70 --out runs/omega-1.7-q2-70
       oscillator run my-case.toml --format parquet --no-plots --quiet --out runs/mine
       oscillator run instance-1 --t-end 2000 --sample 0.05 --out runs/long
       oscillator run instance-1 --t-end 2000 --sample 0.05 --window 1000 1010 --out runs/long-window
@@ -193,7 +193,7 @@ def run(
         if window is not None and no_plots:
             raise InputError("--window chooses what the figures show; it has no use with --no-plots", field="--window")
         check_engine(engine)
-        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window, engine, keep)
+        resolved, grid, claim = _prepare_run(case, t_end, set_, out_dir, fmt, sample, window, engine, keep, quiet)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:
@@ -303,12 +303,12 @@ def report(
 
     \b
     Examples:
-      oscillator report runs/omega-1.7
+      oscillator report runs/omega-1.7-q2-70
       oscillator report runs/long --window 1990 2000
     """
     try:
         load("oscillator.io.runs")
-        from oscillator.io.runs import finish_run, folder_kind, read_run
+        from oscillator.io.runs import finish_run, folder_kind, read_run_folder
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
@@ -320,7 +320,7 @@ def report(
 
             finish_branch(folder)
         else:
-            checked = read_run(folder)  # a damaged folder is refused before the drawing libraries load
+            checked = read_run_folder(folder)  # a damaged folder is refused before the drawing libraries load
             load("oscillator.report.figures", "oscillator.report.transitions")
             finish_run(folder, window=window, run=checked)
     except OscillatorError as error:

@@ -13,7 +13,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, sweep_settings
 from oscillator.errors import InputError, OscillatorError
-from oscillator.io.cases import Case
+from oscillator.io.cases import Case, is_shipped
 from oscillator.model.parameters import SweepSettings
 from oscillator.text import printable
 
@@ -121,7 +121,7 @@ def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, worke
     """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
     from oscillator.io.files import FolderTaken, default_name
 
-    load("oscillator.analysis.sweeps")
+    load("oscillator.analysis.sweeps", notice=True)
     from oscillator.analysis.sweeps import open_sweep
 
     if out_dir is not None:
@@ -136,6 +136,13 @@ def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, worke
         except FolderTaken:
             continue
     raise InputError("no free folder name under runs/; give --out", field="--out")
+
+
+def shown_case(case: Case) -> str:
+    """The case as the command line names it: a shipped case by its name, any other by its file."""
+    if case.source is None or is_shipped(case.source):
+        return printable(case.name)
+    return printable(str(case.source))
 
 
 def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no_plots: bool, quiet: bool) -> None:
@@ -165,8 +172,19 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
         f"{settings.transient} + {settings.record} periods); {outcome.computed} computed, {outcome.resumed} resumed, "
         f"{outcome.failed} failed, {outcome.wall_time:.1f} s",
     )
+    values = sorted(summary[settings.param].to_numpy(float))
     for a, b in ranges:
-        say(f"m{settings.mass} slides (rests on its velocity boundary) for {settings.param} in [{a:.6g}, {b:.6g}]")
+        say(
+            f"m{settings.mass} slides (rests on its velocity boundary) at the grid values {settings.param} = "
+            f"{a:.6g} to {b:.6g}"
+        )
+        below, above = [v for v in values if v < a], [v for v in values if v > b]
+        for which, pair in (("begins", [*below[-1:], a]), ("ends", [b, *above[:1]])):
+            if len(pair) == 2:
+                say(
+                    f"  where it {which} (between two grid values): oscillator locate {shown_case(case)} "
+                    f"--param {settings.param} --between {pair[0]:.6g} {pair[1]:.6g} --what sliding"
+                )
     if not ranges and (summary.status == "ok").any():
         say(f"m{settings.mass} never slides in this range")
     periods = summary[summary.status == "ok"].period.value_counts().sort_index()
@@ -221,7 +239,7 @@ def locate(
     """
     try:
         resolved = case_from(case, None, set_)
-        load("oscillator.analysis.locate")
+        load("oscillator.analysis.locate", notice=True)
         lo, hi = between
         settings = sweep_settings(resolved, param, lo, hi, None, transient, record)
         found = _locate_with_progress(resolved, settings, what, (lo, hi), tolerance)

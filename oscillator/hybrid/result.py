@@ -15,9 +15,12 @@ from oscillator.model.energy import POWER_NAMES, mechanical_energy
 from oscillator.model.phase_space import Mode
 
 if TYPE_CHECKING:
-    import pandas as pd
+    from pathlib import Path
 
-__all__ = ["EnergyAudit", "Result", "SolverStats", "Status"]
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+__all__ = ["EnergyAudit", "Result", "SolverStats", "Status", "records_of"]
 
 
 class Status(enum.StrEnum):
@@ -106,6 +109,14 @@ class _Records:
         return self._trajectory_frame
 
 
+def records_of(events: pd.DataFrame, trajectory: pd.DataFrame) -> _Records:
+    """Records holding tables already built (a run folder read back)."""
+    records = _Records(np.empty((0, 0)), [])
+    records._events_frame, records._trajectory_frame = events, trajectory
+    records._events = records._rows = None
+    return records
+
+
 @dataclass(frozen=True)
 class Result:
     """The outcome of :func:`oscillator.simulate`.
@@ -155,6 +166,37 @@ class Result:
     def success(self) -> bool:
         """Whether the run reached ``t_end``."""
         return self.status is Status.COMPLETE
+
+    def plot(self, panel: str = "a", *, window: tuple[float, float] | None = None) -> Figure:
+        """One of the article's panels (Figs. 9-13) of this run, as a matplotlib figure.
+
+        Parameters
+        ----------
+        panel : str
+            ``"a"`` or ``"displacement"``, ``"b"`` or ``"velocity"``, ``"c"`` or ``"phase"``,
+            ``"d"`` or ``"forces"``.
+        window : (float, float), optional
+            The time window drawn; by default the whole run, or its last 10 forcing periods
+            when it is longer than 20 (as ``oscillator run`` draws it).
+        """
+        from oscillator.report.figures import draw_panel
+
+        return draw_panel(self.trajectory, self.events, self.case, panel, window=window, t_final=self.final_state[0])
+
+    def save(self, folder: str | Path, *, formats: str = "both", figures: bool = True, report: bool = True) -> Path:
+        """Write this run as a run folder, as ``oscillator run`` does: the event tables
+        (``formats``: ``"csv"``, ``"parquet"`` or ``"both"``), ``trajectory.parquet``,
+        ``case.toml``, ``run.json``, then the figures and the report.  ``folder`` must be new.
+        :func:`oscillator.read_run` reads it back.  Returns the folder's path."""
+        from oscillator.io.runs import save_result
+
+        return save_result(self, folder, formats=formats, figures=figures, report=report)
+
+    def _repr_html_(self) -> str:
+        """The status, the counts, the energy residual and the first events (Jupyter)."""
+        from oscillator.report.notebook import result_html
+
+        return result_html(self)
 
     @classmethod
     def from_record(

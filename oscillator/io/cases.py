@@ -141,6 +141,14 @@ def _cases_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "cases"
 
 
+def is_shipped(path: Path) -> bool:
+    """Whether ``path`` is one of the shipped case files."""
+    try:
+        return Path(path).resolve().parent == _cases_dir().resolve()
+    except OSError:
+        return False
+
+
 def case_names() -> list[str]:
     """Names of the shipped cases, sorted."""
     return sorted(path.stem for path in _cases_dir().glob("*.toml"))

@@ -16,7 +16,7 @@ It is made in two steps, so that a finished computation is never lost to a later
 
 A run that the solver or a guard stopped, or that was interrupted, is written the same way from
 its partial result, with ``"status": "failed"`` or ``"interrupted"`` and the reason
-(``"failure"``) in ``run.json``.  Everything read back is checked (:func:`read_run`): a damaged
+(``"failure"``) in ``run.json``.  Everything read back is checked (:func:`read_run_folder`): a damaged
 file is named in the error, never a traceback.
 """
 
@@ -55,8 +55,10 @@ __all__ = [
     "finish_run",
     "folder_kind",
     "read_events_csv",
-    "read_run",
+    "read_run_folder",
+    "result_of",
     "run_metadata",
+    "save_result",
     "write_run",
 ]
 
@@ -189,11 +191,13 @@ def write_run(
     formats: str = "both",
     command: list[str] | None = None,
     pending: tuple[str, ...] = PENDING,
+    extra: dict | None = None,
 ) -> Path:
     """Write the tables, ``case.toml`` and ``run.json`` into the claimed folder and put it in place.
 
-    Returns the folder's path (see :meth:`FolderClaim.commit`).  On any failure the claim is
-    abandoned: nothing is left behind.
+    ``extra`` is added to ``run.json`` (an orbit's ``"kind"`` and ``"orbit"``).  Returns the
+    folder's path (see :meth:`FolderClaim.commit`).  On any failure the claim is abandoned:
+    nothing is left behind.
     """
     if formats not in FORMATS:
         raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
@@ -205,7 +209,7 @@ def write_run(
             result.events.to_parquet(temporary / "events.parquet", index=False)
         result.trajectory.to_parquet(temporary / "trajectory.parquet", index=False)
         (temporary / "case.toml").write_text(case_to_toml(result.case), encoding="utf-8")
-        info = run_info(result, command=command, pending=pending)
+        info = {**run_info(result, command=command, pending=pending), **(extra or {})}
         (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
         return claim.commit()
     except BaseException:
@@ -282,7 +286,7 @@ def _read_table(path: Path, reader) -> pd.DataFrame:
         raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})") from exc
 
 
-def read_run(folder: Path) -> RunFolder:
+def read_run_folder(folder: Path) -> RunFolder:
     """Read a run folder back (for ``oscillator report``), checking every file it reads.
 
     Raises
@@ -303,7 +307,8 @@ def read_run(folder: Path) -> RunFolder:
     except (ValueError, RecursionError) as exc:
         raise _damaged(info_path, "it is not JSON") from exc
     info = _check_run_info(data, info_path)
-    case = dataclasses.replace(load_case(_require(folder, "case.toml")), name=info.get("case") or folder.name)
+    case = dataclasses.replace(load_case(_require(folder, "case.toml")), name=info.get("case") or folder.name,
+                               modified=tuple(info.get("modified", ())))  # fmt: skip
     if _regular(folder / "events.parquet"):
         events = _read_table(folder / "events.parquet", pd.read_parquet)
         source = folder / "events.parquet"
@@ -314,6 +319,63 @@ def read_run(folder: Path) -> RunFolder:
     trajectory_path = _require(folder, "trajectory.parquet")
     trajectory = check_trajectory(_read_table(trajectory_path, pd.read_parquet), printable(str(trajectory_path)))
     return RunFolder(folder, case, events, trajectory, info)
+
+
+def result_of(run: RunFolder) -> Result:
+    """The :class:`~oscillator.hybrid.result.Result` a run folder holds: its case and tables,
+    its status and failure, the energy audit and the solver's counts from ``run.json`` (a value
+    the file lacks reads as NaN, a count as 0)."""
+    from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status, records_of
+
+    info = run.run
+
+    def number(value: Any) -> float:
+        return float(value) if is_number(value) else math.nan
+
+    energy = info.get("energy") or {}
+    audit = EnergyAudit(**{name.name: number(energy.get(name.name)) for name in dataclasses.fields(EnergyAudit)})
+    counts = info.get("counts") or {}
+    stats = SolverStats(
+        engine=str((info.get("solver") or {}).get("engine", "unknown")),
+        wall_time=number(info.get("wall_time")),
+        **{f.name: int(counts.get(f.name, 0)) for f in dataclasses.fields(SolverStats) if f.type in ("int", int)},
+    )
+    given = info.get("final_state")
+    final: dict = given if isinstance(given, dict) else {}
+    if not final and len(run.trajectory):
+        final = run.trajectory.iloc[-1].to_dict()
+    state = tuple(number(final.get(name)) for name in ("t", "x1", "v1", "x2", "v2"))
+    return Result(run.case, audit, stats, state, Status(info.get("status", "complete")),  # type: ignore[arg-type]
+                  info.get("failure") or "", records_of(run.events, run.trajectory))  # fmt: skip
+
+
+def save_result(result: Result, folder: Path | str, *, formats: str = "both", figures: bool = True,
+                report: bool = True) -> Path:  # fmt: skip
+    """Write ``result`` as a run folder (as ``oscillator run`` does) into ``folder``, a new one.
+
+    The tables, ``case.toml`` and ``run.json`` are written first; then the figures and the
+    report.  If those fail, the folder keeps the tables (``run.json`` lists them as
+    ``"pending"``; ``oscillator report`` makes them), a warning says so, and the folder is
+    returned all the same.
+    """
+    import warnings
+
+    from oscillator.io.files import check_name
+
+    if formats not in FORMATS:
+        raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
+    folder = Path(folder)
+    check_name(folder, option="folder")
+    pending = tuple(step for step, wanted in (("figures", figures), ("report", report)) if wanted)
+    path = write_run(result, claim_output(folder, result.case.name), formats=formats,
+                     command=["python", "oscillator.Result.save"], pending=pending)  # fmt: skip
+    if pending:
+        try:
+            finish_run(path, figures=figures, report=report)
+        except Exception as error:  # a later step failed: the tables are safe
+            warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
+                          f"the tables are written; `oscillator report {path}` makes them", stacklevel=2)  # fmt: skip
+    return path
 
 
 def read_events_csv(path: Path) -> pd.DataFrame:
@@ -360,11 +422,11 @@ def finish_run(
     redraws them all for that time window (``run.json``'s ``"figures"`` records which).  Each
     file is written atomically, and ``run.json``'s ``"pending"`` says what is still to be made,
     so an interrupted finish is finished by calling this again.  ``run`` is the folder as
-    :func:`read_run` read it, if the caller has it already.
+    :func:`read_run_folder` read it, if the caller has it already.
     """
-    run = read_run(folder) if run is None else run  # checked before the drawing libraries are loaded
+    run = read_run_folder(folder) if run is None else run  # checked before the drawing libraries are loaded
     from oscillator.analysis.reproduction import compare
-    from oscillator.report.figures import figure_window, missing_figures, write_figures
+    from oscillator.report.figures import figure_title, figure_window, missing_figures, write_figures
     from oscillator.report.transitions import available_figures, report_document, write_report
 
     case, info = run.case, run.run
@@ -372,7 +434,7 @@ def finish_run(
     chosen = figure_window(case.initial.t0, t_final, case.parameters.period, window)
     if (window is not None or (figures and missing_figures(folder / "figures"))) and not run.trajectory.empty:
         start = (case.initial.t0, *case.initial.y)
-        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=case.name,
+        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=figure_title(case),
                       window=chosen)  # fmt: skip
         _update(folder, info, figures={"window": [chosen.start, chosen.stop], "label": chosen.label})
     if figures and "figures" in info.get("pending", []):

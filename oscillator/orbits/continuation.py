@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -50,6 +52,9 @@ from oscillator.orbits.shooting import (
     verdict_of,
 )
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["BIFURCATION_KINDS", "Branch", "ContinuationSettings", "check_settings", "continue_orbit"]
 
@@ -126,7 +131,8 @@ class Branch:
     points : DataFrame
         One row per point, in the order of the branch (including the orbits on either side of each
         located bifurcation): the parameter under its own name, ``x1, v1, x2, v2`` at the section,
-        ``mu1..mu4`` (the multipliers' moduli, largest first), ``stable``, ``signature`` (the
+        ``mu1..mu4`` (the multipliers, complex, largest modulus first: a real one near -1
+        is a period doubling, a complex pair leaving the unit circle a torus), ``stable``, ``signature`` (the
         event kinds over one period as a cycle:
         :func:`~oscillator.orbits.shooting.cyclic_signature`), ``piece`` (the branch's
         continuous pieces, numbered from 0: a new one begins after a jump or a gap) and
@@ -157,6 +163,50 @@ class Branch:
     period: int
     complete: bool = True
     message: str = ""
+    case: Case | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def coordinate(self) -> str:
+        """The coordinate drawn by default: ``x2`` (as Fig. 14), unless it does not change along
+        the branch (m2 parked): then the first of ``x1, v2, v1`` that does."""
+        for name in ("x2", "x1", "v2", "v1"):
+            values = self.points[name].to_numpy(float)
+            if len(values) and np.ptp(values) > 1e-9 * max(1.0, float(np.max(np.abs(values)))):
+                return name
+        return "x2"
+
+    def plot(self, coordinate: str | None = None, *, sweep_points: pd.DataFrame | None = None) -> Figure:
+        """The branch as ``oscillator continue`` draws it (``figures/branch.png``): ``coordinate``
+        at the section (default :attr:`coordinate`) against the parameter, stable solid,
+        unstable dashed, bifurcations marked; over ``sweep_points`` (columns the parameter and
+        ``coordinate``), if given."""
+        from oscillator.orbits.output import branch_figure
+
+        return branch_figure(self, _coordinate(coordinate or self.coordinate), sweep_points)
+
+    def plot_multipliers(self) -> Figure:
+        """The multipliers' moduli against the parameter (``figures/multipliers.png``)."""
+        from oscillator.orbits.output import multipliers_figure
+
+        return multipliers_figure(self)
+
+    def save(self, folder: str | Path, *, coordinate: str | None = None) -> Path:
+        """Write the branch as ``oscillator continue`` does (tables, ``case.toml``, ``run.json``,
+        figures, report) into ``folder``, a new one; :func:`oscillator.read_run` reads it back."""
+        from oscillator.orbits.output import save_branch
+
+        return save_branch(self, folder, coordinate=_coordinate(coordinate or self.coordinate))
+
+    def _repr_html_(self) -> str:
+        from oscillator.report.notebook import branch_html
+
+        return branch_html(self)
+
+
+def _coordinate(name: str) -> str:
+    if name not in STATE:
+        raise InputError(f"coordinate must be one of {', '.join(STATE)}, got {name!r}", field="coordinate")
+    return name
 
 
 class _Continuer:
@@ -348,14 +398,14 @@ def continue_orbit(
     cont = _Continuer(base, param, section_, settings.period, abs(stop - start), settings.tol)
     direction = 1.0 if stop > start else -1.0
 
-    trace = _Trace(cont.first(y_start, start, direction), cont.scale)
+    trace = _Trace(cont.first(y_start, start, direction), cont.scale, param)
     try:
         complete, message = _trace_branch(cont, trace, settings, progress)
     except KeyboardInterrupt:
         last = trace.points[-1].lam
-        partial = trace.branch(param, section_, settings.period, False, f"interrupted at {param} = {last:.10g}")
+        partial = trace.branch(base, section_, settings.period, False, f"interrupted at {param} = {last:.10g}")
         raise Interrupted(partial) from None
-    return trace.branch(param, section_, settings.period, complete, message)
+    return trace.branch(base, section_, settings.period, complete, message)
 
 
 @dataclass(frozen=True)
@@ -467,7 +517,8 @@ def _own_kind(cont: _Continuer, a: _Point, b: _Point) -> _Point | None:
 class _Trace:
     """The branch as it is traced: its points, where each continuous piece begins, its bifurcations."""
 
-    def __init__(self, first: _Point, scale: float) -> None:
+    def __init__(self, first: _Point, scale: float, param: str) -> None:
+        self.param = param
         self.points, self.piece_starts = [first], [0]
         self.rows: list[dict] = []
         self.scale = scale
@@ -495,9 +546,8 @@ class _Trace:
             pieces[start:] += 1
         rows = []
         for p, piece in zip(self.points, pieces, strict=True):
-            moduli = np.abs(p.multipliers)
             rows.append({param: p.lam, **dict(zip(STATE, p.y, strict=True)),
-                         **{f"mu{k + 1}": float(moduli[k]) for k in range(4)}, "stable": p.stable,
+                         **{f"mu{k + 1}": complex(p.multipliers[k]) for k in range(4)}, "stable": p.stable,
                          "signature": p.signature, "piece": int(piece), "iterations": p.iterations})  # fmt: skip
         return pd.DataFrame(rows)
 
@@ -506,10 +556,11 @@ class _Trace:
         frame = pd.DataFrame(self.rows, columns=[param, "kind", *STATE, "jump", "before", "after"])
         return frame.astype({**numbers, "kind": object, "before": object, "after": object})
 
-    def branch(self, param: str, section: float, period: int, complete: bool, message: str) -> Branch:
-        """The :class:`Branch` traced so far."""
+    def branch(self, case: Case, section: float, period: int, complete: bool, message: str) -> Branch:
+        """The :class:`Branch` traced so far (``case``: the case at its start)."""
+        param = self.param
         return Branch(param, self.points_frame(param), self.bifurcations_frame(param), section, period, complete,
-                      message)  # fmt: skip
+                      message, case)  # fmt: skip
 
 
 def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point | None:

@@ -19,6 +19,7 @@ import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -26,19 +27,29 @@ import pandas as pd
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, atomic_path, read_untrusted, replace_file
+from oscillator.model.parameters import UNITS, labelled
 from oscillator.orbits.continuation import Branch
-from oscillator.orbits.shooting import STATE
+from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
 from oscillator.text import printable, shown
 
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
 __all__ = [
     "BranchFolder",
+    "branch_figure",
     "branch_status",
     "draw_branch",
     "draw_multipliers",
     "finish_branch",
+    "multipliers_figure",
+    "orbit_info",
+    "orbit_of_folder",
     "read_branch",
     "read_sweep_points",
+    "save_branch",
+    "save_orbit",
     "write_branch",
 ]
 
@@ -82,28 +93,30 @@ def _label_values(ax, rows: pd.DataFrame, param: str, coordinate: str, span: flo
         ax.annotate(f"{value:.{decimals}f}", (value, y), textcoords="offset points", xytext=offset, fontsize=7)
 
 
-def draw_branch(branch: Branch, path: Path, coordinate: str, sweep_points: pd.DataFrame | None = None) -> None:
-    """``coordinate`` at t0 against the parameter: stable solid, unstable dashed, bifurcations marked."""
-    import matplotlib
+_STATE_UNITS = {"x1": "m", "v1": "m/s", "x2": "m", "v2": "m/s"}
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def branch_figure(branch: Branch, coordinate: str, sweep_points: pd.DataFrame | None = None) -> Figure:
+    """``coordinate`` at the section against the parameter: stable solid, unstable dashed,
+    bifurcations marked, gaps shaded; the sweep's Poincaré points under it, if given."""
+    from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
     param, points = branch.param, branch.points
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=150)
+    fig = Figure(figsize=(7, 4.5), dpi=150, layout="constrained")
+    ax = fig.subplots()
     if sweep_points is not None and len(sweep_points):
         ax.plot(sweep_points[param], sweep_points[coordinate], "o", color="k", ms=2.5, zorder=3,
                 label="sweep (Poincaré points)")  # fmt: skip
     stable = points.stable.to_numpy(bool)
-    labelled = set()
+    labelled_runs = set()
     for piece in _pieces(points):
         for part in _runs(stable, piece):
             is_stable = bool(stable[part.start])
             label = "stable" if is_stable else "unstable"
             ax.plot(points[param].iloc[part], points[coordinate].iloc[part], "-" if is_stable else "--",
-                    color="C0", lw=1.5, label=None if label in labelled else label)  # fmt: skip
-            labelled.add(label)
+                    color="C0", lw=1.5, label=None if label in labelled_runs else label)  # fmt: skip
+            labelled_runs.add(label)
     for k, (lo, hi) in enumerate(_gaps(branch)):
         ax.axvspan(lo, hi, color="0.85", zorder=0, label=None if k else f"no period-{branch.period} orbit")
     for kind, rows in branch.bifurcations.groupby("kind"):
@@ -112,79 +125,91 @@ def draw_branch(branch: Branch, path: Path, coordinate: str, sweep_points: pd.Da
     _label_values(ax, branch.bifurcations, param, coordinate, span=float(np.ptp(points[param])))
     ax.ticklabel_format(useOffset=False)
     ax.xaxis.set_major_locator(MaxNLocator(6))
-    ax.set_xlabel(param)
-    ax.set_ylabel(f"{coordinate} at t0 + kT")
-    ax.set_title(f"period-{branch.period} orbit continued in {param}")
+    ax.set_xlabel(labelled(param))
+    ax.set_ylabel(f"{coordinate} ({_STATE_UNITS[coordinate]}) at t0 + kT")
+    ax.set_title(f"period-{branch.period} orbit continued in {param}", parse_math=False)
     ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    _save(fig, path)
+    return fig
 
 
-def _save(fig, path: Path) -> None:
-    """Save ``fig`` atomically (a temporary name, then rename) and close it."""
-    import matplotlib.pyplot as plt
-
-    try:
-        with atomic_path(path) as temporary:
-            fig.savefig(temporary, format=path.suffix[1:])
-    finally:
-        plt.close(fig)
-
-
-def draw_multipliers(branch: Branch, path: Path) -> None:
+def multipliers_figure(branch: Branch) -> Figure:
     """The multipliers' moduli against the parameter, with the unit circle's radius."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
     param, points = branch.param, branch.points
-    fig, ax = plt.subplots(figsize=(7, 3.5), dpi=150)
+    fig = Figure(figsize=(7, 3.5), dpi=150, layout="constrained")
+    ax = fig.subplots()
     floor = 1e-16  # a multiplier of 0 (a resting mass's constrained velocity) is drawn here
     for k in range(1, 5):
-        moduli = points[f"mu{k}"].clip(lower=floor)
+        moduli = np.abs(points[f"mu{k}"].to_numpy(complex)).clip(min=floor)
         for j, piece in enumerate(_pieces(points)):
-            ax.semilogy(points[param].iloc[piece], moduli.iloc[piece], "-", lw=1.2, color=f"C{k - 1}",
+            ax.semilogy(points[param].iloc[piece], moduli[piece], "-", lw=1.2, color=f"C{k - 1}",
                         label=None if j else f"|mu{k}|")  # fmt: skip
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
     for value in branch.bifurcations[param]:
         ax.axvline(value, color="C3", lw=0.6, ls="--")
     ax.ticklabel_format(axis="x", useOffset=False)
     ax.xaxis.set_major_locator(MaxNLocator(6))
-    ax.set_xlabel(param)
+    ax.set_xlabel(labelled(param))
     ax.set_ylabel("modulus of multiplier")
     ax.set_ylim(floor / 10, None)
     ax.text(0.99, 0.02, "0 is drawn at 1e-16", transform=ax.transAxes, ha="right", fontsize=7, color="0.4")
     ax.legend(fontsize=8, ncol=4, loc="center left")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    _save(fig, path)
+    return fig
+
+
+def _save(fig: Figure, path: Path) -> None:
+    """Save ``fig`` atomically (a temporary name, then rename)."""
+    with atomic_path(path) as temporary:
+        fig.savefig(temporary, format=path.suffix[1:])
+
+
+def draw_branch(branch: Branch, path: Path, coordinate: str, sweep_points: pd.DataFrame | None = None) -> None:
+    """:func:`branch_figure` written to ``path``."""
+    _save(branch_figure(branch, coordinate, sweep_points), path)
+
+
+def draw_multipliers(branch: Branch, path: Path) -> None:
+    """:func:`multipliers_figure` written to ``path``."""
+    _save(multipliers_figure(branch), path)
 
 
 def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
-    """The report: what was continued, the bifurcations, the figures (all text escaped)."""
+    """The report: what was continued and which way, the bifurcations (named as the parameter
+    increases, with the events on its lower and higher side), the fixed parameters and the
+    figures (all text escaped)."""
     param = branch.param
-    lo, hi = branch.points[param].min(), branch.points[param].max()
+    first, last = float(branch.points[param].iloc[0]), float(branch.points[param].iloc[-1])
+    way = "up" if last > first else "down"
+    unit = UNITS.get(param, "")
     blocks: list[mk.Block] = [
         mk.Heading(1, (f"{case.name}: period-{branch.period} orbit continued in {param}",)),
-        mk.Paragraph((f"{len(branch.points)} points from {param} = {lo:.10g} to {hi:.10g}; section at t = "
-                      f"{branch.section:g} s. ",
+        mk.Paragraph((f"{len(branch.points)} points, traced from {param} = {first:.10g} {way} to {last:.10g}"
+                      f"{' ' + unit if unit else ''}; section at t = {branch.section:g} s. ",
                       "Complete." if branch.complete else f"Ended early: {branch.message}.")),
     ]  # fmt: skip
     if case.modified:
         blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
     none = f"(no period-{branch.period} orbit)"
+    increasing = last > first
     rows = tuple(
         (f"{getattr(row, param):.10g}", str(row.kind), f"{row.x1:.6g}", f"{row.v1:.6g}", f"{row.x2:.6g}",
-         f"{row.v2:.6g}", "-" if math.isnan(row.jump) else f"{row.jump:.2e}", str(row.before) or none,
-         str(row.after) or none)
+         f"{row.v2:.6g}", "-" if math.isnan(row.jump) else f"{row.jump:.2e}",
+         *((str(row.before) or none, str(row.after) or none) if increasing else
+           (str(row.after) or none, str(row.before) or none)))
         for row in branch.bifurcations.itertuples(index=False)
     )  # fmt: skip
     blocks.append(mk.Heading(2, ("Bifurcations",)))
     if rows:
-        blocks.append(mk.Table((param, "kind", "x1", "v1", "x2", "v2", "jump", "events before", "events after"), rows))
+        blocks.append(mk.Paragraph((f"Each is named by what happens as {param} increases (sliding_onset: a rest "
+                                    "interval appears; sliding_vanish: it vanishes), whichever way the branch "
+                                    "was traced.",)))  # fmt: skip
+        header = (param, "kind", "x1 (m)", "v1 (m/s)", "x2 (m)", "v2 (m/s)", "jump",
+                  f"events at lower {param}", f"events at higher {param}")  # fmt: skip
+        blocks.append(mk.Table(header, rows))
     else:
         blocks.append(mk.Paragraph(("None in the range.",)))
     for lo, hi in _gaps(branch):
@@ -193,6 +218,9 @@ def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
                                     "(--period).",)))  # fmt: skip
     stable = branch.points.stable
     blocks.append(mk.Paragraph((f"{int(stable.sum())} stable and {int((~stable).sum())} unstable points.",)))
+    fixed = tuple((name, f"{getattr(case.parameters, name):.10g}", UNITS.get(name, "") or "-")
+                  for name in case.parameters.names() if name != param)  # fmt: skip
+    blocks += [mk.Heading(2, ("Fixed parameters",)), mk.Table(("parameter", "value", "unit"), fixed)]
     blocks += [mk.Figure("branch", "the branch"), mk.Figure("multipliers", "the multipliers' moduli")]
     return blocks
 
@@ -202,6 +230,29 @@ def branch_status(branch: Branch) -> str:
     if branch.complete:
         return "complete"
     return "interrupted" if branch.message.startswith("interrupted") else "incomplete"
+
+
+MULTIPLIERS = tuple(f"mu{k}" for k in range(1, 5))
+
+
+def _points_on_disk(points: pd.DataFrame) -> pd.DataFrame:
+    """The points with each complex multiplier ``muK`` as two columns ``muK_re``, ``muK_im``
+    (Parquet has no complex numbers)."""
+    frame = points.copy()
+    for name in MULTIPLIERS:
+        values = frame.pop(name).to_numpy(complex)
+        frame[f"{name}_re"], frame[f"{name}_im"] = values.real, values.imag
+    return frame
+
+
+def _points_from_disk(frame: pd.DataFrame) -> pd.DataFrame:
+    """:func:`_points_on_disk` undone; the multipliers' columns back where they were."""
+    points = frame.copy()
+    for name in MULTIPLIERS:
+        points[name] = points.pop(f"{name}_re").to_numpy(float) + 1j * points.pop(f"{name}_im").to_numpy(float)
+    order = [c for c in frame.columns if not c.endswith(("_re", "_im"))]
+    at = order.index("stable") if "stable" in order else len(order)
+    return points[[*order[:at], *MULTIPLIERS, *order[at:]]]
 
 
 def write_branch(
@@ -222,7 +273,7 @@ def write_branch(
 
     temporary = claim.temporary
     try:
-        branch.points.to_parquet(temporary / "branch.parquet", index=False)
+        _points_on_disk(branch.points).to_parquet(temporary / "branch.parquet", index=False)
         branch.bifurcations.to_parquet(temporary / "bifurcations.parquet", index=False)
         if sweep_points is not None:
             sweep_points.to_parquet(temporary / "sweep_points.parquet", index=False)
@@ -357,7 +408,7 @@ def read_branch(folder: Path) -> BranchFolder:
     folder = Path(folder)
     info = _run_info(folder)
     param = info["param"]
-    moduli = {f"mu{k}": "number" for k in range(1, 5)}
+    moduli = {f"{name}_{part}": "number" for name in MULTIPLIERS for part in ("re", "im")}
     numbers = {param: "number", **dict.fromkeys(STATE, "number")}
     points = _table(folder / "branch.parquet",
                     {**numbers, **moduli, "stable": "flag", "signature": "text", "piece": "number"})  # fmt: skip
@@ -365,13 +416,14 @@ def read_branch(folder: Path) -> BranchFolder:
                   {**numbers, "kind": "text", "jump": "number", "before": "text", "after": "text"})  # fmt: skip
     if points.empty:
         raise _damaged(folder / "branch.parquet", "it has no points")
+    points = _points_from_disk(points)
     sweep = None
     if (folder / "sweep_points.parquet").exists():
         sweep = _table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})
     case = load_case(folder / "case.toml")
     case = dataclasses.replace(case, name=info.get("case") or folder.name, modified=tuple(info.get("modified", ())))
     branch = Branch(param, points, rows, float(info["section"]), info["period"], info["complete"],
-                    info.get("failure") or "")  # fmt: skip
+                    info.get("failure") or "", case)  # fmt: skip
     return BranchFolder(folder, branch, case, info, sweep)
 
 
@@ -396,6 +448,114 @@ def finish_branch(folder: Path) -> BranchFolder:
     info["pending"] = []
     replace_file(folder / "run.json", json_text(info))
     return found
+
+
+def save_branch(branch: Branch, folder: Path | str, *, coordinate: str) -> Path:
+    """Write ``branch`` as a branch folder into ``folder`` (new), then its figures and report; if
+    those fail, the tables stay, a warning says so, and the folder is returned all the same."""
+    import warnings
+
+    from oscillator.io.files import check_name
+    from oscillator.io.runs import claim_output
+
+    if branch.case is None:
+        raise InputError("this branch carries no case to save with it; build it with continue_orbit",
+                         field="case")  # fmt: skip
+    folder = Path(folder)
+    check_name(folder, option="folder")
+    claim = claim_output(folder, f"{branch.case.name}-continue")
+    path = write_branch(branch, branch.case, claim, coordinate=coordinate, sweep_points=None,
+                        command=["python", "oscillator.Branch.save"])  # fmt: skip
+    try:
+        finish_branch(path)
+    except Exception as error:  # a later step failed: the branch is safe
+        warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
+                      f"the tables are written; `oscillator report {path}` makes them", stacklevel=3)  # fmt: skip
+    return path
+
+
+def orbit_info(orbit: Orbit) -> dict:
+    """What ``run.json`` holds of an orbit under ``"orbit"`` (complex numbers as ``[re, im]``)."""
+    return {
+        "section": orbit.section,
+        "period": orbit.period,
+        "state": [float(v) for v in orbit.state],
+        "monodromy": np.asarray(orbit.monodromy, float).tolist(),
+        "multipliers": [[float(mu.real), float(mu.imag)] for mu in orbit.multipliers],
+        "stable": bool(orbit.stable),
+        "verdict": orbit.verdict,
+        "residual": orbit.residual,
+        "iterations": orbit.iterations,
+        "history": list(orbit.history),
+        "resting": list(orbit.resting),
+        "discontinuous": list(orbit.discontinuous),
+        "note": orbit.note,
+    }
+
+
+def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
+    """Write ``orbit`` as the run folder of one return (:meth:`Orbit.one_period`), ``run.json``
+    holding ``"kind": "orbit"`` and :func:`orbit_info`; then its figures and report."""
+    import warnings
+
+    from oscillator.hybrid.simulate import simulate
+    from oscillator.io.files import check_name
+    from oscillator.io.runs import claim_output, finish_run, write_run
+
+    folder = Path(folder)
+    check_name(folder, option="folder")
+    result = simulate(orbit.one_period())
+    claim = claim_output(folder, f"{orbit.case.name}-orbit")
+    path = write_run(result, claim, command=["python", "oscillator.Orbit.save"],
+                     extra={"kind": "orbit", "orbit": orbit_info(orbit)})  # fmt: skip
+    try:
+        finish_run(path)
+    except Exception as error:  # a later step failed: the orbit is safe
+        warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
+                      f"the tables are written; `oscillator report {path}` makes them", stacklevel=3)  # fmt: skip
+    return path
+
+
+def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict) -> Orbit:
+    """The :class:`Orbit` a folder of :func:`save_orbit` holds (``info``: its ``run.json``),
+    every field checked."""
+    data = info.get("orbit")
+    where = path / "run.json"
+    if not isinstance(data, dict):
+        raise _damaged(where, "orbit is not a JSON object")
+
+    def numbers(key: str, shape: tuple[int, ...]) -> np.ndarray:
+        try:
+            values = np.array(data.get(key), dtype=float)
+        except (TypeError, ValueError):
+            raise _damaged(where, f"orbit.{key} is not numbers") from None
+        if values.shape != shape or not np.all(np.isfinite(values)):
+            raise _damaged(where, f"orbit.{key} must be {' x '.join(map(str, shape))} finite numbers")
+        return values
+
+    period = data.get("period")
+    if isinstance(period, bool) or not isinstance(period, int) or period < 1:
+        raise _damaged(where, "orbit.period is not a whole number >= 1")
+    texts = [data.get("note", ""), *data.get("discontinuous", []), *map(str, data.get("resting", []))]
+    if not all(isinstance(text, str) for text in texts) or not isinstance(data.get("stable"), bool):
+        raise _damaged(where, "orbit.note, orbit.discontinuous or orbit.stable is of the wrong kind")
+    pairs = numbers("multipliers", (4, 2))
+    return Orbit(
+        case=case,
+        section=float(numbers("section", ())),
+        state=numbers("state", (4,)),
+        period=period,
+        monodromy=numbers("monodromy", (4, 4)),
+        multipliers=pairs[:, 0] + 1j * pairs[:, 1],
+        stable=data["stable"],
+        residual=float(numbers("residual", ())),
+        iterations=int(numbers("iterations", ())),
+        events=events,
+        history=tuple(float(v) for v in numbers("history", (len(data.get("history") or []),))),
+        resting=tuple(int(m) for m in data.get("resting", []) if m in (1, 2)),
+        discontinuous=tuple(data.get("discontinuous", [])),
+        note=data.get("note", ""),
+    )
 
 
 def _drawn(path: Path) -> bool:

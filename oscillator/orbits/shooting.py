@@ -17,6 +17,8 @@ import dataclasses
 import itertools
 import numbers
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -31,11 +33,14 @@ from oscillator.hybrid.supervisor import Supervisor
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
-from oscillator.model.parameters import real_argument
+from oscillator.model.parameters import InitialState, real_argument
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.saltation import rest_projection, saltation_matrix
 from oscillator.orbits.variational import ModeFlow
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["Orbit", "PeriodMap", "cyclic_signature", "event_signature", "find_orbit", "multipliers_of", "period_map"]
 
@@ -288,6 +293,32 @@ class Orbit:
     def signature(self) -> str:
         """The kinds of the events over one period, in order (:func:`event_signature`)."""
         return event_signature(self.events)
+
+    def one_period(self) -> Case:
+        """The case of one return of the orbit: from ``state`` at ``section`` over ``period``
+        forcing periods (``simulate(orbit.one_period())`` gives its trajectory)."""
+        x1, v1, x2, v2 = (float(v) for v in self.state)
+        initial = InitialState(t0=self.section, x1=x1, v1=v1, x2=x2, v2=v2)
+        t_end = self.section + self.period * self.case.parameters.period
+        return dataclasses.replace(self.case, initial=initial, t_end=t_end, expected=(), keep_events_from=None)
+
+    def plot(self, panel: str = "c") -> Figure:
+        """One panel of the article's figures over one return of the orbit (by default ``"c"``,
+        the phase portraits: a closed curve); see :meth:`oscillator.Result.plot`."""
+        return simulate(self.one_period()).plot(panel)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write the orbit as a run folder of one return (tables, figures, report) whose
+        ``run.json`` holds the orbit (``"kind": "orbit"``: state, multipliers, monodromy,
+        verdict); :func:`oscillator.read_run` reads it back as an :class:`Orbit`."""
+        from oscillator.orbits.output import save_orbit
+
+        return save_orbit(self, folder)
+
+    def _repr_html_(self) -> str:
+        from oscillator.report.notebook import orbit_html
+
+        return orbit_html(self)
 
     @property
     def verdict(self) -> str:

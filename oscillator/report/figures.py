@@ -18,24 +18,29 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from oscillator.analysis.intervals import spans
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
 from oscillator.model.parameters import Parameters, labelled
 from oscillator.model.phase_space import contacts_of_state, velocity_sign
 
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.io.cases import Case
+
 __all__ = [
     "FIGURES",
     "KIND_STYLE",
     "Window",
     "draw_figures",
+    "draw_panel",
     "draw_sweep_figures",
+    "figure_title",
     "figure_window",
     "force_histories",
     "missing_figures",
@@ -51,17 +56,25 @@ FIGURES = {
     "fig-d-forces": "(d) G-function (force) histories",
 }
 _MASS_COLOR = {1: "tab:blue", 2: "black"}
-#: Marker and face colour of each kind of event, in every figure; the start is a green star.
+#: Marker, face colour and size (points², in the time panels) of each kind of event, in every
+#: figure; the start is a green star.  Kinds whose events can fall on one point are drawn
+#: largest first, each on top of the larger ones, so that every marker shows: a rest begins and
+#: ends at one displacement (a square with a diamond inside), a contact's onset and release lie
+#: on its stop, and an event at the start sits on the star (drawn under every event).
 KIND_STYLE = {
-    "passable": ("o", "gold"),
-    "sliding_onset": ("s", "white"),
-    "sliding_vanish": ("D", "white"),
-    "grazing": ("v", "tab:red"),
-    "right_contact_onset": (">", "tab:red"),
-    "right_contact_release": ("<", "mistyrose"),
-    "left_contact_onset": ("P", "tab:pink"),
-    "left_contact_release": ("X", "lavenderblush"),
+    "passable": ("o", "gold", 46),
+    "sliding_onset": ("s", "white", 110),
+    "sliding_vanish": ("D", "deepskyblue", 34),
+    "grazing": ("v", "tab:red", 46),
+    "right_contact_onset": (">", "tab:red", 80),
+    "right_contact_release": ("<", "mistyrose", 30),
+    "left_contact_onset": ("P", "tab:pink", 80),
+    "left_contact_release": ("X", "lavenderblush", 30),
 }
+#: The start's star: larger than every event's marker, and under them.
+_START_SIZE = 240
+#: Each kind's layer: the larger its marker, the lower it lies.
+_LAYER = {kind: 6 + rank for rank, kind in enumerate(sorted(KIND_STYLE, key=lambda k: -KIND_STYLE[k][2]))}
 #: A run longer than this many forcing periods is drawn over its last :data:`SHOWN_PERIODS`.
 LONG_RUN_PERIODS = 20
 SHOWN_PERIODS = 10
@@ -147,15 +160,57 @@ def force_histories(trajectory: pd.DataFrame, p: Parameters, *, points: int = 20
     return pd.DataFrame(rows)
 
 
-def _rest_spans(trajectory: pd.DataFrame, mass: int) -> list[tuple[float, float]]:
-    resting = (trajectory[f"domain{mass}"] == 0).tolist()
-    t = trajectory.t.tolist()
-    return [(a, b) for rests, a, b in spans(t, resting, t[-1] if t else 0.0) if rests]
+def rest_spans(trajectory: pd.DataFrame, events: pd.DataFrame, mass: int) -> list[tuple[float, float]]:
+    """The intervals in which ``mass`` rests, from its events (a rest begins where an event
+    enters domain 0 and ends where one leaves it), not from the trajectory's rows: a coarse
+    sampling grid misses short rests.  Whether the mass rests at the first row is read there."""
+    if trajectory.empty:
+        return []
+    t = trajectory.t.to_numpy(float)
+    begin = float(t[0]) if int(trajectory[f"domain{mass}"].iloc[0]) == 0 else None
+    found = []
+    for row in events[events.mass == mass].sort_values("t", kind="stable").itertuples(index=False):
+        if row.to_domain == 0 and row.from_domain != 0:
+            begin = float(row.t) if begin is None else begin
+        elif row.from_domain == 0 and row.to_domain != 0 and begin is not None:
+            found.append((begin, float(row.t)))
+            begin = None
+    if begin is not None:
+        found.append((begin, float(t[-1])))
+    return found
 
 
-def _marker(kind: str) -> dict:
-    marker, face = KIND_STYLE[kind]
-    return {"marker": marker, "facecolor": face, "edgecolor": "black"}
+def _far_boundaries(ax, motion: np.ndarray, boundaries: list[tuple[Any, np.ndarray]], axis: str) -> None:
+    """Scale ``axis`` to the motion and to the boundaries near it.  A boundary (its line, its
+    values) farther from the motion than the motion's own extent (a stop switched off with
+    ``d = 1000``) is left out of the scale, and its legend entry says where it is."""
+    values = np.asarray(motion, float)
+    values = values[np.isfinite(values)]
+    if not len(values):
+        return
+    low, high = float(values.min()), float(values.max())
+    reach = high - low if high > low else max(1.0, abs(high))
+    shown_low, shown_high = low, high
+    for line, boundary in boundaries:
+        b = np.asarray(boundary, float)
+        b = b[np.isfinite(b)]
+        if not len(b):
+            continue
+        if b.min() > high + reach or b.max() < low - reach:
+            above = bool(b.min() > high)
+            arrow = ("↑" if above else "↓") if axis == "y" else ("→" if above else "←")
+            value = float(b.min() if above else b.max())
+            line.set_label(f"{line.get_label()}: off the scale {arrow} at {value:.6g} m")
+        else:
+            shown_low, shown_high = min(shown_low, float(b.min())), max(shown_high, float(b.max()))
+    margin = 0.06 * (shown_high - shown_low if shown_high > shown_low else reach)
+    (ax.set_ylim if axis == "y" else ax.set_xlim)(shown_low - margin, shown_high + margin)
+
+
+def _marker(kind: str, scale: float = 1.0) -> dict:
+    """The scatter options of a kind's markers (sizes times ``scale``), in the kind's layer."""
+    marker, face, size = KIND_STYLE[kind]
+    return {"marker": marker, "facecolor": face, "edgecolor": "black", "s": size * scale, "zorder": _LAYER[kind]}
 
 
 def _mark_events(ax, events: pd.DataFrame, mass: int, column: str, label_kinds: set) -> None:
@@ -163,11 +218,11 @@ def _mark_events(ax, events: pd.DataFrame, mass: int, column: str, label_kinds: 
         label = kind.replace("_", " ") if kind not in label_kinds else None
         label_kinds.add(kind)
         x, y = (rows[f"x{mass}"], rows[f"v{mass}"]) if column == "phase" else (rows.t, rows[column])
-        ax.scatter(x, y, s=46, zorder=5, label=label, **_marker(kind))
+        ax.scatter(x, y, label=label, **_marker(kind))
 
 
 def _start(ax, x, y, label: str | None = None) -> None:
-    ax.scatter([x], [y], s=130, marker="*", color="limegreen", edgecolor="black", zorder=6, label=label)
+    ax.scatter([x], [y], s=_START_SIZE, marker="*", color="limegreen", edgecolor="black", zorder=5, label=label)
 
 
 def _outside_legend(ax, **options) -> None:
@@ -198,9 +253,12 @@ def _displacements(trajectory, events, p, t0, y0, title, window):
     t = trajectory.t
     ax.plot(t, trajectory.x1, color=_MASS_COLOR[1], label="$x_1$ (m1)")
     ax.plot(t, trajectory.x2, color=_MASS_COLOR[2], label="$x_2$ (m2)")
-    ax.axhline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")
-    ax.plot(t, trajectory.x2 - p.d, color="tab:pink", ls="--", lw=1,
-            label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)")  # fmt: skip
+    right = ax.axhline(p.d1, color="tab:red", ls="--", lw=1,
+                       label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")  # fmt: skip
+    (left,) = ax.plot(t, trajectory.x2 - p.d, color="tab:pink", ls="--", lw=1,
+                      label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)")  # fmt: skip
+    _far_boundaries(ax, np.concatenate([trajectory.x1, trajectory.x2]),
+                    [(right, np.array([p.d1])), (left, trajectory.x2 - p.d)], "y")  # fmt: skip
     _finish_time_panel(ax, events, t0, y0, "x", "displacement (m)", _titled(title, "(a) displacements", window),
                        window)  # fmt: skip
     return fig
@@ -212,7 +270,7 @@ def _velocities(trajectory, events, p, t0, y0, title, window):
     t = trajectory.t
     for mass in (1, 2):
         ax.plot(t, trajectory[f"v{mass}"], color=_MASS_COLOR[mass], label=f"$v_{mass}$ (m{mass})")
-        for i, (a, b) in enumerate(_rest_spans(trajectory, mass)):
+        for i, (a, b) in enumerate(rest_spans(trajectory, events, mass)):
             ax.axvspan(
                 a, b, color=_MASS_COLOR[mass], alpha=0.12, label=f"m{mass} at rest (sliding)" if i == 0 else None
             )
@@ -233,14 +291,28 @@ def _phase(trajectory, events, p, t0, y0, title, window):
     axes = fig.subplots(1, 2)
     for ax, mass in zip(axes, (1, 2), strict=True):
         x, v = trajectory[f"x{mass}"], trajectory[f"v{mass}"]
+        still = len(x) > 0 and np.ptp(x.to_numpy(float)) == 0 and np.ptp(v.to_numpy(float)) == 0
         ax.plot(x, v, color=_MASS_COLOR[mass], lw=1.2, label=f"m{mass}")
+        if still:  # a curve of one point draws nothing: mark the point and say so
+            ax.plot(x.iloc[:1], v.iloc[:1], "o", color=_MASS_COLOR[mass], ms=5, zorder=4)
+            ax.text(0.5, 0.6, f"m{mass} does not move in this window: x{mass} = {x.iloc[0]:.6g} m, "
+                    f"v{mass} = {v.iloc[0]:.3g} m/s", transform=ax.transAxes, ha="center", fontsize=8,
+                    parse_math=False)  # fmt: skip
         ax.axhline(0.0, color="black", ls="--", lw=1, label="velocity boundary $v = 0$")
+        motion = x.to_numpy(float)
+        if still:
+            motion = np.array([motion[0] - 1.0, motion[0] + 1.0])
+            ax.set_ylim(-1.0, 1.0)
         if mass == 1:
-            ax.axvline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop)")
+            stop = ax.axvline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop)")
+            _far_boundaries(ax, motion, [(stop, np.array([p.d1]))], "x")
+        else:
+            _far_boundaries(ax, motion, [], "x")
         if window.start <= t0 <= window.stop:
             _start(ax, y0[2 * mass - 2], y0[2 * mass - 1], label="start")
         _mark_events(ax, events, mass, "phase", set())
-        _with_velocity_boundary(ax)  # the labels below sit on their own side of it
+        if not still:
+            _with_velocity_boundary(ax)  # the labels below sit on their own side of it
         names = ("Ω1(1): v1 > 0", "Ω2(1): v1 < 0") if mass == 1 else ("Ω2(2): v2 > 0", "Ω1(2): v2 < 0")
         ax.text(0.02, 0.97, names[0], transform=ax.transAxes, fontsize=8, va="top")
         ax.text(0.02, 0.03, names[1], transform=ax.transAxes, fontsize=8, va="bottom")
@@ -267,7 +339,7 @@ def _forces(trajectory, events, p, t0, y0, title, window):
         ax.plot(t, histories[f"F{mass}_barrier_minus"], color="tab:green", ls=":", lw=1.5,
                 label=f"flow barrier $F_{mass}^{{(0>0_{minus})}}$")  # fmt: skip
         ax.axhline(0.0, color="grey", lw=0.8)
-        for a, b in _rest_spans(trajectory, mass):
+        for a, b in rest_spans(trajectory, events, mass):
             ax.axvspan(a, b, color=_MASS_COLOR[mass], alpha=0.1)
         times = events.t[events.mass == mass].to_numpy()
         ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), color="tab:red", lw=0.6, alpha=0.6,
@@ -330,6 +402,45 @@ def _clipped(trajectory: pd.DataFrame, events: pd.DataFrame, window: Window) -> 
     return clipped.reset_index(drop=True), events[(events.t >= window.start) & (events.t <= window.stop)]
 
 
+#: What :func:`draw_panel` accepts for each panel.
+PANEL_NAMES = {
+    "a": "fig-a-displacement", "displacement": "fig-a-displacement",
+    "b": "fig-b-velocity", "velocity": "fig-b-velocity",
+    "c": "fig-c-phase", "phase": "fig-c-phase",
+    "d": "fig-d-forces", "forces": "fig-d-forces",
+}  # fmt: skip
+
+
+def figure_title(case: Case) -> str:
+    """The case's name, and what overrides changed (``instance-1 (Omega 1.6 → 1.7)``; more than
+    three changes are named, not valued)."""
+    if not case.modified:
+        return case.name
+    if len(case.modified) <= 3:
+        return f"{case.name} ({', '.join(case.modified)})"
+    names = ", ".join(change.split(" ")[0] for change in case.modified)
+    return f"{case.name} ({len(case.modified)} values changed: {names})"
+
+
+def draw_panel(
+    trajectory: pd.DataFrame, events: pd.DataFrame, case: Case, panel: str = "a", *,
+    window: tuple[float, float] | None = None, t_final: float | None = None,
+) -> Figure:  # fmt: skip
+    """One panel (``"a"``-``"d"`` or its name, :data:`PANEL_NAMES`) of a run of ``case`` that
+    ended at ``t_final`` (by default, the trajectory's last time)."""
+    name = PANEL_NAMES.get(str(panel).lower()) if isinstance(panel, str) else None
+    if name is None:
+        raise InputError(f"panel must be one of {', '.join(PANEL_NAMES)}, got {panel!r}", field="panel")
+    if trajectory.empty:
+        raise InputError("this run kept no trajectory to draw; simulate it with record_trajectory=True",
+                         field="trajectory")  # fmt: skip
+    t0 = case.initial.t0
+    end = float(trajectory.t.iloc[-1]) if t_final is None else t_final
+    chosen = figure_window(t0, end, case.parameters.period, window)
+    clipped, shown_events = _clipped(trajectory, events, chosen)
+    return _PANELS[name](clipped, shown_events, case.parameters, t0, case.initial.y, figure_title(case), chosen)
+
+
 def draw_figures(
     trajectory: pd.DataFrame,
     events: pd.DataFrame,
@@ -386,9 +497,8 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
         for i, (a, b) in enumerate(spans):
             ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
         for kind, rows in switches.groupby("kind"):
-            color = _SWEEP_COLORS.get(kind, "grey")
-            ax.scatter(rows[param], rows[column], s=8, marker=KIND_STYLE[kind][0], color=color,
-                       label=kind.replace("_", " "))  # fmt: skip
+            style = _marker(kind, scale=0.3) | {"facecolor": _SWEEP_COLORS.get(kind, "grey"), "linewidths": 0.4}
+            ax.scatter(rows[param], rows[column], label=kind.replace("_", " "), **style)
         ax.set(ylabel=label)
         _outside_legend(ax, markerscale=2)
     axes[-1].set(xlabel=labelled(param))

@@ -31,6 +31,7 @@ __all__ = [
     "Paragraph",
     "Span",
     "Table",
+    "html_fragment",
     "to_html",
     "to_markdown",
 ]
@@ -215,8 +216,8 @@ def _figure_data(folder: Path, name: str) -> str | None:
     return base64.b64encode(data).decode("ascii") if data.startswith(b"\x89PNG\r\n\x1a\n") else None
 
 
-def to_html(blocks: Iterable[Block], *, folder: Path, title: str) -> str:
-    """One self-contained HTML page; the run folder's figures embedded as data URIs."""
+def html_fragment(blocks: Iterable[Block], *, folder: Path | None = None) -> str:
+    """The blocks as HTML elements (no page around them); figures from ``folder``, if given."""
     body: list[str] = []
     for block in blocks:
         if isinstance(block, Heading):
@@ -231,14 +232,20 @@ def to_html(blocks: Iterable[Block], *, folder: Path, title: str) -> str:
             rows = "".join("<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in row) + "</tr>" for row in block.rows)
             body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>")
         elif isinstance(block, Figure):
-            data = _figure_data(folder, block.name)
+            data = None if folder is None else _figure_data(folder, block.name)
             if data is None:
                 body.append(f"<p><em>(figure {_h(block.name)} missing)</em></p>")
             else:
                 body.append(f'<figure><img src="data:image/png;base64,{data}" alt="{_h(block.caption)}">'
                             f"<figcaption>{_h(block.caption)}</figcaption></figure>")  # fmt: skip
+    return "\n".join(body)
+
+
+def to_html(blocks: Iterable[Block], *, folder: Path, title: str) -> str:
+    """One self-contained HTML page; the run folder's figures embedded as data URIs."""
+    body = html_fragment(blocks, folder=folder)
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f'<meta http-equiv="Content-Security-Policy" content="{_POLICY}">'
-        f"<title>{_cell(title)}</title><style>{_STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+        f"<title>{_cell(title)}</title><style>{_STYLE}</style></head><body>\n" + body + "\n</body></html>\n"
     )
