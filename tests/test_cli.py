@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import textwrap
 
 import numpy as np
@@ -390,18 +391,14 @@ def test_figures_of_a_window_and_refused_windows(tmp_path):
                    "no use with --no-plots", folder=tmp_path / "y")  # fmt: skip
 
 
-def test_the_event_table_fits_a_narrow_terminal_without_cutting_a_time(tmp_path):
-    import re
-    import subprocess
-    import sys
-    from pathlib import Path
+def test_the_event_table_fits_a_narrow_terminal_without_cutting_a_time(tmp_path, monkeypatch):
+    from oscillator.cli import console
 
-    command = str(Path(sys.executable).with_name("oscillator"))
     expected = [f"{t:.6f}" for t in simulate("instance-3").events.t]
     for width in (120, 80, 60, 40):
-        arguments = [command, "run", "instance-3", "--no-plots", "--no-report", "--out", tmp_path / str(width)]
-        done = subprocess.run(arguments, capture_output=True, text=True, env={**os.environ, "COLUMNS": str(width)})
-        assert done.returncode == 0, done.stderr
+        monkeypatch.setattr(console.out, "width", width)  # as COLUMNS sets it for the command
+        done = invoke("run", "instance-3", "--no-plots", "--no-report", "--out", tmp_path / str(width))
+        assert done.exit_code == 0, done.stderr
         lines = done.stdout.splitlines()
         table = lines[1 : lines.index(next(line for line in lines if line.startswith("energy audit")))]
         assert max(len(line) for line in table) <= width, (width, table)
@@ -446,3 +443,37 @@ def test_a_sweep_summary_names_grid_values_and_how_to_locate_the_ends(tmp_path):
             "--between 1.595 1.6 --what sliding") in result.stdout  # fmt: skip
     assert "where it ends (between two grid values): oscillator locate bifurcation-omega" in result.stdout
     assert "--between 1.605 1.61 --what sliding" in result.stdout
+
+
+def test_show_prints_expressions_as_written_with_units():
+    result = invoke("show", "instance-1")
+    assert result.exit_code == 0
+    lines = result.stdout.splitlines()
+    assert any("P1" in line and "pi/8 = 0.3926990817" in line and line.rstrip(" │").endswith("N") for line in lines)
+    assert (
+        any("C2" in line and "N s^3/m^3" in line for line in lines) and "the run ends at t_end = 1.9 s" in result.stdout
+    )
+
+
+def test_check_fits_80_columns_without_wrapping_the_numbers(monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    result = invoke("check", "instance-3")
+    assert result.exit_code == 0
+    rows = [line for line in result.stdout.splitlines() if "✓" in line]
+    assert len(rows) == 6 and all(len(line) <= 80 for line in result.stdout.splitlines())
+    assert all(
+        re.search(r"\d\.\d{4}\s+\d\.\d{4}\s+\d\.\d{6}\s+[-+]\d\.\de-\d\d\s+[-+]\d\.\de-\d\d\s+✓", row) for row in rows
+    )
+
+
+def test_a_both_ways_sweep_says_where_the_two_ways_differ(tmp_path):
+    result = invoke("sweep", "bifurcation-q2", "--from", "71.15", "--to", "71.18", "--steps", "7", "--transient", "20",
+                    "--record", "4", "--both-ways", "--out", tmp_path / "both")  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    assert "Q2 from 71.15 to 71.18 and back (7 values" in result.stdout
+    assert "going up: m2 slides at the grid values Q2 = 71.15 to 71.17" in result.stdout
+    assert "going down: m2 slides at the grid values Q2 = 71.15 to 71.155" in result.stdout
+    assert "hysteresis: at Q2 = 71.16, 71.165, 71.17 the two ways end on different motions" in result.stdout
+    assert {p.name for p in (tmp_path / "both" / "figures").iterdir()} >= {"fig-14-poincare.png"}
+    refused = invoke("sweep", "bifurcation-q2", "--both-ways", "--workers", "2", "--out", tmp_path / "no")
+    assert_refused(refused, "--workers", "one after another", folder=tmp_path / "no")

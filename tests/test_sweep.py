@@ -125,3 +125,48 @@ def test_locate_refuses_a_bracket_without_a_change(case):
     settings = dataclasses.replace(case.sweep, transient=3, record=2)
     with pytest.raises(OscillatorError, match="is the same at"):
         locate(case, settings, "sliding", (1.3, 1.31))
+
+
+BOTH_WAYS = dict(param="Q2", start=71.15, stop=71.18, steps=7, transient=20, record=4, both_ways=True)
+
+
+def test_a_both_ways_sweep_shows_the_hysteresis_of_the_sliding_bifurcation(tmp_path):
+    """At Omega = 1.6 the orbit in which m2 rests lives up to Q2 = 71.17025 and the orbit without
+    rest down to 71.1577416 (located by continuation): between them both are stable.  Going up
+    from Instance 1's start, each value from the last one's end, m2 keeps resting to 71.17;
+    coming back down it keeps sliding through, to rest again only below 71.1577."""
+    case = load_case("bifurcation-q2")
+    settings = SweepSettings(**BOTH_WAYS)
+    assert [d for d, _ in settings.points] == ["up"] * 7 + ["down"] * 7
+    run_sweep(case, settings, tmp_path / "both", workers=1)
+    summary = read_sweep(tmp_path / "both")["summary"]
+    assert sliding_ranges(summary, "Q2", "up") == [(71.15, 71.17)]
+    assert sliding_ranges(summary, "Q2", "down") == [(71.15, 71.155)]
+    # each value started where the one before it ended: the state at the turn is handed on
+    turn = summary.set_index("index").loc[[6, 7]]
+    assert turn.Q2.tolist() == [71.18, 71.18] and np.allclose(
+        turn[["end_x1", "end_v1", "end_x2", "end_v2"]].diff().iloc[1], 0, atol=1e-6
+    )
+
+
+def test_a_both_ways_sweep_resumes_from_the_state_it_stopped_in(tmp_path):
+    case = load_case("bifurcation-q2")
+    settings = SweepSettings(**BOTH_WAYS)
+    run_sweep(case, settings, tmp_path / "whole", workers=1)
+
+    def stop_after_nine(done, total):
+        if done == 9:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(case, settings, tmp_path / "resumed", workers=1, progress=stop_after_nine)
+    run_sweep(case, settings, tmp_path / "resumed", workers=1)
+    whole, resumed = read_sweep(tmp_path / "whole"), read_sweep(tmp_path / "resumed")
+    for name in TABLES:
+        columns = [c for c in whole[name].columns if c != "wall_time"]
+        pd.testing.assert_frame_equal(whole[name][columns], resumed[name][columns])
+
+
+def test_both_ways_must_be_a_flag():
+    with pytest.raises(OscillatorError, match=r"sweep\.both_ways must be true or false"):
+        SweepSettings(**{**BOTH_WAYS, "both_ways": "yes"})

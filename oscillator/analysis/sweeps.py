@@ -86,6 +86,12 @@ class PointSummary:
     crossings_per_period: float = math.nan
     grazings_per_period: float = math.nan
     wall_time: float = math.nan  #: seconds spent on the value
+    direction: str = "up"  #: ``up`` or ``down``: the way the sweep went when it ran the value
+    #: The state the value's run ended in (NaN if it failed): where a both-ways sweep's next value starts.
+    end_x1: float = math.nan
+    end_v1: float = math.nan
+    end_x2: float = math.nan
+    end_v2: float = math.nan
 
     def row(self, param: str, value: float) -> dict[str, Any]:
         return {param: value, **dataclasses.asdict(self)}
@@ -150,11 +156,15 @@ def _rest_time(
     return sum(b - a for a, b in intervals), intervals
 
 
-def _point_case(case: Case, settings: SweepSettings, value: float) -> tuple[Case, np.ndarray]:
-    """The case of one swept value, and its Poincaré times: one at the start of each recorded
-    period (the run ends with the last period)."""
+def _point_case(
+    case: Case, settings: SweepSettings, value: float, from_state: tuple[float, ...] | None = None
+) -> tuple[Case, np.ndarray]:
+    """The case of one swept value (from ``from_state``, ``(x1, v1, x2, v2)`` at ``t0``, if given),
+    and its Poincaré times: one at the start of each recorded period (the run ends with the
+    last period)."""
     param = settings.param
-    point = resolve_case(case, **{param: value})
+    begin = {} if from_state is None else dict(zip(("x1", "v1", "x2", "v2"), from_state, strict=True))
+    point = resolve_case(case, **{param: value}, **begin)
     period, t0 = point.parameters.period, point.initial.t0
     marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
     if not (np.isfinite(marks).all() and np.all(np.diff(marks) > 0) and marks[0] >= t0 and marks[-1] > t0):
@@ -163,23 +173,44 @@ def _point_case(case: Case, settings: SweepSettings, value: float) -> tuple[Case
     return point, marks
 
 
-def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> PointTables:
+def _periods_with_rest(intervals: list[tuple[float, float]], start: float, period: float, record: int) -> int:
+    """How many of the ``record`` periods from ``start`` hold a rest (a rest spanning several
+    periods counts in each of them)."""
+    periods: set[int] = set()
+    for a, b in intervals:
+        first = min(int((a - start) // period), record - 1)
+        last = min(math.ceil((b - start) / period), record)
+        periods.update(range(first, max(last, first + 1)))
+    return len(periods)
+
+
+def run_point(
+    case: Case,
+    settings: SweepSettings,
+    index: int,
+    value: float,
+    *,
+    from_state: tuple[float, ...] | None = None,
+    direction: str = "up",
+) -> PointTables:
     """Simulate one parameter value and tabulate what the sweep keeps of it.
 
-    A value the model refuses (e.g. ``Omega <= 0``) or a solver failure gives a summary row
-    with ``status = "failed"`` and the message, and no other rows.
+    The run starts from the case's start, or from ``from_state`` (``x1, v1, x2, v2`` at the case's
+    ``t0``: a both-ways sweep's previous end).  A value the model refuses (e.g. ``Omega <= 0``)
+    or a solver failure gives a summary row with ``status = "failed"`` and the message, and no
+    other rows.
     """
     param, mass = settings.param, settings.mass
     columns = _columns(param)
     started = time.perf_counter()
     try:
-        point, marks = _point_case(case, settings, value)
+        point, marks = _point_case(case, settings, value, from_state)
         result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
     except OscillatorError as error:
-        failed = PointSummary(index, "failed", str(error), wall_time=time.perf_counter() - started)
-        summary = failed.row(param, value)
-        empty_switches, empty_poincare = _frame([], columns["switches"]), _frame([], columns["poincare"])
-        return PointTables(index, value, empty_switches, empty_poincare, _frame(summary, columns["summary"]))
+        failed = PointSummary(index, "failed", str(error), wall_time=time.perf_counter() - started,
+                              direction=direction)  # fmt: skip
+        return PointTables(index, value, _frame([], columns["switches"]), _frame([], columns["poincare"]),
+                           _frame(failed.row(param, value), columns["summary"]))  # fmt: skip
 
     start, stop, period = float(marks[0]), float(marks[-1]), point.parameters.period
     events = result.events
@@ -207,25 +238,25 @@ def run_point(case: Case, settings: SweepSettings, index: int, value: float) -> 
     n = detect_period(points, settings.period_tolerance, settings.max_period)
     domain_at_start = int(trajectory[f"domain{mass}"].iloc[0])
     rest, intervals = _rest_time(events, mass, domain_at_start, start, stop)
-    periods_with_rest: set[int] = set()
-    for a, b in intervals:  # a rest spanning several periods counts in each of them
-        first = min(int((a - start) // period), settings.record - 1)
-        last = min(math.ceil((b - start) / period), settings.record)
-        periods_with_rest.update(range(first, max(last, first + 1)))
     crossings = window[window.kind.isin(["passable", "sliding_onset"])]
     grazings = window[window.kind == "grazing"]  # reports: they switch nothing
     summary = PointSummary(
-        index, period=n, periodic=n > 0, sliding=rest > 0, sliding_periods=len(periods_with_rest),
+        index, period=n, periodic=n > 0, sliding=rest > 0,
+        sliding_periods=_periods_with_rest(intervals, start, period, settings.record),
         rest_time_per_period=rest / settings.record,
         switches_per_period=(len(window) - len(grazings)) / settings.record,
         crossings_per_period=len(crossings) / settings.record, grazings_per_period=len(grazings) / settings.record,
-        wall_time=time.perf_counter() - started,
+        wall_time=time.perf_counter() - started, direction=direction, end_x1=result.final_state[1],
+        end_v1=result.final_state[2], end_x2=result.final_state[3], end_v2=result.final_state[4],
     ).row(param, value)  # fmt: skip
     return PointTables(index, value, switches, poincare, _frame(summary, columns["summary"]))
 
 
-def sliding_ranges(summary: pd.DataFrame, param: str) -> list[tuple[float, float]]:
-    """The ranges ``(first, last)`` of consecutive swept values at which the mass slides."""
+def sliding_ranges(summary: pd.DataFrame, param: str, direction: str | None = None) -> list[tuple[float, float]]:
+    """The ranges ``(first, last)`` of consecutive swept values at which the mass slides (of
+    the values run going ``direction``, if given: a both-ways sweep has each value twice)."""
+    if direction is not None and "direction" in summary.columns:
+        summary = summary[summary.direction == direction]
     ok = summary[summary.status == "ok"].sort_values(param)
     values = ok[param].tolist()
     return [(values[i], values[j - 1]) for slides, i, j in runs(ok.sliding.tolist()) if slides]
@@ -315,7 +346,7 @@ class _Store:
 
     def _status(self, status: str, **extra) -> str:
         info = {"identity": self.identity, "status": status, "param": self.settings.param,
-                "points": self.settings.steps, **extra}  # fmt: skip
+                "points": len(self.settings.points), **extra}  # fmt: skip
         return json.dumps(info, indent=2, default=str)
 
     def write_status(self, status: str, **extra) -> None:
@@ -323,6 +354,15 @@ class _Store:
 
     def done(self) -> set[int]:
         return {int(p.name.split(".")[0]) for p in self.parts.glob("*.summary.parquet")}
+
+    def end_state(self, index: int) -> tuple[float, ...] | None:
+        """The state a stored point ended in, or None (no such point, or it failed)."""
+        path = self.parts / f"{index:06d}.summary.parquet"
+        if not path.is_file():
+            return None
+        row = pd.read_parquet(path).iloc[0]
+        state = tuple(float(row.get(f"end_{name}", math.nan)) for name in ("x1", "v1", "x2", "v2"))
+        return state if all(math.isfinite(v) for v in state) else None
 
     def write_point(self, point: PointTables) -> None:
         for name in TABLES:  # the summary last: it marks the point done
@@ -361,8 +401,28 @@ def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
 
 
 def _points_serial(case, settings, tasks) -> Iterator[PointTables]:
+    directions = dict(enumerate(direction for direction, _ in settings.points))
     for index, value in tasks:
-        yield run_point(case, settings, index, value)
+        yield run_point(case, settings, index, value, direction=directions[index])
+
+
+def _points_following(case, settings, tasks, store: _Store) -> Iterator[PointTables]:
+    """A both-ways sweep: each point from the state the point before it ended in (read from
+    its stored summary when resuming), the first from the case's start; after a failed point,
+    from the case's start again."""
+    directions = dict(enumerate(direction for direction, _ in settings.points))
+    ends: dict[int, tuple[float, ...] | None] = {}
+    for index, value in tasks:
+        start = None
+        if index > 0:
+            if index - 1 not in ends:
+                ends[index - 1] = store.end_state(index - 1)
+            start = ends[index - 1]
+        point = run_point(case, settings, index, value, from_state=start, direction=directions[index])
+        row = point.summary.iloc[0]
+        state = tuple(float(row[f"end_{name}"]) for name in ("x1", "v1", "x2", "v2"))
+        ends[index] = state if all(math.isfinite(v) for v in state) else None
+        yield point
 
 
 def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
@@ -381,7 +441,7 @@ def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
 
         def fill() -> None:
             for index, value in pending:
-                running.add(pool.submit(run_point, case, settings, index, value))
+                running.add(pool.submit(run_point, case, settings, index, value, direction=settings.points[0][0]))
                 if len(running) >= 4 * workers:
                     return
 
@@ -442,7 +502,9 @@ def _points_dask(client, case, settings, tasks) -> Iterator[PointTables]:
     from distributed import as_completed
 
     case_on_cluster = client.scatter(case, broadcast=True)
-    futures = [client.submit(run_point, case_on_cluster, settings, i, v, pure=False) for i, v in tasks]
+    direction = settings.points[0][0]  # one way: a both-ways sweep runs in this process
+    futures = [client.submit(run_point, case_on_cluster, settings, i, v, direction=direction, pure=False)
+               for i, v in tasks]  # fmt: skip
     try:
         for future in as_completed(futures):
             yield future.result()
@@ -499,13 +561,15 @@ class Sweep:
         store, settings = self._store, self.settings
         try:
             store.open()
-            values = settings.values
+            values = [value for _, value in settings.points]
             done = store.done()
             tasks = [(i, v) for i, v in enumerate(values) if i not in done]
             if progress is not None:
                 progress(len(done), len(values))
-            if self._client is not None:
-                points: Iterable[PointTables] = _points_dask(self._client, self.case, settings, tasks)
+            if settings.both_ways:  # each point starts where the one before it ended: one after another
+                points: Iterable[PointTables] = _points_following(self.case, settings, tasks, store)
+            elif self._client is not None:
+                points = _points_dask(self._client, self.case, settings, tasks)
             elif self.workers == 1 or len(tasks) <= 1:
                 points = _points_serial(self.case, settings, tasks)
             else:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import tomllib
 from typing import Annotated
 
 import typer
@@ -9,7 +10,9 @@ from rich.table import Table
 
 from oscillator.cli.console import fail, message, out, say
 from oscillator.errors import OscillatorError
-from oscillator.io.cases import case_names, load_case
+from oscillator.io.cases import MAX_CASE_BYTES, Case, case_names, load_case
+from oscillator.io.files import read_untrusted
+from oscillator.model.parameters import UNITS
 from oscillator.text import printable
 
 __all__ = ["list_cases", "show"]
@@ -30,6 +33,22 @@ def list_cases() -> None:
     out.print(table)
 
 
+def _written(case: Case) -> dict[str, str]:
+    """The parameters the case file writes as expressions (``P1 = "pi/8"``), as written, with
+    their values: ``{"P1": "pi/8 = 0.3926990817"}``."""
+    if case.source is None:
+        return {}
+    try:
+        data = tomllib.loads(read_untrusted(case.source, what="case file", field="case", limit=MAX_CASE_BYTES))
+    except (OSError, OscillatorError, tomllib.TOMLDecodeError):
+        return {}
+    table = data.get("parameters")
+    if not isinstance(table, dict):
+        return {}
+    return {name: f"{printable(text)} = {getattr(case.parameters, name):.10g}" for name, text in table.items()
+            if isinstance(text, str) and name in case.parameters.names()}  # fmt: skip
+
+
 def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")]) -> None:
     """Show a case: its parameters, start, run settings and expected events.
 
@@ -45,17 +64,19 @@ def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case 
     if c.description:
         say(" ".join(c.description.split()))
     params = Table(title="parameters", title_justify="left", header_style="bold")
-    for column in ("name", "value", "name ", "value "):
+    for column in ("name", "value", "unit", "name ", "value ", "unit "):
         params.add_column(column, justify="right" if "value" in column else "left")
-    items = [(name, f"{getattr(c.parameters, name):.10g}") for name in c.parameters.names()]
+    written = _written(c)
+    items = [(name, written.get(name, f"{getattr(c.parameters, name):.10g}"), UNITS.get(name) or "-")
+             for name in c.parameters.names()]  # fmt: skip
     half = (len(items) + 1) // 2
-    for left, right in zip(items[:half], [*items[half:], ("", "")], strict=False):
+    for left, right in zip(items[:half], [*items[half:], ("", "", "")], strict=False):
         params.add_row(*left, *right)
     out.print(params)
     initial = c.initial
     say(
         f"start: t0 = {initial.t0} s, x1 = {initial.x1} m, v1 = {initial.v1} m/s, x2 = {initial.x2} m, "
-        f"v2 = {initial.v2} m/s; end: t_end = {c.t_end} s"
+        f"v2 = {initial.v2} m/s; the run ends at t_end = {c.t_end} s"
     )
     say("solver: " + ", ".join(f"{name} = {getattr(c.options, name)}" for name in c.options.names()))
     if c.expected:

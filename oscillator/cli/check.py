@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
+from rich import box
 from rich.table import Table
 from rich.text import Text
 
@@ -53,11 +54,14 @@ def check(
         raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
     except KeyboardInterrupt:
         raise fail("interrupted", code=130) from None
-    view = Table(title=f"{printable(resolved.name)}: expected switching times", title_justify="left",
-                 header_style="bold")  # fmt: skip
+    view = Table(title=f"{printable(resolved.name)}: expected switching times (s)", title_justify="left",
+                 header_style="bold", box=box.SIMPLE_HEAD, pad_edge=False)  # fmt: skip
     source = "article" if resolved.source is None or is_shipped(resolved.source) else "expected"
-    for column in ("event", source, "reference", "ours", f"ours − {source}", "ours − reference", "ok"):
-        view.add_column(column, overflow="fold")
+    view.add_column("event", ratio=1, min_width=16)
+    for column in (source, "ref.", "ours", f"− {source}", "− ref.", "ok"):  # the differences: ours minus that
+        view.add_column(column, no_wrap=True, justify="right")
+    view.caption = f"ref.: the independent implementation; − {source}, − ref.: ours minus that time"
+    view.caption_justify = "left"
     for row in table.itertuples(index=False):
         ok = row.within_article and row.within_reference
         view.add_row(

@@ -85,15 +85,15 @@ def sample_grid(case: Case, sample: float | None):
     return np.unique(np.append(grid[grid < case.t_end], case.t_end))
 
 
-def sweep_settings(c: Case, param, start, stop, steps, transient, record) -> SweepSettings:
-    """The case's ``[sweep]`` table with the command line's changes."""
+def sweep_settings(c: Case, param, start, stop, steps, transient, record, both_ways: bool = False) -> SweepSettings:
+    """The case's ``[sweep]`` table with the command line's changes (``--both-ways`` sets it)."""
     base = c.sweep
     if base is None and (param is None or start is None or stop is None):
         raise InputError(
             f"case {shown(c.name)} has no [sweep] table; give --param NAME --from A --to B", field="--param"
         )
     changes = {k: v for k, v in dict(param=param, start=start, stop=stop, steps=steps, transient=transient,
-                                     record=record).items() if v is not None}  # fmt: skip
+                                     record=record, both_ways=both_ways or None).items() if v is not None}  # fmt: skip
     if base is None:
         return SweepSettings(**changes)
     return dataclasses.replace(base, **changes)

@@ -152,7 +152,7 @@ def continue_(
     period: PeriodOption = 1,
     step: Annotated[
         float | None,
-        typer.Option("--step", metavar="S", help="Largest step, as a fraction of the range (1e-6 to 1; 1/40)."),
+        typer.Option("--step", metavar="S", help="Largest step, as a fraction of the range (1e-6 to 1; default 1/40)."),
     ] = None,
     max_points: Annotated[
         int, typer.Option("--max-points", metavar="N", help="The most points computed (2 to 100000).")

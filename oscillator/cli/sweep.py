@@ -28,7 +28,7 @@ def _sweep_progress(name: str, settings: SweepSettings):
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
     bar = Progress(*columns, console=err, transient=True)
-    task = bar.add_task(f"{printable(name)}: {settings.param}", total=settings.steps, rate="")
+    task = bar.add_task(f"{printable(name)}: {settings.param}", total=len(settings.points), rate="")
     began = time.monotonic()
     first: list[int] = []
 
@@ -40,6 +40,17 @@ def _sweep_progress(name: str, settings: SweepSettings):
         bar.update(task, completed=done, total=total, rate=rate)
 
     return bar, report
+
+
+#: ``--both-ways``: to the last value and back, each value from the previous one's end.
+BothWaysOption = Annotated[
+    bool,
+    typer.Option(
+        "--both-ways",
+        help="Sweep to the last value and back, each value starting where the previous one ended: shows hysteresis "
+        "(coexisting motions). Runs in this process.",
+    ),
+]
 
 
 def sweep(
@@ -76,6 +87,7 @@ def sweep(
     set_: Annotated[
         list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
     ] = None,
+    both_ways: BothWaysOption = False,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the diagrams.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")] = False,
 ) -> None:
@@ -91,10 +103,11 @@ def sweep(
       oscillator sweep bifurcation-omega --out runs/omega
       oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2
       oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10
+      oscillator sweep bifurcation-q2 --from 71.15 --to 71.18 --steps 7 --transient 20 --record 4 --both-ways
     """
     try:
         resolved = case_from(case, None, set_)
-        settings = sweep_settings(resolved, param, start, stop, steps, transient, record)
+        settings = sweep_settings(resolved, param, start, stop, steps, transient, record, both_ways)
         plan = _open_sweep(resolved, settings, out_dir, workers, scheduler)
     except OscillatorError as error:
         raise fail(message(error)) from None
@@ -102,12 +115,7 @@ def sweep(
         raise fail("interrupted; nothing was written", 130) from None
     folder = plan.folder
     try:
-        if quiet or not err.is_terminal:
-            outcome = plan.run()
-        else:
-            bar, report_progress = _sweep_progress(resolved.name, settings)
-            with bar:
-                outcome = plan.run(report_progress)
+        outcome = _run_with_progress(plan, resolved.name, settings, quiet)
     except OscillatorError as error:
         raise fail(message(error), 1) from None
     except KeyboardInterrupt:
@@ -117,8 +125,21 @@ def sweep(
     _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
 
 
+def _run_with_progress(plan, name: str, settings: SweepSettings, quiet: bool):
+    """Run the sweep, with a progress bar where a person watches."""
+    if quiet or not err.is_terminal:
+        return plan.run()
+    bar, report_progress = _sweep_progress(name, settings)
+    with bar:
+        return plan.run(report_progress)
+
+
 def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, workers, scheduler):
     """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
+    if settings.both_ways and (scheduler is not None or (workers is not None and workers != 1)):
+        option = "--scheduler" if scheduler is not None else "--workers"
+        raise InputError(f"{option}: a --both-ways sweep runs its values one after another in this process "
+                         f"(each starts where the one before ended); leave out {option}", field=option)  # fmt: skip
     from oscillator.io.files import FolderTaken, default_name
 
     load("oscillator.analysis.sweeps", notice=True)
@@ -165,33 +186,56 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
         out.print(printable(str(folder)))
         _fail_if_every_point_failed(summary, folder)
         return
-    ranges = sliding_ranges(summary, settings.param)
     say(
         (case.name, "bold"),
-        f": {settings.param} from {settings.start:g} to {settings.stop:g} ({settings.steps} values, "
-        f"{settings.transient} + {settings.record} periods); {outcome.computed} computed, {outcome.resumed} resumed, "
-        f"{outcome.failed} failed, {outcome.wall_time:.1f} s",
+        f": {settings.param} from {settings.start:g} to {settings.stop:g}{' and back' if settings.both_ways else ''} "
+        f"({settings.steps} values, {settings.transient} + {settings.record} periods); {outcome.computed} computed, "
+        f"{outcome.resumed} resumed, {outcome.failed} failed, {outcome.wall_time:.1f} s",
     )
-    values = sorted(summary[settings.param].to_numpy(float))
-    for a, b in ranges:
-        say(
-            f"m{settings.mass} slides (rests on its velocity boundary) at the grid values {settings.param} = "
-            f"{a:.6g} to {b:.6g}"
-        )
-        below, above = [v for v in values if v < a], [v for v in values if v > b]
-        for which, pair in (("begins", [*below[-1:], a]), ("ends", [b, *above[:1]])):
-            if len(pair) == 2:
-                say(
-                    f"  where it {which} (between two grid values): oscillator locate {shown_case(case)} "
-                    f"--param {settings.param} --between {pair[0]:.6g} {pair[1]:.6g} --what sliding"
-                )
-    if not ranges and (summary.status == "ok").any():
-        say(f"m{settings.mass} never slides in this range")
+    if settings.both_ways:
+        _say_both_ways(summary, settings)
+    else:
+        ranges = sliding_ranges(summary, settings.param)
+        _say_ranges(case, summary, settings, ranges)
+        if not ranges and (summary.status == "ok").any():
+            say(f"m{settings.mass} never slides in this range")
     periods = summary[summary.status == "ok"].period.value_counts().sort_index()
     if len(periods):
         say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
     say("written to ", (str(folder), "bold"))
     _fail_if_every_point_failed(summary, folder)
+
+
+def _say_ranges(case: Case, summary, settings: SweepSettings, ranges: list[tuple[float, float]]) -> None:
+    """The grid values at which the mass slides, and the ``locate`` command for each end."""
+    values = sorted(summary[settings.param].to_numpy(float))
+    for a, b in ranges:
+        say(f"m{settings.mass} slides (rests on its velocity boundary) at the grid values {settings.param} = "
+            f"{a:.6g} to {b:.6g}")  # fmt: skip
+        below, above = [v for v in values if v < a], [v for v in values if v > b]
+        for which, pair in (("begins", [*below[-1:], a]), ("ends", [b, *above[:1]])):
+            if len(pair) == 2:
+                say(f"  where it {which} (between two grid values): oscillator locate {shown_case(case)} "
+                    f"--param {settings.param} --between {pair[0]:.6g} {pair[1]:.6g} --what sliding")  # fmt: skip
+
+
+def _say_both_ways(summary, settings: SweepSettings) -> None:
+    """Where the mass slides going each way; the values where the two ways differ (hysteresis)."""
+    from oscillator.analysis.sweeps import sliding_ranges
+
+    ways = list(dict.fromkeys(direction for direction, _ in settings.points))
+    for way in ways:
+        found = sliding_ranges(summary, settings.param, way)
+        spans = ", ".join(f"{a:.6g} to {b:.6g}" for a, b in found)
+        say(f"going {way}: m{settings.mass} " + (f"slides at the grid values {settings.param} = {spans}" if found
+                                                 else "never slides"))  # fmt: skip
+    ok = summary[summary.status == "ok"]
+    by_way = {way: dict(zip(rows[settings.param], rows.sliding, strict=True)) for way, rows in ok.groupby("direction")}
+    differ = sorted(v for v in by_way.get(ways[0], {}) if v in by_way.get(ways[-1], {})
+                    and by_way[ways[0]][v] != by_way[ways[-1]][v])  # fmt: skip
+    if differ:
+        say(f"hysteresis: at {settings.param} = {', '.join(f'{v:.6g}' for v in differ)} the two ways end on "
+            "different motions (both exist there)")  # fmt: skip
 
 
 def _fail_if_every_point_failed(summary, folder: Path) -> None:

@@ -364,6 +364,11 @@ class SweepSettings:
         Poincaré points closer than this (relative) count as the same point (period-n).
     max_period : int
         The largest period n looked for.
+    both_ways : bool
+        Sweep from ``start`` to ``stop`` and back, each value starting from the state the
+        previous value ended in (the first from the case's start): where two attractors
+        coexist, the way up and the way down end on different ones (hysteresis).  The points
+        then run one after another, in one process.
     """
 
     param: str
@@ -375,9 +380,12 @@ class SweepSettings:
     mass: int = 2
     period_tolerance: float = 1e-6
     max_period: int = 16
+    both_ways: bool = False
 
     def __post_init__(self) -> None:
         owner = "sweep"
+        if not isinstance(self.both_ways, bool):
+            raise InputError(f"{owner}.both_ways must be true or false, got {shown(self.both_ways)}", field="both_ways")
         if self.param not in Parameters.names():
             import difflib
 
@@ -411,6 +419,15 @@ class SweepSettings:
             return (self.start,)
         step = (self.stop - self.start) / (self.steps - 1)
         return (*(self.start + i * step for i in range(self.steps - 1)), self.stop)
+
+    @property
+    def points(self) -> tuple[tuple[str, float], ...]:
+        """``(direction, value)`` of every point, in the order they run: the values (``"up"``
+        if ``stop >= start``, else ``"down"``), then, with ``both_ways``, the values back (the
+        other direction)."""
+        forward, back = ("up", "down") if self.stop >= self.start else ("down", "up")
+        there = tuple((forward, v) for v in self.values)
+        return there + tuple((back, v) for v in reversed(self.values)) if self.both_ways else there
 
     @classmethod
     def names(cls) -> tuple[str, ...]:

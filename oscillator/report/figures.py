@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
@@ -480,42 +481,72 @@ def write_figures(
 _SWEEP_COLORS = {"passable": "tab:blue", "sliding_onset": "tab:red", "sliding_vanish": "tab:green"}
 
 
-def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
-    """Fig. 14-style diagrams of a sweep: ``fig-14-bifurcation`` (the switching displacement and
-    phase of the mass against the parameter, sliding ranges shaded) and ``fig-14-poincare``."""
-    switches, summary, poincare = tables["switches"], tables["summary"], tables["poincare"]
+#: How a both-ways sweep draws each way: shading of the rests, and the Poincaré points (the way
+#: up in larger open circles, the way down in small dots inside them, so both show where equal).
+_WAYS = {
+    "up": ({"color": "tab:blue", "alpha": 0.15}, {"s": 22, "facecolor": "none", "edgecolor": "tab:blue",
+                                                  "linewidths": 0.8}),
+    "down": ({"facecolor": "none", "edgecolor": "tab:orange", "hatch": "//", "linewidth": 0.0},
+             {"s": 5, "color": "tab:orange"}),
+}  # fmt: skip
+
+
+def _shade_rests(ax, summary: pd.DataFrame, param: str, mass: int, ways: list[str], half: float) -> None:
+    """The swept values at which the mass rests, shaded: one style per way of a both-ways sweep."""
     from oscillator.analysis.sweeps import sliding_ranges
 
-    values = np.sort(summary[param].to_numpy())
+    for way in ways:
+        style = _WAYS[way][0] if len(ways) > 1 else {"color": "tab:orange", "alpha": 0.15}
+        label = f"m{mass} rests (sliding)" + (f", going {way}" if len(ways) > 1 else "")
+        for i, (a, b) in enumerate(sliding_ranges(summary, param, way if len(ways) > 1 else None)):
+            ax.axvspan(a - half, b + half, label=None if i else label, **style)
+
+
+def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
+    """Fig. 14-style diagrams of a sweep: ``fig-14-bifurcation`` (the switching displacement and
+    phase of the mass against the parameter, sliding ranges shaded) and ``fig-14-poincare``.
+
+    A both-ways sweep (``direction`` "up" and "down") shades each way's rests in its own style
+    and draws each way's Poincaré points in its own colour: where they differ, two motions
+    coexist (hysteresis)."""
+    switches, summary, poincare = tables["switches"], tables["summary"], tables["poincare"]
+    ways = list(dict.fromkeys(summary.direction)) if "direction" in summary.columns else ["up"]
+    values = np.unique(summary[param].to_numpy())
     half = 0.5 * np.min(np.diff(values)) if len(values) > 1 else 0.0
-    spans = [(a - half, b + half) for a, b in sliding_ranges(summary, param)]
+    both = len(ways) > 1
+    going = dict(zip(summary["index"], summary.direction, strict=True)) if both else {}
 
     fig = Figure(figsize=(10, 7), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
     for ax, column, label in ((axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
                               (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)")):  # fmt: skip
-        for i, (a, b) in enumerate(spans):
-            ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
+        _shade_rests(ax, summary, param, mass, ways, half)
         for kind, rows in switches.groupby("kind"):
             style = _marker(kind, scale=0.3) | {"facecolor": _SWEEP_COLORS.get(kind, "grey"), "linewidths": 0.4}
             ax.scatter(rows[param], rows[column], label=kind.replace("_", " "), **style)
         ax.set(ylabel=label)
         _outside_legend(ax, markerscale=2)
     axes[-1].set(xlabel=labelled(param))
-    fig.suptitle(f"{title} — switching points of m{mass} after the transient (Fig. 14 style)", parse_math=False)
+    axes[-1].xaxis.set_major_locator(MaxNLocator(8))
+    both_words = " (both ways)" if both else ""
+    fig.suptitle(f"{title} — switching points of m{mass} after the transient{both_words} (Fig. 14 style)",
+                 parse_math=False)  # fmt: skip
     bifurcation = fig
 
     fig = Figure(figsize=(11, 4.5), layout="constrained")
     axes = fig.subplots(1, 2)
     units = {"x": "m", "v": "m/s"}
     for ax, quantity in zip(axes, ("x", "v"), strict=True):
-        for i, (a, b) in enumerate(spans):
-            ax.axvspan(a, b, color="tab:orange", alpha=0.15, label=f"sliding (m{mass} rests)" if i == 0 else None)
-        ax.scatter(poincare[param], poincare[f"{quantity}{mass}"], s=4, color=_MASS_COLOR[mass],
-                   label="Poincaré points")  # fmt: skip
+        _shade_rests(ax, summary, param, mass, ways, half)
+        for way in ways:
+            rows = poincare[poincare["index"].map(going) == way] if both else poincare
+            style = _WAYS[way][1] if both else {"s": 4, "color": _MASS_COLOR[mass]}
+            ax.scatter(rows[param], rows[f"{quantity}{mass}"], label=f"Poincaré points, going {way}" if both else
+                       "Poincaré points", **style)  # fmt: skip
         ax.set(xlabel=labelled(param), ylabel=f"${quantity}_{mass}$ at $t_0 + nT$ ({units[quantity]})")
+        ax.xaxis.set_major_locator(MaxNLocator(5))
     axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
-    fig.suptitle(f"{title} — Poincaré bifurcation diagram (sliding ranges shaded)", parse_math=False)
+    fig.suptitle(f"{title} — Poincaré bifurcation diagram{both_words} (sliding ranges shaded)", parse_math=False)
     return {"fig-14-bifurcation": bifurcation, "fig-14-poincare": fig}
 
 
