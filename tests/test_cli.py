@@ -400,8 +400,11 @@ def test_the_event_table_fits_a_narrow_terminal_without_cutting_a_time(tmp_path,
         done = invoke("run", "instance-3", "--no-plots", "--no-report", "--out", tmp_path / str(width))
         assert done.exit_code == 0, done.stderr
         lines = done.stdout.splitlines()
-        table = lines[1 : lines.index(next(line for line in lines if line.startswith("energy audit")))]
+        table = lines[lines.index("switching events") : lines.index(next(x for x in lines if x.startswith("energy")))]
         assert max(len(line) for line in table) <= width, (width, table)
+        title = lines[: lines.index("switching events")]  # the case's name and title, wrapped
+        assert max(len(line) for line in title) <= width and " ".join(title).split() == (
+            "instance-3: " + load_case("instance-3").title).split()  # fmt: skip
         assert re.findall(r"\d\.\d{6}", "\n".join(table)) == expected, width
 
 

@@ -152,3 +152,14 @@ def test_rich_displays_escape_the_case_text(tmp_path):
     assert "energy audit residual" in shown and "<table>" in shown and "complete" in shown
     orbit_shown = osc.find_orbit(case)._repr_html_()
     assert "<script>" not in orbit_shown and "multiplier" in orbit_shown
+
+
+def test_a_save_whose_figures_fail_keeps_the_tables_and_warns(tmp_path, modified, monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("no display")
+
+    monkeypatch.setattr("oscillator.report.figures.write_figures", broken)
+    with pytest.warns(UserWarning, match=r"could not be made \(RuntimeError: no display\); the tables are written"):
+        folder = modified.save(tmp_path / "run")
+    assert not (folder / "figures").exists()
+    pd.testing.assert_frame_equal(osc.read_run(folder).events, modified.events)

@@ -43,7 +43,6 @@ import pyarrow.parquet as pq
 
 from oscillator.analysis.intervals import runs, spans
 from oscillator.errors import InputError, OscillatorError
-from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
@@ -195,11 +194,12 @@ def run_point(
 ) -> PointTables:
     """Simulate one parameter value and tabulate what the sweep keeps of it.
 
-    The run starts from the case's start, or from ``from_state`` (``x1, v1, x2, v2`` at the case's
-    ``t0``: a both-ways sweep's previous end).  A value the model refuses (e.g. ``Omega <= 0``)
-    or a solver failure gives a summary row with ``status = "failed"`` and the message, and no
-    other rows.
+    The run starts from the case's start, or from ``from_state`` (``x1, v1, x2, v2`` at ``t0``:
+    a both-ways sweep's previous end).  A value the model refuses (``Omega <= 0``) or a solver
+    failure gives a summary row with ``status = "failed"`` and the message, and no other rows.
     """
+    from oscillator.hybrid.simulate import simulate  # here: a sweep's settings are checked before it loads
+
     param, mass = settings.param, settings.mass
     columns = _columns(param)
     started = time.perf_counter()
@@ -212,10 +212,9 @@ def run_point(
         return PointTables(index, value, _frame([], columns["switches"]), _frame([], columns["poincare"]),
                            _frame(failed.row(param, value), columns["summary"]))  # fmt: skip
 
-    start, stop, period = float(marks[0]), float(marks[-1]), point.parameters.period
+    start, stop, period, omega = float(marks[0]), float(marks[-1]), point.parameters.period, point.parameters.Omega
     events = result.events
     window = events[(events.mass == mass) & (events.t >= start) & (events.t <= stop)]
-    omega = point.parameters.Omega
     switches = _frame(
         [
             {param: value, "index": index, "t": row.t, "phase": math.fmod(omega * row.t, 2 * math.pi),
@@ -489,7 +488,12 @@ def _connect(scheduler: str):
         raise InputError(
             "scheduler needs Dask: pip install 'oscillator[dask]' (dask.distributed)", field="scheduler"
         ) from exc
+    parsed = urllib.parse.urlsplit(address)
     try:
+        if parsed.scheme in ("tcp", "tls"):  # a refused connection is said at once, not after Dask's retries
+            import socket
+
+            socket.create_connection((parsed.hostname, parsed.port), timeout=10).close()
         return Client(address, timeout="10s")
     except (OSError, ValueError, TypeError) as exc:
         raise InputError(

@@ -73,8 +73,9 @@ def say(*parts: str | tuple[str, str]) -> None:
 
 #: What a command says when numba compiles the kernels (the first run after an install).
 COMPILING = "compiling the numerical kernels once (about 30 s); later runs start in about a second"
-#: Seconds of loading after which the command says so even if the cache seemed full (stale).
-SLOW_LOAD = 3.0
+#: Seconds of loading after which the command says so even if the cache seemed full (stale): loading
+#: takes about a second, a few on a busy machine; compiling about half a minute.
+SLOW_LOAD = 10.0
 #: Whether the notice was printed in this process.
 _noticed = False
 

@@ -215,16 +215,17 @@ def _prepare_continue(
         raise InputError(f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
                          "range with --from and --to", field="--set")  # fmt: skip
     resolved = case_from(case, None, set_)
+    from oscillator.io.files import check_new
+
+    if out_dir is not None:
+        check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
     load("oscillator.orbits.continuation", "oscillator.orbits.output", "oscillator.io.runs", notice=True)
-    from oscillator.io.files import check_name
     from oscillator.io.runs import claim_output
     from oscillator.orbits.continuation import check_settings
     from oscillator.orbits.output import read_sweep_points
 
     check_settings(resolved, **settings)
     sweep_points = read_sweep_points(over, param, coordinate or "x2") if over is not None else None
-    if out_dir is not None:
-        check_name(out_dir, option="--out")
     return resolved, settings, sweep_points, claim_output(out_dir, f"{resolved.name}-continue")
 
 

@@ -21,7 +21,7 @@ from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import EngineOption, case_from, check_engine, sample_grid
 from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
 from oscillator.io.cases import Case
-from oscillator.io.files import check_name
+from oscillator.io.files import check_new
 from oscillator.io.signals import interrupts_deferred
 from oscillator.text import printable, shown
 
@@ -119,7 +119,7 @@ def _prepare_run(
     grid = sample_grid(resolved, sample)
 
     if out_dir is not None:
-        check_name(out_dir, option="--out")
+        check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
     load("oscillator.io.runs", "oscillator.hybrid.simulate", "oscillator.report.figures", notice=not quiet)
     from oscillator.engines import build_engine
     from oscillator.hybrid.simulate import admit
@@ -259,8 +259,8 @@ def _tables_kept(folder: Path) -> str:
 
 
 def _print_summary(summary: list, folder: Path, quiet: bool) -> None:
-    for line in summary:
-        out.print(line)
+    for k, line in enumerate(summary):  # the title wraps at the terminal's width; tables fit it themselves
+        out.print(line, soft_wrap=k > 0)
     if quiet:
         out.print(printable(str(folder)))
     else:

@@ -348,6 +348,15 @@ def _make_parents(folder: Path) -> list[Path]:
     return missing
 
 
+def check_new(target: Path, *, option: str = "folder") -> None:
+    """Refuse a folder name that cannot be written (:func:`check_name`) or that exists already:
+    the check a command makes before it loads anything, and :func:`claim_folder` again."""
+    check_name(target, option=option)
+    if os.path.lexists(target):
+        raise FolderTaken(f"{option} {printable(str(target))} exists already; give a new folder (runs are never "
+                          "overwritten)", field=option)  # fmt: skip
+
+
 def claim_folder(target: Path, *, option: str = "folder") -> FolderClaim:
     """Reserve ``target`` as a new output folder; see the module docstring.
 
@@ -360,11 +369,9 @@ def claim_folder(target: Path, *, option: str = "folder") -> FolderClaim:
         Nothing is left behind.
     """
     target = Path(target)
-    check_name(target, option=option)
+    check_new(target, option=option)
     shown = printable(str(target))
     exists = f"{option} {shown} exists already; give a new folder (runs are never overwritten)"
-    if os.path.lexists(target):
-        raise FolderTaken(exists, field=option)
     created: list[Path] = []
     descriptor = None
     lock_path = target.parent / f".{target.name}.lock"

@@ -30,6 +30,7 @@ import os
 import platform
 import stat
 import sys
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -52,6 +53,7 @@ __all__ = [
     "PENDING",
     "RunFolder",
     "claim_output",
+    "finish_or_warn",
     "finish_run",
     "folder_kind",
     "read_events_csv",
@@ -358,8 +360,6 @@ def save_result(result: Result, folder: Path | str, *, formats: str = "both", fi
     ``"pending"``; ``oscillator report`` makes them), a warning says so, and the folder is
     returned all the same.
     """
-    import warnings
-
     from oscillator.io.files import check_name
 
     if formats not in FORMATS:
@@ -370,12 +370,20 @@ def save_result(result: Result, folder: Path | str, *, formats: str = "both", fi
     path = write_run(result, claim_output(folder, result.case.name), formats=formats,
                      command=["python", "oscillator.Result.save"], pending=pending)  # fmt: skip
     if pending:
-        try:
-            finish_run(path, figures=figures, report=report)
-        except Exception as error:  # a later step failed: the tables are safe
-            warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
-                          f"the tables are written; `oscillator report {path}` makes them", stacklevel=2)  # fmt: skip
+        finish_or_warn(lambda: finish_run(path, figures=figures, report=report), path)
     return path
+
+
+def finish_or_warn(finish: Callable[[], object], folder: Path) -> None:
+    """Make a saved folder's figures and report (``finish``); if that fails, warn and go on:
+    the tables are written, and ``oscillator report`` makes the rest later."""
+    import warnings
+
+    try:
+        finish()
+    except Exception as error:  # a later step failed: what was computed is safe
+        warnings.warn(f"the figures or report of {folder} could not be made ({type(error).__name__}: {error}); "
+                      f"the tables are written; `oscillator report {folder}` makes them", stacklevel=4)  # fmt: skip
 
 
 def read_events_csv(path: Path) -> pd.DataFrame:

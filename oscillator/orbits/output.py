@@ -453,10 +453,8 @@ def finish_branch(folder: Path) -> BranchFolder:
 def save_branch(branch: Branch, folder: Path | str, *, coordinate: str) -> Path:
     """Write ``branch`` as a branch folder into ``folder`` (new), then its figures and report; if
     those fail, the tables stay, a warning says so, and the folder is returned all the same."""
-    import warnings
-
     from oscillator.io.files import check_name
-    from oscillator.io.runs import claim_output
+    from oscillator.io.runs import claim_output, finish_or_warn
 
     if branch.case is None:
         raise InputError("this branch carries no case to save with it; build it with continue_orbit",
@@ -466,11 +464,7 @@ def save_branch(branch: Branch, folder: Path | str, *, coordinate: str) -> Path:
     claim = claim_output(folder, f"{branch.case.name}-continue")
     path = write_branch(branch, branch.case, claim, coordinate=coordinate, sweep_points=None,
                         command=["python", "oscillator.Branch.save"])  # fmt: skip
-    try:
-        finish_branch(path)
-    except Exception as error:  # a later step failed: the branch is safe
-        warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
-                      f"the tables are written; `oscillator report {path}` makes them", stacklevel=3)  # fmt: skip
+    finish_or_warn(lambda: finish_branch(path), path)
     return path
 
 
@@ -496,11 +490,9 @@ def orbit_info(orbit: Orbit) -> dict:
 def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
     """Write ``orbit`` as the run folder of one return (:meth:`Orbit.one_period`), ``run.json``
     holding ``"kind": "orbit"`` and :func:`orbit_info`; then its figures and report."""
-    import warnings
-
     from oscillator.hybrid.simulate import simulate
     from oscillator.io.files import check_name
-    from oscillator.io.runs import claim_output, finish_run, write_run
+    from oscillator.io.runs import claim_output, finish_or_warn, finish_run, write_run
 
     folder = Path(folder)
     check_name(folder, option="folder")
@@ -508,11 +500,7 @@ def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
     claim = claim_output(folder, f"{orbit.case.name}-orbit")
     path = write_run(result, claim, command=["python", "oscillator.Orbit.save"],
                      extra={"kind": "orbit", "orbit": orbit_info(orbit)})  # fmt: skip
-    try:
-        finish_run(path)
-    except Exception as error:  # a later step failed: the orbit is safe
-        warnings.warn(f"the figures or report of {path} could not be made ({type(error).__name__}: {error}); "
-                      f"the tables are written; `oscillator report {path}` makes them", stacklevel=3)  # fmt: skip
+    finish_or_warn(lambda: finish_run(path), path)
     return path
 
 
