@@ -30,7 +30,14 @@ def test_a_slow_load_is_announced_even_with_a_cache(fresh, capsys):
     fresh.setattr(console, "SLOW_LOAD", 0.05)
     slow = types.ModuleType("slow_to_load")
     fresh.setitem(sys.modules, "slow_to_load", slow)
-    fresh.setattr(console.importlib, "import_module", lambda name: time.sleep(0.5) or slow)
+
+    def loading(name):  # a load that lasts until the notice came, however busy the machine
+        deadline = time.monotonic() + 60
+        while not console._noticed and time.monotonic() < deadline:
+            time.sleep(0.01)
+        return slow
+
+    fresh.setattr(console.importlib, "import_module", loading)
     console.load("slow_to_load", notice=True)
     assert capsys.readouterr().err.startswith(console.COMPILING)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Hashable, Sequence
 from typing import TypeVar
 
-__all__ = ["runs", "spans"]
+__all__ = ["rest_intervals", "runs", "spans"]
 
 S = TypeVar("S", bound=Hashable)
 
@@ -37,3 +37,15 @@ def spans(times: Sequence[float], states: Sequence[S], end: float) -> list[tuple
     [('a', 0.0, 1.0), ('b', 1.0, 3.0), ('a', 3.0, 5.0)]
     """
     return [(state, times[i], times[j] if j < len(times) else end) for state, i, j in runs(states)]
+
+
+def rest_intervals(events, mass: int, resting_at_start: bool, start: float, stop: float) -> list[tuple[float, float]]:
+    """The intervals of ``[start, stop]`` in which ``mass`` rests, from its events (a table with
+    ``t, mass, from_domain, to_domain``): a rest begins at an event into domain 0 and ends at
+    one out of it; ``resting_at_start`` says whether it rests at ``start``.  Exact where a
+    sampled trajectory is not: a rest shorter than the sampling step is found all the same."""
+    switches = events[(events.mass == mass) & (events.from_domain != events.to_domain)]
+    switches = switches[(switches.t >= start) & (switches.t <= stop)]
+    times = [start, *switches.t]
+    resting = [resting_at_start, *(switches.to_domain == 0)]
+    return [(a, b) for rests, a, b in spans(times, resting, stop) if rests and b > a]

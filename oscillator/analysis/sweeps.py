@@ -41,7 +41,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from oscillator.analysis.intervals import runs, spans
+from oscillator.analysis.intervals import rest_intervals, runs
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
@@ -147,11 +147,7 @@ def _rest_time(
     events: pd.DataFrame, mass: int, domain_at_start: int, start: float, stop: float
 ) -> tuple[float, list[tuple[float, float]]]:
     """Total rest time of ``mass`` in ``[start, stop]`` and the rest intervals."""
-    switches = events[(events.mass == mass) & (events.from_domain != events.to_domain)]
-    switches = switches[(switches.t >= start) & (switches.t <= stop)]
-    times = [start, *switches.t]
-    resting = [domain_at_start == 0, *(switches.to_domain == 0)]
-    intervals = [(a, b) for rests, a, b in spans(times, resting, stop) if rests]
+    intervals = rest_intervals(events, mass, domain_at_start == 0, start, stop)
     return sum(b - a for a, b in intervals), intervals
 
 

@@ -25,6 +25,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from oscillator.analysis.intervals import rest_intervals
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
@@ -162,23 +163,14 @@ def force_histories(trajectory: pd.DataFrame, p: Parameters, *, points: int = 20
 
 
 def rest_spans(trajectory: pd.DataFrame, events: pd.DataFrame, mass: int) -> list[tuple[float, float]]:
-    """The intervals in which ``mass`` rests, from its events (a rest begins where an event
-    enters domain 0 and ends where one leaves it), not from the trajectory's rows: a coarse
-    sampling grid misses short rests.  Whether the mass rests at the first row is read there."""
+    """The intervals in which ``mass`` rests over the trajectory's span, from its events
+    (:func:`~oscillator.analysis.intervals.rest_intervals`), not from the trajectory's rows: a
+    coarse sampling grid misses short rests.  Whether it rests at the first row is read there."""
     if trajectory.empty:
         return []
     t = trajectory.t.to_numpy(float)
-    begin = float(t[0]) if int(trajectory[f"domain{mass}"].iloc[0]) == 0 else None
-    found = []
-    for row in events[events.mass == mass].sort_values("t", kind="stable").itertuples(index=False):
-        if row.to_domain == 0 and row.from_domain != 0:
-            begin = float(row.t) if begin is None else begin
-        elif row.from_domain == 0 and row.to_domain != 0 and begin is not None:
-            found.append((begin, float(row.t)))
-            begin = None
-    if begin is not None:
-        found.append((begin, float(t[-1])))
-    return found
+    resting = int(trajectory[f"domain{mass}"].iloc[0]) == 0
+    return rest_intervals(events, mass, resting, float(t[0]), float(t[-1]))
 
 
 def _far_boundaries(ax, motion: np.ndarray, boundaries: list[tuple[Any, np.ndarray]], axis: str) -> None:
