@@ -203,3 +203,16 @@ def test_sweep_markers_show_where_onset_and_vanish_coincide():
     assert {"sliding_onset", "sliding_vanish"} <= set(tables["switches"].kind)
     figure = draw_sweep_figures(tables, "Omega", 2, title="scene")["fig-14-bifurcation"]
     assert hidden_markers(figure) == []
+
+
+def test_a_both_ways_sweep_draws_each_way_and_hides_neither(tmp_path):
+    from oscillator.analysis.sweeps import read_sweep, run_sweep
+
+    settings = SweepSettings(param="Q2", start=71.15, stop=71.18, steps=4, transient=20, record=2, both_ways=True)
+    run_sweep(load_case("bifurcation-q2"), settings, tmp_path / "both", workers=1)
+    drawn = draw_sweep_figures(read_sweep(tmp_path / "both"), "Q2", 2, title="scene")
+    for name, figure in drawn.items():
+        labels = {text.get_text() for ax in figure.axes if ax.get_legend() for text in ax.get_legend().get_texts()}
+        assert {"m2 rests (sliding), going up", "m2 rests (sliding), going down"} <= labels, name
+        assert any(label.endswith("going down") and "rests" not in label for label in labels), name
+        assert hidden_markers(figure) == [], name

@@ -513,9 +513,17 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
     for ax, column, label in ((axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
                               (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)")):  # fmt: skip
         _shade_rests(ax, summary, param, mass, ways, half)
-        for kind, rows in switches.groupby("kind"):
-            style = _marker(kind, scale=0.3) | {"facecolor": _SWEEP_COLORS.get(kind, "grey"), "linewidths": 0.4}
-            ax.scatter(rows[param], rows[column], label=kind.replace("_", " "), **style)
+        for way in ways:  # a both-ways sweep: the way down in smaller markers edged in orange, inside the way up's
+            down = both and way == ways[-1]
+            shown = switches[switches["index"].map(going) == way] if both else switches
+            for kind, rows in shown.groupby("kind"):
+                scale = 0.1 if down else 0.45 if both else 0.3
+                style = _marker(kind, scale) | {"facecolor": _SWEEP_COLORS.get(kind, "grey"),
+                        "linewidths": 0.6 if down else 0.4, "edgecolor": "tab:orange" if down else "black"}  # fmt: skip
+                if down:
+                    style["zorder"] += len(KIND_STYLE)
+                name = kind.replace("_", " ") + (f", going {way}" if both else "")
+                ax.scatter(rows[param], rows[column], label=name, **style)
         ax.set(ylabel=label)
         _outside_legend(ax, markerscale=2)
     axes[-1].set(xlabel=labelled(param))
