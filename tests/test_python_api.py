@@ -163,3 +163,26 @@ def test_a_save_whose_figures_fail_keeps_the_tables_and_warns(tmp_path, modified
         folder = modified.save(tmp_path / "run")
     assert not (folder / "figures").exists()
     pd.testing.assert_frame_equal(osc.read_run(folder).events, modified.events)
+
+
+@pytest.fixture(scope="module")
+def saved_orbit(tmp_path_factory):
+    return osc.find_orbit("instance-1").save(tmp_path_factory.mktemp("orbits") / "orbit")
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "fragment"),
+    [("resting", 5, "orbit.resting must be a list"), ("discontinuous", "v2", "orbit.discontinuous must be a list"),
+     ("history", {"a": 1}, "orbit.history must be a list"), ("multipliers", [[1, 0]], "orbit.multipliers must be"),
+     ("period", True, "orbit.period is not a whole number"), ("stable", "yes", "orbit.stable true or false")],
+)  # fmt: skip
+def test_a_damaged_orbit_folder_names_the_field(tmp_path, saved_orbit, key, value, fragment):
+    import json
+    import shutil
+
+    folder = shutil.copytree(saved_orbit, tmp_path / "orbit")
+    info = json.loads((folder / "run.json").read_text())
+    info["orbit"][key] = value
+    (folder / "run.json").write_text(json.dumps(info))
+    with pytest.raises(osc.InputError, match=fragment):
+        osc.read_run(folder)

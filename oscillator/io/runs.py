@@ -360,12 +360,9 @@ def save_result(result: Result, folder: Path | str, *, formats: str = "both", fi
     ``"pending"``; ``oscillator report`` makes them), a warning says so, and the folder is
     returned all the same.
     """
-    from oscillator.io.files import check_name
-
     if formats not in FORMATS:
         raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
     folder = Path(folder)
-    check_name(folder, option="folder")
     pending = tuple(step for step, wanted in (("figures", figures), ("report", report)) if wanted)
     path = write_run(result, claim_output(folder, result.case.name), formats=formats,
                      command=["python", "oscillator.Result.save"], pending=pending)  # fmt: skip

@@ -453,15 +453,12 @@ def finish_branch(folder: Path) -> BranchFolder:
 def save_branch(branch: Branch, folder: Path | str, *, coordinate: str) -> Path:
     """Write ``branch`` as a branch folder into ``folder`` (new), then its figures and report; if
     those fail, the tables stay, a warning says so, and the folder is returned all the same."""
-    from oscillator.io.files import check_name
     from oscillator.io.runs import claim_output, finish_or_warn
 
     if branch.case is None:
         raise InputError("this branch carries no case to save with it; build it with continue_orbit",
                          field="case")  # fmt: skip
-    folder = Path(folder)
-    check_name(folder, option="folder")
-    claim = claim_output(folder, f"{branch.case.name}-continue")
+    claim = claim_output(Path(folder), f"{branch.case.name}-continue")
     path = write_branch(branch, branch.case, claim, coordinate=coordinate, sweep_points=None,
                         command=["python", "oscillator.Branch.save"])  # fmt: skip
     finish_or_warn(lambda: finish_branch(path), path)
@@ -491,11 +488,11 @@ def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
     """Write ``orbit`` as the run folder of one return (:meth:`Orbit.one_period`), ``run.json``
     holding ``"kind": "orbit"`` and :func:`orbit_info`; then its figures and report."""
     from oscillator.hybrid.simulate import simulate
-    from oscillator.io.files import check_name
+    from oscillator.io.files import check_new
     from oscillator.io.runs import claim_output, finish_or_warn, finish_run, write_run
 
     folder = Path(folder)
-    check_name(folder, option="folder")
+    check_new(folder)  # before the simulation: a taken name is refused at once
     result = simulate(orbit.one_period())
     claim = claim_output(folder, f"{orbit.case.name}-orbit")
     path = write_run(result, claim, command=["python", "oscillator.Orbit.save"],
@@ -524,9 +521,15 @@ def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict) ->
     period = data.get("period")
     if isinstance(period, bool) or not isinstance(period, int) or period < 1:
         raise _damaged(where, "orbit.period is not a whole number >= 1")
-    texts = [data.get("note", ""), *data.get("discontinuous", []), *map(str, data.get("resting", []))]
-    if not all(isinstance(text, str) for text in texts) or not isinstance(data.get("stable"), bool):
-        raise _damaged(where, "orbit.note, orbit.discontinuous or orbit.stable is of the wrong kind")
+    resting, discontinuous, history = data.get("resting", []), data.get("discontinuous", []), data.get("history", [])
+    if not (isinstance(resting, list) and all(m in (1, 2) and not isinstance(m, bool) for m in resting)):
+        raise _damaged(where, "orbit.resting must be a list of masses, 1 or 2")
+    if not (isinstance(discontinuous, list) and all(v in ("v1", "v2") for v in discontinuous)):
+        raise _damaged(where, "orbit.discontinuous must be a list of v1, v2")
+    if not isinstance(data.get("note", ""), str) or not isinstance(data.get("stable"), bool):
+        raise _damaged(where, "orbit.note must be text and orbit.stable true or false")
+    if not isinstance(history, list):
+        raise _damaged(where, "orbit.history must be a list of numbers")
     pairs = numbers("multipliers", (4, 2))
     return Orbit(
         case=case,
@@ -539,9 +542,9 @@ def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict) ->
         residual=float(numbers("residual", ())),
         iterations=int(numbers("iterations", ())),
         events=events,
-        history=tuple(float(v) for v in numbers("history", (len(data.get("history") or []),))),
-        resting=tuple(int(m) for m in data.get("resting", []) if m in (1, 2)),
-        discontinuous=tuple(data.get("discontinuous", [])),
+        history=tuple(float(v) for v in numbers("history", (len(history),))),
+        resting=tuple(resting),
+        discontinuous=tuple(discontinuous),
         note=data.get("note", ""),
     )
 
