@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import importlib
 
+from oscillator import presenting as _presenting
+from oscillator import views as _views
+from oscillator.version import __version__ as __version__
+
 #: ``typing.TYPE_CHECKING`` without importing ``typing``: the command starts faster, and a
 #: Ctrl-C in its first milliseconds reaches code that can catch it sooner.
 TYPE_CHECKING = False
-
-__version__ = "0.2.0"
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
@@ -37,6 +39,7 @@ _EXPORTS = {
     "InputError": "oscillator.errors",
     "SimulationFailed": "oscillator.errors",
     "Interrupted": "oscillator.errors",
+    "Reason": "oscillator.errors",
     "Result": "oscillator.hybrid.result",
     "Status": "oscillator.hybrid.result",
     "EnergyAudit": "oscillator.hybrid.result",
@@ -63,6 +66,7 @@ __all__ = [
     "Orbit",
     "OscillatorError",
     "Parameters",
+    "Reason",
     "Result",
     "SimulationFailed",
     "SolverOptions",
@@ -79,7 +83,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
-    from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
+    from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status
     from oscillator.hybrid.simulate import simulate
     from oscillator.io.cases import Case, ExpectedEvent, case_names, load_case, resolve_case
@@ -89,6 +93,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.continuation import Branch, continue_orbit
     from oscillator.orbits.shooting import Orbit, find_orbit
     from oscillator.saved import read_run
+
+
+# The results' plot/save/_repr_html_ go through this (the computing layers import no report).
+_presenting.register(_views.Views())
 
 
 def __getattr__(name: str) -> object:

@@ -14,13 +14,64 @@ carries the partial result the same way (a ``Result``, or the ``Branch`` traced 
 
 from __future__ import annotations
 
+import enum
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
     from oscillator.orbits.continuation import Branch
 
-__all__ = ["InputError", "Interrupted", "OscillatorError", "SimulationFailed"]
+__all__ = ["InputError", "Interrupted", "OscillatorError", "Reason", "SimulationFailed"]
+
+
+class Reason(enum.StrEnum):
+    """Why a run, an orbit or a point of a branch did not succeed: what a program reads (the
+    message says it to a person)."""
+
+    SOLVER_FAILURE = "solver_failure"
+    """The integrator returned an error flag (CVODE's, or SciPy's)."""
+    STEP_LIMIT = "step_limit"
+    """More than ``max_num_steps`` steps without a switch."""
+    UNSEEN_CROSSING = "unseen_crossing"
+    """A guard: the state crossed a boundary between two steps, unseen by the root finding."""
+    STALL = "stall"
+    """A guard: the solver keeps stopping at roots at one instant without a switch."""
+    STORM = "storm"
+    """A guard: more than ``storm_events`` events within ``storm_window``, or endless switching
+    at one instant."""
+    MAX_EVENTS = "max_events"
+    """More than ``max_events`` events in all."""
+    MAX_ROWS = "max_rows"
+    """The trajectory passed ``max_trajectory_rows`` rows."""
+    ARITHMETIC = "arithmetic"
+    """The forces left floating point (an overflow or an invalid operation)."""
+    INTERRUPTED = "interrupted"
+    """Ctrl-C."""
+    NO_CONVERGENCE = "no_convergence"
+    """Newton's method (an orbit, a corrector step) did not converge."""
+    SINGULAR = "singular"
+    """Newton's system is singular (a multiplier 1: a fold, or a family of orbits)."""
+    NO_MONODROMY = "no_monodromy"
+    """No monodromy matrix: the orbit grazes a boundary (the saltation matrix is undefined)."""
+    NO_ORBIT = "no_orbit"
+    """No orbit where one was sought (a located bifurcation's side, the end of a range)."""
+    MAX_POINTS = "max_points"
+    """A continuation computed ``max_points`` points before it reached its end."""
+    REFUSED = "refused"
+    """The input was refused before anything ran (:class:`InputError`: a sweep's value the model
+    does not admit)."""
+
+    @property
+    def guard(self) -> bool:
+        """Stopped by one of the run's guards, not by the integrator."""
+        return self in (
+            Reason.UNSEEN_CROSSING,
+            Reason.STALL,
+            Reason.STORM,
+            Reason.MAX_EVENTS,
+            Reason.MAX_ROWS,
+            Reason.STEP_LIMIT,
+        )
 
 
 class OscillatorError(ValueError):
@@ -49,14 +100,18 @@ class SimulationFailed(OscillatorError):
 
     Attributes
     ----------
+    reason : Reason
+        Why, for a program to read.
     result : Result or None
         The partial result up to the last point reached (``result.status`` is
-        ``Status.FAILED``); ``None`` only while the supervisor raises it, before
-        :func:`oscillator.simulate` attaches the result.
+        ``Status.FAILED``, ``result.reason`` this reason); ``None`` only while the supervisor
+        raises it, before :func:`oscillator.simulate` attaches the result, and for the orbit
+        code's failures.
     """
 
-    def __init__(self, message: str, *, field: str | None = None, result: Result | None = None) -> None:
+    def __init__(self, message: str, *, reason: Reason, field: str | None = None, result: Result | None = None) -> None:
         super().__init__(message, field=field)
+        self.reason = reason
         self.result = result
 
 

@@ -26,16 +26,16 @@ def read_run(folder: str | Path) -> Result | Orbit | Branch:
     InputError
         Not such a folder, or a file in it missing or damaged (named in the message).
     """
-    from oscillator.io.runs import folder_kind, read_run_folder, result_of
+    from oscillator.report.runs import folder_kind, read_run_folder, result_of
 
     folder = Path(folder)
     if folder_kind(folder) == "branch":
-        from oscillator.orbits.output import read_branch
+        from oscillator.report.orbits import read_branch
 
         return read_branch(folder).branch
     run = read_run_folder(folder)
     if run.run.get("kind") == "orbit":
-        from oscillator.orbits.output import orbit_of_folder
+        from oscillator.report.orbits import orbit_of_folder
 
         return orbit_of_folder(folder, run.case, run.events, run.run)
     return result_of(run)

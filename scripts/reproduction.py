@@ -8,7 +8,7 @@ With --check, exit 1 if docs/reproduction.md differs from what the case files gi
 import sys
 from pathlib import Path
 
-from oscillator.analysis.reproduction import render_markdown
+from oscillator.report.reproduction import render_markdown
 
 INSTANCES = [f"instance-{i}" for i in range(1, 6)]
 TARGET = Path(__file__).resolve().parents[1] / "docs" / "reproduction.md"

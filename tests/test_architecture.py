@@ -36,11 +36,13 @@ def top_level_imports(tree: ast.Module, known: set[str]) -> set[str]:
 def test_no_import_cycles():
     trees = modules()
     graph = {name: top_level_imports(tree, set(trees)) & set(trees) for name, tree in trees.items()}
-    # a package's __init__ is imported before its modules: an edge to every parent package
+    # a package's __init__ is imported before its modules: an edge to every parent package (but
+    # from a module the package itself imports while it starts: Python runs it then)
     for name in trees:
         parent = name.rpartition(".")[0]
         while parent:
-            graph[name].add(parent)
+            if name not in graph[parent]:
+                graph[name].add(parent)
             parent = parent.rpartition(".")[0]
     state: dict[str, int] = {}
     cycles = []
@@ -74,6 +76,68 @@ def test_no_function_is_longer_than_60_lines():
     assert long == []
 
 
+#: The layers, lowest first (docs/architecture.md): a module imports only from its own unit (a
+#: subpackage, or a top-level module) or from a lower layer; the units of the first layer (the
+#: base: plain modules) and of the last (the public API) also from each other.
+LAYERS = (
+    ("errors", "text", "compiled", "folders", "presenting", "process", "version"),
+    ("model",),
+    ("engines", "io"),
+    ("hybrid",),
+    ("analysis", "orbits"),
+    ("report",),
+    ("cli",),
+    ("__init__", "__main__", "saved", "views"),
+)
+LAYER = {unit: rank for rank, units in enumerate(LAYERS) for unit in units}
+
+
+def unit_of(module: str) -> str:
+    """``oscillator.model.fields`` -> ``model``; ``oscillator.saved`` -> ``saved``; ``oscillator`` -> ``__init__``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def every_import(tree: ast.Module) -> list[tuple[int, str]]:
+    """``(line, module)`` of every import of the package, top-level or in a function (lazy), but
+    those under ``if TYPE_CHECKING:`` (annotations: never run)."""
+    skipped = {id(node) for block in ast.walk(tree) if isinstance(block, ast.If)
+               and getattr(block.test, "id", None) == "TYPE_CHECKING" for node in ast.walk(block)}  # fmt: skip
+    found = []
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "oscillator":
+            if node.module == "oscillator":  # from oscillator import presenting: the named modules
+                found += [(node.lineno, f"oscillator.{alias.name}") for alias in node.names]
+            else:
+                found.append((node.lineno, node.module))
+        elif isinstance(node, ast.Import):
+            found += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] == "oscillator"]
+    return found
+
+
+def test_every_module_imports_only_its_own_layer_and_those_below():
+    """No upward import anywhere in the package, lazy ones included."""
+    trees = modules()
+    upward = []
+    for name, tree in trees.items():
+        here = unit_of(name)
+        for line, module in every_import(tree):
+            there = unit_of(module)
+            if there not in LAYER:  # `from oscillator import simulate`: the API's name
+                there = "__init__"
+            shared = LAYER[there] == LAYER[here] in (0, len(LAYERS) - 1)
+            if there != here and LAYER[there] >= LAYER[here] and not shared:
+                upward.append(f"{name}:{line} imports {module}")
+    assert upward == []
+
+
+def test_every_unit_has_a_layer():
+    units = {unit_of(name) for name in modules()}
+    assert units <= set(LAYER), units - set(LAYER)
+
+
 def test_the_model_does_not_know_the_layers_above_it():
     """model/ is the article's system: it imports no engine, supervisor, file, report or command."""
     above = ("oscillator.engines", "oscillator.hybrid", "oscillator.io", "oscillator.analysis", "oscillator.report",
@@ -84,3 +148,11 @@ def test_the_model_does_not_know_the_layers_above_it():
             for node in ast.walk(tree):
                 if isinstance(node, ast.ImportFrom) and node.module:
                     assert not node.module.startswith(above), f"{name} imports {node.module}"
+
+
+def test_the_formatter_is_never_switched_off():
+    """Functions are short because they are, not because ``# fmt: skip`` packs their lines."""
+    packed = [f"{path.relative_to(PACKAGE)}:{n}" for path in sorted(PACKAGE.rglob("*.py"))
+              for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+              if "fmt: skip" in line or "fmt: off" in line]  # fmt: skip
+    assert packed == []

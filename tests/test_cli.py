@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from oscillator import Event, SolverOptions, load_case, simulate
 from oscillator.cli.app import app
-from oscillator.io.runs import read_events_csv
+from oscillator.report.runs import read_events_csv
 
 runner = CliRunner()
 
@@ -279,7 +279,7 @@ def test_a_failure_while_writing_leaves_no_half_written_folder(tmp_path, monkeyp
     def broken(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("oscillator.io.runs.case_to_toml", broken)
+    monkeypatch.setattr("oscillator.report.runs.case_to_toml", broken)
     folder = tmp_path / "x"
     result = runner.invoke(app, ["run", "instance-1", "--out", str(folder), "--no-plots"], catch_exceptions=False)
     assert result.exit_code == 1 and "Traceback" not in result.stderr

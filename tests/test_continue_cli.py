@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from conftest import start_reaching
+from oscillator import Reason, read_run
 from test_hostile import TIMEOUT, _limit_file_size, oscillator, refused, snapshot
 
 #: Every test runs the installed command in a subprocess: slow.
@@ -37,6 +38,7 @@ def test_a_branch_that_ends_early_exits_1_and_keeps_what_it_traced(work):
     assert "the branch so far is in x" in done.stderr and "Traceback" not in done.stderr
     info = run_json(work / "x")
     assert info["status"] == "incomplete" and info["complete"] is False and info["pending"] == []
+    assert info["reason"] == "max_points" and read_run(work / "x").reason is Reason.MAX_POINTS
     assert len(pd.read_parquet(work / "x" / "branch.parquet")) == 3
     assert "Ended early: max\\_points = 3 reached" in (work / "x" / "report.md").read_text(encoding="utf-8")
 
@@ -71,7 +73,7 @@ def test_ctrl_c_during_the_continuation_keeps_the_branch_so_far(work):
 
 
 def test_ctrl_c_while_the_figures_are_drawn_keeps_the_branch_and_report_finishes_it(work):
-    code, stderr = interrupted_at("oscillator.orbits.output.draw_branch", [*CONTINUE, "--out", "x"], work)
+    code, stderr = interrupted_at("oscillator.report.orbits.draw_branch", [*CONTINUE, "--out", "x"], work)
     assert code == 130 and "Traceback" not in stderr, stderr
     assert "error: interrupted; the branch's tables are in x; `oscillator report x` makes" in stderr
     info = run_json(work / "x")

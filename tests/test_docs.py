@@ -78,7 +78,8 @@ def test_the_case_file_example_does_what_its_title_says(tmp_path):
 
 def test_the_readme_says_what_the_reproduction_page_shows():
     from oscillator import load_case, simulate
-    from oscillator.analysis.reproduction import _summary, compare
+    from oscillator.analysis.reproduction import compare
+    from oscillator.report.reproduction import _summary
 
     tables = {name: compare(load_case(name), simulate(name, record_trajectory=False).events)
               for name in (f"instance-{i}" for i in range(1, 6))}  # fmt: skip

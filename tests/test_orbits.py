@@ -13,7 +13,8 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import random_case
-from oscillator import InputError, resolve_case
+from oscillator import InputError, Reason, resolve_case
+from oscillator.model.events import EventKind
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.continuation import continue_orbit
 from oscillator.orbits.saltation import elementary_switches
@@ -94,7 +95,7 @@ def test_newton_converges_quadratically():
 
 def test_the_orbit_is_a_fixed_point_of_the_simulation():
     orbit = find_orbit("instance-1", Q2=70.5)
-    assert orbit.signature.count("sliding_onset") == 2
+    assert orbit.signature.count((2, EventKind.SLIDING_ONSET)) == 2
     assert orbit.stable and np.max(np.abs(orbit.multipliers)) < 1
     image = period_map(orbit.case, orbit.section, orbit.state, derivative=False)
     assert np.max(np.abs(image.end - orbit.state)) < 1e-9
@@ -251,7 +252,7 @@ def test_the_cyclic_signature_is_each_mass_s_own_cycle_of_switches():
 
     def signature(events):
         table = pd.DataFrame(events, columns=["t", "mass", "kind"])
-        return cyclic_signature(PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table))
+        return str(cyclic_signature(PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table)))
 
     a = signature([(0.2, 1, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])
     rotated = signature([(0.1, 2, "sliding_vanish"), (0.6, 2, "passable"), (1.3, 1, "passable"),
@@ -359,9 +360,9 @@ def test_newton_says_when_it_went_from_one_kind_of_motion_to_another():
     """A guess on the resting orbit's side at a Q2 where that orbit no longer exists: Newton
     converges to the orbit without rest, and says that it changed kind."""
     resting = find_orbit("instance-1", Q2=71.1)
-    assert resting.signature.count("sliding_onset") == 2 and resting.note == ""
+    assert resting.signature.count((2, EventKind.SLIDING_ONSET)) == 2 and resting.note == ""
     other = find_orbit("instance-1", Q2=71.2, guess=resting.state)
-    assert "sliding" not in other.signature
+    assert not any(kind.starts_rest for _, kind in other.signature)
     assert "another cycle of switches" in other.note and "sliding_onset" in other.note
 
 
@@ -379,4 +380,5 @@ def test_the_python_api_raises_interrupted_with_the_partial_branch():
         continue_orbit("instance-1", param="Q2", start=71.3, stop=71.0, step=0.1, progress=progress)
     branch = stopped.value.result
     assert branch.complete is False and branch.message.startswith("interrupted at Q2 = ")
+    assert branch.reason is Reason.INTERRUPTED
     assert len(branch.points) == 3 and branch.points.Q2.iloc[0] == 71.3

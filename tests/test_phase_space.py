@@ -80,3 +80,27 @@ def test_mode_transitions():
     assert resting.domain2 == 0 and resting.system_state == "IV-c"
     assert resting.boundary_label(2) == "∂Ω56(2)"
     assert resting.boundary_label(1) == "∂Ω78(1)"
+
+
+def test_the_compiled_numbering_is_the_numbering():
+    """The switching rules' compiled numbering and phase_space's agree everywhere (one definition)."""
+    from oscillator.model import numbering, numbering_kernels
+
+    for mass in (1, 2):
+        for left in (0, 1):
+            for right in (0, 1):
+                for sign in (-1, 0, 1):
+                    expected = domain_of(mass, sign, left=bool(left), right=bool(right))
+                    assert numbering_kernels.domain_code(mass, sign, left, right) == expected
+                    assert numbering.domain_code(mass, sign, left, right) == expected
+                code = numbering_kernels.velocity_boundary_code(mass, left, right)
+                assert code == numbering.velocity_boundary_code(mass, left, right)
+                a, b = velocity_boundary(mass, left=bool(left), right=bool(right))
+                assert (velocity_sign(mass, a), velocity_sign(mass, b)) == ((1, -1) if mass == 1 else (-1, 1))
+        for a in range(9):
+            assert numbering_kernels.velocity_sign_code(mass, a) == velocity_sign(mass, a)
+            for b in range(9):
+                assert numbering_kernels.displacement_boundary_code(mass, a, b) == (
+                    numbering.displacement_boundary_code(mass, a, b))  # fmt: skip
+    codes = {numbering_kernels.state_code(*flags) for flags in itertools.product((0, 1), repeat=4)}
+    assert codes == set(range(16))

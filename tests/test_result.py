@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from oscillator import OscillatorError, simulate
+from oscillator import OscillatorError, Reason, Status, simulate
 
 REQUIRED_EVENT_COLUMNS = ["t", "mass", "kind", "boundary", "from_domain", "to_domain", "theorem", "equation",
                           "branch", "x1", "v1", "x2", "v2"]  # fmt: skip
@@ -58,6 +58,9 @@ def test_event_count_guard_names_the_last_event():
     # the partial record travels with the error; the instant that tripped it is kept whole
     assert info.value.result.events.kind.tolist()[-2:] == ["left_contact_onset"] * 2
     assert len(info.value.result.events) == 5
+    # the reason, for a program: on the error and on its partial result
+    assert info.value.reason is Reason.MAX_EVENTS and info.value.reason.guard
+    assert info.value.result.reason is Reason.MAX_EVENTS and info.value.result.status is Status.FAILED
 
 
 def test_a_long_rest_under_forcing_is_not_a_stall(build):
@@ -99,3 +102,16 @@ def test_the_tables_read_any_number_of_times_and_from_copies():
         pd.testing.assert_frame_equal(copy.events, events)
         pd.testing.assert_frame_equal(copy.trajectory, trajectory)
     assert len(events) == 8 and len(trajectory) > 100
+
+
+def test_run_json_is_written_and_checked_by_one_table(tmp_path):
+    """What run_info writes passes every check of RUN_JSON; each field damaged in turn is named."""
+    from oscillator.report.runs import RUN_JSON, _check_run_info, run_info
+
+    info = run_info(simulate("instance-3", record_trajectory=False))
+    assert set(RUN_JSON) - {"versions", "check", "figures"} <= set(info)
+    assert _check_run_info(dict(info), tmp_path / "run.json") == info
+    for key in RUN_JSON:
+        with pytest.raises(OscillatorError, match=rf"run.json is damaged.*\b{key}\b") as caught:
+            _check_run_info({**info, key: [[1]]}, tmp_path / "run.json")
+        assert caught.value.field is not None

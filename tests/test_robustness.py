@@ -22,11 +22,11 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from conftest import CHATTER, assert_same_tables, chatter_case, start_reaching, start_running
-from oscillator import OscillatorError, Parameters, SolverOptions, Status, load_case, simulate
+from oscillator import OscillatorError, Parameters, Reason, SolverOptions, Status, load_case, simulate
 from oscillator.analysis.sweeps import read_sweep
 from oscillator.cli.app import app
 from oscillator.io.cases import case_to_toml
-from oscillator.io.runs import read_events_csv, read_run_folder
+from oscillator.report.runs import read_events_csv, read_run_folder
 
 runner = CliRunner()
 #: Only against a hang: a loaded machine may take many times the usual seconds.
@@ -49,6 +49,7 @@ def test_too_many_steps_stops_with_time_domains_state_and_keeps_the_partial_resu
     first = full.events.iloc[0]  # m1 crosses its velocity boundary at 1.5621 s, into domain 2
     assert f"CVODE failed after t = {first.t:.10g} s with flag -1" in message
     assert "max_num_steps" in message and "m1: 2, m2: 1" in message and "x1=" in message
+    assert error.reason is Reason.SOLVER_FAILURE and not error.reason.guard
     partial = error.result
     assert partial.status is Status.FAILED and not partial.success and partial.message == message
     assert partial.final_state[0] == first.t
@@ -85,7 +86,7 @@ def test_a_chattering_case_stops_with_the_boundary_and_the_time():
         simulate(chatter_case(), record_trajectory=False)
     assert time.perf_counter() - started < 60  # it would otherwise run for 3.2e7 events
     error = caught.value
-    assert error.field == "storm_events"
+    assert error.field == "storm_events" and error.reason is Reason.STORM
     message = str(error)
     assert message.startswith("event storm: 1001 events within")
     assert "1000 of them mass 2 passable on ∂Ω12(2)" in message and "raise storm_events" in message
@@ -214,7 +215,7 @@ KILLED_WHILE_WRITING = textwrap.dedent(
     import sys, time
     from pathlib import Path
     from oscillator import simulate
-    from oscillator.io import runs as output
+    from oscillator.report import runs as output
     from oscillator.io import cases
 
     result = simulate("instance-3")
@@ -497,7 +498,7 @@ def test_positive_parameters_below_any_physical_scale_are_refused(name, value):
 def test_run_json_is_strict_json_even_with_infinite_values():
     import json
 
-    from oscillator.io.runs import json_text
+    from oscillator.report.runs import json_text
 
     text = json_text({"energy": {"E0": math.inf, "residual": math.nan, "E1": np.float64(2.5)}, "n": np.int64(3)})
     assert json.loads(text) == {"energy": {"E0": None, "residual": None, "E1": 2.5}, "n": 3}

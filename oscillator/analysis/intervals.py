@@ -7,7 +7,10 @@ domain) and the figures (rest shading) each ask of a sequence of states.
 from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
 
 __all__ = ["rest_intervals", "runs", "spans"]
 
@@ -39,7 +42,9 @@ def spans(times: Sequence[float], states: Sequence[S], end: float) -> list[tuple
     return [(state, times[i], times[j] if j < len(times) else end) for state, i, j in runs(states)]
 
 
-def rest_intervals(events, mass: int, resting_at_start: bool, start: float, stop: float) -> list[tuple[float, float]]:
+def rest_intervals(
+    events: pd.DataFrame, mass: int, resting_at_start: bool, start: float, stop: float
+) -> list[tuple[float, float]]:
     """The intervals of ``[start, stop]`` in which ``mass`` rests, from its events (a table with
     ``t, mass, from_domain, to_domain``): a rest begins at an event into domain 0 and ends at
     one out of it; ``resting_at_start`` says whether it rests at ``start``.  Exact where a

@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 
 from oscillator.analysis.sweeps import PointTables, run_point
-from oscillator.errors import InputError, SimulationFailed
+from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.io.cases import Case
-from oscillator.model.parameters import SweepSettings, is_number
+from oscillator.model.parameters import SweepSettings, is_finite_number
 from oscillator.text import shown
 
 __all__ = ["INDICATORS", "Location", "locate"]
@@ -72,13 +72,13 @@ def locate(
     if what not in INDICATORS:
         raise InputError(f"what must be one of {', '.join(INDICATORS)}, got {shown(what)}", field="what")
     column = INDICATORS[what]
-    if len(between) != 2 or not all(is_number(v) and math.isfinite(v) for v in between):
+    if len(between) != 2 or not all(is_finite_number(v) for v in between):
         raise InputError(f"between needs two finite values, got {shown(between)}", field="between")
     a, b = float(min(between)), float(max(between))
     if not b > a:
         raise InputError(f"between needs two different values, got {shown(between)}", field="between")
     resolution = 4 * float(np.spacing(max(abs(a), abs(b))))
-    if not (is_number(tolerance) and math.isfinite(tolerance) and tolerance >= resolution):
+    if not (is_finite_number(tolerance) and tolerance >= resolution):
         raise InputError(
             f"tolerance must be a width of at least {resolution:.2g} (4 ulp of floating point at "
             f"{settings.param} = {b:g}), got {shown(tolerance)}",
@@ -92,7 +92,9 @@ def locate(
         point = run_point(case, settings, 0, value)
         row = point.summary.iloc[0]
         if row.status != "ok":
-            raise SimulationFailed(f"{settings.param} = {value!r}: {row.message}", field=settings.param)
+            raise SimulationFailed(
+                f"{settings.param} = {value!r}: {row.message}", reason=Reason(row.reason), field=settings.param
+            )
         return point
 
     low, high = evaluate(a, 1), evaluate(b, 2)

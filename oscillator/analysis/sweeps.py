@@ -42,10 +42,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from oscillator.analysis.intervals import rest_intervals, runs
-from oscillator.errors import InputError, OscillatorError
+from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
+from oscillator.model.events import EventKind
 from oscillator.model.parameters import SweepSettings, is_whole_number
 from oscillator.text import printable, shown
 
@@ -61,6 +62,9 @@ __all__ = [
     "run_sweep",
     "sliding_ranges",
 ]
+
+#: The values a sweep runs: ``(index, value)``.
+Tasks = list[tuple[int, float]]
 
 #: The tables a sweep writes, one Parquet file each.
 TABLES = ("switches", "poincare", "summary")
@@ -91,6 +95,7 @@ class PointSummary:
     end_v1: float = math.nan
     end_x2: float = math.nan
     end_v2: float = math.nan
+    reason: str = ""  #: why it failed, for a program (:class:`~oscillator.errors.Reason`), else empty
 
     def row(self, param: str, value: float) -> dict[str, Any]:
         return {param: value, **dataclasses.asdict(self)}
@@ -102,16 +107,33 @@ _DTYPES = {"int": "int64", "float": "float64", "bool": "bool", "str": "str"}
 def _columns(param: str) -> dict[str, dict[str, str]]:
     """Column names and dtypes of each table; the swept parameter comes first."""
     return {
-        "switches": {param: "float64", "index": "int64", "t": "float64", "phase": "float64", "kind": "str",
-                     "boundary": "str", "from_domain": "int64", "to_domain": "int64", "x": "float64",
-                     "v": "float64"},
-        "poincare": {param: "float64", "index": "int64", "n": "int64", "t": "float64", "x1": "float64",
-                     "v1": "float64", "x2": "float64", "v2": "float64"},
+        "switches": {
+            param: "float64",
+            "index": "int64",
+            "t": "float64",
+            "phase": "float64",
+            "kind": "str",
+            "boundary": "str",
+            "from_domain": "int64",
+            "to_domain": "int64",
+            "x": "float64",
+            "v": "float64",
+        },
+        "poincare": {
+            param: "float64",
+            "index": "int64",
+            "n": "int64",
+            "t": "float64",
+            "x1": "float64",
+            "v1": "float64",
+            "x2": "float64",
+            "v2": "float64",
+        },
         "summary": {param: "float64", **{f.name: _DTYPES[str(f.type)] for f in dataclasses.fields(PointSummary)}},
-    }  # fmt: skip
+    }
 
 
-def _frame(rows: list[dict] | dict, columns: dict[str, str]) -> pd.DataFrame:
+def _frame(rows: list[dict[str, Any]] | dict[str, Any], columns: dict[str, str]) -> pd.DataFrame:
     frame = pd.DataFrame(rows if isinstance(rows, list) else [rows], columns=list(columns))
     return frame.astype(columns)
 
@@ -163,8 +185,11 @@ def _point_case(
     period, t0 = point.parameters.period, point.initial.t0
     marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
     if not (np.isfinite(marks).all() and np.all(np.diff(marks) > 0) and marks[0] >= t0 and marks[-1] > t0):
-        raise InputError(f"{param} = {value!r}: its forcing period, {period:.3g} s, is lost beside t0 = {t0:g} s in "
-                         f"floating point; give a {param} of physical size", field=param)  # fmt: skip
+        raise InputError(
+            f"{param} = {value!r}: its forcing period, {period:.3g} s, is lost beside t0 = {t0:g} s in "
+            f"floating point; give a {param} of physical size",
+            field=param,
+        )
     return point, marks
 
 
@@ -203,48 +228,89 @@ def run_point(
         point, marks = _point_case(case, settings, value, from_state)
         result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
     except OscillatorError as error:
-        failed = PointSummary(index, "failed", str(error), wall_time=time.perf_counter() - started,
-                              direction=direction)  # fmt: skip
-        return PointTables(index, value, _frame([], columns["switches"]), _frame([], columns["poincare"]),
-                           _frame(failed.row(param, value), columns["summary"]))  # fmt: skip
+        reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
+        failed = PointSummary(
+            index,
+            "failed",
+            str(error),
+            wall_time=time.perf_counter() - started,
+            direction=direction,
+            reason=reason.value,
+        )
+        empty = _frame([], columns["switches"]), _frame([], columns["poincare"])
+        return PointTables(index, value, *empty, _frame(failed.row(param, value), columns["summary"]))
 
-    start, stop, period, omega = float(marks[0]), float(marks[-1]), point.parameters.period, point.parameters.Omega
+    start, stop = float(marks[0]), float(marks[-1])
     events = result.events
     window = events[(events.mass == mass) & (events.t >= start) & (events.t <= stop)]
-    switches = _frame(
-        [
-            {param: value, "index": index, "t": row.t, "phase": math.fmod(omega * row.t, 2 * math.pi),
-             "kind": row.kind, "boundary": row.boundary, "from_domain": row.from_domain,
-             "to_domain": row.to_domain, "x": getattr(row, f"x{mass}"), "v": getattr(row, f"v{mass}")}
-            for row in window.itertuples()
-        ],
-        columns["switches"],
-    )  # fmt: skip
+    switches = _switch_rows(window, param, value, index, mass, point.parameters.Omega, columns["switches"])
     trajectory = result.trajectory
-    poincare = _frame(
-        [
-            {param: value, "index": index, "n": settings.transient + k, "t": row.t, "x1": row.x1, "v1": row.v1,
-             "x2": row.x2, "v2": row.v2}
-            for k, row in enumerate(trajectory.itertuples())
-        ],
-        columns["poincare"],
-    )  # fmt: skip
-    points = poincare[["x1", "v1", "x2", "v2"]].to_numpy()
-    n = detect_period(points, settings.period_tolerance, settings.max_period)
-    domain_at_start = int(trajectory[f"domain{mass}"].iloc[0])
-    rest, intervals = _rest_time(events, mass, domain_at_start, start, stop)
-    crossings = window[window.kind.isin(["passable", "sliding_onset"])]
-    grazings = window[window.kind == "grazing"]  # reports: they switch nothing
+    poincare = _poincare_rows(trajectory, param, value, index, settings.transient, columns["poincare"])
+    n = detect_period(poincare[["x1", "v1", "x2", "v2"]].to_numpy(), settings.period_tolerance, settings.max_period)
+    rest, intervals = _rest_time(events, mass, int(trajectory[f"domain{mass}"].iloc[0]), start, stop)
+    crossings = window[window.kind.isin(EventKind.values_where(lambda kind: kind.reaches_velocity_boundary))]
+    grazings = window[~window.kind.isin(EventKind.values_where(lambda kind: kind.switches))]  # reports only
+    record = settings.record
     summary = PointSummary(
-        index, period=n, periodic=n > 0, sliding=rest > 0,
-        sliding_periods=_periods_with_rest(intervals, start, period, settings.record),
-        rest_time_per_period=rest / settings.record,
-        switches_per_period=(len(window) - len(grazings)) / settings.record,
-        crossings_per_period=len(crossings) / settings.record, grazings_per_period=len(grazings) / settings.record,
-        wall_time=time.perf_counter() - started, direction=direction, end_x1=result.final_state[1],
-        end_v1=result.final_state[2], end_x2=result.final_state[3], end_v2=result.final_state[4],
-    ).row(param, value)  # fmt: skip
+        index,
+        period=n,
+        periodic=n > 0,
+        sliding=rest > 0,
+        sliding_periods=_periods_with_rest(intervals, start, point.parameters.period, record),
+        rest_time_per_period=rest / record,
+        switches_per_period=(len(window) - len(grazings)) / record,
+        crossings_per_period=len(crossings) / record,
+        grazings_per_period=len(grazings) / record,
+        wall_time=time.perf_counter() - started,
+        direction=direction,
+        end_x1=result.final_state[1],
+        end_v1=result.final_state[2],
+        end_x2=result.final_state[3],
+        end_v2=result.final_state[4],
+    ).row(param, value)
     return PointTables(index, value, switches, poincare, _frame(summary, columns["summary"]))
+
+
+def _switch_rows(
+    window: pd.DataFrame, param: str, value: float, index: int, mass: int, omega: float, columns: dict[str, str]
+) -> pd.DataFrame:
+    """``switches.parquet``'s rows of one value: the swept mass's events in the recorded window."""
+    rows = [
+        {
+            param: value,
+            "index": index,
+            "t": row.t,
+            "phase": math.fmod(omega * row.t, 2 * math.pi),
+            "kind": row.kind,
+            "boundary": row.boundary,
+            "from_domain": row.from_domain,
+            "to_domain": row.to_domain,
+            "x": getattr(row, f"x{mass}"),
+            "v": getattr(row, f"v{mass}"),
+        }
+        for row in window.itertuples()
+    ]
+    return _frame(rows, columns)
+
+
+def _poincare_rows(
+    trajectory: pd.DataFrame, param: str, value: float, index: int, transient: int, columns: dict[str, str]
+) -> pd.DataFrame:
+    """``poincare.parquet``'s rows of one value: the state once a period after the transient."""
+    rows = [
+        {
+            param: value,
+            "index": index,
+            "n": transient + k,
+            "t": row.t,
+            "x1": row.x1,
+            "v1": row.v1,
+            "x2": row.x2,
+            "v2": row.v2,
+        }
+        for k, row in enumerate(trajectory.itertuples())
+    ]
+    return _frame(rows, columns)
 
 
 def sliding_ranges(summary: pd.DataFrame, param: str, direction: str | None = None) -> list[tuple[float, float]]:
@@ -292,8 +358,7 @@ class _Store:
         marker = self.folder / "sweep.json"
         if not os.path.lexists(marker):
             if any(self.folder.iterdir()):
-                raise InputError(f"folder {shown} exists and is not a sweep folder; give a new folder",
-                                      field="folder")  # fmt: skip
+                raise InputError(f"folder {shown} exists and is not a sweep folder; give a new folder", field="folder")
             return
         text = read_untrusted(marker, what="sweep file", field="sweep.json", limit=_MAX_SWEEP_JSON)
         try:
@@ -320,8 +385,11 @@ class _Store:
             except Exception as exc:  # pyarrow raises many types for a damaged file
                 if isinstance(exc, MemoryError):
                     raise
-                raise _damaged(part, "it is not a part of this sweep",
-                               "delete it, and run the same command to compute that point again") from exc  # fmt: skip
+                raise _damaged(
+                    part,
+                    "it is not a part of this sweep",
+                    "delete it, and run the same command to compute that point again",
+                ) from exc
         self.resuming = True
 
     def open(self) -> None:
@@ -339,12 +407,17 @@ class _Store:
                 field="folder",
             ) from exc
 
-    def _status(self, status: str, **extra) -> str:
-        info = {"identity": self.identity, "status": status, "param": self.settings.param,
-                "points": len(self.settings.points), **extra}  # fmt: skip
+    def _status(self, status: str, **extra: Any) -> str:
+        info = {
+            "identity": self.identity,
+            "status": status,
+            "param": self.settings.param,
+            "points": len(self.settings.points),
+            **extra,
+        }
         return json.dumps(info, indent=2, default=str)
 
-    def write_status(self, status: str, **extra) -> None:
+    def write_status(self, status: str, **extra: Any) -> None:
         replace_file(self.folder / "sweep.json", self._status(status, **extra))
 
     def done(self) -> set[int]:
@@ -395,13 +468,13 @@ def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
 # --------------------------------------------------------------------------- execution
 
 
-def _points_serial(case, settings, tasks) -> Iterator[PointTables]:
+def _points_serial(case: Case, settings: SweepSettings, tasks: Tasks) -> Iterator[PointTables]:
     directions = dict(enumerate(direction for direction, _ in settings.points))
     for index, value in tasks:
         yield run_point(case, settings, index, value, direction=directions[index])
 
 
-def _points_following(case, settings, tasks, store: _Store) -> Iterator[PointTables]:
+def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: _Store) -> Iterator[PointTables]:
     """A both-ways sweep: each point from the state the point before it ended in (read from
     its stored summary when resuming), the first from the case's start; after a failed point,
     from the case's start again."""
@@ -420,7 +493,7 @@ def _points_following(case, settings, tasks, store: _Store) -> Iterator[PointTab
         yield point
 
 
-def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
+def _points_pool(case: Case, settings: SweepSettings, tasks: Tasks, workers: int) -> Iterator[PointTables]:
     """A local process pool; at most ``4 workers`` points in flight, so memory stays flat.
 
     The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator.io.signals`); on an
@@ -429,10 +502,11 @@ def _points_pool(case, settings, tasks, workers: int) -> Iterator[PointTables]:
     context = multiprocessing.get_context("spawn")
     quiet_resource_tracker()
     pending = iter(tasks)
-    running: set[cf.Future] = set()
+    running: set[cf.Future[Any]] = set()
     with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
-        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=prepare_worker,
-                                      initargs=(os.getpid(),))  # fmt: skip
+        pool = cf.ProcessPoolExecutor(
+            max_workers=workers, mp_context=context, initializer=prepare_worker, initargs=(os.getpid(),)
+        )
 
         def fill() -> None:
             for index, value in pending:
@@ -475,7 +549,7 @@ def _scheduler_address(scheduler: str) -> str:
     return scheduler
 
 
-def _connect(scheduler: str):
+def _connect(scheduler: str) -> Any:
     """A Dask client of the scheduler at ``scheduler``, or a clear error."""
     address = _scheduler_address(scheduler)
     try:
@@ -498,13 +572,14 @@ def _connect(scheduler: str):
         ) from exc
 
 
-def _points_dask(client, case, settings, tasks) -> Iterator[PointTables]:
+def _points_dask(client: Any, case: Case, settings: SweepSettings, tasks: Tasks) -> Iterator[PointTables]:
     from distributed import as_completed
 
     case_on_cluster = client.scatter(case, broadcast=True)
     direction = settings.points[0][0]  # one way: a both-ways sweep runs in this process
-    futures = [client.submit(run_point, case_on_cluster, settings, i, v, direction=direction, pure=False)
-               for i, v in tasks]  # fmt: skip
+    futures = [
+        client.submit(run_point, case_on_cluster, settings, i, v, direction=direction, pure=False) for i, v in tasks
+    ]
     try:
         for future in as_completed(futures):
             yield future.result()
@@ -537,7 +612,9 @@ class Sweep:
     after work started, and every point finished by then is kept in the folder.
     """
 
-    def __init__(self, case: Case, settings: SweepSettings, store: _Store, workers: int, client, lock) -> None:
+    def __init__(
+        self, case: Case, settings: SweepSettings, store: _Store, workers: int, client: Any, lock: Any
+    ) -> None:
         self.case, self.settings, self._store, self.workers = case, settings, store, workers
         self._client, self._lock = client, lock
 
@@ -602,8 +679,11 @@ def _check_values(case: Case, settings: SweepSettings) -> None:
     on a parameter are intervals: ``m1 > 0``, ``mu_s >= mu_k``, magnitudes; so the values
     between are valid too)."""
     if not all(math.isfinite(value) for value in settings.values):
-        raise InputError(f"stop: the values from {settings.start!r} to {settings.stop!r} leave floating point; "
-                         "give a range of physical size", field="stop")  # fmt: skip
+        raise InputError(
+            f"stop: the values from {settings.start!r} to {settings.stop!r} leave floating point; "
+            "give a range of physical size",
+            field="stop",
+        )
     for name in ("start", "stop"):
         value = getattr(settings, name)
         try:
@@ -642,8 +722,11 @@ def open_sweep(
         )
     client = _connect(scheduler) if scheduler else None
     try:
-        lock = lock_name(store.folder, busy=f"folder {printable(str(store.folder))} is being swept by another "
-                         f"process now; wait for it, or give another folder")  # fmt: skip
+        lock = lock_name(
+            store.folder,
+            busy=f"folder {printable(str(store.folder))} is being swept by another "
+            f"process now; wait for it, or give another folder",
+        )
     except OscillatorError:
         if client is not None:
             client.close()

@@ -23,10 +23,10 @@ from typing import Annotated
 import typer
 from rich.text import Text
 
-from oscillator import __version__
 from oscillator.cli import cases, check, console, orbit, run, sweep
 from oscillator.cli.console import err, out
 from oscillator.text import printable
+from oscillator.version import __version__
 
 __all__ = ["app", "main"]
 
@@ -98,7 +98,7 @@ def main(args: list[str] | None = None) -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
         code = 1
     if code == 130:
-        from oscillator.__main__ import interrupted_exit
+        from oscillator.process import interrupted_exit
 
         interrupted_exit()
     sys.exit(code if isinstance(code, int) else 0)

@@ -45,8 +45,11 @@ def _written(case: Case) -> dict[str, str]:
     table = data.get("parameters")
     if not isinstance(table, dict):
         return {}
-    return {name: f"{printable(text)} = {getattr(case.parameters, name):.10g}" for name, text in table.items()
-            if isinstance(text, str) and name in case.parameters.names()}  # fmt: skip
+    return {
+        name: f"{printable(text)} = {getattr(case.parameters, name):.10g}"
+        for name, text in table.items()
+        if isinstance(text, str) and name in case.parameters.names()
+    }
 
 
 def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")]) -> None:
@@ -67,8 +70,10 @@ def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case 
     for column in ("name", "value", "unit", "name ", "value ", "unit "):
         params.add_column(column, justify="right" if "value" in column else "left")
     written = _written(c)
-    items = [(name, written.get(name, f"{getattr(c.parameters, name):.10g}"), UNITS.get(name) or "-")
-             for name in c.parameters.names()]  # fmt: skip
+    items = [
+        (name, written.get(name, f"{getattr(c.parameters, name):.10g}"), UNITS.get(name) or "-")
+        for name in c.parameters.names()
+    ]
     half = (len(items) + 1) // 2
     for left, right in zip(items[:half], [*items[half:], ("", "", "")], strict=False):
         params.add_row(*left, *right)
@@ -84,7 +89,13 @@ def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case 
         for column in ("event", "mass", "kind", "domain", "article (s)", "reference (s)", "tolerance (s)"):
             table.add_column(column)
         for e in c.expected:
-            table.add_row(printable(e.label), str(e.mass), str(e.kind), "" if e.to_domain is None else str(e.to_domain),
-                          "—" if e.t is None else f"{e.t}", "—" if e.reference is None else f"{e.reference}",
-                          f"{e.tolerance:g}")  # fmt: skip
+            table.add_row(
+                printable(e.label),
+                str(e.mass),
+                str(e.kind),
+                "" if e.to_domain is None else str(e.to_domain),
+                "—" if e.t is None else f"{e.t}",
+                "—" if e.reference is None else f"{e.reference}",
+                f"{e.tolerance:g}",
+            )
         out.print(table)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich import box
@@ -12,8 +12,11 @@ from rich.text import Text
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import EngineOption, case_from, check_engine
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
-from oscillator.io.cases import is_shipped
+from oscillator.io.cases import Case, is_shipped
 from oscillator.text import printable, shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
 
 __all__ = ["check"]
 
@@ -54,21 +57,7 @@ def check(
         raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
     except KeyboardInterrupt:
         raise fail("interrupted", code=130) from None
-    view = Table(title=f"{printable(resolved.name)}: expected switching times (s)", title_justify="left",
-                 header_style="bold", box=box.SIMPLE_HEAD, pad_edge=False)  # fmt: skip
-    source = "article" if resolved.source is None or is_shipped(resolved.source) else "expected"
-    view.add_column("event", ratio=1, min_width=16)
-    for column in (source, "ref.", "ours", f"− {source}", "− ref.", "ok"):  # the differences: ours minus that
-        view.add_column(column, no_wrap=True, justify="right")
-    view.caption = f"ref.: the independent implementation; − {source}, − ref.: ours minus that time"
-    view.caption_justify = "left"
-    for row in table.itertuples(index=False):
-        ok = row.within_article and row.within_reference
-        view.add_row(
-            printable(row.label), _time(row.article), _time(row.reference), _time(row.ours, 6),
-            _delta(row.ours_minus_article), _delta(row.ours_minus_reference), Text("✓") if ok else Text("✗", "red"),
-        )  # fmt: skip
-    out.print(view)
+    out.print(_times_table(resolved, table))
     for row in table.itertuples(index=False):
         if row.note:
             out.print(Text(f"{printable(row.label)}: {printable(row.note)}", style="dim"))
@@ -77,6 +66,35 @@ def check(
         err.print(Text(f"{failed} expected time(s) out of tolerance", style="bold red"))
         raise typer.Exit(1)
     say(f"all {len(table)} expected times within tolerance")
+
+
+def _times_table(case: Case, table: pd.DataFrame) -> Table:
+    """The comparison as a table: each expected event's times, ours minus them, and a verdict."""
+    view = Table(
+        title=f"{printable(case.name)}: expected switching times (s)",
+        title_justify="left",
+        header_style="bold",
+        box=box.SIMPLE_HEAD,
+        pad_edge=False,
+    )
+    source = "article" if case.source is None or is_shipped(case.source) else "expected"
+    view.add_column("event", ratio=1, min_width=16)
+    for column in (source, "ref.", "ours", f"− {source}", "− ref.", "ok"):  # the differences: ours minus that
+        view.add_column(column, no_wrap=True, justify="right")
+    view.caption = f"ref.: the independent implementation; − {source}, − ref.: ours minus that time"
+    view.caption_justify = "left"
+    for row in table.itertuples(index=False):
+        ok = row.within_article and row.within_reference
+        view.add_row(
+            printable(row.label),
+            _time(row.article),
+            _time(row.reference),
+            _time(row.ours, 6),
+            _delta(row.ours_minus_article),
+            _delta(row.ours_minus_reference),
+            Text("✓") if ok else Text("✗", "red"),
+        )
+    return view
 
 
 def _time(value: float, digits: int = 4) -> str:

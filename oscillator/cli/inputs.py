@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, check_setting, load_case, resolve_case
 from oscillator.io.expressions import parse_value
-from oscillator.model.parameters import SolverOptions, SweepSettings
+from oscillator.model.parameters import SolverOptions, SweepSettings, is_finite_number
 from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
-    pass
+    import numpy as np
 
 __all__ = ["EngineOption", "case_from", "check_engine", "overrides", "sample_grid", "sweep_settings"]
 
@@ -42,7 +42,7 @@ def check_engine(engine: str | None) -> None:
 INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
 
 
-def overrides(assignments: list[str]) -> dict:
+def overrides(assignments: list[str]) -> dict[str, Any]:
     """``NAME=VALUE`` strings to overrides, values as numbers or expressions of pi."""
     values = {}
     for item in assignments:
@@ -66,13 +66,13 @@ def case_from(
     return resolve_case(load_case(case), t_end=t_end, keep_events_from=keep_events_from, **overrides(assignments or []))
 
 
-def sample_grid(case: Case, sample: float | None):
+def sample_grid(case: Case, sample: float | None) -> np.ndarray | None:
     """The grid of ``--sample DT``: every DT seconds from t0, and t_end."""
     if sample is None:
         return None
     import numpy as np
 
-    if not (math.isfinite(sample) and sample > 0):
+    if not (is_finite_number(sample) and sample > 0):
         raise InputError(f"--sample must be a positive time step in s, got {sample!r}", field="--sample")
     rows = (case.t_end - case.initial.t0) / sample
     if rows > case.options.max_trajectory_rows:
@@ -85,15 +85,35 @@ def sample_grid(case: Case, sample: float | None):
     return np.unique(np.append(grid[grid < case.t_end], case.t_end))
 
 
-def sweep_settings(c: Case, param, start, stop, steps, transient, record, both_ways: bool = False) -> SweepSettings:
+def sweep_settings(
+    c: Case,
+    param: str | None,
+    start: float | None,
+    stop: float | None,
+    steps: int | None,
+    transient: int | None,
+    record: int | None,
+    both_ways: bool = False,
+) -> SweepSettings:
     """The case's ``[sweep]`` table with the command line's changes (``--both-ways`` sets it)."""
     base = c.sweep
     if base is None and (param is None or start is None or stop is None):
         raise InputError(
             f"case {shown(c.name)} has no [sweep] table; give --param NAME --from A --to B", field="--param"
         )
-    changes = {k: v for k, v in dict(param=param, start=start, stop=stop, steps=steps, transient=transient,
-                                     record=record, both_ways=both_ways or None).items() if v is not None}  # fmt: skip
+    changes = {
+        k: v
+        for k, v in dict(
+            param=param,
+            start=start,
+            stop=stop,
+            steps=steps,
+            transient=transient,
+            record=record,
+            both_ways=both_ways or None,
+        ).items()
+        if v is not None
+    }
     if base is None:
-        return SweepSettings(**changes)
-    return dataclasses.replace(base, **changes)
+        return SweepSettings(**changes)  # type: ignore[arg-type]  # the values' types by name, checked there
+    return dataclasses.replace(base, **changes)  # type: ignore[arg-type]

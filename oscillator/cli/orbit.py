@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -21,7 +22,7 @@ from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, overrides
-from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
+from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
 from oscillator.io.signals import interrupts_deferred
 from oscillator.text import printable, shown
@@ -96,8 +97,14 @@ def orbit(
         load("oscillator.orbits.shooting", notice=True)
         from oscillator.orbits.shooting import find_orbit
 
-        found = find_orbit(resolved, period=period, guess=start, transient=transient, section=section,  # type: ignore[arg-type]
-                           max_iterations=max_iterations)  # fmt: skip
+        found = find_orbit(
+            resolved,
+            period=period,
+            guess=start,
+            transient=transient,
+            section=section,
+            max_iterations=max_iterations,
+        )
     except OscillatorError as error:
         raise fail(message(error), code=_code(error)) from None
     except KeyboardInterrupt:
@@ -119,9 +126,13 @@ def orbit(
     out.print(_events_table(found.events))
 
 
-def _progress_bar(name: str):
-    columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-               TimeElapsedColumn())  # fmt: skip
+def _progress_bar(name: str) -> tuple[Progress, Callable[[float], None]]:
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+    )
     bar = Progress(*columns, console=err, transient=True)
     task = bar.add_task(printable(name), total=1.0)
     last = [0.0]
@@ -135,7 +146,9 @@ def _progress_bar(name: str):
     return bar, report
 
 
-def _continue_with_progress(continue_orbit, case, settings: dict, quiet: bool):
+def _continue_with_progress(
+    continue_orbit: Callable[..., Branch], case: Case, settings: dict[str, Any], quiet: bool
+) -> Branch:
     if quiet or not err.is_terminal:  # a progress bar only where a person watches
         return continue_orbit(case, **settings)
     bar, report = _progress_bar(case.name)
@@ -183,10 +196,24 @@ def continue_(
       oscillator continue instance-1 --param Q2 --from 70.5 --to 71.5 --out runs/q2-branch
     """
     try:
-        resolved, settings, sweep_points, claim = _prepare_continue(case, set_, coordinate, over, out_dir, {
-            "param": param, "start": start, "stop": stop, "period": period, "step": step, "max_points": max_points,
-            "guess": _guess(guess), "transient": transient, "section": section,
-        })  # fmt: skip
+        resolved, settings, sweep_points, claim = _prepare_continue(
+            case,
+            set_,
+            coordinate,
+            over,
+            out_dir,
+            {
+                "param": param,
+                "start": start,
+                "stop": stop,
+                "period": period,
+                "step": step,
+                "max_points": max_points,
+                "guess": _guess(guess),
+                "transient": transient,
+                "section": section,
+            },
+        )
     except OscillatorError as error:
         raise fail(message(error), code=_code(error)) from None
     except KeyboardInterrupt:
@@ -203,26 +230,34 @@ def continue_(
 
 
 def _prepare_continue(
-    case: str, set_: list[str] | None, coordinate: str | None, over: Path | None, out_dir: Path | None,
+    case: str,
+    set_: list[str] | None,
+    coordinate: str | None,
+    over: Path | None,
+    out_dir: Path | None,
     settings: dict[str, Any],
-) -> tuple[Case, dict[str, Any], Any, FolderClaim]:  # fmt: skip
+) -> tuple[Case, dict[str, Any], Any, FolderClaim]:
     """Every check of ``continue`` before anything is computed, then the output folder claimed."""
     if coordinate is not None and coordinate not in COORDINATES:
-        raise InputError(f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}",
-                         field="--coordinate")  # fmt: skip
+        raise InputError(
+            f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}", field="--coordinate"
+        )
     param = settings["param"]
     if param in overrides(set_ or []):
-        raise InputError(f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
-                         "range with --from and --to", field="--set")  # fmt: skip
+        raise InputError(
+            f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
+            "range with --from and --to",
+            field="--set",
+        )
     resolved = case_from(case, None, set_)
     from oscillator.io.files import check_new
 
     if out_dir is not None:
         check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
-    load("oscillator.orbits.continuation", "oscillator.orbits.output", "oscillator.io.runs", notice=True)
-    from oscillator.io.runs import claim_output
+    load("oscillator.orbits.continuation", "oscillator.report.orbits", "oscillator.report.runs", notice=True)
     from oscillator.orbits.continuation import check_settings
-    from oscillator.orbits.output import read_sweep_points
+    from oscillator.report.orbits import read_sweep_points
+    from oscillator.report.runs import claim_output
 
     check_settings(resolved, **settings)
     sweep_points = read_sweep_points(over, param, coordinate or "x2") if over is not None else None
@@ -266,28 +301,40 @@ def _summary(branch: Branch, quiet: bool) -> None:
 
 def _write(branch: Branch, case: Case, claim: FolderClaim, coordinate: str, sweep_points: Any) -> Path:
     """The branch's tables, case and run.json written whole into the claimed folder."""
-    from oscillator.orbits.output import write_branch
+    from oscillator.report.orbits import write_branch
 
     try:
         with interrupts_deferred():  # Ctrl-C waits until the tables are written whole
-            return write_branch(branch, case, claim, coordinate=coordinate, sweep_points=sweep_points,
-                                command=["oscillator", *sys.argv[1:]])  # fmt: skip
+            return write_branch(
+                branch,
+                case,
+                claim,
+                coordinate=coordinate,
+                sweep_points=sweep_points,
+                command=["oscillator", *sys.argv[1:]],
+            )
     except KeyboardInterrupt:  # it came while the tables were written: they are whole
-        raise fail(f"interrupted; the branch is in {claim.target}; `oscillator report {claim.target}` makes its "
-                   "figures and report", 130) from None  # fmt: skip
+        raise fail(
+            f"interrupted; the branch is in {claim.target}; `oscillator report {claim.target}` makes its "
+            "figures and report",
+            130,
+        ) from None
     except (OSError, OscillatorError) as error:
         reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise fail(f"cannot write the branch to {claim.target}: {reason}; nothing was written; free the space or "
-                   "give another --out, and continue again", 1) from None  # fmt: skip
+        raise fail(
+            f"cannot write the branch to {claim.target}: {reason}; nothing was written; free the space or "
+            "give another --out, and continue again",
+            1,
+        ) from None
 
 
 def _finish(folder: Path) -> str:
     """The figures and the report; what went wrong, if anything (the tables stay either way)."""
-    from oscillator.orbits.output import finish_branch
+    from oscillator.report.orbits import finish_branch
 
     kept = f"the branch's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
     try:
-        load("oscillator.orbits.output")
+        load("oscillator.report.orbits")
         finish_branch(folder)
     except KeyboardInterrupt:
         raise fail(f"interrupted; {kept}", 130) from None
@@ -298,7 +345,7 @@ def _finish(folder: Path) -> str:
 
 def _exit(branch: Branch, folder: Path, problem: str) -> None:
     """Exit 130 for an interrupted branch, 1 for one that ended early or lacks its figures."""
-    if branch.message.startswith("interrupted"):
+    if branch.reason is Reason.INTERRUPTED:
         raise fail(f"{branch.message}; the branch so far is in {folder}", 130)
     if not branch.complete:
         raise fail(f"the branch ended early: {branch.message}; the branch so far is in {folder}", 1)

@@ -26,6 +26,8 @@ from oscillator.io.signals import interrupts_deferred
 from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
     from oscillator.hybrid.result import Result
     from oscillator.io.files import FolderClaim
 
@@ -45,7 +47,7 @@ _EVENT_COLUMNS: tuple[tuple[str, JustifyMethod, Callable[[Any], str]], ...] = (
 )
 
 
-def _events_table(events, limit: int = 40) -> Table:
+def _events_table(events: pd.DataFrame, limit: int = 40) -> Table:
     """The switching events as a table as wide as the terminal allows: columns are left out, least
     important first, until it fits; a number is never cut."""
     rows = list(events.itertuples(index=False))
@@ -72,8 +74,13 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine:
     if quiet or not err.is_terminal:  # a progress bar only where a person watches
         return simulate(case, t_eval=t_eval, engine=engine)
     span = case.t_end - case.initial.t0
-    columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("t = {task.fields[t]:.4g} s"),
-               TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("t = {task.fields[t]:.4g} s"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
     with Progress(*columns, console=err, transient=True) as progress:
         task = progress.add_task(printable(case.name), total=span, t=case.initial.t0)
         last = [0.0]
@@ -90,7 +97,7 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine:
 def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> str:
     """Write the error's partial result (``error.result``) into the claimed folder; say where."""
     from oscillator.hybrid.result import Result
-    from oscillator.io.runs import write_run
+    from oscillator.report.runs import write_run
 
     partial = error.result if isinstance(error, (SimulationFailed, Interrupted)) else None
     if not isinstance(partial, Result):
@@ -110,7 +117,16 @@ def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: 
 
 
 def _prepare_run(
-    case: str, t_end, set_, out_dir, fmt: str, sample, window, engine: str | None, keep: float | None, quiet: bool
+    case: str,
+    t_end: float | None,
+    set_: list[str] | None,
+    out_dir: Path | None,
+    fmt: str,
+    sample: float | None,
+    window: tuple[float, float] | None,
+    engine: str | None,
+    keep: float | None,
+    quiet: bool,
 ) -> tuple[Case, object, FolderClaim]:
     """Every check of ``run`` before anything is created, then the output folder claimed."""
     if fmt not in FORMATS:
@@ -120,11 +136,11 @@ def _prepare_run(
 
     if out_dir is not None:
         check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
-    load("oscillator.io.runs", "oscillator.hybrid.simulate", "oscillator.report.figures", notice=not quiet)
+    load("oscillator.report.runs", "oscillator.hybrid.simulate", "oscillator.report.figures", notice=not quiet)
     from oscillator.engines import build_engine
     from oscillator.hybrid.simulate import admit
-    from oscillator.io.runs import claim_output
     from oscillator.report.figures import figure_window
+    from oscillator.report.runs import claim_output
 
     if window is not None:
         figure_window(resolved.initial.t0, resolved.t_end, resolved.parameters.period, window)
@@ -226,7 +242,7 @@ def _simulate_or_keep_partial(
 
 def _write_tables(result: Result, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> Path:
     """The run's tables, case and run.json written whole into the claimed folder."""
-    from oscillator.io.runs import write_run
+    from oscillator.report.runs import write_run
 
     try:
         with interrupts_deferred():  # Ctrl-C waits until the tables are written whole
@@ -235,14 +251,17 @@ def _write_tables(result: Result, claim: FolderClaim, fmt: str, pending: tuple[s
         raise fail(f"interrupted; {_tables_kept(claim.target)}", 130) from None
     except (OSError, OscillatorError) as error:
         reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise fail(f"cannot write the run to {claim.target}: {reason}; nothing was written; free the space or "
-                    f"give another --out, and run again", 1) from None  # fmt: skip
+        raise fail(
+            f"cannot write the run to {claim.target}: {reason}; nothing was written; free the space or "
+            f"give another --out, and run again",
+            1,
+        ) from None
     return folder
 
 
 def _finish(folder: Path, *, figures: bool, report: bool, window: tuple[float, float] | None) -> None:
     """The figures and the report; if they fail, the tables stay and the message says how to finish."""
-    from oscillator.io.runs import finish_run
+    from oscillator.report.runs import finish_run
 
     try:
         load("oscillator.report.figures", "oscillator.report.transitions")
@@ -258,7 +277,7 @@ def _tables_kept(folder: Path) -> str:
     return f"the run's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
 
 
-def _print_summary(summary: list, folder: Path, quiet: bool) -> None:
+def _print_summary(summary: list[Any], folder: Path, quiet: bool) -> None:
     for k, line in enumerate(summary):  # the title wraps at the terminal's width; tables fit it themselves
         out.print(line, soft_wrap=k > 0)
     if quiet:
@@ -282,8 +301,14 @@ def _run_summary(case: Case, result: Result) -> list[Text | Table | str]:
         ok = int((comparison.within_article & comparison.within_reference).sum())
         lines.append(Text(f"expected events within tolerance: {ok}/{len(comparison)}"))
     elif case.modified:
-        lines.append(Text(printable(f"modified case ({', '.join(case.modified)}): the expected times of the case as "
-                                    "written are not compared")))  # fmt: skip
+        lines.append(
+            Text(
+                printable(
+                    f"modified case ({', '.join(case.modified)}): the expected times of the case as "
+                    "written are not compared"
+                )
+            )
+        )
     return lines
 
 
@@ -307,16 +332,16 @@ def report(
       oscillator report runs/long --window 1990 2000
     """
     try:
-        load("oscillator.io.runs")
-        from oscillator.io.runs import finish_run, folder_kind, read_run_folder
+        load("oscillator.report.runs")
+        from oscillator.report.runs import finish_run, folder_kind, read_run_folder
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
         if folder_kind(folder) == "branch":
             if window is not None:
                 raise InputError("--window chooses a run's time window; a branch folder has none", field="--window")
-            load("oscillator.orbits.output")
-            from oscillator.orbits.output import finish_branch
+            load("oscillator.report.orbits")
+            from oscillator.report.orbits import finish_branch
 
             finish_branch(folder)
         else:

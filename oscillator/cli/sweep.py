@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
@@ -18,15 +19,23 @@ from oscillator.model.parameters import SweepSettings
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
     from oscillator.analysis.locate import Location
 
 __all__ = ["locate", "sweep"]
 
 
-def _sweep_progress(name: str, settings: SweepSettings):
+def _sweep_progress(name: str, settings: SweepSettings) -> tuple[Progress, Callable[[int, int], None]]:
     """A progress bar and its callback ``report(done, total)``."""
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn())  # fmt: skip
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[rate]}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
     bar = Progress(*columns, console=err, transient=True)
     task = bar.add_task(f"{printable(name)}: {settings.param}", total=len(settings.points), rate="")
     began = time.monotonic()
@@ -125,7 +134,7 @@ def sweep(
     _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
 
 
-def _run_with_progress(plan, name: str, settings: SweepSettings, quiet: bool):
+def _run_with_progress(plan: Any, name: str, settings: SweepSettings, quiet: bool) -> Any:
     """Run the sweep, with a progress bar where a person watches."""
     if quiet or not err.is_terminal:
         return plan.run()
@@ -134,12 +143,17 @@ def _run_with_progress(plan, name: str, settings: SweepSettings, quiet: bool):
         return plan.run(report_progress)
 
 
-def _open_sweep(case: Case, settings: SweepSettings, out_dir: Path | None, workers, scheduler):
+def _open_sweep(
+    case: Case, settings: SweepSettings, out_dir: Path | None, workers: int | None, scheduler: str | None
+) -> Any:
     """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
     if settings.both_ways and (scheduler is not None or (workers is not None and workers != 1)):
         option = "--scheduler" if scheduler is not None else "--workers"
-        raise InputError(f"{option}: a --both-ways sweep runs its values one after another in this process "
-                         f"(each starts where the one before ended); leave out {option}", field=option)  # fmt: skip
+        raise InputError(
+            f"{option}: a --both-ways sweep runs its values one after another in this process "
+            f"(each starts where the one before ended); leave out {option}",
+            field=option,
+        )
     from oscillator.io.files import FolderTaken, default_name
 
     load("oscillator.analysis.sweeps", notice=True)
@@ -166,7 +180,7 @@ def shown_case(case: Case) -> str:
     return printable(str(case.source))
 
 
-def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no_plots: bool, quiet: bool) -> None:
+def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome: Any, no_plots: bool, quiet: bool) -> None:
     from oscillator.analysis.sweeps import read_sweep, sliding_ranges
 
     tables = read_sweep(folder)
@@ -179,8 +193,11 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
         except KeyboardInterrupt:
             raise fail(f"interrupted while drawing; the sweep's tables are in {folder}", 130) from None
         except Exception as error:  # the sweep itself is safe
-            raise fail(f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
-                        f"are in {folder}", 1) from None  # fmt: skip
+            raise fail(
+                f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
+                f"are in {folder}",
+                1,
+            ) from None
     summary = tables["summary"]
     if quiet:
         out.print(printable(str(folder)))
@@ -206,20 +223,24 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome, no
     _fail_if_every_point_failed(summary, folder)
 
 
-def _say_ranges(case: Case, summary, settings: SweepSettings, ranges: list[tuple[float, float]]) -> None:
+def _say_ranges(case: Case, summary: pd.DataFrame, settings: SweepSettings, ranges: list[tuple[float, float]]) -> None:
     """The grid values at which the mass slides, and the ``locate`` command for each end."""
     values = sorted(summary[settings.param].to_numpy(float))
     for a, b in ranges:
-        say(f"m{settings.mass} slides (rests on its velocity boundary) at the grid values {settings.param} = "
-            f"{a:.6g} to {b:.6g}")  # fmt: skip
+        say(
+            f"m{settings.mass} slides (rests on its velocity boundary) at the grid values {settings.param} = "
+            f"{a:.6g} to {b:.6g}"
+        )
         below, above = [v for v in values if v < a], [v for v in values if v > b]
         for which, pair in (("begins", [*below[-1:], a]), ("ends", [b, *above[:1]])):
             if len(pair) == 2:
-                say(f"  where it {which} (between two grid values): oscillator locate {shown_case(case)} "
-                    f"--param {settings.param} --between {pair[0]:.6g} {pair[1]:.6g} --what sliding")  # fmt: skip
+                say(
+                    f"  where it {which} (between two grid values): oscillator locate {shown_case(case)} "
+                    f"--param {settings.param} --between {pair[0]:.6g} {pair[1]:.6g} --what sliding"
+                )
 
 
-def _say_both_ways(summary, settings: SweepSettings) -> None:
+def _say_both_ways(summary: pd.DataFrame, settings: SweepSettings) -> None:
     """Where the mass slides going each way; the values where the two ways differ (hysteresis)."""
     from oscillator.analysis.sweeps import sliding_ranges
 
@@ -227,23 +248,33 @@ def _say_both_ways(summary, settings: SweepSettings) -> None:
     for way in ways:
         found = sliding_ranges(summary, settings.param, way)
         spans = ", ".join(f"{a:.6g} to {b:.6g}" for a, b in found)
-        say(f"going {way}: m{settings.mass} " + (f"slides at the grid values {settings.param} = {spans}" if found
-                                                 else "never slides"))  # fmt: skip
+        say(
+            f"going {way}: m{settings.mass} "
+            + (f"slides at the grid values {settings.param} = {spans}" if found else "never slides")
+        )
     ok = summary[summary.status == "ok"]
     by_way = {way: dict(zip(rows[settings.param], rows.sliding, strict=True)) for way, rows in ok.groupby("direction")}
-    differ = sorted(v for v in by_way.get(ways[0], {}) if v in by_way.get(ways[-1], {})
-                    and by_way[ways[0]][v] != by_way[ways[-1]][v])  # fmt: skip
+    differ = sorted(
+        v
+        for v in by_way.get(ways[0], {})
+        if v in by_way.get(ways[-1], {}) and by_way[ways[0]][v] != by_way[ways[-1]][v]
+    )
     if differ:
-        say(f"hysteresis: at {settings.param} = {', '.join(f'{v:.6g}' for v in differ)} the two ways end on "
-            "different motions (both exist there)")  # fmt: skip
+        say(
+            f"hysteresis: at {settings.param} = {', '.join(f'{v:.6g}' for v in differ)} the two ways end on "
+            "different motions (both exist there)"
+        )
 
 
-def _fail_if_every_point_failed(summary, folder: Path) -> None:
+def _fail_if_every_point_failed(summary: pd.DataFrame, folder: Path) -> None:
     """Exit 1 when no point of the sweep could be computed, with the first point's reason."""
     failed = summary[summary.status == "failed"]
     if len(summary) and len(failed) == len(summary):
-        raise fail(f"every point of the sweep failed; the first: {failed.message.iloc[0]} (summary.parquet in "
-                   f"{folder} has each point's reason)", 1)  # fmt: skip
+        raise fail(
+            f"every point of the sweep failed; the first: {failed.message.iloc[0]} (summary.parquet in "
+            f"{folder} has each point's reason)",
+            1,
+        )
 
 
 def locate(
@@ -296,8 +327,10 @@ def locate(
         f" changes at {found.param} = {found.value:.10f} (between {found.lower:.10f} and {found.upper:.10f}, "
         f"width {found.width:.1e}, {found.iterations} bisections)",
     )
-    for side, summary, events in (("below", found.below, found.evidence_below),
-                                  ("above", found.above, found.evidence_above)):  # fmt: skip
+    for side, summary, events in (
+        ("below", found.below, found.evidence_below),
+        ("above", found.above, found.evidence_above),
+    ):
         row = summary.iloc[0]
         kinds = ", ".join(f"{k}: {n}" for k, n in events.kind.value_counts().items()) or "none"
         say(
@@ -315,8 +348,13 @@ def _locate_with_progress(
 
     if not err.is_terminal:
         return locate_change(case, settings, what, between, tolerance=tolerance)
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TextColumn("{task.fields[bracket]}"), TimeElapsedColumn())  # fmt: skip
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[bracket]}"),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns, console=err, transient=True) as bar:
         task = bar.add_task(f"locating {printable(what)}", total=None, bracket="")
 

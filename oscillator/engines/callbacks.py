@@ -17,22 +17,24 @@ from typing import Any
 
 import numpy as np
 from llvmlite import ir
-from numba import carray, types
+from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
+from numba.np.numpy_support import carray
 
 from oscillator.compiled import cfunc
 from oscillator.model.kernels import derivative
+from oscillator.model.parameters import Parameters
 from oscillator.model.roots import NUM_ROOTS, root_kernel
 
 __all__ = ["COEFFICIENTS", "LAYOUT", "USER_DATA_SIZE", "data_offset", "rhs", "roots"]
 
 #: Positions in the user-data vector.
 LAYOUT = {"t_ref": 0, "s1": 1, "s2": 2, "left": 3, "right": 4, "step": 5, "near": 6}
-#: Where the parameter vector starts in the user data.
-COEFFICIENTS = 7
-#: The user data's length: the layout and the 25 parameters.
-USER_DATA_SIZE = COEFFICIENTS + 25
+#: Where the parameter vector starts in the user data: after the layout.
+COEFFICIENTS = len(LAYOUT)
+#: The user data's length: the layout and the parameters (:func:`~oscillator.model.fields.coefficients`).
+USER_DATA_SIZE = COEFFICIENTS + len(Parameters.names())
 #: The state's length: x1, v1, x2, v2 and the four work quadratures.
 SIZE = 8
 #: Byte offset of ``data`` in the serial vector's content: ``sunindextype`` (int32) and

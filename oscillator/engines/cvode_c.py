@@ -181,8 +181,13 @@ class CCvodeEngine:
             if t_stop != self._t_stop:  # once per restart: CVODE keeps it until it is reached
                 check(api.CVodeSetStopTime(memory, t_stop - self._t_ref), "CVodeSetStopTime")
                 self._t_stop = t_stop
-            flag = api.CVode(memory, target - self._t_ref, self._objects.out, ctypes.byref(self._tret),
-                             CV_ONE_STEP if one_step else CV_NORMAL)  # fmt: skip
+            flag = api.CVode(
+                memory,
+                target - self._t_ref,
+                self._objects.out,
+                ctypes.byref(self._tret),
+                CV_ONE_STEP if one_step else CV_NORMAL,
+            )
             if flag == _CLOSE_ROOTS and self._after_root:
                 self._y[:] = self._out_at_root
                 self._initialise()  # at the root just returned

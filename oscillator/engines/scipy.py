@@ -44,12 +44,17 @@ def _check_tolerances(options: SolverOptions) -> None:
     from oscillator.errors import InputError
 
     if options.rtol < SCIPY_MIN_RTOL:
-        raise InputError(f"rtol = {options.rtol:g} is below what SciPy's solve_ivp accepts ({SCIPY_MIN_RTOL:.3g}: it "
-                         "would raise it to that); give a larger rtol, or the cvode engine", field="rtol")  # fmt: skip
+        raise InputError(
+            f"rtol = {options.rtol:g} is below what SciPy's solve_ivp accepts ({SCIPY_MIN_RTOL:.3g}: it "
+            "would raise it to that); give a larger rtol, or the cvode engine",
+            field="rtol",
+        )
     if options.atol < SCIPY_MIN_ATOL:
-        raise InputError(f"atol = {options.atol:g} is too small for SciPy's error norm (it overflows at a state "
-                         f"component of 0); give atol >= {SCIPY_MIN_ATOL:g}, or the cvode engine",
-                         field="atol")  # fmt: skip
+        raise InputError(
+            f"atol = {options.atol:g} is too small for SciPy's error norm (it overflows at a state "
+            f"component of 0); give atol >= {SCIPY_MIN_ATOL:g}, or the cvode engine",
+            field="atol",
+        )
 
 
 class ScipyEngine:
@@ -150,9 +155,15 @@ class ScipyEngine:
         self._restarts += 1
         n = self._size
         solution = solve_ivp(
-            lambda t, y: self._field(t, y, mode), (self._t, end), self._y[:n], method=self._method,
-            rtol=self._options.rtol, atol=self._options.atol, events=self._events(mode), max_step=self._max_step,
-        )  # fmt: skip
+            lambda t, y: self._field(t, y, mode),
+            (self._t, end),
+            self._y[:n],
+            method=self._method,
+            rtol=self._options.rtol,
+            atol=self._options.atol,
+            events=self._events(mode),
+            max_step=self._max_step,
+        )
         self._evaluations += solution.nfev
         if solution.status == -1:
             raise EngineFailure(solution.message, "solve_ivp")
@@ -163,8 +174,10 @@ class ScipyEngine:
                 if tk < reached:
                     returns.append((float(tk), 0, Step(float(tk), self._full(yk), StepKind.ROOT, (int(k),))))
         if one_step:
-            returns += [(float(tk), 1, Step(float(tk), self._full(solution.y[:, i]), StepKind.STEP))
-                        for i, tk in enumerate(solution.t[1:-1], start=1)]  # fmt: skip
+            returns += [
+                (float(tk), 1, Step(float(tk), self._full(solution.y[:, i]), StepKind.STEP))
+                for i, tk in enumerate(solution.t[1:-1], start=1)
+            ]
         last = self._full(solution.y[:, -1])
         if solution.status == 1:  # a terminal root
             fired = tuple(

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from oscillator.errors import OscillatorError, SimulationFailed
+from oscillator.errors import OscillatorError, Reason, SimulationFailed
 from oscillator.model.energy import mechanical_energy
 from oscillator.model.events import COLUMN, decode, event_of_row
 from oscillator.model.fields import coefficients
@@ -94,6 +94,7 @@ def solver_failure(engine: str, detail: str, flag: int | str, t: float, y: np.nd
     return SimulationFailed(
         f"{name} failed after t = {t:.10g} s with flag {flag} ({detail}) in {_where(mode, y)}; "
         f"loosen rtol/atol or raise max_num_steps",
+        reason=Reason.SOLVER_FAILURE,
         field="rtol",
     )
 
@@ -105,6 +106,7 @@ def check_consistent(t: float, y: np.ndarray, p: Parameters, mode: Mode) -> None
         raise SimulationFailed(
             f"the state crossed {violation} unseen before t = {t:.10g} s in mode {mode}; "
             f"lower max_step_fraction or tighten rtol/atol",
+            reason=Reason.UNSEEN_CROSSING,
             field="max_step_fraction",
         )
 
@@ -123,6 +125,7 @@ class StepGuard:
             raise SimulationFailed(
                 f"CVODE took more than max_num_steps = {self.limit} steps without a switch up to "
                 f"t = {t:.10g} s in {_where(mode, y)}; loosen rtol/atol or raise max_num_steps",
+                reason=Reason.STEP_LIMIT,
                 field="max_num_steps",
             )
 
@@ -143,6 +146,7 @@ class StallGuard:
             raise SimulationFailed(
                 f"the solver keeps stopping at roots at t = {t:.10g} s without a switch (mode {mode}); "
                 f"tighten rtol/atol",
+                reason=Reason.STALL,
                 field="rtol",
             )
 
@@ -169,6 +173,7 @@ class EventGuard:
             raise SimulationFailed(
                 f"more than max_events = {self.options.max_events} switching events by t = {t:.10g} s (last: mass "
                 f"{last.mass} {last.kind} on {last.boundary}); raise max_events or shorten t_end",
+                reason=Reason.MAX_EVENTS,
                 field="max_events",
             )
 
@@ -185,5 +190,6 @@ class EventGuard:
             f"t = {recent[-1][0]:.10g} s, {count} of them mass {mass:.0f} {what}; the "
             f"motion chatters there. Change the case, or raise storm_events (now {self.options.storm_events}) or "
             f"lower storm_window (now {self.options.storm_window:g} s) if such a rate is meant",
+            reason=Reason.STORM,
             field="storm_events",
         )

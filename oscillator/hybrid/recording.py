@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from oscillator.engines import Step, StepKind
-from oscillator.errors import SimulationFailed
+from oscillator.errors import Reason, SimulationFailed
 from oscillator.hybrid.record import RunRecord
 from oscillator.model.phase_space import Mode
 
@@ -74,6 +74,7 @@ class Recording:
                 f"the trajectory passed max_trajectory_rows = {self.max_rows} rows at t = {t:.10g} s; record it on "
                 f"a grid (t_eval; --sample DT on the command line) or not at all, shorten t_end, or raise "
                 f"max_trajectory_rows",
+                reason=Reason.MAX_ROWS,
                 field="max_trajectory_rows",
             )
         record.rows.append((t, y[:4].copy(), mode))

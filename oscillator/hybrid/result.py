@@ -9,10 +9,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from oscillator.errors import Reason
 from oscillator.hybrid.record import RunRecord
 from oscillator.io.cases import Case
 from oscillator.model.energy import POWER_NAMES, mechanical_energy
 from oscillator.model.phase_space import Mode
+from oscillator.presenting import presenter
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -144,6 +146,8 @@ class Result:
         ``COMPLETE``; or, for the partial result an error carries, ``FAILED`` or ``INTERRUPTED``.
     message : str
         Why a partial result stopped (the error's message); empty when complete.
+    reason : Reason or None
+        Why, for a program to read (:class:`~oscillator.errors.Reason`); None when complete.
     """
 
     case: Case
@@ -152,6 +156,7 @@ class Result:
     final_state: tuple[float, float, float, float, float]
     status: Status = Status.COMPLETE
     message: str = ""
+    reason: Reason | None = None
     _records: _Records = field(default_factory=lambda: _Records(np.empty((0, 0)), []), repr=False, compare=False)
 
     @property
@@ -179,28 +184,29 @@ class Result:
             The time window drawn; by default the whole run, or its last 10 forcing periods
             when it is longer than 20 (as ``oscillator run`` draws it).
         """
-        from oscillator.report.figures import draw_panel
-
-        return draw_panel(self.trajectory, self.events, self.case, panel, window=window, t_final=self.final_state[0])
+        return presenter().plot_result(self, panel, window)
 
     def save(self, folder: str | Path, *, formats: str = "both", figures: bool = True, report: bool = True) -> Path:
         """Write this run as a run folder, as ``oscillator run`` does: the event tables
         (``formats``: ``"csv"``, ``"parquet"`` or ``"both"``), ``trajectory.parquet``,
         ``case.toml``, ``run.json``, then the figures and the report.  ``folder`` must be new.
         :func:`oscillator.read_run` reads it back.  Returns the folder's path."""
-        from oscillator.io.runs import save_result
-
-        return save_result(self, folder, formats=formats, figures=figures, report=report)
+        return presenter().save_result(self, folder, formats=formats, figures=figures, report=report)
 
     def _repr_html_(self) -> str:
         """The status, the counts, the energy residual and the first events (Jupyter)."""
-        from oscillator.report.notebook import result_html
-
-        return result_html(self)
+        return presenter().result_html(self)
 
     @classmethod
     def from_record(
-        cls, case: Case, record: RunRecord, *, engine: str, status: Status = Status.COMPLETE, message: str = ""
+        cls,
+        case: Case,
+        record: RunRecord,
+        *,
+        engine: str,
+        status: Status = Status.COMPLETE,
+        message: str = "",
+        reason: Reason | None = None,
     ) -> Result:
         assert record.y_final is not None
         stats = SolverStats(
@@ -220,5 +226,6 @@ class Result:
             (record.t_final, x1, v1, x2, v2),
             status,
             message,
+            reason,
             _Records(record.events.rows.copy(), record.rows),
         )

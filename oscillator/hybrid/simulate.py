@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from oscillator.engines import EngineChoice, build_engine
-from oscillator.errors import InputError, Interrupted, SimulationFailed
+from oscillator.engines import Engine, EngineChoice, build_engine
+from oscillator.errors import InputError, Interrupted, Reason, SimulationFailed
 from oscillator.hybrid.guards import start_problem
 from oscillator.hybrid.record import RunRecord
-from oscillator.hybrid.recording import recording
+from oscillator.hybrid.recording import Recording, recording
 from oscillator.hybrid.result import Result, Status
 from oscillator.hybrid.supervisor import CallbackRaised, Supervisor
 from oscillator.io.cases import Case, resolve_case
@@ -158,9 +158,19 @@ def simulate(
     admit(case)
     p, options = case.parameters, case.options
     integrator = build_engine(engine, p, options)
-    policy = recording(grid=grid, trajectory=bool(record_trajectory), max_rows=options.max_trajectory_rows,
-                       period=p.period, keep_events_from=keep_from)  # fmt: skip
-    supervisor = Supervisor(p, options, integrator, policy, progress=progress)
+    policy = recording(
+        grid=grid,
+        trajectory=bool(record_trajectory),
+        max_rows=options.max_trajectory_rows,
+        period=p.period,
+        keep_events_from=keep_from,
+    )
+    return _run(case, integrator, policy, progress)
+
+
+def _run(case: Case, integrator: Engine, policy: Recording, progress: Callable[[float], None] | None) -> Result:
+    """Run the supervisor; the result, or the failure with its partial result."""
+    supervisor = Supervisor(case.parameters, case.options, integrator, policy, progress=progress)
     record = RunRecord()
     try:
         supervisor.run(case.initial.t0, case.initial.y, case.t_end, record)
@@ -169,15 +179,22 @@ def simulate(
     except SimulationFailed as error:
         if record.started:
             policy.stopped(record)
-            error.result = Result.from_record(case, record, engine=integrator.name, status=Status.FAILED,
-                                              message=str(error))  # fmt: skip
+            error.result = Result.from_record(
+                case, record, engine=integrator.name, status=Status.FAILED, message=str(error), reason=error.reason
+            )
         raise
     except KeyboardInterrupt:
         if not record.started:
             raise
         policy.stopped(record)
-        partial = Result.from_record(case, record, engine=integrator.name, status=Status.INTERRUPTED,
-                                     message="interrupted by the user")  # fmt: skip
+        partial = Result.from_record(
+            case,
+            record,
+            engine=integrator.name,
+            status=Status.INTERRUPTED,
+            message="interrupted by the user",
+            reason=Reason.INTERRUPTED,
+        )
         raise Interrupted(partial) from None
     finally:
         integrator.close()

@@ -20,7 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from oscillator.engines import Engine, EngineFailure, Step, StepKind
-from oscillator.errors import SimulationFailed
+from oscillator.errors import Reason, SimulationFailed
 from oscillator.hybrid.guards import (
     ARITHMETIC_ERRORS,
     EventGuard,
@@ -94,6 +94,7 @@ class Supervisor:
             raise SimulationFailed(
                 f"arithmetic failed after t = {record.t_final:.10g} s ({exc}): the forces leave floating point; "
                 f"give parameters and a start of physical size",
+                reason=Reason.ARITHMETIC,
                 field="parameters",
             ) from exc
         finally:
@@ -170,8 +171,7 @@ class Supervisor:
         check_consistent(t, y, self.params, mode)
         state = y[:4].copy()
         log = record.events
-        after, count = resolve_rows(t, state, self.params, mode, step.fired, self.options,
-                                    log.free(MAX_ROWS), len(log))  # fmt: skip
+        after, count = resolve_rows(t, state, self.params, mode, step.fired, self.options, log.free(MAX_ROWS), len(log))
         new = log.staged(count)
         self.recording.events(record, t, count)
         self._events.count(new, record.event_count, t)

@@ -23,7 +23,15 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.expressions import parse_value
 from oscillator.io.files import read_untrusted
 from oscillator.model.events import EventKind
-from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings, as_float
+from oscillator.model.parameters import (
+    InitialState,
+    Parameters,
+    SolverOptions,
+    SweepSettings,
+    as_float,
+    is_finite_number,
+    real_argument,
+)
 from oscillator.text import printable, shown, unsafe_characters
 
 __all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "resolve_case"]
@@ -103,13 +111,15 @@ class Case:
         return f"{self.title} ({changes})" if self.title else changes
 
     def __post_init__(self) -> None:
-        t_end = _finite("run.t_end", self.t_end)
+        t_end = real_argument(self.t_end, "run.t_end")
         object.__setattr__(self, "t_end", t_end)
         if self.keep_events_from is not None:
             keep = as_float(self.keep_events_from)
             if math.isnan(keep):
-                raise InputError(f"run.keep_events_from must be a time in s, got {shown(self.keep_events_from)}",
-                                 field="keep_events_from")  # fmt: skip
+                raise InputError(
+                    f"run.keep_events_from must be a time in s, got {shown(self.keep_events_from)}",
+                    field="keep_events_from",
+                )
             object.__setattr__(self, "keep_events_from", keep)
         if t_end <= self.initial.t0:
             raise InputError(
@@ -123,13 +133,6 @@ def _given(value: float | None) -> float:
     """A value with a default, which is never ``None``."""
     assert value is not None
     return value
-
-
-def _finite(name: str, value: Any) -> float:
-    number = as_float(value)
-    if not math.isfinite(number):
-        raise InputError(f"{name} must be a finite number, got {shown(value)}", field=name)
-    return number
 
 
 def _cases_dir() -> Path:
@@ -161,14 +164,14 @@ def _suggest(word: str, choices: list[str] | tuple[str, ...]) -> str:
     return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
 
 
-def _table(data: dict, name: str, source: str) -> dict:
+def _table(data: dict[str, Any], name: str, source: str) -> dict[str, Any]:
     value = data.get(name, {})
     if not isinstance(value, dict):
         raise InputError(f"{source}: [{name}] must be a table", field=name)
     return value
 
 
-def _build(cls: Any, table: dict, section: str, source: str, defaults: dict | None = None) -> Any:
+def _build(cls: Any, table: dict[str, Any], section: str, source: str, defaults: dict[str, Any] | None = None) -> Any:
     names = cls.names()
     values = dict(defaults or {})
     for key, raw in table.items():
@@ -202,7 +205,7 @@ def _required(cls: type) -> set[str]:
 _RUN_KEYS = ("t_end", "keep_events_from", *SolverOptions.names())
 
 
-def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path | None = None) -> Case:
+def case_from_dict(data: dict[str, Any], *, name: str, source: str = "<case>", path: Path | None = None) -> Case:
     """Build a :class:`Case` from the parsed contents of a case file."""
     known = {"title", "description", "parameters", "initial", "run", "expected", "sweep"}
     for key in data:
@@ -249,25 +252,27 @@ def case_from_dict(data: dict, *, name: str, source: str = "<case>", path: Path 
 def _check_expected_times(expected: tuple[ExpectedEvent, ...], t0: float, t_end: object, source: str) -> None:
     """Refuse an expected event whose time lies outside the run: it could never be checked
     (``check`` would report every event within tolerance without looking at it)."""
-    if not (isinstance(t_end, (int, float)) and not isinstance(t_end, bool) and math.isfinite(t_end)):
+    if not is_finite_number(t_end):
         return  # Case refuses the end time itself, naming it
     for item in expected:
         time = _expected_time(item)
         if time is not None and not t0 <= time <= t_end:
             what = f"{item.label!r}" if item.label else f"m{item.mass} {item.kind}"
-            raise InputError(f"{source}: [[expected]] {printable(what)} at t = {time:g} s lies outside the run "
-                             f"[t0, t_end] = [{t0:g}, {t_end:g}] s and could never be checked; raise run.t_end or "
-                             "remove the entry", field="expected")  # fmt: skip
+            raise InputError(
+                f"{source}: [[expected]] {printable(what)} at t = {time:g} s lies outside the run "
+                f"[t0, t_end] = [{t0:g}, {t_end:g}] s and could never be checked; raise run.t_end or "
+                "remove the entry",
+                field="expected",
+            )
 
 
-def _text(table: dict, key: str, source: str, *, where: str = "") -> str:
+def _text(table: dict[str, Any], key: str, source: str, *, where: str = "") -> str:
     """A text of the case (title, description, label, note): a string of bounded length,
     without control characters (descriptions and notes may hold line breaks and tabs)."""
     value = table.get(key, "")
     name = f"{where}{key}"
     if not isinstance(value, str):
-        raise InputError(f"{source}: {name} must be text in quotes, got {printable(repr(value))[:80]}",
-                              field=name)  # fmt: skip
+        raise InputError(f"{source}: {name} must be text in quotes, got {printable(repr(value))[:80]}", field=name)
     if len(value) > MAX_TEXT[key]:
         raise InputError(
             f"{source}: {name} is {len(value):,} characters long; at most {MAX_TEXT[key]:,} are allowed", field=name
@@ -282,7 +287,7 @@ def _text(table: dict, key: str, source: str, *, where: str = "") -> str:
 _SWEEP_KEYS = {"from": "start", "to": "stop"} | {n: n for n in SweepSettings.names() if n not in ("start", "stop")}
 
 
-def _sweep(table: dict, source: str) -> SweepSettings:
+def _sweep(table: dict[str, Any], source: str) -> SweepSettings:
     values = {}
     for key, raw in table.items():
         if key not in _SWEEP_KEYS:
@@ -305,7 +310,7 @@ def _sweep(table: dict, source: str) -> SweepSettings:
 _EXPECTED_KEYS = ("label", "t", "reference", "mass", "kind", "to_domain", "tolerance", "reference_tolerance", "note")
 
 
-def _expected_list(data: dict, source: str) -> tuple[ExpectedEvent, ...]:
+def _expected_list(data: dict[str, Any], source: str) -> tuple[ExpectedEvent, ...]:
     items = data.get("expected", [])
     if not isinstance(items, list):
         raise InputError(
@@ -342,7 +347,7 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
     def number(key: str, default: float | None, positive: bool = False) -> float | None:
         if key not in item:
             return default
-        value = _finite(f"expected.{key}", parse_value(item[key], field=f"expected.{key}"))
+        value = real_argument(parse_value(item[key], field=f"expected.{key}"), f"expected.{key}")
         if positive and value <= 0:
             raise refuse(f"{key} must be > 0, got {value!r}")
         return value
@@ -440,7 +445,7 @@ def resolve_case(
     """
     if not isinstance(case, Case):
         case = load_case(case)
-    groups: dict[str, dict] = {group: {} for group, _ in _OVERRIDABLE}
+    groups: dict[str, dict[str, Any]] = {group: {} for group, _ in _OVERRIDABLE}
     for key, value in overrides.items():
         check_setting(key)
         group = next(group for group, names in _OVERRIDABLE if key in names)

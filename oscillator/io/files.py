@@ -353,8 +353,10 @@ def check_new(target: Path, *, option: str = "folder") -> None:
     the check a command makes before it loads anything, and :func:`claim_folder` again."""
     check_name(target, option=option)
     if os.path.lexists(target):
-        raise FolderTaken(f"{option} {printable(str(target))} exists already; give a new folder (runs are never "
-                          "overwritten)", field=option)  # fmt: skip
+        raise FolderTaken(
+            f"{option} {printable(str(target))} exists already; give a new folder (runs are never overwritten)",
+            field=option,
+        )
 
 
 def claim_folder(target: Path, *, option: str = "folder") -> FolderClaim:
@@ -383,8 +385,9 @@ def claim_folder(target: Path, *, option: str = "folder") -> FolderClaim:
         temporary = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.partial-"))
     except Busy:
         _undo(created)
-        raise FolderTaken(f"{option} {shown} is being written by another run now; give another folder",
-                          field=option) from None  # fmt: skip
+        raise FolderTaken(
+            f"{option} {shown} is being written by another run now; give another folder", field=option
+        ) from None
     except OscillatorError:
         if descriptor is not None:
             _unlock(lock_path, descriptor)
@@ -399,8 +402,9 @@ def claim_folder(target: Path, *, option: str = "folder") -> FolderClaim:
         reason = exc.strerror or str(exc)
         if exc.errno == errno.ENAMETOOLONG:
             reason += " (give a shorter name)"
-        raise InputError(f"{option} {shown}: cannot write in {where} ({reason}); choose a writable folder",
-                              field=option) from exc  # fmt: skip
+        raise InputError(
+            f"{option} {shown}: cannot write in {where} ({reason}); choose a writable folder", field=option
+        ) from exc
     return FolderClaim(target, temporary, lock_path, descriptor, created)
 
 

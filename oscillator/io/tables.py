@@ -28,8 +28,13 @@ __all__ = [
 
 TRAJECTORY_COLUMNS = ("t", "x1", "v1", "x2", "v2", "domain1", "domain2", "system_state")
 _DOMAINS = {1: set(range(9)), 2: {0, 1, 2, 5, 6}}
-_STATES = {system_state(left, right, r1, r2) for left in (False, True) for right in (False, True)
-           for r1 in (False, True) for r2 in (False, True)}  # fmt: skip
+_STATES = {
+    system_state(left, right, r1, r2)
+    for left in (False, True)
+    for right in (False, True)
+    for r1 in (False, True)
+    for r2 in (False, True)
+}
 
 
 #: The dtype of each column of ``Result.events``, from the types of :class:`Event`'s fields

@@ -10,11 +10,13 @@ from __future__ import annotations
 import enum
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, fields
+from typing import Literal
 
 import numpy as np
 
-from oscillator.model.phase_space import system_state
+from oscillator.model.phase_space import boundary_label, state_label
 
 __all__ = ["COLUMN", "Event", "EventKind", "decode", "decode_column", "event_of_row"]
 
@@ -31,9 +33,63 @@ class EventKind(enum.StrEnum):
     GRAZING = "grazing"
     """A flow touches a boundary and turns back (Thm 5.5; displacement boundaries: rule 6)."""
     RIGHT_CONTACT_ONSET = "right_contact_onset"
+    """m1 reaches the right stop ``x1 = d1`` (Thm 5.6/5.8)."""
     RIGHT_CONTACT_RELEASE = "right_contact_release"
+    """m1 leaves the right stop (Thm 5.6/5.8)."""
     LEFT_CONTACT_ONSET = "left_contact_onset"
+    """m1 reaches m2's stop ``z1 = -d``: both masses change domain (Thm 5.7/5.9)."""
     LEFT_CONTACT_RELEASE = "left_contact_release"
+    """m1 leaves m2's stop: both masses change domain (Thm 5.7/5.9)."""
+
+    @property
+    def switches(self) -> bool:
+        """Whether it changes a domain (a grazing only reports a touch)."""
+        return self is not EventKind.GRAZING
+
+    @property
+    def reaches_velocity_boundary(self) -> bool:
+        """A moving mass reaching ``v_i = 0``: it passes (Thm 5.1) or comes to rest (5.2/5.3)."""
+        return self in (EventKind.PASSABLE, EventKind.SLIDING_ONSET)
+
+    @property
+    def starts_rest(self) -> bool:
+        """A mass comes to rest on its velocity boundary (a rest interval begins)."""
+        return self is EventKind.SLIDING_ONSET
+
+    @property
+    def ends_rest(self) -> bool:
+        """A resting mass moves again (a rest interval ends)."""
+        return self is EventKind.SLIDING_VANISH
+
+    @property
+    def contact(self) -> Literal["right", "left"] | None:
+        """The stop whose contact changes, or None."""
+        return _CONTACT.get(self)
+
+    @property
+    def contact_starts(self) -> bool:
+        """A contact begins (``contact`` names the stop)."""
+        return self in (EventKind.RIGHT_CONTACT_ONSET, EventKind.LEFT_CONTACT_ONSET)
+
+    @property
+    def both_masses(self) -> bool:
+        """Written as one row per mass at one instant: the left stop moves with m2, so a left
+        contact change switches both masses' fields."""
+        return self.contact == "left"
+
+    @classmethod
+    def values_where(cls, test: Callable[[EventKind], bool]) -> list[str]:
+        """The values (the ``kind`` column's text) of the kinds that pass ``test``:
+        ``events.kind.isin(EventKind.values_where(lambda k: k.starts_rest))``."""
+        return [kind.value for kind in cls if test(kind)]
+
+
+_CONTACT: dict[EventKind, Literal["right", "left"]] = {
+    EventKind.RIGHT_CONTACT_ONSET: "right",
+    EventKind.RIGHT_CONTACT_RELEASE: "right",
+    EventKind.LEFT_CONTACT_ONSET: "left",
+    EventKind.LEFT_CONTACT_RELEASE: "left",
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,19 +172,9 @@ COLUMN = {f.name: index for index, f in enumerate(fields(Event))}
 WIDTH = len(COLUMN)
 #: Event kinds by code (their order in :class:`EventKind`).
 KINDS = tuple(EventKind)
-#: Boundary codes of the two stops; a domain boundary ``∂Ω{lo}{hi}(mass)`` is ``100 lo + 10 hi + mass``.
-RIGHT_STOP_LABEL, LEFT_STOP_LABEL = 0, 1
 #: G-function name codes: none, ``v1``, ``zdot1``; ``F{mass}^(delta)`` is ``FIELD + delta`` and
 #: ``F{mass}^(0>0_delta)`` (a flow barrier) ``BARRIER + delta``.
 NO_NAME, V1_NAME, ZDOT1_NAME, FIELD, BARRIER = 0, 1, 2, 10, 20
-
-
-def _boundary_text(code: int) -> str:
-    if code == RIGHT_STOP_LABEL:
-        return "x1 = d1"
-    if code == LEFT_STOP_LABEL:
-        return "z1 = -d"
-    return f"∂Ω{code // 100}{code // 10 % 10}({code % 10})"
 
 
 def _name_text(code: int, mass: int) -> str:
@@ -137,11 +183,6 @@ def _name_text(code: int, mass: int) -> str:
     if code >= FIELD:
         return f"F{mass}^({code - FIELD})"
     return ("", "v1", "zdot1")[code]
-
-
-def _state_text(code: int) -> str:
-    """System state of the code ``8 left + 4 right + 2 (m1 at rest) + (m2 at rest)``."""
-    return system_state(bool(code & 8), bool(code & 4), bool(code & 2), bool(code & 1))
 
 
 @functools.cache
@@ -153,7 +194,7 @@ def _text(column: str, code: int, mass: int) -> str:
     if column == "kind":
         return KINDS[code].value
     if column == "boundary":
-        return _boundary_text(code)
+        return boundary_label(code)
     if column == "theorem":
         return theorem_text(code)
     if column == "equation":
@@ -162,7 +203,7 @@ def _text(column: str, code: int, mass: int) -> str:
         return branch_text(code)
     if column in ("G_alpha", "G_beta"):
         return _name_text(code, mass)
-    return _state_text(code)
+    return state_label(code)
 
 
 def decode(column: str, code: float, mass: float) -> str:

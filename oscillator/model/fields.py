@@ -42,9 +42,34 @@ __all__ = [
 _POSITION = {name: index for index, name in enumerate(Parameters.names())}
 (M1, M2, C1, C2, C3, C4, C5, K1, K2, K3, K4, K5, K6, MU_K, MU_S, D, D1, Q1, Q2, OMEGA, PHI1, PHI2, P1, P2, G) = (
     _POSITION[name]
-    for name in ("m1", "m2", "C1", "C2", "C3", "C4", "C5", "K1", "K2", "K3", "K4", "K5", "K6", "mu_k", "mu_s", "d",
-                 "d1", "Q1", "Q2", "Omega", "phi1", "phi2", "P1", "P2", "g")
-)  # fmt: skip
+    for name in (
+        "m1",
+        "m2",
+        "C1",
+        "C2",
+        "C3",
+        "C4",
+        "C5",
+        "K1",
+        "K2",
+        "K3",
+        "K4",
+        "K5",
+        "K6",
+        "mu_k",
+        "mu_s",
+        "d",
+        "d1",
+        "Q1",
+        "Q2",
+        "Omega",
+        "phi1",
+        "phi2",
+        "P1",
+        "P2",
+        "g",
+    )
+)
 
 
 #: Parameters -> their vector, keyed by identity: called a few dozen times at every root, where
@@ -164,9 +189,17 @@ def non_friction_force_rate(
     acceleration of the field assumed for mass ``i`` (0 for a resting mass).
     """
     rates = force_rates(
-        float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), left, right, float(a1), float(a2),
+        float(t),
+        float(y[0]),
+        float(y[1]),
+        float(y[2]),
+        float(y[3]),
+        left,
+        right,
+        float(a1),
+        float(a2),
         coefficients(p),
-    )  # fmt: skip
+    )
     return rates[0], rates[1]
 
 
@@ -192,8 +225,9 @@ def force_scale(t: float, y: StateLike, p: Parameters, mode: Mode, mass: int) ->
     A force-like G-function counts as zero when it is small against this (rounding and the
     solver's tolerance act on each term), whatever the units and magnitudes of the case.
     """
-    return float(scale_of(float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right, mass,
-                          coefficients(p)))  # fmt: skip
+    return float(
+        scale_of(float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right, mass, coefficients(p))
+    )
 
 
 def kinetic_field(p: Parameters, mass: int, sign: int, force: float) -> float:

@@ -67,8 +67,9 @@ def g_values(  # pragma: no cover - compiled
                 force = f1 if mass == 1 else f2
                 g0 = barrier(c, mass, sign, force) if barrier_side else kinetic(c, mass, sign, force)
                 own = 0.0 if barrier_side else g0
-                rates = force_rates(t, x1, v1, x2, v2, left, right, own if mass == 1 else a1,
-                                    a2 if mass == 1 else own, c)  # fmt: skip
+                rates = force_rates(
+                    t, x1, v1, x2, v2, left, right, own if mass == 1 else a1, a2 if mass == 1 else own, c
+                )
                 out[k], out[k + 1] = g0, rates[0] if mass == 1 else rates[1]
                 k += 2
 
@@ -109,8 +110,19 @@ def displacement_values(
 
 def _values(t: float, y: StateLike, p: Parameters, mode: Mode) -> Vector:
     values = np.empty(16)
-    g_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right, mode.sign(1),
-             mode.sign(2), coefficients(p), values)  # fmt: skip
+    g_values(
+        float(t),
+        float(y[0]),
+        float(y[1]),
+        float(y[2]),
+        float(y[3]),
+        mode.left,
+        mode.right,
+        mode.sign(1),
+        mode.sign(2),
+        coefficients(p),
+        values,
+    )
     return values
 
 
@@ -146,6 +158,17 @@ def displacement_g(t: float, y: StateLike, p: Parameters, mode: Mode, boundary: 
     """
     if boundary not in ("right", "left"):
         raise ValueError(f"boundary must be 'right' or 'left', got {boundary!r}")
-    g0, g1 = displacement_values(float(t), float(y[0]), float(y[1]), float(y[2]), float(y[3]), mode.left, mode.right,
-                                 mode.sign(1), mode.sign(2), coefficients(p), boundary == "right")  # fmt: skip
+    g0, g1 = displacement_values(
+        float(t),
+        float(y[0]),
+        float(y[1]),
+        float(y[2]),
+        float(y[3]),
+        mode.left,
+        mode.right,
+        mode.sign(1),
+        mode.sign(2),
+        coefficients(p),
+        boundary == "right",
+    )
     return float(g0), float(g1)

@@ -11,7 +11,7 @@ import dataclasses
 import math
 import numbers
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, TypeGuard
 
 from oscillator.errors import InputError
 from oscillator.text import shown
@@ -45,6 +45,12 @@ def is_number(value: Any) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
+def is_finite_number(value: Any) -> TypeGuard[float]:
+    """A finite real number (Python's or NumPy's), not a boolean: the one test every argument
+    and file field that must be a number goes through (:func:`real_argument` raises on it)."""
+    return is_number(value) and math.isfinite(value)
+
+
 def is_whole_number(value: Any) -> bool:
     """An integer (Python's or NumPy's), not a boolean."""
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
@@ -66,7 +72,7 @@ def real_argument(value: Any, name: str, *, positive: bool = False) -> float:
     Text, booleans, ``nan`` and infinities are refused with :class:`InputError` naming ``name``.
     """
     number = as_float(value)
-    if not math.isfinite(number) or (positive and not number > 0):
+    if not is_finite_number(number) or (positive and not number > 0):
         kind = "a positive finite number" if positive else "a finite number"
         raise InputError(f"{name} must be {kind}, got {shown(value)}", field=name)
     return number
@@ -80,18 +86,39 @@ def _require_finite(owner: str, name: str, value: Any) -> float:
             field=name,
         )
     number = as_float(value)
-    if not math.isfinite(number):
+    if not is_finite_number(number):
         raise InputError(f"{owner}.{name} must be finite, got {number!r}; give a finite number", field=name)
     return number
 
 
 #: The SI unit of each parameter ("" for the friction coefficients), for labels.
 UNITS = {
-    "m1": "kg", "m2": "kg", "C1": "N s/m", "C2": "N s^3/m^3", "C3": "N s/m", "C4": "N s/m", "C5": "N s^3/m^3",
-    "K1": "N/m", "K2": "N/m^3", "K3": "N/m", "K4": "N/m", "K5": "N/m^3", "K6": "N/m", "mu_k": "", "mu_s": "",
-    "d": "m", "d1": "m", "Q1": "N", "Q2": "N", "Omega": "rad/s", "phi1": "rad", "phi2": "rad", "P1": "N",
-    "P2": "N", "g": "m/s^2",
-}  # fmt: skip
+    "m1": "kg",
+    "m2": "kg",
+    "C1": "N s/m",
+    "C2": "N s^3/m^3",
+    "C3": "N s/m",
+    "C4": "N s/m",
+    "C5": "N s^3/m^3",
+    "K1": "N/m",
+    "K2": "N/m^3",
+    "K3": "N/m",
+    "K4": "N/m",
+    "K5": "N/m^3",
+    "K6": "N/m",
+    "mu_k": "",
+    "mu_s": "",
+    "d": "m",
+    "d1": "m",
+    "Q1": "N",
+    "Q2": "N",
+    "Omega": "rad/s",
+    "phi1": "rad",
+    "phi2": "rad",
+    "P1": "N",
+    "P2": "N",
+    "g": "m/s^2",
+}
 
 
 def labelled(name: str) -> str:
@@ -264,22 +291,27 @@ class SolverOptions:
     Parameters
     ----------
     rtol, atol : float
-        CVODE's relative and absolute tolerances.  The defaults are the loosest that keep
-        switching times within 1e-8 s of a 1e-13 run, over the article's instances and 20 forcing
-        periods of Instance 1 (``tests/test_convergence.py``, ``docs/performance.md``).
+        CVODE's relative and absolute tolerances, both ``> 0``; ``rtol`` in ``[1e-15, 1e-3]``.
+        The defaults are the loosest that keep switching times within 1e-8 s of a 1e-13 run,
+        over the article's instances and 20 forcing periods of Instance 1
+        (``tests/test_convergence.py``, ``docs/performance.md``).
     max_step_fraction : float
         Largest step as a fraction of the forcing period, from 1e-6 to 0.25.  A resting mass's force
         turns twice per period; a step shorter than half a period cannot hide both turns, so
         the watched extrema always reveal two crossings hidden in one step.
     grazing_velocity_tolerance : float
         A velocity extremum (root of ``G^(0)``) with ``|v_i|`` at most this is reported as
-        grazing of the velocity boundary (Thm 5.5), with the distance ``|v_i|`` (m/s).
+        grazing of the velocity boundary (Thm 5.5), with the distance ``|v_i|`` (m/s); ``>= 0``.
     grazing_displacement_tolerance : float
         A zero of ``v1`` within this distance of ``x1 = d1``, or of ``zdot1`` within this distance
-        of ``z1 = -d``, is reported as grazing of that displacement boundary (m).
+        of ``z1 = -d``, is reported as grazing of that displacement boundary (m); ``>= 0``.
     max_events : int
         Stop with an error after this many switching events in one run (10^9 by default: a
         100,000-period run of Instance 1 has 10^6; chattering at one instant has its own guards).
+    storm_events, storm_window : int, float
+        An event storm: more than ``storm_events`` events (1000 by default) within
+        ``storm_window`` seconds (1e-3 by default, ``> 0``) stops the run with an error
+        (``Reason.STORM``) naming the mass, kind and boundary that chatter.
     max_periods : int
         Refuse a run longer than this many forcing periods (10^8 by default: days of computing;
         a run of Instance 1 makes about 100 periods per second).
@@ -287,7 +319,12 @@ class SolverOptions:
         Stop with an error when the recorded trajectory passes this many rows (5 x 10^6 by
         default, about 1 GB): record it on a grid (``t_eval``) or not at all for long runs.
     max_num_steps : int
-        CVODE's step limit between two outputs.
+        CVODE's step limit between two outputs (or between two switches when the trajectory is
+        recorded at every step).
+
+    Every count (``max_events``, ``storm_events``, ``max_periods``, ``max_trajectory_rows``,
+    ``max_num_steps``) is a whole number from 1 to 10^12; a value out of range is refused with
+    :class:`~oscillator.errors.InputError` naming the field.
     """
 
     rtol: float = 1e-10
@@ -399,8 +436,12 @@ class SweepSettings:
             object.__setattr__(self, name, _require_finite(owner, name, getattr(self, name)))
         if self.period_tolerance <= 0:
             raise InputError(f"{owner}.period_tolerance must be > 0", field="period_tolerance")
-        limits = (("steps", 1, MAX_SWEEP_STEPS), ("transient", 0, 10**8), ("record", 1, MAX_SWEEP_RECORD),
-                  ("max_period", 1, 10**6))  # fmt: skip
+        limits = (
+            ("steps", 1, MAX_SWEEP_STEPS),
+            ("transient", 0, 10**8),
+            ("record", 1, MAX_SWEEP_RECORD),
+            ("max_period", 1, 10**6),
+        )
         for name, low, high in limits:
             value = getattr(self, name)
             if not is_whole_number(value) or not low <= value <= high:

@@ -17,24 +17,30 @@ import functools
 from dataclasses import dataclass
 
 from oscillator.errors import InputError
+from oscillator.model.numbering import (
+    LEFT_STOP_LABEL,
+    RIGHT_STOP_LABEL,
+    displacement_boundary_code,
+    domain_code,
+    state_code,
+    velocity_boundary_code,
+    velocity_sign_code,
+)
 
 __all__ = [
     "Mode",
+    "boundary_label",
     "contact_flags",
     "contacts_of_state",
     "displacement_boundary_label",
     "domain_label",
     "domain_of",
+    "state_label",
     "system_state",
     "velocity_boundary",
     "velocity_boundary_label",
     "velocity_sign",
 ]
-
-# (left, right) -> domain of m1 with v1 > 0; the v1 < 0 domain is one more.
-_M1_POSITIVE = {(False, False): 1, (False, True): 3, (True, False): 5, (True, True): 7}
-# left -> domain of m2 with v2 < 0; the v2 > 0 domain is one more.
-_M2_NEGATIVE = {False: 1, True: 5}
 
 
 def domain_of(mass: int, sign: int, *, left: bool, right: bool = False) -> int:
@@ -42,21 +48,12 @@ def domain_of(mass: int, sign: int, *, left: bool, right: bool = False) -> int:
 
     ``sign = 0`` (at rest on a velocity boundary) gives domain 0.  m2 ignores ``right``.
     """
-    if sign == 0:
-        return 0
-    if mass == 1:
-        return _M1_POSITIVE[(left, right)] + (0 if sign > 0 else 1)
-    return _M2_NEGATIVE[left] + (0 if sign < 0 else 1)
+    return domain_code(mass, sign, int(left), int(right))
 
 
 def velocity_sign(mass: int, domain: int) -> int:
     """Velocity sign ``s`` of a domain: +1, -1, or 0 for the velocity boundary itself."""
-    if domain == 0:
-        return 0
-    odd = domain % 2 == 1
-    if mass == 1:
-        return 1 if odd else -1
-    return -1 if odd else 1
+    return velocity_sign_code(mass, domain)
 
 
 def contact_flags(domain1: int) -> tuple[bool, bool] | None:
@@ -66,39 +63,37 @@ def contact_flags(domain1: int) -> tuple[bool, bool] | None:
     return (domain1 >= 5, domain1 in (3, 4, 7, 8))
 
 
+def boundary_label(code: int) -> str:
+    """The label of a boundary code (:mod:`oscillator.model.numbering`): ``∂Ω12(2)``, or the
+    constraint ``x1 = d1`` / ``z1 = -d``."""
+    if code == RIGHT_STOP_LABEL:
+        return "x1 = d1"
+    if code == LEFT_STOP_LABEL:
+        return "z1 = -d"
+    return f"∂Ω{code // 100}{code // 10 % 10}({code % 10})"
+
+
 def velocity_boundary(mass: int, *, left: bool, right: bool = False) -> tuple[int, int]:
     """The velocity boundary ``(alpha, beta)`` that mass ``mass`` rests on or crosses.
 
     m1: (1, 2), (3, 4), (5, 6) or (7, 8); m2: (1, 2) or (5, 6) (4.2), (4.4), (4.6), (4.8).
     """
-    if mass == 1:
-        low = _M1_POSITIVE[(left, right)]
-    else:
-        low = _M2_NEGATIVE[left]
-    return (low, low + 1)
+    code = velocity_boundary_code(mass, int(left), int(right))
+    return (code // 100, code // 10 % 10)
 
 
 def velocity_boundary_label(mass: int, *, left: bool, right: bool = False) -> str:
     """Label such as ``∂Ω12(2)``."""
-    a, b = velocity_boundary(mass, left=left, right=right)
-    return f"∂Ω{a}{b}({mass})"
+    return boundary_label(velocity_boundary_code(mass, int(left), int(right)))
 
 
 def displacement_boundary_label(mass: int, domain_a: int, domain_b: int) -> str:
     """Label of the displacement boundary between two domains, e.g. ``∂Ω13(1)``.
 
-    A resting mass crosses no boundary of its own phase plane; its contact changes are named
-    by the constraint instead (``x1 = d1`` or ``z1 = -d``).
+    A resting mass crosses no boundary of its own phase plane; its contact change is named by
+    the constraint instead (``z1 = -d``).
     """
-    if domain_a == 0 or domain_b == 0:
-        return "x1 = d1" if (mass == 1 and _right_changes(domain_a, domain_b)) else "z1 = -d"
-    lo, hi = sorted((domain_a, domain_b))
-    return f"∂Ω{lo}{hi}({mass})"
-
-
-def _right_changes(domain_a: int, domain_b: int) -> bool:
-    flags = [contact_flags(x) for x in (domain_a, domain_b)]
-    return None not in flags and flags[0][1] != flags[1][1]  # type: ignore[index]
+    return boundary_label(displacement_boundary_code(mass, domain_a, domain_b))
 
 
 def domain_label(mass: int, domain: int, *, left: bool, right: bool = False) -> str:
@@ -115,9 +110,9 @@ _SIGNS = {
 }
 _REGIONS = {"I": (False, False), "II": (False, True), "III": (True, False), "IV": (True, True)}
 _LETTERS = {(False, False): "a", (True, False): "b", (False, True): "c", (True, True): "d"}
-#: (left, right, m1 resting, m2 resting) -> the state's label.
+#: The system states' labels, by code (:func:`oscillator.model.numbering.state_code`).
 _STATES = {
-    (left, right, resting1, resting2): f"{region}-{_LETTERS[(resting1, resting2)]}"
+    state_code(int(left), int(right), int(resting1), int(resting2)): f"{region}-{_LETTERS[(resting1, resting2)]}"
     for region, (left, right) in _REGIONS.items()
     for resting1 in (False, True)
     for resting2 in (False, True)
@@ -130,7 +125,12 @@ def system_state(left: bool, right: bool, resting1: bool, resting2: bool) -> str
     Region I no contact, II right contact only, III left contact only, IV both; letter a both
     moving, b m1 at rest, c m2 at rest, d both at rest.
     """
-    return _STATES[bool(left), bool(right), bool(resting1), bool(resting2)]
+    return _STATES[state_code(int(left), int(right), int(resting1), int(resting2))]
+
+
+def state_label(code: int) -> str:
+    """The system state of a code (:func:`oscillator.model.numbering.state_code`), e.g. ``III-b``."""
+    return _STATES[code]
 
 
 def contacts_of_state(label: str) -> tuple[bool, bool]:

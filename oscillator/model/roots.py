@@ -130,8 +130,9 @@ def root_kernel(
             forced = (c[Q1] if mass == 1 else c[Q2]) != 0.0
             other_moves = (s2 if mass == 1 else s1) != 0
             if forced or (left and other_moves):
-                rates = force_rates(t, x1, v1, x2, v2, left, right, a1 if mass == 2 else 0.0,
-                                    a2 if mass == 1 else 0.0, c)  # fmt: skip
+                rates = force_rates(
+                    t, x1, v1, x2, v2, left, right, a1 if mass == 2 else 0.0, a2 if mass == 1 else 0.0, c
+                )
                 g[base + 1] = rates[mass - 1]
             else:
                 g[base + 1] = 1.0
@@ -164,8 +165,9 @@ def root_values(
     """
     g = out if out is not None else np.empty(NUM_ROOTS)
     state = np.asarray(y, dtype=np.float64)
-    root_kernel(float(t), state, g, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right,
-                float(step), float(near))  # fmt: skip
+    root_kernel(
+        float(t), state, g, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right, float(step), float(near)
+    )
     return g
 
 
@@ -209,6 +211,7 @@ def mode_violation(t: float, y: StateLike, p: Parameters, mode: Mode, tolerance:
     (relative to the size of the quantity).
     """
     state = np.asarray(y, dtype=np.float64)
-    code = violation_code(float(t), state, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right,
-                          float(tolerance))  # fmt: skip
+    code = violation_code(
+        float(t), state, coefficients(p), mode.sign(1), mode.sign(2), mode.left, mode.right, float(tolerance)
+    )
     return _VIOLATIONS[code]

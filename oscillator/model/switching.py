@@ -27,15 +27,13 @@ import numpy as np
 from numba import types
 
 from oscillator.compiled import njit
-from oscillator.errors import SimulationFailed
+from oscillator.errors import Reason, SimulationFailed
 from oscillator.model.events import (
     BARRIER,
     COLUMN,
     FIELD,
     KINDS,
-    LEFT_STOP_LABEL,
     NO_NAME,
-    RIGHT_STOP_LABEL,
     V1_NAME,
     WIDTH,
     ZDOT1_NAME,
@@ -45,8 +43,16 @@ from oscillator.model.events import (
 )
 from oscillator.model.fields import D1, D, coefficients, scale_of
 from oscillator.model.g_functions import barrier_index, displacement_values, g_values, velocity_index
+from oscillator.model.numbering import LEFT_STOP_LABEL, RIGHT_STOP_LABEL
+from oscillator.model.numbering_kernels import (
+    displacement_boundary_code,
+    domain_code,
+    state_code,
+    velocity_boundary_code,
+)
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
+from oscillator.model.roots import Root
 from oscillator.model.theorems import (
     DECISION,
     DEFINITION_5_2,
@@ -83,21 +89,91 @@ ZERO_TIME = 1e-12
 
 # Bits of the fired roots (oscillator.model.roots.Root), and the event-row columns and kind codes,
 # as module constants (numba freezes them into the compiled code).
-_VELOCITY_1, _EXTREMUM_1, _BARRIER_1_POSITIVE, _BARRIER_1_NEGATIVE = 1 << 0, 1 << 1, 1 << 2, 1 << 3
-_VELOCITY_2, _EXTREMUM_2, _BARRIER_2_POSITIVE, _BARRIER_2_NEGATIVE = 1 << 4, 1 << 5, 1 << 6, 1 << 7
-_RIGHT_STOP, _LEFT_STOP, _RELATIVE_VELOCITY = 1 << 8, 1 << 9, 1 << 10
-(_T, _MASS, _KIND, _BOUNDARY, _FROM, _TO, _THEOREM, _EQUATION, _BRANCH, _X1, _G0A, _G1A, _G0B, _G1B, _NAME_A, _NAME_B,
- _DISTANCE, _STATE_FROM, _STATE_TO) = (
-    COLUMN[name] for name in ("t", "mass", "kind", "boundary", "from_domain", "to_domain", "theorem", "equation",
-                              "branch", "x1", "G0_alpha", "G1_alpha", "G0_beta", "G1_beta", "G_alpha", "G_beta",
-                              "distance", "state_from", "state_to")
-)  # fmt: skip
+(
+    _VELOCITY_1,
+    _EXTREMUM_1,
+    _BARRIER_1_POSITIVE,
+    _BARRIER_1_NEGATIVE,
+    _VELOCITY_2,
+    _EXTREMUM_2,
+    _BARRIER_2_POSITIVE,
+    _BARRIER_2_NEGATIVE,
+    _RIGHT_STOP,
+    _LEFT_STOP,
+    _RELATIVE_VELOCITY,
+) = (
+    1 << int(root)
+    for root in (
+        Root.VELOCITY_1,
+        Root.EXTREMUM_1,
+        Root.BARRIER_1_POSITIVE,
+        Root.BARRIER_1_NEGATIVE,
+        Root.VELOCITY_2,
+        Root.EXTREMUM_2,
+        Root.BARRIER_2_POSITIVE,
+        Root.BARRIER_2_NEGATIVE,
+        Root.RIGHT_STOP,
+        Root.LEFT_STOP,
+        Root.RELATIVE_VELOCITY,
+    )
+)
+(
+    _T,
+    _MASS,
+    _KIND,
+    _BOUNDARY,
+    _FROM,
+    _TO,
+    _THEOREM,
+    _EQUATION,
+    _BRANCH,
+    _X1,
+    _G0A,
+    _G1A,
+    _G0B,
+    _G1B,
+    _NAME_A,
+    _NAME_B,
+    _DISTANCE,
+    _STATE_FROM,
+    _STATE_TO,
+) = (
+    COLUMN[name]
+    for name in (
+        "t",
+        "mass",
+        "kind",
+        "boundary",
+        "from_domain",
+        "to_domain",
+        "theorem",
+        "equation",
+        "branch",
+        "x1",
+        "G0_alpha",
+        "G1_alpha",
+        "G0_beta",
+        "G1_beta",
+        "G_alpha",
+        "G_beta",
+        "distance",
+        "state_from",
+        "state_to",
+    )
+)
 (_PASSABLE, _SLIDING_ONSET, _SLIDING_VANISH, _GRAZING, _RIGHT_ONSET, _RIGHT_RELEASE, _LEFT_ONSET, _LEFT_RELEASE) = (
     KINDS.index(kind)
-    for kind in (EventKind.PASSABLE, EventKind.SLIDING_ONSET, EventKind.SLIDING_VANISH, EventKind.GRAZING,
-                 EventKind.RIGHT_CONTACT_ONSET, EventKind.RIGHT_CONTACT_RELEASE, EventKind.LEFT_CONTACT_ONSET,
-                 EventKind.LEFT_CONTACT_RELEASE)
-)  # fmt: skip
+    for kind in (
+        EventKind.PASSABLE,
+        EventKind.SLIDING_ONSET,
+        EventKind.SLIDING_VANISH,
+        EventKind.GRAZING,
+        EventKind.RIGHT_CONTACT_ONSET,
+        EventKind.RIGHT_CONTACT_RELEASE,
+        EventKind.LEFT_CONTACT_ONSET,
+        EventKind.LEFT_CONTACT_RELEASE,
+    )
+)
 _NAN = math.nan
 
 # Every kernel carries its signature: one compiled version each, whatever literal constants the
@@ -116,19 +192,9 @@ _NAMES = types.UniTuple(_i, 2)
 # --------------------------------------------------------------------------- modes as numbers
 
 
-@njit(_i(_i, _i, _i, _i), cache=True)
-def _domain(mass: int, sign: int, left: int, right: int) -> int:  # pragma: no cover - compiled
-    """:func:`oscillator.model.phase_space.domain_of`."""
-    if sign == 0:
-        return 0
-    if mass == 1:
-        return 1 + 4 * left + 2 * right + (0 if sign > 0 else 1)
-    return 1 + 4 * left + (0 if sign < 0 else 1)
-
-
 @njit(_i(_MODE, _i), cache=True)
 def _domain_in(mode: tuple[int, int, int, int], mass: int) -> int:  # pragma: no cover - compiled
-    return _domain(mass, mode[mass - 1], mode[2], mode[3])
+    return domain_code(mass, mode[mass - 1], mode[2], mode[3])
 
 
 @njit(_MODE(_MODE, _i, _i), cache=True)
@@ -140,24 +206,8 @@ def _with_sign(mode: tuple[int, int, int, int], mass: int, sign: int) -> tuple[i
 
 @njit(_i(_MODE), cache=True)
 def _state_code(mode: tuple[int, int, int, int]) -> int:  # pragma: no cover - compiled
-    """``8 left + 4 right + 2 (m1 at rest) + (m2 at rest)``: the system state (events.py)."""
-    return 8 * mode[2] + 4 * mode[3] + 2 * (mode[0] == 0) + (mode[1] == 0)
-
-
-@njit(_i(_i, _i, _i), cache=True)
-def _velocity_boundary(mass: int, left: int, right: int) -> int:  # pragma: no cover - compiled
-    """The code of the velocity boundary ``∂Ω{a}{b}(mass)`` the mass rests on or crosses."""
-    low = _domain(mass, 1 if mass == 1 else -1, left, right)
-    return 100 * low + 10 * (low + 1) + mass
-
-
-@njit(_i(_i, _i, _i), cache=True)
-def _displacement_boundary(mass: int, domain_a: int, domain_b: int) -> int:  # pragma: no cover - compiled
-    """The code of the displacement boundary between two domains; a resting mass crosses none
-    of its own phase plane, its contact change is named by the constraint ``z1 = -d``."""
-    if domain_a == 0 or domain_b == 0:
-        return LEFT_STOP_LABEL
-    return 100 * min(domain_a, domain_b) + 10 * max(domain_a, domain_b) + mass
+    """The system state's code (:func:`oscillator.model.numbering.state_code`)."""
+    return state_code(mode[2], mode[3], int(mode[0] == 0), int(mode[1] == 0))
 
 
 # --------------------------------------------------------------------------- G-functions at the instant
@@ -244,7 +294,7 @@ def _switch_right_contact(
     if not decision[0]:
         return mode, n  # touched and turned back: reported as grazing, if close, by rule 6
     kind = _RIGHT_ONSET if after[3] else _RIGHT_RELEASE
-    boundary = _displacement_boundary(1, from_domain, to_domain)
+    boundary = displacement_boundary_code(1, from_domain, to_domain)
     n = _write(out, n, t, y, 1, kind, boundary, mode, after, decision, before_g, after_g, (V1_NAME, V1_NAME), _NAN)
     return after, n
 
@@ -266,9 +316,10 @@ def _switch_left_contact(
         return mode, n
     kind = _LEFT_ONSET if onset else _LEFT_RELEASE
     for mass in (1, 2):
-        boundary = _displacement_boundary(mass, _domain_in(mode, mass), _domain_in(after, mass))
-        n = _write(out, n, t, y, mass, kind, boundary, mode, after, decision, before_g, after_g,
-                   (ZDOT1_NAME, ZDOT1_NAME), _NAN)  # fmt: skip
+        boundary = displacement_boundary_code(mass, _domain_in(mode, mass), _domain_in(after, mass))
+        n = _write(
+            out, n, t, y, mass, kind, boundary, mode, after, decision, before_g, after_g, (ZDOT1_NAME, ZDOT1_NAME), _NAN
+        )
     return after, n
 
 
@@ -281,13 +332,13 @@ def _arrive(
 ) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """A moving mass on its velocity boundary: passes (Thm 5.1) or comes to rest (5.2/5.3)."""
     s = mode[mass - 1]
-    alpha, beta = _domain(mass, s, mode[2], mode[3]), _domain(mass, -s, mode[2], mode[3])
+    alpha, beta = domain_code(mass, s, mode[2], mode[3]), domain_code(mass, -s, mode[2], mode[3])
     g = _g(t, y, c, mode)
     k_alpha, k_beta = velocity_index(mass, s), velocity_index(mass, -s)
     g_alpha, g_beta = (g[k_alpha], g[k_alpha + 1]), (g[k_beta], g[k_beta + 1])
     tol = _zero_tolerance(y, c, period, mode, mass, g_beta[1])
     names = (FIELD + alpha, FIELD + beta)
-    boundary = _velocity_boundary(mass, mode[2], mode[3])
+    boundary = velocity_boundary_code(mass, mode[2], mode[3])
 
     decision = passable(mass, alpha, beta, g_alpha[0], g_beta[0])
     if decision[0]:
@@ -322,7 +373,7 @@ def _leave_rest(
     n: int,
 ) -> tuple[tuple[int, int, int, int], int]:  # pragma: no cover - compiled
     """A resting mass leaves into the side ``s`` if Theorem 5.4 holds."""
-    delta = _domain(mass, s, mode[2], mode[3])
+    delta = domain_code(mass, s, mode[2], mode[3])
     g = _g(t, y, c, mode)
     k_barrier, k_field = barrier_index(mass, s), velocity_index(mass, s)
     barrier, field = (g[k_barrier], g[k_barrier + 1]), (g[k_field], g[k_field + 1])
@@ -332,7 +383,7 @@ def _leave_rest(
         return mode, n
     after = _with_sign(mode, mass, s)
     names = (BARRIER + delta, FIELD + delta)
-    boundary = _velocity_boundary(mass, mode[2], mode[3])
+    boundary = velocity_boundary_code(mass, mode[2], mode[3])
     n = _write(out, n, t, y, mass, _SLIDING_VANISH, boundary, mode, after, decision, barrier, field, names, _NAN)
     return after, n
 
@@ -399,9 +450,8 @@ def _stop_grazing(
         decision = (True, DEFINITION_5_4, equation, NO_BRANCH)
         flipped = (mode[0], mode[1], 1 - mode[2], mode[3])
     if mode[0] != 0:
-        boundary = _displacement_boundary(1, _domain_in(mode, 1), _domain_in(flipped, 1))
-    return _write(out, n, t, y, 1, _GRAZING, boundary, mode, mode, decision, g, (_NAN, _NAN), (name, NO_NAME),
-                  distance)  # fmt: skip
+        boundary = displacement_boundary_code(1, _domain_in(mode, 1), _domain_in(flipped, 1))
+    return _write(out, n, t, y, 1, _GRAZING, boundary, mode, mode, decision, g, (_NAN, _NAN), (name, NO_NAME), distance)
 
 
 @njit(_i(_f, _VECTOR, _PARAMS, _f, _MODE, _MODE, _i, _f, _f, _ROWS, _i), cache=True)
@@ -431,9 +481,23 @@ def _grazing_reports(
             decision = grazing(mass, alpha, g[k], g[k + 1], tolerance)
             speed = abs(y[2 * mass - 1])
             if decision[0] and speed <= velocity_tolerance:
-                boundary = _velocity_boundary(mass, mode[2], mode[3])
-                n = _write(out, n, t, y, mass, _GRAZING, boundary, mode, mode, decision, (g[k], g[k + 1]),
-                           (_NAN, _NAN), (FIELD + alpha, NO_NAME), speed)  # fmt: skip
+                boundary = velocity_boundary_code(mass, mode[2], mode[3])
+                n = _write(
+                    out,
+                    n,
+                    t,
+                    y,
+                    mass,
+                    _GRAZING,
+                    boundary,
+                    mode,
+                    mode,
+                    decision,
+                    (g[k], g[k + 1]),
+                    (_NAN, _NAN),
+                    (FIELD + alpha, NO_NAME),
+                    speed,
+                )
     if fired & _VELOCITY_1 and abs(y[0] - c[D1]) <= displacement_tolerance:
         # v1 = 0 within tol of x1 = d1: the flow touched the right stop in m1's domain before.
         n = _stop_grazing(t, y, c, before, True, 7 if mode[2] else 6, out, n)
@@ -494,6 +558,7 @@ def _storm(t: float, mode: Mode) -> SimulationFailed:
         f"event storm at t = {t:.10g} s: the masses keep switching at one instant "
         f"(mode {mode}); the flow barrier and the fields contradict each other here — check "
         f"mu_s >= mu_k and the contact parameters",
+        reason=Reason.STORM,
         field="mu_s",
     )
 
@@ -522,9 +587,17 @@ def resolve_rows(
         The masses keep switching at the instant (an event storm).
     """
     (s1, s2, left, right), end, settled = _resolve(
-        float(t), y, coefficients(p), p.period, _numbers(mode), fired, options.grazing_velocity_tolerance,
-        options.grazing_displacement_tolerance, out, start,
-    )  # fmt: skip
+        float(t),
+        y,
+        coefficients(p),
+        p.period,
+        _numbers(mode),
+        fired,
+        options.grazing_velocity_tolerance,
+        options.grazing_displacement_tolerance,
+        out,
+        start,
+    )
     after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
     if not settled:
         raise _storm(t, after)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from numba import types
 
 from oscillator.compiled import njit
+from oscillator.model.numbering_kernels import velocity_sign_code
 
 __all__ = [
     "Decision",
@@ -106,12 +107,6 @@ def branch_text(code: int) -> str:
     return _BRANCHES[int(code)]
 
 
-@njit(_i(_i, _i), cache=True)
-def _sign(mass: int, domain: int) -> int:  # pragma: no cover - compiled
-    """The article's ``(-1)^(i+delta)``."""
-    return -1 if (mass + domain) % 2 else 1
-
-
 @njit(_b(_f, _f), cache=True)
 def is_zero(value: float, tolerance: float) -> bool:  # pragma: no cover - compiled
     """Whether a G-function value counts as zero (a root located by the integrator)."""
@@ -131,7 +126,7 @@ def passable(mass: int, alpha: int, beta: int, g_alpha: float, g_beta: float) ->
     (5.12), (5.13): ``(-1)^(i+alpha) F_i^(alpha)(t_m-) < 0`` and
     ``(-1)^(i+alpha) F_i^(beta)(t_m+) < 0`` (``H`` in place of ``F`` on ``∂Ω56``, ``∂Ω78``).
     """
-    s = _sign(mass, alpha)
+    s = velocity_sign_code(mass, alpha)
     equation = 12 if _pair_index(alpha) < 2 else 13
     return s * g_alpha < 0 and s * g_beta < 0, 1, equation, NO_BRANCH
 
@@ -158,7 +153,7 @@ def sliding_appears(
     The printed article has ``> 0`` in that last factor, which would make the boundary a
     source on the beta side just after ``t_m`` (a passable flow); we implement the sink.
     """
-    s_alpha, s_beta = _sign(mass, alpha), _sign(mass, beta)
+    s_alpha, s_beta = velocity_sign_code(mass, alpha), velocity_sign_code(mass, beta)
     holds = is_zero(g_beta, tolerance) and s_alpha * g_alpha < 0 and s_beta * dg_beta < 0
     return holds, 3, 22 + _pair_index(alpha), NO_BRANCH
 
@@ -186,7 +181,7 @@ def sliding_vanishes(
     value already past zero, ``(-1)^(i+delta) F_i^(0>0_delta) > 0`` (at the start or after a
     contact makes the force jump), also leaves at once.
     """
-    s = _sign(mass, delta)
+    s = velocity_sign_code(mass, delta)
     on_barrier = is_zero(g_barrier, tolerance)
     crossing = (on_barrier and s * dg_barrier > 0) or (not on_barrier and s * g_barrier > 0)
     holds = crossing and s * g_delta >= -tolerance
@@ -201,7 +196,7 @@ def grazing(mass: int, alpha: int, g_alpha: float, dg_alpha: float, tolerance: f
     (5.37), (5.38): ``F_i^(alpha)(t_m) = 0`` and ``(-1)^(i+alpha) D F_i^(alpha) > 0``: the
     speed has a minimum there and the flow turns back into ``Omega_alpha``.
     """
-    s = _sign(mass, alpha)
+    s = velocity_sign_code(mass, alpha)
     equation = 37 if _pair_index(alpha) < 2 else 38
     return is_zero(g_alpha, tolerance) and s * dg_alpha > 0, 5, equation, NO_BRANCH
 
@@ -284,16 +279,18 @@ def theorem_5_3_sliding_appears(
     mass: int, alpha: int, beta: int, g_alpha: float, g_beta: float, dg_beta: float, *, tolerance: float
 ) -> Decision:
     """Theorem 5.3 as a :class:`Decision` (:func:`sliding_appears`)."""
-    return Decision.of(sliding_appears(mass, alpha, beta, float(g_alpha), float(g_beta), float(dg_beta),
-                                       float(tolerance)))  # fmt: skip
+    return Decision.of(
+        sliding_appears(mass, alpha, beta, float(g_alpha), float(g_beta), float(dg_beta), float(tolerance))
+    )
 
 
 def theorem_5_4_sliding_vanishes(
     mass: int, delta: int, g_barrier: float, dg_barrier: float, g_delta: float, *, tolerance: float
 ) -> Decision:
     """Theorem 5.4 as a :class:`Decision` (:func:`sliding_vanishes`)."""
-    return Decision.of(sliding_vanishes(mass, delta, float(g_barrier), float(dg_barrier), float(g_delta),
-                                        float(tolerance)))  # fmt: skip
+    return Decision.of(
+        sliding_vanishes(mass, delta, float(g_barrier), float(dg_barrier), float(g_delta), float(tolerance))
+    )
 
 
 def theorem_5_5_grazing(mass: int, alpha: int, g_alpha: float, dg_alpha: float, *, tolerance: float) -> Decision:

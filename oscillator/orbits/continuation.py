@@ -20,23 +20,25 @@ Each is located by bisection along the branch, to ``locate_tol`` in the paramete
 
 from __future__ import annotations
 
+import enum
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError, Interrupted, OscillatorError
+from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, real_argument
 from oscillator.orbits.shooting import (
     MAX_TRANSIENT,
     STATE,
     PeriodMap,
+    Signature,
     check_count,
     check_guess,
     check_orbit_settings,
@@ -51,14 +53,54 @@ from oscillator.orbits.shooting import (
     start_of,
     verdict_of,
 )
+from oscillator.presenting import presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["BIFURCATION_KINDS", "Branch", "ContinuationSettings", "check_settings", "continue_orbit"]
+__all__ = ["BIFURCATION_KINDS", "Bifurcation", "Branch", "ContinuationSettings", "check_settings", "continue_orbit"]
 
-BIFURCATION_KINDS = ("sliding_onset", "sliding_vanish", "grazing", "fold", "period_doubling", "torus")
+
+class Bifurcation(enum.StrEnum):
+    """The kinds of bifurcation a branch locates, named as the parameter increases (the values
+    are the ``kind`` column's text)."""
+
+    SLIDING_ONSET = "sliding_onset"
+    """A rest interval appears (a mass's cycle of switches gains a sliding onset)."""
+    SLIDING_VANISH = "sliding_vanish"
+    """A rest interval vanishes, or a mass at rest all period can no longer be held where it stuck."""
+    GRAZING = "grazing"
+    """The cycle of switches changes with as many rests: a pair of switches appears or vanishes
+    where the orbit touches a boundary."""
+    FOLD = "fold"
+    """The branch turns back in the parameter: a multiplier crosses the unit circle at +1."""
+    PERIOD_DOUBLING = "period_doubling"
+    """A real multiplier crosses the unit circle at -1."""
+    TORUS = "torus"
+    """A complex pair of multipliers crosses the unit circle (Neimark-Sacker)."""
+
+    @property
+    def nonsmooth(self) -> bool:
+        """Located where the cycle of switches changes (the map is not smooth there), not where a
+        multiplier crosses the unit circle; the branch may jump across it."""
+        return self in (Bifurcation.SLIDING_ONSET, Bifurcation.SLIDING_VANISH, Bifurcation.GRAZING)
+
+    @classmethod
+    def of_rests(cls, appears: bool) -> Bifurcation:
+        """A rest interval appearing or vanishing as the parameter increases."""
+        return cls.SLIDING_ONSET if appears else cls.SLIDING_VANISH
+
+    @classmethod
+    def of_multiplier(cls, mu: complex) -> Bifurcation:
+        """The smooth bifurcation of a multiplier ``mu`` on the unit circle."""
+        if abs(mu.imag) > 1e-6 * abs(mu):
+            return cls.TORUS
+        return cls.PERIOD_DOUBLING if mu.real < 0 else cls.FOLD
+
+
+#: The kinds' text, as the ``kind`` column holds them.
+BIFURCATION_KINDS = tuple(kind.value for kind in Bifurcation)
 #: The default largest step, the smallest allowed and the most points (``continue_orbit``).
 DEFAULT_STEP = 1 / 40
 MIN_STEP = 1e-6
@@ -82,7 +124,7 @@ class _Point:
         return multipliers_of(self.image.monodromy)
 
     @cached_property
-    def signature(self) -> str:
+    def signature(self) -> Signature:
         return cyclic_signature(self.image)
 
     @cached_property
@@ -96,8 +138,10 @@ class _Point:
         the mass there any more, the orbit ends even if the signature does not change)."""
         if self.signature != other.signature or self.image.resting != other.image.resting:
             return False
-        return all(abs(x - y) <= 1e-9 * max(1.0, abs(x)) for (_, x), (_, y) in
-                   zip(self.rest_positions, other.rest_positions, strict=True))  # fmt: skip
+        return all(
+            abs(x - y) <= 1e-9 * max(1.0, abs(x))
+            for (_, x), (_, y) in zip(self.rest_positions, other.rest_positions, strict=True)
+        )
 
     @cached_property
     def unstable(self) -> int:
@@ -112,10 +156,24 @@ class _Point:
 
 
 @dataclass(frozen=True)
+class Skipped:
+    """A point the corrector could not compute, and why (in place of a :class:`_Point`)."""
+
+    lam: float
+    reason: Reason
+    message: str
+
+
+def _skipped(lam: float, error: OscillatorError) -> Skipped:
+    reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
+    return Skipped(lam, reason, str(error))
+
+
+@dataclass(frozen=True)
 class _Located:
     """A located bifurcation: its row, and the orbits on either side (None across a gap)."""
 
-    row: dict
+    row: dict[str, Any]
     left: _Point | None
     right: _Point | None
 
@@ -154,6 +212,8 @@ class Branch:
     complete : bool
         Whether the branch reached ``stop`` (else ``message`` says why it ended).
     message : str
+    reason : Reason or None
+        Why it ended early, for a program (:class:`~oscillator.errors.Reason`); None when complete.
     """
 
     param: str
@@ -163,6 +223,7 @@ class Branch:
     period: int
     complete: bool = True
     message: str = ""
+    reason: Reason | None = None
     case: Case | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -180,27 +241,19 @@ class Branch:
         at the section (default :attr:`coordinate`) against the parameter, stable solid,
         unstable dashed, bifurcations marked; over ``sweep_points`` (columns the parameter and
         ``coordinate``), if given."""
-        from oscillator.orbits.output import branch_figure
-
-        return branch_figure(self, _coordinate(coordinate or self.coordinate), sweep_points)
+        return presenter().plot_branch(self, _coordinate(coordinate or self.coordinate), sweep_points)
 
     def plot_multipliers(self) -> Figure:
         """The multipliers' moduli against the parameter (``figures/multipliers.png``)."""
-        from oscillator.orbits.output import multipliers_figure
-
-        return multipliers_figure(self)
+        return presenter().plot_multipliers(self)
 
     def save(self, folder: str | Path, *, coordinate: str | None = None) -> Path:
         """Write the branch as ``oscillator continue`` does (tables, ``case.toml``, ``run.json``,
         figures, report) into ``folder``, a new one; :func:`oscillator.read_run` reads it back."""
-        from oscillator.orbits.output import save_branch
-
-        return save_branch(self, folder, coordinate=_coordinate(coordinate or self.coordinate))
+        return presenter().save_branch(self, folder, coordinate=_coordinate(coordinate or self.coordinate))
 
     def _repr_html_(self) -> str:
-        from oscillator.report.notebook import branch_html
-
-        return branch_html(self)
+        return presenter().branch_html(self)
 
 
 def _coordinate(name: str) -> str:
@@ -242,54 +295,53 @@ class _Continuer:
 
     def tangent(self, jacobian: np.ndarray, previous: np.ndarray | None, direction: float) -> np.ndarray:
         """The unit null vector of ``jacobian``, oriented along ``previous`` (or ``direction`` in lam)."""
-        t = np.linalg.svd(jacobian)[2][-1]
+        t: np.ndarray = np.linalg.svd(jacobian)[2][-1]
         reference = previous @ t if previous is not None else direction * t[4]
         return -t if reference < 0 else t
 
     def correct(
         self, guess: np.ndarray, tangent: np.ndarray, anchor: np.ndarray, max_iterations: int = 8
-    ) -> _Point | None:
-        """Newton on ``F = 0`` and ``tangent . (u - anchor) = 0`` from ``guess``; None if it fails."""
+    ) -> _Point | Skipped:
+        """Newton on ``F = 0`` and ``tangent . (u - anchor) = 0`` from ``guess``; why not, if it fails."""
         u = guess.copy()
         for iteration in range(max_iterations + 1):
             y, lam = u[:4], u[4] * self.sigma
             try:
                 residual, image = self.residual(y, lam)
                 jacobian = self.jacobian(y, lam, image)
-            except OscillatorError:
-                return None
+            except OscillatorError as error:
+                return _skipped(lam, error)
             constraint = float(tangent @ (u - anchor))
             if np.max(np.abs(residual)) <= self.tol * self.scale and abs(constraint) <= 1e-9:
                 return _Point(y.copy(), lam, image, self.tangent(jacobian, tangent, 1.0), iteration)
             if iteration == max_iterations:
-                return None
-            system = np.vstack([jacobian, tangent])
+                break
             try:
-                step = np.linalg.solve(system, -np.append(residual, constraint))
+                step = np.linalg.solve(np.vstack([jacobian, tangent]), -np.append(residual, constraint))
             except np.linalg.LinAlgError:
-                return None
+                return Skipped(lam, Reason.SINGULAR, "the corrector's system is singular")
             u = u + step
             if not np.isfinite(u).all():
-                return None
-        return None
+                return Skipped(lam, Reason.SINGULAR, "the corrector's step is not finite")
+        return Skipped(
+            float(u[4] * self.sigma), Reason.NO_CONVERGENCE, f"the corrector did not converge in {max_iterations} steps"
+        )
 
-    def along(self, a: _Point, s: float) -> _Point | None:
+    def along(self, a: _Point, s: float) -> _Point | Skipped:
         """The point at arclength ``s`` from ``a`` along its tangent (corrected)."""
         u_a = np.append(a.y, a.lam / self.sigma)
         anchor = u_a + s * a.tangent
         return self.correct(anchor, a.tangent, anchor)
 
 
-def _kind_of_change(before: str, after: str, increasing: bool) -> str:
+def _kind_of_change(before: Signature, after: Signature, increasing: bool) -> Bifurcation:
     """The kind of a change of the orbit's cycle of switches, named as the parameter increases;
     with the cycle unchanged, a mass at rest all period could no longer be held where it stuck."""
     if before == after:
-        return "sliding_vanish" if increasing else "sliding_onset"
-    rests_before, rests_after = before.count("sliding_onset"), after.count("sliding_onset")
-    if rests_before == rests_after:
-        return "grazing"
-    appears = (rests_after > rests_before) == increasing
-    return "sliding_onset" if appears else "sliding_vanish"
+        return Bifurcation.of_rests(appears=not increasing)
+    if before.rests == after.rests:
+        return Bifurcation.GRAZING
+    return Bifurcation.of_rests(appears=(after.rests > before.rests) == increasing)
 
 
 def _critical(point: _Point) -> complex:
@@ -298,12 +350,13 @@ def _critical(point: _Point) -> complex:
 
 
 def _check_range(
-    case: Case | str, param: str, start: object, stop: object, overrides: dict, locate_tol: float
+    case: Case | str, param: str, start: object, stop: object, overrides: dict[str, Any], locate_tol: float
 ) -> tuple[float, float]:
     """``start`` and ``stop`` as valid values of ``param``, far enough apart to continue."""
     if param not in Parameters.names():
-        raise InputError(f"param must be one of the parameters {', '.join(Parameters.names())}, got {shown(param)}",
-                         field="param")  # fmt: skip
+        raise InputError(
+            f"param must be one of the parameters {', '.join(Parameters.names())}, got {shown(param)}", field="param"
+        )
     if param in overrides:
         raise InputError(f"{param} is the continued parameter; give its range with start and stop", field=param)
     values = real_argument(start, "start"), real_argument(stop, "stop")
@@ -315,8 +368,11 @@ def _check_range(
     width = abs(values[1] - values[0])
     if width < 10 * locate_tol or width < 1e-12 * max(abs(values[0]), abs(values[1])):
         least = max(10 * locate_tol, 1e-12 * abs(values[0]))
-        raise InputError(f"`stop` must be at least {least:.3g} away from `start` (10 times the location "
-                         f"tolerance), got {values[1]!r} and {values[0]!r}", field="stop")  # fmt: skip
+        raise InputError(
+            f"`stop` must be at least {least:.3g} away from `start` (10 times the location "
+            f"tolerance), got {values[1]!r} and {values[0]!r}",
+            field="stop",
+        )
     return values
 
 
@@ -328,7 +384,7 @@ def continue_orbit(
     stop: float,
     period: int = 1,
     section: float | None = None,
-    guess: tuple[float, float, float, float] | np.ndarray | None = None,
+    guess: Sequence[float] | np.ndarray | None = None,
     transient: int | None = None,
     step: float | None = None,
     max_points: int = 400,
@@ -388,10 +444,21 @@ def continue_orbit(
     [[71.157742, 'sliding_vanish']]
     """
     settings = check_settings(
-        case, param=param, start=start, stop=stop, period=period, section=section, guess=guess,
-        transient=transient, step=step, max_points=max_points, tol=tol, locate_tol=locate_tol, progress=progress,
+        case,
+        param=param,
+        start=start,
+        stop=stop,
+        period=period,
+        section=section,
+        guess=guess,
+        transient=transient,
+        step=step,
+        max_points=max_points,
+        tol=tol,
+        locate_tol=locate_tol,
+        progress=progress,
         **overrides,
-    )  # fmt: skip
+    )
     start, stop = settings.start, settings.stop
     base = orbit_case(case, {**overrides, param: start})
     section_, y_start = start_of(base, section, guess, transient)
@@ -403,6 +470,7 @@ def continue_orbit(
         complete, message = _trace_branch(cont, trace, settings, progress)
     except KeyboardInterrupt:
         last = trace.points[-1].lam
+        trace.reason = Reason.INTERRUPTED
         partial = trace.branch(base, section_, settings.period, False, f"interrupted at {param} = {last:.10g}")
         raise Interrupted(partial) from None
     return trace.branch(base, section_, settings.period, complete, message)
@@ -452,8 +520,9 @@ def check_settings(
     max_points_ = check_count(max_points, "max_points", 2, MAX_POINTS)
     step_ = DEFAULT_STEP if step is None else real_argument(step, "step", positive=True)
     if not MIN_STEP <= step_ <= 1:
-        raise InputError(f"step must be from {MIN_STEP:g} to 1 (a fraction of |stop - start|), got {shown(step)}",
-                         field="step")  # fmt: skip
+        raise InputError(
+            f"step must be from {MIN_STEP:g} to 1 (a fraction of |stop - start|), got {shown(step)}", field="step"
+        )
     if progress is not None and not callable(progress):
         raise InputError(f"progress must be a function of the fraction done, got {shown(progress)}", field="progress")
     if guess is not None:
@@ -478,31 +547,43 @@ def _trace_branch(
     while len(points) < max_points:
         a = points[-1]
         b = cont.along(a, ds)
-        own = _own_kind(cont, a, b) if b is not None and b.iterations <= 5 and not b.same_kind(a) else None
+        fits = isinstance(b, _Point) and b.iterations <= 5
+        own = _own_kind(cont, a, b) if isinstance(b, _Point) and fits and not b.same_kind(a) else None
         if own is not None and ds <= ds_min:  # the corrector keeps jumping: take a's kind there
-            b = _Point(own.y, own.lam, own.image, cont.tangent(cont.jacobian(own.y, own.lam, own.image), a.tangent,
-                                                                1.0), own.iterations)  # fmt: skip
-        elif b is None or b.iterations > 5 or own is not None:
+            b = _Point(
+                own.y,
+                own.lam,
+                own.image,
+                cont.tangent(cont.jacobian(own.y, own.lam, own.image), a.tangent, 1.0),
+                own.iterations,
+            )
+        elif not isinstance(b, _Point) or not fits or own is not None:
             if ds <= ds_min:
-                return False, f"the corrector failed at {param} = {a.lam:.10g} with the smallest step"
+                why = f": {b.message} ({b.reason})" if isinstance(b, Skipped) else " (it kept jumping to another orbit)"
+                trace.reason = b.reason if isinstance(b, Skipped) else Reason.NO_CONVERGENCE
+                return False, f"the corrector failed at {param} = {a.lam:.10g} with the smallest step{why}"
             ds /= 2
             continue
         if not lo - 1e-12 * sigma <= b.lam <= hi + 1e-12 * sigma:
             end = _end_point(cont, a, b, stop if (b.lam - stop) * direction > 0 else start)
-            if end is not None:
-                trace.add(_between(cont, a, end, ds, locate_tol), end)
-            if end is not None and end.lam == stop:
+            if isinstance(end, Skipped):
+                trace.reason = end.reason
+                return False, f"no orbit found at {param} = {stop:.10g}, the end of the range: {end.message}"
+            trace.add(_between(cont, a, end, ds, locate_tol), end)
+            if end.lam == stop:
                 return True, ""
-            if end is None:
-                return False, f"no orbit found at {param} = {stop:.10g}, the end of the range"
+            trace.reason = Reason.NO_ORBIT
             return False, f"the branch came back to {param} = {start:.10g} after a fold"
         trace.add(_between(cont, a, b, ds, locate_tol), b)
         if progress is not None:
             progress(min(1.0, abs(b.lam - start) / sigma))
         if b.iterations <= 2:
             ds = min(ds * 1.5, ds_max)
-    return False, (f"max_points = {max_points} reached at {param} = {points[-1].lam:.10g}, "
-                   f"{abs(points[-1].lam - start) / sigma:.0%} of the range")  # fmt: skip
+    trace.reason = Reason.MAX_POINTS
+    return False, (
+        f"max_points = {max_points} reached at {param} = {points[-1].lam:.10g}, "
+        f"{abs(points[-1].lam - start) / sigma:.0%} of the range"
+    )
 
 
 def _own_kind(cont: _Continuer, a: _Point, b: _Point) -> _Point | None:
@@ -511,7 +592,7 @@ def _own_kind(cont: _Continuer, a: _Point, b: _Point) -> _Point | None:
     (or, at the smallest step, this orbit is taken), so that the branch follows its own orbit
     to where it ends."""
     own = _natural(cont, b.lam, a.y + _slope(a, cont.sigma) * (b.lam - a.lam))
-    return own if own is not None and own.same_kind(a) else None
+    return own if isinstance(own, _Point) and own.same_kind(a) else None
 
 
 class _Trace:
@@ -520,8 +601,10 @@ class _Trace:
     def __init__(self, first: _Point, scale: float, param: str) -> None:
         self.param = param
         self.points, self.piece_starts = [first], [0]
-        self.rows: list[dict] = []
+        self.rows: list[dict[str, Any]] = []
         self.scale = scale
+        #: Why the branch ended early (set where it does).
+        self.reason: Reason | None = None
 
     def add(self, located: list[_Located], b: _Point) -> None:
         """The bifurcations between the last point and ``b``, the orbits on their sides (so the
@@ -546,9 +629,17 @@ class _Trace:
             pieces[start:] += 1
         rows = []
         for p, piece in zip(self.points, pieces, strict=True):
-            rows.append({param: p.lam, **dict(zip(STATE, p.y, strict=True)),
-                         **{f"mu{k + 1}": complex(p.multipliers[k]) for k in range(4)}, "stable": p.stable,
-                         "signature": p.signature, "piece": int(piece), "iterations": p.iterations})  # fmt: skip
+            rows.append(
+                {
+                    param: p.lam,
+                    **dict(zip(STATE, p.y, strict=True)),
+                    **{f"mu{k + 1}": complex(p.multipliers[k]) for k in range(4)},
+                    "stable": p.stable,
+                    "signature": str(p.signature),
+                    "piece": int(piece),
+                    "iterations": p.iterations,
+                }
+            )
         return pd.DataFrame(rows)
 
     def bifurcations_frame(self, param: str) -> pd.DataFrame:
@@ -559,19 +650,29 @@ class _Trace:
     def branch(self, case: Case, section: float, period: int, complete: bool, message: str) -> Branch:
         """The :class:`Branch` traced so far (``case``: the case at its start)."""
         param = self.param
-        return Branch(param, self.points_frame(param), self.bifurcations_frame(param), section, period, complete,
-                      message, case)  # fmt: skip
+        reason = None if complete else self.reason
+        return Branch(
+            param,
+            self.points_frame(param),
+            self.bifurcations_frame(param),
+            section,
+            period,
+            complete,
+            message,
+            reason,
+            case,
+        )
 
 
-def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point | None:
+def _end_point(cont: _Continuer, a: _Point, b: _Point, lam_end: float) -> _Point | Skipped:
     """The orbit at ``lam = lam_end``, between ``a`` and ``b``: of ``a``'s kind where that still
     exists (Newton from ``a`` moved along the branch's slope), else Newton from the
     interpolation of ``a`` and ``b``."""
     own = _natural(cont, lam_end, a.y + _slope(a, cont.sigma) * (lam_end - a.lam))
-    if own is None or not own.same_kind(a):
+    if not isinstance(own, _Point) or not own.same_kind(a):
         weight = (lam_end - a.lam) / (b.lam - a.lam)
         own = _natural(cont, lam_end, a.y + weight * (b.y - a.y))
-    return None if own is None else _Point(own.y, lam_end, own.image, b.tangent, own.iterations)
+    return own if isinstance(own, Skipped) else _Point(own.y, lam_end, own.image, b.tangent, own.iterations)
 
 
 def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: float) -> list[_Located]:
@@ -589,41 +690,36 @@ def _between(cont: _Continuer, a: _Point, b: _Point, ds: float, locate_tol: floa
     if a.tangent[4] * b.tangent[4] < 0:
         sign = np.sign(a.tangent[4])
         left, right = _bisect(cont, a, b, ds, lambda p: np.sign(p.tangent[4]) == sign, locate_tol)
-        return [_Located(_record(cont, "fold", left, right, a.signature, b.signature), left, right)]
+        return [_Located(_record(cont, Bifurcation.FOLD, left, right, a.signature, b.signature), left, right)]
     if a.unstable != b.unstable:
         count = a.unstable
         left, right = _bisect(cont, a, b, ds, lambda p: p.unstable == count, locate_tol)
         # the multiplier on the unit circle, read where it crosses (between the located sides)
         mu = min((_critical(left), _critical(right)), key=lambda value: abs(abs(value) - 1))
-        if abs(mu.imag) > 1e-6 * abs(mu):
-            kind = "torus"
-        elif mu.real < 0:
-            kind = "period_doubling"
-        else:
-            kind = "fold"
+        kind = Bifurcation.of_multiplier(mu)
         return [_Located(_record(cont, kind, left, right, a.signature, b.signature), left, right)]
     return []
 
 
 def _signature_change(
-    cont: _Continuer, kind: str, left: _Point, right: _Point, before: str, locate_tol: float
+    cont: _Continuer, kind: Bifurcation, left: _Point, right: _Point, before: Signature, locate_tol: float
 ) -> list[_Located]:
     """One row where the two sides meet; two where they do not (a gap: no period-N orbit lies
     between the end of ``left``'s kind and the start of ``right``'s)."""
     if abs(right.lam - left.lam) <= 3 * locate_tol:
         return [_Located(_record(cont, kind, left, right, before, right.signature), left, right)]
     return [
-        _Located(_record(cont, kind, left, None, before, ""), left, None),
-        _Located(_record(cont, kind, right, None, "", right.signature), None, right),
+        _Located(_record(cont, kind, left, None, before, None), left, None),
+        _Located(_record(cont, kind, right, None, None, right.signature), None, right),
     ]
 
 
-def _natural(cont: _Continuer, lam: float, guess: np.ndarray) -> _Point | None:
-    """The orbit at ``lam`` by Newton from ``guess`` (no arclength condition); None if it fails."""
+def _natural(cont: _Continuer, lam: float, guess: np.ndarray) -> _Point | Skipped:
+    """The orbit at ``lam`` by Newton from ``guess`` (no arclength condition); why not, if it fails."""
     try:
         y, image, _ = newton(cont.at(lam), cont.t0, guess, cont.period, tol=cont.tol, max_iterations=8)
-    except OscillatorError:
-        return None
+    except OscillatorError as error:
+        return _skipped(lam, error)
     return _Point(y, lam, image, np.zeros(5), 0)
 
 
@@ -653,19 +749,19 @@ def _bisect_signature(cont: _Continuer, a: _Point, b: _Point, locate_tol: float)
     while abs(beyond - left.lam) > locate_tol:
         mid = 0.5 * (left.lam + beyond)
         p = _natural(cont, mid, left.y + slope_a * (mid - left.lam))
-        if p is not None and p.same_kind(a):
+        if isinstance(p, _Point) and p.same_kind(a):
             left = p
         else:
             beyond = mid
     right, short = b, left.lam  # the first orbit of another kind; where none was found
     if beyond != b.lam:  # most often the other kind exists right there
         p = _natural(cont, beyond, b.y + slope_b * (beyond - b.lam))
-        if p is not None and not p.same_kind(a):
+        if isinstance(p, _Point) and not p.same_kind(a):
             right = p
     while abs(right.lam - short) > locate_tol:
         mid = 0.5 * (short + right.lam)
         p = _natural(cont, mid, right.y + slope_b * (mid - right.lam))
-        if p is not None and not p.same_kind(a):
+        if isinstance(p, _Point) and not p.same_kind(a):
             right = p
         else:
             short = mid
@@ -683,9 +779,9 @@ def _bisect(
             break
         s = 0.5 * (lo_s + hi_s)
         p = cont.along(a, s)
-        if p is None:  # on the switching boundary itself: nudge
+        if isinstance(p, Skipped):  # on the switching boundary itself: nudge
             p = cont.along(a, s * (1 + 1e-7))
-            if p is None:
+            if isinstance(p, Skipped):
                 break
         if like_a(p):
             lo_s, left = s, p
@@ -694,7 +790,14 @@ def _bisect(
     return left, right
 
 
-def _record(cont: _Continuer, kind: str, at: _Point, other: _Point | None, before: str, after: str) -> dict:
+def _record(
+    cont: _Continuer,
+    kind: Bifurcation,
+    at: _Point,
+    other: _Point | None,
+    before: Signature | None,
+    after: Signature | None,
+) -> dict[str, object]:
     """A bifurcation row: the parameter (between ``at`` and ``other``, or at ``at`` where no
     orbit lies on the other side), the state at ``at`` and ``jump``, the distance (max norm)
     between the two sides' states at the section (NaN without an ``other``; 0 at a fold,
@@ -702,9 +805,15 @@ def _record(cont: _Continuer, kind: str, at: _Point, other: _Point | None, befor
     lam = at.lam if other is None else 0.5 * (at.lam + other.lam)
     if other is None:
         jump = math.nan
-    elif kind in ("fold", "period_doubling", "torus"):
+    elif not kind.nonsmooth:
         jump = 0.0
     else:
         jump = float(np.max(np.abs(other.y - at.y)))
-    return {cont.param: lam, "kind": kind, **dict(zip(STATE, at.y, strict=True)), "jump": jump,
-            "before": before, "after": after}  # fmt: skip
+    return {
+        cont.param: lam,
+        "kind": kind.value,
+        **dict(zip(STATE, at.y, strict=True)),
+        "jump": jump,
+        "before": "" if before is None else str(before),
+        "after": "" if after is None else str(after),
+    }

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.engines import build_engine
-from oscillator.errors import InputError, SimulationFailed
+from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.record import RunRecord
 from oscillator.hybrid.recording import NoTrajectory
 from oscillator.hybrid.result import Result
@@ -37,12 +38,23 @@ from oscillator.model.parameters import InitialState, real_argument
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.saltation import rest_projection, saltation_matrix
 from oscillator.orbits.variational import ModeFlow
+from oscillator.presenting import presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["Orbit", "PeriodMap", "cyclic_signature", "event_signature", "find_orbit", "multipliers_of", "period_map"]
+__all__ = [
+    "Orbit",
+    "PeriodMap",
+    "Signature",
+    "cyclic_signature",
+    "event_signature",
+    "find_orbit",
+    "multipliers_of",
+    "period_map",
+    "signature_text",
+]
 
 #: Forcing periods simulated before Newton starts, when the case has no sweep settings.
 TRANSIENT = 100
@@ -144,6 +156,7 @@ def solve_step(matrix: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
         raise SimulationFailed(
             f"{what}: the Newton system is singular (a Floquet multiplier of the map at this guess is 1: "
             "an orbit at a fold, or a family of orbits); give another guess or a longer transient",
+            reason=Reason.SINGULAR,
             field="guess",
         )
     return step
@@ -192,42 +205,68 @@ def _monodromy(case: Case, switches: list[tuple[float, np.ndarray, Mode]], t1: f
                 try:
                     salt = saltation_matrix(t_b, y_b, y_next, p, mode, mode_next)
                 except ZeroDivisionError as exc:
-                    raise SimulationFailed(f"no monodromy matrix: {exc} (a grazing orbit)", field="orbit") from exc
+                    raise SimulationFailed(
+                        f"no monodromy matrix: {exc} (a grazing orbit)", reason=Reason.NO_MONODROMY, field="orbit"
+                    ) from exc
                 matrix = salt @ matrix
         return matrix
     finally:
         flow.close()
 
 
-def event_signature(events: pd.DataFrame) -> str:
-    """The orbit's events over one period as text: ``"m2 sliding_onset, m2 sliding_vanish, ..."``
+def event_signature(events: pd.DataFrame) -> tuple[tuple[int, EventKind], ...]:
+    """The orbit's switches over one period, in order: ``((2, SLIDING_ONSET), (2, SLIDING_VANISH), ...)``
     (grazing contacts are not switches and are left out)."""
-    kinds = events[events.kind != EventKind.GRAZING.value]
-    return ", ".join(f"m{mass} {kind}" for mass, kind in zip(kinds["mass"], kinds["kind"], strict=True))
+    switches = events[events.kind.isin(EventKind.values_where(lambda kind: kind.switches))]
+    return tuple((int(mass), EventKind(kind)) for mass, kind in zip(switches["mass"], switches["kind"], strict=True))
 
 
-def cyclic_signature(image: PeriodMap) -> str:
-    """The signature of an orbit through ``image``, whatever the section and however the two
-    masses' events interleave: ``"m1: passable, passable; m2: passable, sliding_onset, ..."``.
+def signature_text(signature: tuple[tuple[int, EventKind], ...]) -> str:
+    """An :func:`event_signature` for display: ``"m2 sliding_onset, m2 sliding_vanish, ..."``."""
+    return ", ".join(f"m{mass} {kind.value}" for mass, kind in signature)
+
+
+@dataclass(frozen=True)
+class Signature:
+    """Each mass's own cycle of switches over one period, the orbit's identity along a branch.
+
+    ``cycles[mass - 1]`` is mass ``mass``'s switches as a cycle, written from the rotation whose
+    text sorts first: where the section cuts the orbit, and how the two masses' events
+    interleave, do not change it; only a change of a mass's own cycle does (a rest interval or a
+    pair of switches appearing or vanishing).  ``str()`` gives the text form shown to people and
+    stored in tables: ``"m1: passable, passable; m2: passable, sliding_onset, ..."``.
+    """
+
+    cycles: tuple[tuple[EventKind, ...], tuple[EventKind, ...]]
+
+    @property
+    def rests(self) -> int:
+        """Rest intervals per period, both masses together."""
+        return sum(kind.starts_rest for cycle in self.cycles for kind in cycle)
+
+    def __str__(self) -> str:
+        return "; ".join(
+            f"m{mass}: {', '.join(cycle) if cycle else 'none'}" for mass, cycle in enumerate(self.cycles, start=1)
+        )
+
+
+def cyclic_signature(image: PeriodMap) -> Signature:
+    """The :class:`Signature` of an orbit through ``image``.
 
     Each mass's events over one period are read as a cycle (a switch at both ends of
-    ``[t0, t1]``, there because the orbit is on a boundary at the section, counted once) and
-    written from the rotation whose text sorts first.  Along a branch an event passing through
-    the section, or one mass's event passing another's, then does not change the signature;
-    only a change of a mass's own cycle of switches does (a rest interval or a pair of
-    switches appearing or vanishing).
+    ``[t0, t1]``, there because the orbit is on a boundary at the section, counted once).
     """
-    events = image.events[image.events.kind != EventKind.GRAZING.value]
+    events = image.events[image.events.kind.isin(EventKind.values_where(lambda kind: kind.switches))]
     span = image.t1 - image.t0
-    parts = []
+    cycles = []
     for mass in (1, 2):
         own = events[events["mass"] == mass]
-        kinds, times = list(own["kind"]), own["t"].to_numpy(float)
+        kinds, times = [EventKind(kind) for kind in own["kind"]], own["t"].to_numpy(float)
         if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((times[-1] - times[0]) - span) <= 1e-6 * span:
             kinds.pop()
-        cycle = min((kinds[k:] + kinds[:k] for k in range(len(kinds))), default=[])
-        parts.append(f"m{mass}: {', '.join(cycle)}" if cycle else f"m{mass}: none")
-    return "; ".join(parts)
+        rotations = [tuple(kinds[k:] + kinds[:k]) for k in range(len(kinds))]
+        cycles.append(min(rotations, key=lambda cycle: [kind.value for kind in cycle], default=()))
+    return Signature((cycles[0], cycles[1]))
 
 
 @dataclass(frozen=True)
@@ -290,8 +329,9 @@ class Orbit:
     note: str = ""
 
     @property
-    def signature(self) -> str:
-        """The kinds of the events over one period, in order (:func:`event_signature`)."""
+    def signature(self) -> tuple[tuple[int, EventKind], ...]:
+        """The switches over one period, in order, as ``(mass, kind)`` (:func:`event_signature`;
+        :func:`signature_text` for display)."""
         return event_signature(self.events)
 
     def one_period(self) -> Case:
@@ -311,14 +351,10 @@ class Orbit:
         """Write the orbit as a run folder of one return (tables, figures, report) whose
         ``run.json`` holds the orbit (``"kind": "orbit"``: state, multipliers, monodromy,
         verdict); :func:`oscillator.read_run` reads it back as an :class:`Orbit`."""
-        from oscillator.orbits.output import save_orbit
-
-        return save_orbit(self, folder)
+        return presenter().save_orbit(self, folder)
 
     def _repr_html_(self) -> str:
-        from oscillator.report.notebook import orbit_html
-
-        return orbit_html(self)
+        return presenter().orbit_html(self)
 
     @property
     def verdict(self) -> str:
@@ -359,8 +395,9 @@ def discontinuities(case: Case, image: PeriodMap) -> tuple[str, ...]:
     t, y, mode = image.switches[0]
     p = case.parameters
     forces = non_friction_force(t, y, p, mode.left, mode.right)
-    return tuple(f"v{mass}" for mass in (1, 2)
-                 if mode.sign(mass) == 0 and abs(forces[mass - 1]) > kinetic_threshold(p, mass))  # fmt: skip
+    return tuple(
+        f"v{mass}" for mass in (1, 2) if mode.sign(mass) == 0 and abs(forces[mass - 1]) > kinetic_threshold(p, mass)
+    )
 
 
 def multipliers_of(monodromy: np.ndarray) -> np.ndarray:
@@ -387,7 +424,7 @@ def newton(
     *,
     tol: float,
     max_iterations: int,
-    first_signature: list[str] | None = None,
+    first_signature: list[Signature] | None = None,
 ) -> tuple[np.ndarray, PeriodMap, list[float]]:
     """Newton's method on ``P(y) - y``; the fixed point, the map there and the residuals.
 
@@ -416,6 +453,7 @@ def newton(
         f"Newton's method did not converge in {max_iterations} steps (residuals "
         f"{', '.join(f'{r:.2e}' for r in history)}); give a better `guess`, a longer `transient` or a larger "
         "`max_iterations`",
+        reason=Reason.NO_CONVERGENCE,
         field="guess",
     )
 
@@ -489,7 +527,7 @@ def find_orbit(
     *,
     period: int = 1,
     section: float | None = None,
-    guess: tuple[float, float, float, float] | np.ndarray | None = None,
+    guess: Sequence[float] | np.ndarray | None = None,
     transient: int | None = None,
     tol: float = 1e-9,
     max_iterations: int = 20,
@@ -562,14 +600,17 @@ def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, hi
 
 
 def _orbit(case: Case, section: float, start: np.ndarray, period: int, *, tol: float, max_iterations: int) -> Orbit:
-    first: list[str] = []
-    state, image, history = newton(case, section, start, period, tol=tol, max_iterations=max_iterations,
-                                   first_signature=first)  # fmt: skip
+    first: list[Signature] = []
+    state, image, history = newton(
+        case, section, start, period, tol=tol, max_iterations=max_iterations, first_signature=first
+    )
     orbit = orbit_of(case, section, state, image, history)
     found = cyclic_signature(image)
     if first and first[0] != found:
-        note = (f"Newton started from a motion with another cycle of switches ({first[0]}) than the orbit it "
-                f"found ({found}): another orbit may exist near the guess (an orbit ending nearby, or two "
-                "coexisting); continue from a parameter value where it is clear, or give another guess")  # fmt: skip
+        note = (
+            f"Newton started from a motion with another cycle of switches ({first[0]}) than the orbit it "
+            f"found ({found}): another orbit may exist near the guess (an orbit ending nearby, or two "
+            "coexisting); continue from a parameter value where it is clear, or give another guess"
+        )
         orbit = dataclasses.replace(orbit, note=note)
     return orbit

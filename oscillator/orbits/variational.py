@@ -14,7 +14,7 @@ import weakref
 from typing import Any
 
 import numpy as np
-from numba import carray
+from numba.np.numpy_support import carray
 
 from oscillator.compiled import cfunc, njit
 from oscillator.engines import EngineFailure
@@ -85,16 +85,27 @@ def variational_rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pr
     d = carray(user_data, (cb.USER_DATA_SIZE,), dtype=np.float64)
     state = carray(cb._load_pointer(cb._load_pointer(y, 0), cb.DATA_OFFSET), (SIZE,), dtype=np.float64)
     rates = carray(cb._load_pointer(cb._load_pointer(ydot, 0), cb.DATA_OFFSET), (SIZE,), dtype=np.float64)
-    variational_derivative(d[0] + tau, state, rates, d[cb.COEFFICIENTS :], int(d[1]), int(d[2]), d[3] != 0.0,
-                           d[4] != 0.0)  # fmt: skip
+    variational_derivative(
+        d[0] + tau, state, rates, d[cb.COEFFICIENTS :], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0
+    )
     return 0
 
 
 def field_jacobian(y: np.ndarray, p: Parameters, mode: Mode) -> np.ndarray:
     """``df/dy`` (4 x 4) of ``mode``'s field at ``y`` (it does not depend on ``t``)."""
     out = np.empty(16)
-    jacobian(float(y[0]), float(y[1]), float(y[2]), float(y[3]), coefficients(p), mode.sign(1), mode.sign(2),
-             mode.left, mode.right, out)  # fmt: skip
+    jacobian(
+        float(y[0]),
+        float(y[1]),
+        float(y[2]),
+        float(y[3]),
+        coefficients(p),
+        mode.sign(1),
+        mode.sign(2),
+        mode.left,
+        mode.right,
+        out,
+    )
     return out.reshape(4, 4)
 
 

@@ -16,6 +16,7 @@ the titles.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -28,11 +29,14 @@ from matplotlib.ticker import MaxNLocator
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
+from oscillator.model.events import EventKind
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
 from oscillator.model.parameters import Parameters, labelled
 from oscillator.model.phase_space import contacts_of_state, velocity_sign
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+
     from oscillator.io.cases import Case
 
 __all__ = [
@@ -63,15 +67,15 @@ _MASS_COLOR = {1: "tab:blue", 2: "black"}
 #: largest first, each on top of the larger ones, so that every marker shows: a rest begins and
 #: ends at one displacement (a square with a diamond inside), a contact's onset and release lie
 #: on its stop, and an event at the start sits on the star (drawn under every event).
-KIND_STYLE = {
-    "passable": ("o", "gold", 46),
-    "sliding_onset": ("s", "white", 110),
-    "sliding_vanish": ("D", "deepskyblue", 34),
-    "grazing": ("v", "tab:red", 46),
-    "right_contact_onset": (">", "tab:red", 80),
-    "right_contact_release": ("<", "mistyrose", 30),
-    "left_contact_onset": ("P", "tab:pink", 80),
-    "left_contact_release": ("X", "lavenderblush", 30),
+KIND_STYLE: dict[EventKind, tuple[str, str, float]] = {
+    EventKind.PASSABLE: ("o", "gold", 46),
+    EventKind.SLIDING_ONSET: ("s", "white", 110),
+    EventKind.SLIDING_VANISH: ("D", "deepskyblue", 34),
+    EventKind.GRAZING: ("v", "tab:red", 46),
+    EventKind.RIGHT_CONTACT_ONSET: (">", "tab:red", 80),
+    EventKind.RIGHT_CONTACT_RELEASE: ("<", "mistyrose", 30),
+    EventKind.LEFT_CONTACT_ONSET: ("P", "tab:pink", 80),
+    EventKind.LEFT_CONTACT_RELEASE: ("X", "lavenderblush", 30),
 }
 #: The start's star: larger than every event's marker, and under them.
 _START_SIZE = 240
@@ -104,8 +108,9 @@ def figure_window(t0: float, t_final: float, period: float, window: tuple[float,
         return Window(a, b, f"t in [{a:.6g}, {b:.6g}] s")
     periods = (t_final - t0) / period
     if periods > LONG_RUN_PERIODS:
-        return Window(t_final - SHOWN_PERIODS * period, t_final,
-                      f"the last {SHOWN_PERIODS} of {periods:.0f} forcing periods")  # fmt: skip
+        return Window(
+            t_final - SHOWN_PERIODS * period, t_final, f"the last {SHOWN_PERIODS} of {periods:.0f} forcing periods"
+        )
     return Window(t0, t_final)
 
 
@@ -173,7 +178,7 @@ def rest_spans(trajectory: pd.DataFrame, events: pd.DataFrame, mass: int) -> lis
     return rest_intervals(events, mass, resting, float(t[0]), float(t[-1]))
 
 
-def _far_boundaries(ax, motion: np.ndarray, boundaries: list[tuple[Any, np.ndarray]], axis: str) -> None:
+def _far_boundaries(ax: Axes, motion: np.ndarray, boundaries: list[tuple[Any, np.ndarray]], axis: str) -> None:
     """Scale ``axis`` to the motion and to the boundaries near it.  A boundary (its line, its
     values) farther from the motion than the motion's own extent (a stop switched off with
     ``d = 1000``) is left out of the scale, and its legend entry says where it is."""
@@ -200,13 +205,19 @@ def _far_boundaries(ax, motion: np.ndarray, boundaries: list[tuple[Any, np.ndarr
     (ax.set_ylim if axis == "y" else ax.set_xlim)(shown_low - margin, shown_high + margin)
 
 
-def _marker(kind: str, scale: float = 1.0) -> dict:
+def _marker(kind: str, scale: float = 1.0) -> dict[str, Any]:
     """The scatter options of a kind's markers (sizes times ``scale``), in the kind's layer."""
-    marker, face, size = KIND_STYLE[kind]
-    return {"marker": marker, "facecolor": face, "edgecolor": "black", "s": size * scale, "zorder": _LAYER[kind]}
+    marker, face, size = KIND_STYLE[EventKind(kind)]
+    return {
+        "marker": marker,
+        "facecolor": face,
+        "edgecolor": "black",
+        "s": size * scale,
+        "zorder": _LAYER[EventKind(kind)],
+    }
 
 
-def _mark_events(ax, events: pd.DataFrame, mass: int, column: str, label_kinds: set) -> None:
+def _mark_events(ax: Axes, events: pd.DataFrame, mass: int, column: str, label_kinds: set[Any]) -> None:
     for kind, rows in events[events.mass == mass].groupby("kind"):
         label = kind.replace("_", " ") if kind not in label_kinds else None
         label_kinds.add(kind)
@@ -214,11 +225,11 @@ def _mark_events(ax, events: pd.DataFrame, mass: int, column: str, label_kinds: 
         ax.scatter(x, y, label=label, **_marker(kind))
 
 
-def _start(ax, x, y, label: str | None = None) -> None:
+def _start(ax: Axes, x: float, y: float, label: str | None = None) -> None:
     ax.scatter([x], [y], s=_START_SIZE, marker="*", color="limegreen", edgecolor="black", zorder=5, label=label)
 
 
-def _outside_legend(ax, **options) -> None:
+def _outside_legend(ax: Axes, **options: Any) -> None:
     """The legend to the right of the axes, where it hides no data."""
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8, **options)
 
@@ -227,9 +238,18 @@ def _titled(title: str, panel: str, window: Window) -> str:
     return " — ".join(part for part in (title, panel, window.label) if part)
 
 
-def _finish_time_panel(ax, events, t0, y0, quantity: str, ylabel: str, title: str, window: Window) -> None:
+def _finish_time_panel(
+    ax: Axes,
+    events: pd.DataFrame,
+    t0: float,
+    y0: Sequence[float],
+    quantity: str,
+    ylabel: str,
+    title: str,
+    window: Window,
+) -> None:
     """Start points, switching points of both masses (``quantity`` is ``x`` or ``v``), labels."""
-    seen: set = set()
+    seen: set[Any] = set()
     offset = 0 if quantity == "x" else 1
     for mass in (1, 2):
         if window.start <= t0 <= window.stop:
@@ -240,24 +260,48 @@ def _finish_time_panel(ax, events, t0, y0, quantity: str, ylabel: str, title: st
     _outside_legend(ax)
 
 
-def _displacements(trajectory, events, p, t0, y0, title, window):
+def _displacements(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    t0: float,
+    y0: Sequence[float],
+    title: str,
+    window: Window,
+) -> Figure:
     fig = Figure(figsize=(10, 4.5), layout="constrained")
     ax = fig.subplots()
     t = trajectory.t
     ax.plot(t, trajectory.x1, color=_MASS_COLOR[1], label="$x_1$ (m1)")
     ax.plot(t, trajectory.x2, color=_MASS_COLOR[2], label="$x_2$ (m2)")
-    right = ax.axhline(p.d1, color="tab:red", ls="--", lw=1,
-                       label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")  # fmt: skip
-    (left,) = ax.plot(t, trajectory.x2 - p.d, color="tab:pink", ls="--", lw=1,
-                      label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)")  # fmt: skip
-    _far_boundaries(ax, np.concatenate([trajectory.x1, trajectory.x2]),
-                    [(right, np.array([p.d1])), (left, trajectory.x2 - p.d)], "y")  # fmt: skip
-    _finish_time_panel(ax, events, t0, y0, "x", "displacement (m)", _titled(title, "(a) displacements", window),
-                       window)  # fmt: skip
+    right = ax.axhline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")
+    (left,) = ax.plot(
+        t,
+        trajectory.x2 - p.d,
+        color="tab:pink",
+        ls="--",
+        lw=1,
+        label=r"$x_1 = x_2 - d$ (left stop, $\partial\Omega_{15}$)",
+    )
+    _far_boundaries(
+        ax,
+        np.concatenate([trajectory.x1, trajectory.x2]),
+        [(right, np.array([p.d1])), (left, trajectory.x2 - p.d)],
+        "y",
+    )
+    _finish_time_panel(ax, events, t0, y0, "x", "displacement (m)", _titled(title, "(a) displacements", window), window)
     return fig
 
 
-def _velocities(trajectory, events, p, t0, y0, title, window):
+def _velocities(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    t0: float,
+    y0: Sequence[float],
+    title: str,
+    window: Window,
+) -> Figure:
     fig = Figure(figsize=(10, 4.5), layout="constrained")
     ax = fig.subplots()
     t = trajectory.t
@@ -272,14 +316,22 @@ def _velocities(trajectory, events, p, t0, y0, title, window):
     return fig
 
 
-def _with_velocity_boundary(ax) -> None:
+def _with_velocity_boundary(ax: Axes) -> None:
     """Widen the velocity axis so that it shows ``v = 0`` with both sides of it."""
     low, high = ax.get_ylim()
     margin = 0.08 * (high - low)
     ax.set_ylim(min(low, -margin), max(high, margin))
 
 
-def _phase(trajectory, events, p, t0, y0, title, window):
+def _phase(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    t0: float,
+    y0: Sequence[float],
+    title: str,
+    window: Window,
+) -> Figure:
     fig = Figure(figsize=(11, 5), layout="constrained")
     axes = fig.subplots(1, 2)
     for ax, mass in zip(axes, (1, 2), strict=True):
@@ -288,9 +340,15 @@ def _phase(trajectory, events, p, t0, y0, title, window):
         ax.plot(x, v, color=_MASS_COLOR[mass], lw=1.2, label=f"m{mass}")
         if still:  # a curve of one point draws nothing: mark the point and say so
             ax.plot(x.iloc[:1], v.iloc[:1], "o", color=_MASS_COLOR[mass], ms=5, zorder=4)
-            ax.text(0.5, 0.6, f"m{mass} does not move in this window: x{mass} = {x.iloc[0]:.6g} m, "
-                    f"v{mass} = {v.iloc[0]:.3g} m/s", transform=ax.transAxes, ha="center", fontsize=8,
-                    parse_math=False)  # fmt: skip
+            ax.text(
+                0.5,
+                0.6,
+                f"m{mass} does not move in this window: x{mass} = {x.iloc[0]:.6g} m, v{mass} = {v.iloc[0]:.3g} m/s",
+                transform=ax.transAxes,
+                ha="center",
+                fontsize=8,
+                parse_math=False,
+            )
         ax.axhline(0.0, color="black", ls="--", lw=1, label="velocity boundary $v = 0$")
         motion = x.to_numpy(float)
         if still:
@@ -315,28 +373,34 @@ def _phase(trajectory, events, p, t0, y0, title, window):
     return fig
 
 
-def _forces(trajectory, events, p, t0, y0, title, window):
+def _forces(
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    p: Parameters,
+    t0: float,
+    y0: Sequence[float],
+    title: str,
+    window: Window,
+) -> Figure:
     histories = force_histories(trajectory, p)
     fig = Figure(figsize=(10, 7), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
     for ax, mass in zip(axes, (1, 2), strict=True):
-        t = histories.t
-        ax.plot(t, histories[f"F{mass}_real"], color=_MASS_COLOR[mass], label=f"real $F_{mass}$ (current domain)")
-        plus, minus = (1, 2) if mass == 1 else (2, 1)
-        ax.plot(t, histories[f"F{mass}_plus"], color="tab:orange", ls="--", lw=1,
-                label=f"$F_{mass}^{{({plus})}}$ ($v_{mass} > 0$ side)")  # fmt: skip
-        ax.plot(t, histories[f"F{mass}_minus"], color="tab:green", ls="--", lw=1,
-                label=f"$F_{mass}^{{({minus})}}$ ($v_{mass} < 0$ side)")  # fmt: skip
-        ax.plot(t, histories[f"F{mass}_barrier_plus"], color="tab:orange", ls=":", lw=1.5,
-                label=f"flow barrier $F_{mass}^{{(0>0_{plus})}}$")  # fmt: skip
-        ax.plot(t, histories[f"F{mass}_barrier_minus"], color="tab:green", ls=":", lw=1.5,
-                label=f"flow barrier $F_{mass}^{{(0>0_{minus})}}$")  # fmt: skip
+        _force_lines(ax, histories, mass)
         ax.axhline(0.0, color="grey", lw=0.8)
         for a, b in rest_spans(trajectory, events, mass):
             ax.axvspan(a, b, color=_MASS_COLOR[mass], alpha=0.1)
         times = events.t[events.mass == mass].to_numpy()
-        ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), color="tab:red", lw=0.6, alpha=0.6,
-                  label=f"switching times of m{mass}")  # fmt: skip
+        ax.vlines(
+            times,
+            0,
+            1,
+            transform=ax.get_xaxis_transform(),
+            color="tab:red",
+            lw=0.6,
+            alpha=0.6,
+            label=f"switching times of m{mass}",
+        )
         ax.set(ylabel=f"force per unit mass on m{mass} (N/kg)")
         _outside_legend(ax)
     axes[-1].set(xlabel="time t (s)")
@@ -344,7 +408,29 @@ def _forces(trajectory, events, p, t0, y0, title, window):
     return fig
 
 
-def _save(fig, directory: Path, name: str) -> list[Path]:
+#: The forces drawn per mass: column suffix, colour, line style, width and legend (``{m}`` the
+#: mass, ``{side}`` the domain on the ``v > 0`` or ``v < 0`` side).
+_FORCE_LINES = (
+    ("plus", "tab:orange", "--", 1.0, "$F_{m}^{{({side})}}$ ($v_{m} > 0$ side)"),
+    ("minus", "tab:green", "--", 1.0, "$F_{m}^{{({side})}}$ ($v_{m} < 0$ side)"),
+    ("barrier_plus", "tab:orange", ":", 1.5, "flow barrier $F_{m}^{{(0>0_{side})}}$"),
+    ("barrier_minus", "tab:green", ":", 1.5, "flow barrier $F_{m}^{{(0>0_{side})}}$"),
+)
+
+
+def _force_lines(ax: Axes, histories: pd.DataFrame, mass: int) -> None:
+    """The real force on ``mass`` and the G-functions on either side of its velocity boundary."""
+    t = histories.t
+    ax.plot(t, histories[f"F{mass}_real"], color=_MASS_COLOR[mass], label=f"real $F_{mass}$ (current domain)")
+    plus, minus = (1, 2) if mass == 1 else (2, 1)
+    for suffix, color, style, width, label in _FORCE_LINES:
+        side = plus if suffix.endswith("plus") else minus
+        ax.plot(
+            t, histories[f"F{mass}_{suffix}"], color=color, ls=style, lw=width, label=label.format(m=mass, side=side)
+        )
+
+
+def _save(fig: Figure, directory: Path, name: str) -> list[Path]:
     """Save a figure as PNG and SVG, each atomically (temporary name, then rename)."""
     paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
     for path in paths:
@@ -366,7 +452,7 @@ def missing_figures(directory: Path) -> list[str]:
     return [name for name in FIGURES if not all(drawn(directory / f"{name}{s}") for s in (".png", ".svg"))]
 
 
-_PANELS = {
+_PANELS: dict[str, Callable[..., Figure]] = {
     "fig-a-displacement": _displacements,
     "fig-b-velocity": _velocities,
     "fig-c-phase": _phase,
@@ -397,11 +483,15 @@ def _clipped(trajectory: pd.DataFrame, events: pd.DataFrame, window: Window) -> 
 
 #: What :func:`draw_panel` accepts for each panel.
 PANEL_NAMES = {
-    "a": "fig-a-displacement", "displacement": "fig-a-displacement",
-    "b": "fig-b-velocity", "velocity": "fig-b-velocity",
-    "c": "fig-c-phase", "phase": "fig-c-phase",
-    "d": "fig-d-forces", "forces": "fig-d-forces",
-}  # fmt: skip
+    "a": "fig-a-displacement",
+    "displacement": "fig-a-displacement",
+    "b": "fig-b-velocity",
+    "velocity": "fig-b-velocity",
+    "c": "fig-c-phase",
+    "phase": "fig-c-phase",
+    "d": "fig-d-forces",
+    "forces": "fig-d-forces",
+}
 
 
 def figure_title(case: Case) -> str:
@@ -416,17 +506,23 @@ def figure_title(case: Case) -> str:
 
 
 def draw_panel(
-    trajectory: pd.DataFrame, events: pd.DataFrame, case: Case, panel: str = "a", *,
-    window: tuple[float, float] | None = None, t_final: float | None = None,
-) -> Figure:  # fmt: skip
+    trajectory: pd.DataFrame,
+    events: pd.DataFrame,
+    case: Case,
+    panel: str = "a",
+    *,
+    window: tuple[float, float] | None = None,
+    t_final: float | None = None,
+) -> Figure:
     """One panel (``"a"``-``"d"`` or its name, :data:`PANEL_NAMES`) of a run of ``case`` that
     ended at ``t_final`` (by default, the trajectory's last time)."""
     name = PANEL_NAMES.get(str(panel).lower()) if isinstance(panel, str) else None
     if name is None:
         raise InputError(f"panel must be one of {', '.join(PANEL_NAMES)}, got {panel!r}", field="panel")
     if trajectory.empty:
-        raise InputError("this run kept no trajectory to draw; simulate it with record_trajectory=True",
-                         field="trajectory")  # fmt: skip
+        raise InputError(
+            "this run kept no trajectory to draw; simulate it with record_trajectory=True", field="trajectory"
+        )
     t0 = case.initial.t0
     end = float(trajectory.t.iloc[-1]) if t_final is None else t_final
     chosen = figure_window(t0, end, case.parameters.period, window)
@@ -470,20 +566,30 @@ def write_figures(
     return written
 
 
-_SWEEP_COLORS = {"passable": "tab:blue", "sliding_onset": "tab:red", "sliding_vanish": "tab:green"}
+#: The sweep diagrams' switching points: a mass reaching its velocity boundary (passing or coming
+#: to rest) or leaving rest; every other kind is drawn grey.
+_SWEEP_COLORS = {
+    EventKind.PASSABLE: "tab:blue",
+    EventKind.SLIDING_ONSET: "tab:red",
+    EventKind.SLIDING_VANISH: "tab:green",
+}
 
 
 #: How a both-ways sweep draws each way: shading of the rests, and the Poincaré points (the way
 #: up in larger open circles, the way down in small dots inside them, so both show where equal).
-_WAYS = {
-    "up": ({"color": "tab:blue", "alpha": 0.15}, {"s": 22, "facecolor": "none", "edgecolor": "tab:blue",
-                                                  "linewidths": 0.8}),
-    "down": ({"facecolor": "none", "edgecolor": "tab:orange", "hatch": "//", "linewidth": 0.0},
-             {"s": 5, "color": "tab:orange"}),
-}  # fmt: skip
+_WAYS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
+    "up": (
+        {"color": "tab:blue", "alpha": 0.15},
+        {"s": 22, "facecolor": "none", "edgecolor": "tab:blue", "linewidths": 0.8},
+    ),
+    "down": (
+        {"facecolor": "none", "edgecolor": "tab:orange", "hatch": "//", "linewidth": 0.0},
+        {"s": 5, "color": "tab:orange"},
+    ),
+}
 
 
-def _shade_rests(ax, summary: pd.DataFrame, param: str, mass: int, ways: list[str], half: float) -> None:
+def _shade_rests(ax: Axes, summary: pd.DataFrame, param: str, mass: int, ways: list[str], half: float) -> None:
     """The swept values at which the mass rests, shaded: one style per way of a both-ways sweep."""
     from oscillator.analysis.sweeps import sliding_ranges
 
@@ -494,7 +600,7 @@ def _shade_rests(ax, summary: pd.DataFrame, param: str, mass: int, ways: list[st
             ax.axvspan(a - half, b + half, label=None if i else label, **style)
 
 
-def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
+def draw_sweep_figures(tables: dict[str, Any], param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
     """Fig. 14-style diagrams of a sweep: ``fig-14-bifurcation`` (the switching displacement and
     phase of the mass against the parameter, sliding ranges shaded) and ``fig-14-poincare``.
 
@@ -510,16 +616,21 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
 
     fig = Figure(figsize=(10, 7), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
-    for ax, column, label in ((axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
-                              (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)")):  # fmt: skip
+    for ax, column, label in (
+        (axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
+        (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)"),
+    ):
         _shade_rests(ax, summary, param, mass, ways, half)
         for way in ways:  # a both-ways sweep: the way down in smaller markers edged in orange, inside the way up's
             down = both and way == ways[-1]
             shown = switches[switches["index"].map(going) == way] if both else switches
             for kind, rows in shown.groupby("kind"):
                 scale = 0.1 if down else 0.45 if both else 0.3
-                style = _marker(kind, scale) | {"facecolor": _SWEEP_COLORS.get(kind, "grey"),
-                        "linewidths": 0.6 if down else 0.4, "edgecolor": "tab:orange" if down else "black"}  # fmt: skip
+                style = _marker(kind, scale) | {
+                    "facecolor": _SWEEP_COLORS.get(kind, "grey"),
+                    "linewidths": 0.6 if down else 0.4,
+                    "edgecolor": "tab:orange" if down else "black",
+                }
                 if down:
                     style["zorder"] += len(KIND_STYLE)
                 name = kind.replace("_", " ") + (f", going {way}" if both else "")
@@ -529,8 +640,9 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
     axes[-1].set(xlabel=labelled(param))
     axes[-1].xaxis.set_major_locator(MaxNLocator(8))
     both_words = " (both ways)" if both else ""
-    fig.suptitle(f"{title} — switching points of m{mass} after the transient{both_words} (Fig. 14 style)",
-                 parse_math=False)  # fmt: skip
+    fig.suptitle(
+        f"{title} — switching points of m{mass} after the transient{both_words} (Fig. 14 style)", parse_math=False
+    )
     bifurcation = fig
 
     fig = Figure(figsize=(11, 4.5), layout="constrained")
@@ -541,8 +653,12 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
         for way in ways:
             rows = poincare[poincare["index"].map(going) == way] if both else poincare
             style = _WAYS[way][1] if both else {"s": 4, "color": _MASS_COLOR[mass]}
-            ax.scatter(rows[param], rows[f"{quantity}{mass}"], label=f"Poincaré points, going {way}" if both else
-                       "Poincaré points", **style)  # fmt: skip
+            ax.scatter(
+                rows[param],
+                rows[f"{quantity}{mass}"],
+                label=f"Poincaré points, going {way}" if both else "Poincaré points",
+                **style,
+            )
         ax.set(xlabel=labelled(param), ylabel=f"${quantity}_{mass}$ at $t_0 + nT$ ({units[quantity]})")
         ax.xaxis.set_major_locator(MaxNLocator(5))
     axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
@@ -550,7 +666,9 @@ def draw_sweep_figures(tables: dict, param: str, mass: int, *, title: str = "") 
     return {"fig-14-bifurcation": bifurcation, "fig-14-poincare": fig}
 
 
-def write_sweep_figures(tables: dict, param: str, mass: int, directory: Path, *, title: str = "") -> list[Path]:
+def write_sweep_figures(
+    tables: dict[str, Any], param: str, mass: int, directory: Path, *, title: str = ""
+) -> list[Path]:
     """Write the Fig. 14-style diagrams of a sweep as PNG and SVG (see :func:`draw_sweep_figures`)."""
     directory.mkdir(parents=True, exist_ok=True)
     written = []

@@ -162,8 +162,10 @@ def to_markdown(blocks: Iterable[Block]) -> str:
         elif isinstance(block, Bullets):
             out.append("\n".join(f"- {_md_inline(item)}" for item in block.items))
         elif isinstance(block, Table):
-            lines = ["| " + " | ".join(_md_text(c.strip()) for c in block.header) + " |",
-                     "|" + "|".join("---" for _ in block.header) + "|"]  # fmt: skip
+            lines = [
+                "| " + " | ".join(_md_text(c.strip()) for c in block.header) + " |",
+                "|" + "|".join("---" for _ in block.header) + "|",
+            ]
             lines += ["| " + " | ".join(_md_text(c.strip()) for c in row) + " |" for row in block.rows]
             out.append("\n".join(lines))
         elif isinstance(block, Figure):
@@ -236,8 +238,10 @@ def html_fragment(blocks: Iterable[Block], *, folder: Path | None = None) -> str
             if data is None:
                 body.append(f"<p><em>(figure {_h(block.name)} missing)</em></p>")
             else:
-                body.append(f'<figure><img src="data:image/png;base64,{data}" alt="{_h(block.caption)}">'
-                            f"<figcaption>{_h(block.caption)}</figcaption></figure>")  # fmt: skip
+                body.append(
+                    f'<figure><img src="data:image/png;base64,{data}" alt="{_h(block.caption)}">'
+                    f"<figcaption>{_h(block.caption)}</figcaption></figure>"
+                )
     return "\n".join(body)
 
 

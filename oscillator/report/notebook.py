@@ -45,8 +45,10 @@ def _heading(name: str, title: str) -> mk.Heading:
 def result_html(result: Result) -> str:
     case, energy, stats = result.case, result.energy, result.stats
     t_final = result.final_state[0]
-    status: list[mk.Inline] = [mk.Span(str(result.status), "strong"),
-                               f" at t = {t_final:.10g} s (from {case.initial.t0:g} s)"]  # fmt: skip
+    status: list[mk.Inline] = [
+        mk.Span(str(result.status), "strong"),
+        f" at t = {t_final:.10g} s (from {case.initial.t0:g} s)",
+    ]
     if result.message:
         status.append(f": {result.message}")
     facts = (
@@ -59,8 +61,9 @@ def result_html(result: Result) -> str:
 
 def orbit_html(orbit: Orbit) -> str:
     case = orbit.case
-    state = ", ".join(f"{name} = {value:.10g}" for name, value in zip(("x1", "v1", "x2", "v2"), orbit.state,
-                                                                        strict=True))  # fmt: skip
+    state = ", ".join(
+        f"{name} = {value:.10g}" for name, value in zip(("x1", "v1", "x2", "v2"), orbit.state, strict=True)
+    )
     header = ("multiplier", "modulus")
     rows = tuple((f"{mu.real:+.6e} {mu.imag:+.6e}i", f"{abs(mu):.6e}") for mu in orbit.multipliers)
     found = (
@@ -83,12 +86,20 @@ def branch_html(branch: Branch) -> str:
     values = points[param].to_numpy(float)
     increasing = values[-1] > values[0]
     ended = "complete" if branch.complete else f"ended early: {branch.message}"
-    summary = (f"{len(points)} points, traced from {param} = {values[0]:.10g} {'up' if increasing else 'down'} to "
-               f"{values[-1]:.10g} (period {branch.period}, section t = {branch.section:.10g} s); {ended}")  # fmt: skip
+    summary = (
+        f"{len(points)} points, traced from {param} = {values[0]:.10g} {'up' if increasing else 'down'} to "
+        f"{values[-1]:.10g} (period {branch.period}, section t = {branch.section:.10g} s); {ended}"
+    )
     blocks: list[mk.Block] = [mk.Paragraph((mk.Span(f"branch in {param}", "strong"), ": ", summary))]
     if len(rows):
-        table = tuple((f"{row[param]:.10g}", str(row.kind), *((str(row.before), str(row.after)) if increasing else
-                       (str(row.after), str(row.before)))) for _, row in rows.iterrows())  # fmt: skip
+        table = tuple(
+            (
+                f"{row[param]:.10g}",
+                str(row.kind),
+                *((str(row.before), str(row.after)) if increasing else (str(row.after), str(row.before))),
+            )
+            for _, row in rows.iterrows()
+        )
         header = (param, f"kind (as {param} increases)", f"events at lower {param}", f"events at higher {param}")
         blocks.append(mk.Table(header, table))
     else:

@@ -7,7 +7,7 @@ The report reads only what a run folder holds (``case.toml``, ``events``, ``traj
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +16,7 @@ import pandas as pd
 from oscillator.analysis.intervals import spans
 from oscillator.io.cases import Case
 from oscillator.io.files import replace_file
+from oscillator.model.events import EventKind
 from oscillator.model.phase_space import domain_label
 from oscillator.report.figures import FIGURES
 from oscillator.report.markup import Block, Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
@@ -38,7 +39,7 @@ def _sign(value: float) -> str:
     return "< 0" if value < 0 else ("> 0" if value > 0 else "= 0")
 
 
-def _theorem(row) -> str:
+def _theorem(row: Any) -> str:
     number = row.equation.strip("()")
     if row.theorem.startswith("Def."):
         return f"{row.theorem}, Eq. {number}"
@@ -49,61 +50,92 @@ def _domain(mass: int, domain: int, boundary: str) -> str:
     return boundary if domain == 0 else f"Ω{domain}({mass})"
 
 
-def _sentence(row) -> str:
+def _passes(row: Any, frm: str, to: str, why: str) -> str:
+    return (
+        f"m{row.mass} passes {row.boundary} from {frm} into {to}: {row.G_alpha} = {_f(row.G0_alpha)} brings it "
+        f"to the boundary and {row.G_beta} = {_f(row.G0_beta)} carries it across ({why})"
+    )
+
+
+def _comes_to_rest(row: Any, frm: str, to: str, why: str) -> str:
+    return (
+        f"m{row.mass} comes to rest on {row.boundary} (sliding): {row.G_alpha} = {_f(row.G0_alpha)} brings it "
+        f"to the boundary and {row.G_beta} = {_f(row.G0_beta)} pushes it back ({why})"
+    )
+
+
+def _leaves_rest(row: Any, frm: str, to: str, why: str) -> str:
+    how = (
+        f"{row.G_alpha} = {_f(row.G0_alpha)} is already past 0"
+        if row.branch == "already_past"
+        else f"{row.G_alpha} reaches 0 with DF {_sign(row.G1_alpha)}"
+    )
+    return f"m{row.mass} leaves rest on {row.boundary} into {to}: {how} ({why})"
+
+
+def _grazes(row: Any, frm: str, to: str, why: str) -> str:
+    if row.theorem == "5.5":
+        return (
+            f"m{row.mass} grazes {row.boundary} in {frm}: {row.G_alpha} = 0 with DF {_sign(row.G1_alpha)}, "
+            f"closest |v{row.mass}| = {_f(row.distance)} m/s ({why})"
+        )
+    return f"m{row.mass} grazes {row.boundary}: {row.G_alpha} = 0 at {_f(row.distance)} m from the stop ({why})"
+
+
+def _right_contact(row: Any, frm: str, to: str, why: str) -> str:
+    verb = "reaches" if EventKind(row.kind).contact_starts else "leaves"
+    speed = f"v1 = {_f(row.G0_alpha)} {_sign(row.G0_alpha)}"
+    return f"m1 {verb} the right stop on {row.boundary}, {frm} → {to}: {speed} ({why})"
+
+
+def _left_contact(rows: Sequence[Any]) -> str:
+    """A left-contact change moves both masses: one sentence for its rows (one per mass)."""
+    row = rows[0]
+    moves = ", ".join(
+        f"m{r.mass} {_domain(r.mass, r.from_domain, r.boundary)} → {_domain(r.mass, r.to_domain, r.boundary)}"
+        for r in rows
+    )
+    return (
+        f"left contact {'starts' if EventKind(row.kind).contact_starts else 'ends'} on {row.boundary} ({moves}): "
+        f"ż1 = {_f(row.G0_alpha)} {_sign(row.G0_alpha)} ({_theorem(row)})"
+    )
+
+
+#: The sentence of one mass's event, by kind; a kind that moves both masses at once
+#: (:attr:`EventKind.both_masses`) is told once for its rows, by :func:`_left_contact`.
+SENTENCES: dict[EventKind, Callable[[Any, str, str, str], str]] = {
+    EventKind.PASSABLE: _passes,
+    EventKind.SLIDING_ONSET: _comes_to_rest,
+    EventKind.SLIDING_VANISH: _leaves_rest,
+    EventKind.GRAZING: _grazes,
+    EventKind.RIGHT_CONTACT_ONSET: _right_contact,
+    EventKind.RIGHT_CONTACT_RELEASE: _right_contact,
+}
+#: The sentence of the rows of an event of both masses, by kind.
+BOTH_MASSES_SENTENCES: dict[EventKind, Callable[[Sequence[Any]], str]] = {
+    EventKind.LEFT_CONTACT_ONSET: _left_contact,
+    EventKind.LEFT_CONTACT_RELEASE: _left_contact,
+}
+
+
+def _sentence(row: Any) -> str:
     """One event of one mass, in words: what happened and why."""
-    mass, kind = row.mass, row.kind
-    to = _domain(mass, row.to_domain, row.boundary)
-    frm = _domain(mass, row.from_domain, row.boundary)
-    why = _theorem(row)
-    if kind == "passable":
-        return (
-            f"m{mass} passes {row.boundary} from {frm} into {to}: {row.G_alpha} = {_f(row.G0_alpha)} brings it "
-            f"to the boundary and {row.G_beta} = {_f(row.G0_beta)} carries it across ({why})"
-        )
-    if kind == "sliding_onset":
-        return (
-            f"m{mass} comes to rest on {row.boundary} (sliding): {row.G_alpha} = {_f(row.G0_alpha)} brings it "
-            f"to the boundary and {row.G_beta} = {_f(row.G0_beta)} pushes it back ({why})"
-        )
-    if kind == "sliding_vanish":
-        how = (
-            f"{row.G_alpha} = {_f(row.G0_alpha)} is already past 0"
-            if row.branch == "already_past"
-            else f"{row.G_alpha} reaches 0 with DF {_sign(row.G1_alpha)}"
-        )
-        return f"m{mass} leaves rest on {row.boundary} into {to}: {how} ({why})"
-    if kind == "grazing":
-        if row.theorem == "5.5":
-            return (
-                f"m{mass} grazes {row.boundary} in {frm}: {row.G_alpha} = 0 with DF {_sign(row.G1_alpha)}, "
-                f"closest |v{mass}| = {_f(row.distance)} m/s ({why})"
-            )
-        return f"m{mass} grazes {row.boundary}: {row.G_alpha} = 0 at {_f(row.distance)} m from the stop ({why})"
-    if kind in ("right_contact_onset", "right_contact_release"):
-        verb = "reaches" if kind.endswith("onset") else "leaves"
-        speed = f"v1 = {_f(row.G0_alpha)} {_sign(row.G0_alpha)}"
-        return f"m1 {verb} the right stop on {row.boundary}, {frm} → {to}: {speed} ({why})"
-    return ""  # left contact: told for both masses at once, see transition_log
+    to = _domain(row.mass, row.to_domain, row.boundary)
+    frm = _domain(row.mass, row.from_domain, row.boundary)
+    return SENTENCES[EventKind(row.kind)](row, frm, to, _theorem(row))
 
 
 def transition_log(events: pd.DataFrame) -> list[str]:
-    """One line per event (a left-contact change, which moves both masses, is one line)."""
+    """One line per event (an event of both masses, a left-contact change, is one line)."""
     lines = []
     rows = list(events.itertuples(index=False))
     i = 0
     while i < len(rows):
         row = rows[i]
-        if row.kind in ("left_contact_onset", "left_contact_release"):
+        kind = EventKind(row.kind)
+        if kind.both_masses:
             pair = [r for r in rows[i : i + 2] if r.kind == row.kind and r.t == row.t]
-            starts = row.kind.endswith("onset")
-            moves = ", ".join(
-                f"m{r.mass} {_domain(r.mass, r.from_domain, r.boundary)} → {_domain(r.mass, r.to_domain, r.boundary)}"
-                for r in pair
-            )
-            text = (
-                f"left contact {'starts' if starts else 'ends'} on {row.boundary} ({moves}): "
-                f"ż1 = {_f(row.G0_alpha)} {_sign(row.G0_alpha)} ({_theorem(row)})"
-            )
+            text = BOTH_MASSES_SENTENCES[kind](pair)
             i += len(pair)
         else:
             text = _sentence(row)
@@ -124,15 +156,18 @@ def _summarised_log(events: pd.DataFrame) -> list[str]:
     half = LOGGED_EVENTS // 2
     middle = events.iloc[half:-half]
     counts = ", ".join(f"{kind} {count:,}" for kind, count in middle.kind.value_counts().items())
-    gap = (f"… {len(middle):,} events from t = {middle.t.iloc[0]:.4f} s to t = {middle.t.iloc[-1]:.4f} s are not "
-           f"listed here ({counts}); events.parquet holds them all")  # fmt: skip
+    gap = (
+        f"… {len(middle):,} events from t = {middle.t.iloc[0]:.4f} s to t = {middle.t.iloc[-1]:.4f} s are not "
+        f"listed here ({counts}); events.parquet holds them all"
+    )
     return [*transition_log(events.iloc[:half]), gap, *transition_log(events.iloc[-half:])]
 
 
 def _time_in_each_domain(intervals: pd.DataFrame) -> pd.DataFrame:
     """The intervals summed per mass and domain: how many, how long in all."""
-    total = intervals.groupby(["mass", "where"], sort=True).agg(intervals=("duration", "size"),
-                                                                 duration=("duration", "sum"))  # fmt: skip
+    total = intervals.groupby(["mass", "where"], sort=True).agg(
+        intervals=("duration", "size"), duration=("duration", "sum")
+    )
     return total.reset_index()
 
 
@@ -149,8 +184,11 @@ def domain_intervals(events: pd.DataFrame, case: Case, t_final: float) -> pd.Dat
         states = [(int(first.from_domain), first.boundary), *zip(mine.to_domain, mine.boundary, strict=True)]
         found = spans(times, states, t_final)
         # a switch at an instant (the start among them) leaves no interval behind it; the last one stays
-        rows += [(mass, domain, where, a, b) for k, ((domain, where), a, b) in enumerate(found)
-                 if b > a or k == len(found) - 1]  # fmt: skip
+        rows += [
+            (mass, domain, where, a, b)
+            for k, ((domain, where), a, b) in enumerate(found)
+            if b > a or k == len(found) - 1
+        ]
     table = pd.DataFrame(rows, columns=["mass", "domain", "boundary", "from", "to"])
     table["duration"] = table["to"] - table["from"]
     table["where"] = [
@@ -170,7 +208,7 @@ def _tick(value: bool) -> str:
     return "✓" if value else "✗"
 
 
-def _cells(frame: pd.DataFrame, formats: dict | None = None) -> Table:
+def _cells(frame: pd.DataFrame, formats: dict[str, Any] | None = None) -> Table:
     """A table block of a frame: floats to 4 decimals (NaN as a dash), other values as text."""
     formats = formats or {}
     rows = []
@@ -192,7 +230,7 @@ def _number(value: object, spec: str) -> str:
     return format(value, spec) if isinstance(value, (int, float)) and not isinstance(value, bool) else "—"
 
 
-def _header(case: Case, run: dict) -> list[Block]:
+def _header(case: Case, run: dict[str, Any]) -> list[Block]:
     """Title, description, the reason a run is incomplete, and the start and the system in one line."""
     p, start = case.parameters, case.initial
     t_final = _number(run.get("t_final", case.t_end), ".10g")
@@ -202,11 +240,15 @@ def _header(case: Case, run: dict) -> list[Block]:
     modified = run.get("modified")
     if modified and isinstance(modified, list):
         changes = ", ".join(str(change) for change in modified)
-        blocks.append(Paragraph((
-            Span("Modified case:", "strong"),
-            f" {changes}. The expected times of the case as written (the article's) do not apply to it "
-            f"and are not compared.",
-        )))  # fmt: skip
+        blocks.append(
+            Paragraph(
+                (
+                    Span("Modified case:", "strong"),
+                    f" {changes}. The expected times of the case as written (the article's) do not apply to it "
+                    f"and are not compared.",
+                )
+            )
+        )
     status = run.get("status", "complete")
     if status != "complete":
         reason = run.get("failure") or "no reason recorded"
@@ -224,7 +266,7 @@ def _header(case: Case, run: dict) -> list[Block]:
     return [*blocks, Paragraph((where + system,))]
 
 
-def _energy(energy: dict) -> list[Block]:
+def _energy(energy: dict[str, Any]) -> list[Block]:
     g = {key: _number(energy.get(key), ".6f") for key in ("E0", "E1", "forcing", "feedback", "damping", "friction")}
     balance = "Change of mechanical energy = forcing work + feedback work − damper losses − friction losses:"
     return [
@@ -251,8 +293,12 @@ def _comparison(comparison: pd.DataFrame) -> list[Block]:
         if ok
         else (Span("Some expected times are out of tolerance.", "strong"),)
     )
-    legend = (Span("article", "em"), ": the article's time; ", Span("reference", "em"),
-              ": an independent implementation, to 4 decimals (docs/model.md, Sec. 9).")  # fmt: skip
+    legend = (
+        Span("article", "em"),
+        ": the article's time; ",
+        Span("reference", "em"),
+        ": an independent implementation, to 4 decimals (docs/model.md, Sec. 9).",
+    )
     blocks: list[Block] = [
         Heading(2, ("Comparison with the article",)),
         Paragraph(legend),
@@ -262,7 +308,7 @@ def _comparison(comparison: pd.DataFrame) -> list[Block]:
     return blocks + [Paragraph((Span(row.label, "em"), f": {row.note}")) for row in comparison.itertuples() if row.note]
 
 
-def _counts(run: dict, counts: dict) -> list[Block]:
+def _counts(run: dict[str, Any], counts: dict[str, Any]) -> list[Block]:
     versions = _table(run, "versions")
     n = {key: _number(counts.get(key), "d") for key in ("events", "returns", "rhs_evaluations", "restarts")}
     text = (
@@ -276,7 +322,7 @@ def _counts(run: dict, counts: dict) -> list[Block]:
 def report_document(
     case: Case,
     events: pd.DataFrame,
-    run: dict,
+    run: dict[str, Any],
     *,
     comparison: pd.DataFrame | None = None,
     figures: Sequence[str] = (),
@@ -289,8 +335,14 @@ def report_document(
     blocks = _header(case, run)
     blocks.append(Heading(2, ("Transition log",)))
     if case.keep_events_from is not None and math.isfinite(case.keep_events_from):
-        blocks.append(Paragraph((f"Only the events at or after t = {case.keep_events_from:.10g} s were kept "
-                                 "(keep_events_from); the log and the times below start there.",)))  # fmt: skip
+        blocks.append(
+            Paragraph(
+                (
+                    f"Only the events at or after t = {case.keep_events_from:.10g} s were kept "
+                    "(keep_events_from); the log and the times below start there.",
+                )
+            )
+        )
     log = _summarised_log(events)
     none = Paragraph(("No switching event: each mass stays in its domain.",))
     blocks.append(Bullets(tuple((line,) for line in log)) if log else none)

@@ -37,12 +37,12 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from oscillator.errors import InputError
+from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, FolderTaken, claim_folder, default_name, read_untrusted, replace_file
 from oscillator.io.tables import check_events, check_trajectory
 from oscillator.model.events import Event
-from oscillator.model.parameters import is_number
+from oscillator.model.parameters import is_finite_number, is_number
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -81,7 +81,7 @@ class RunFolder:
     case: Case
     events: pd.DataFrame
     trajectory: pd.DataFrame
-    run: dict
+    run: dict[str, Any]
 
 
 def claim_output(folder: Path | None, case_name: str, *, root: Path = Path("runs")) -> FolderClaim:
@@ -104,7 +104,7 @@ def claim_output(folder: Path | None, case_name: str, *, root: Path = Path("runs
     raise InputError(f"no free folder name under {root} for {case_name}; give a folder", field="folder")
 
 
-def _versions() -> dict:
+def _versions() -> dict[str, Any]:
     versions: dict[str, str | None] = {"python": platform.python_version()}
     for name in _PACKAGES:
         try:
@@ -122,7 +122,7 @@ _INTEGRATORS = {
 }
 
 
-def run_metadata(command: list[str] | None = None) -> dict:
+def run_metadata(command: list[str] | None = None) -> dict[str, Any]:
     """When, how and with what a folder was made: ``created``, ``command``, ``versions``, ``platform``."""
     return {
         "created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
@@ -132,7 +132,7 @@ def run_metadata(command: list[str] | None = None) -> dict:
     }
 
 
-def run_info(result: Result, *, command: list[str] | None = None, pending: tuple[str, ...] = PENDING) -> dict:
+def run_info(result: Result, *, command: list[str] | None = None, pending: tuple[str, ...] = PENDING) -> dict[str, Any]:
     """What ``run.json`` holds."""
     case = result.case
     info: dict[str, Any] = {
@@ -143,6 +143,7 @@ def run_info(result: Result, *, command: list[str] | None = None, pending: tuple
         "complete": result.success,
         "status": str(result.status),
         "failure": result.message or None,
+        "reason": None if result.reason is None else result.reason.value,
         "pending": list(pending),
         **run_metadata(command),
         "solver": {
@@ -181,7 +182,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def json_text(info: dict) -> str:
+def json_text(info: dict[str, Any]) -> str:
     """Strict JSON (no ``NaN`` or ``Infinity``, which JSON does not have)."""
     return json.dumps(_plain(info), indent=2, default=str, allow_nan=False) + "\n"
 
@@ -193,7 +194,7 @@ def write_run(
     formats: str = "both",
     command: list[str] | None = None,
     pending: tuple[str, ...] = PENDING,
-    extra: dict | None = None,
+    extra: dict[str, Any] | None = None,
 ) -> Path:
     """Write the tables, ``case.toml`` and ``run.json`` into the claimed folder and put it in place.
 
@@ -247,39 +248,86 @@ def _require(folder: Path, name: str) -> Path:
     return path
 
 
-def _check_run_info(data: Any, path: Path) -> dict:
-    """``run.json``'s content, with the fields the report reads checked."""
+# --------------------------------------------------------------------------- run.json, checked by one table
+#
+# Each field run_info writes that a reader relies on, with what it must be.  A check returns what
+# is wrong (or "" when the value is right); a field that is absent is not checked here (readers
+# give it a default).  tests/test_hostile.py damages each field in turn.
+
+
+def _text(value: Any) -> str:
+    return "" if value is None or isinstance(value, str) else "is not text"
+
+
+def _finite(value: Any) -> str:
+    return "" if is_finite_number(value) else "is not a finite number"
+
+
+def _object(value: Any) -> str:
+    return "" if value is None or isinstance(value, dict) else "is not a JSON object"
+
+
+def _one_of(choices: tuple[str, ...], *, null: bool = False) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if (null and value is None) or (isinstance(value, str) and value in choices):
+            return ""
+        return f"must be {'null or ' if null else ''}one of {', '.join(choices)}"
+
+    return check
+
+
+def _values(check: Callable[[Any], bool], what: str) -> Callable[[Any], str]:
+    """A JSON object whose every value passes ``check``."""
+
+    def checked(value: Any) -> str:
+        if value is None:
+            return ""
+        if not isinstance(value, dict):
+            return "is not a JSON object"
+        wrong = next((key for key, item in value.items() if not check(item)), None)
+        return "" if wrong is None else f".{wrong} is not {what}"
+
+    return checked
+
+
+def _items(check: Callable[[Any], bool], what: str) -> Callable[[Any], str]:
+    """A JSON list whose every item passes ``check``."""
+    return lambda value: "" if isinstance(value, list) and all(check(item) for item in value) else f"must be {what}"
+
+
+def _figures(value: Any) -> str:
+    if not isinstance(value, (dict, type(None))):
+        return "is not a JSON object"
+    return "" if isinstance((value or {}).get("label", ""), str) else ".label is not text"
+
+
+#: What each field of ``run.json`` must be (:func:`run_info` writes them).
+RUN_JSON: dict[str, Callable[[Any], str]] = {
+    "status": _one_of(_STATUSES),
+    "reason": _one_of(tuple(Reason), null=True),
+    **dict.fromkeys(("t_final", "wall_time", "t0", "t_end"), _finite),
+    **dict.fromkeys(("versions", "solver", "check"), _object),
+    "figures": _figures,
+    "energy": _values(lambda v: v is None or is_number(v), "a number"),
+    "counts": _values(lambda v: isinstance(v, int) and not isinstance(v, bool), "a whole number"),
+    "pending": _items(lambda v: v in PENDING, f"a list of {', '.join(PENDING)}"),
+    **dict.fromkeys(("failure", "case", "title"), _text),
+    "modified": _items(lambda v: isinstance(v, str), "a list of texts"),
+}
+
+
+def _check_run_info(data: Any, path: Path) -> dict[str, Any]:
+    """``run.json``'s content, with the fields the report reads checked (:data:`RUN_JSON`)."""
     if not isinstance(data, dict):
         raise _damaged(path, "it is not a JSON object")
-    if data.get("status", "complete") not in _STATUSES:
-        raise _damaged(path, f"status must be one of {', '.join(_STATUSES)}")
-    for key in ("t_final", "wall_time", "t0", "t_end"):
-        if key in data and not (is_number(data[key]) and math.isfinite(data[key])):
-            raise _damaged(path, f"{key} is not a finite number")
-    for key in ("energy", "counts", "versions", "solver", "check", "figures"):
-        if key in data and data[key] is not None and not isinstance(data[key], dict):
-            raise _damaged(path, f"{key} is not a JSON object")
-    for key, value in (data.get("energy") or {}).items():
-        if value is not None and not is_number(value):
-            raise _damaged(path, f"energy.{key} is not a number")
-    for key, value in (data.get("counts") or {}).items():
-        if not isinstance(value, int) or isinstance(value, bool):
-            raise _damaged(path, f"counts.{key} is not a whole number")
-    pending = data.get("pending", [])
-    if not isinstance(pending, list) or not set(pending) <= set(PENDING):
-        raise _damaged(path, f"pending must be a list of {', '.join(PENDING)}")
-    for key in ("failure", "case", "title"):
-        if data.get(key) is not None and not isinstance(data[key], str):
-            raise _damaged(path, f"{key} is not text")
-    if not isinstance((data.get("figures") or {}).get("label", ""), str):
-        raise _damaged(path, "figures.label is not text")
-    modified = data.get("modified", [])
-    if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
-        raise _damaged(path, "modified must be a list of texts")
+    for key, check in RUN_JSON.items():
+        wrong = check(data[key]) if key in data else ""
+        if wrong:  # "is not ...", "must be ..." or ".field is not ..."
+            raise _damaged(path, f"{key}{wrong}" if wrong.startswith(".") else f"{key} {wrong}")
     return data
 
 
-def _read_table(path: Path, reader) -> pd.DataFrame:
+def _read_table(path: Path, reader: Callable[[Path], pd.DataFrame]) -> pd.DataFrame:
     try:
         return reader(path)
     except Exception as exc:  # pyarrow and pandas raise many types for a damaged file
@@ -309,8 +357,11 @@ def read_run_folder(folder: Path) -> RunFolder:
     except (ValueError, RecursionError) as exc:
         raise _damaged(info_path, "it is not JSON") from exc
     info = _check_run_info(data, info_path)
-    case = dataclasses.replace(load_case(_require(folder, "case.toml")), name=info.get("case") or folder.name,
-                               modified=tuple(info.get("modified", ())))  # fmt: skip
+    case = dataclasses.replace(
+        load_case(_require(folder, "case.toml")),
+        name=info.get("case") or folder.name,
+        modified=tuple(info.get("modified", ())),
+    )
     if _regular(folder / "events.parquet"):
         events = _read_table(folder / "events.parquet", pd.read_parquet)
         source = folder / "events.parquet"
@@ -343,16 +394,26 @@ def result_of(run: RunFolder) -> Result:
         **{f.name: int(counts.get(f.name, 0)) for f in dataclasses.fields(SolverStats) if f.type in ("int", int)},
     )
     given = info.get("final_state")
-    final: dict = given if isinstance(given, dict) else {}
+    final: dict[str, Any] = given if isinstance(given, dict) else {}
     if not final and len(run.trajectory):
         final = run.trajectory.iloc[-1].to_dict()
-    state = tuple(number(final.get(name)) for name in ("t", "x1", "v1", "x2", "v2"))
-    return Result(run.case, audit, stats, state, Status(info.get("status", "complete")),  # type: ignore[arg-type]
-                  info.get("failure") or "", records_of(run.events, run.trajectory))  # fmt: skip
+    t, x1, v1, x2, v2 = (number(final.get(name)) for name in ("t", "x1", "v1", "x2", "v2"))
+    state = (t, x1, v1, x2, v2)
+    return Result(
+        run.case,
+        audit,
+        stats,
+        state,
+        Status(info.get("status", "complete")),
+        info.get("failure") or "",
+        None if info.get("reason") is None else Reason(info["reason"]),
+        records_of(run.events, run.trajectory),
+    )
 
 
-def save_result(result: Result, folder: Path | str, *, formats: str = "both", figures: bool = True,
-                report: bool = True) -> Path:  # fmt: skip
+def save_result(
+    result: Result, folder: Path | str, *, formats: str = "both", figures: bool = True, report: bool = True
+) -> Path:
     """Write ``result`` as a run folder (as ``oscillator run`` does) into ``folder``, a new one.
 
     The tables, ``case.toml`` and ``run.json`` are written first; then the figures and the
@@ -364,8 +425,13 @@ def save_result(result: Result, folder: Path | str, *, formats: str = "both", fi
         raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
     folder = Path(folder)
     pending = tuple(step for step, wanted in (("figures", figures), ("report", report)) if wanted)
-    path = write_run(result, claim_output(folder, result.case.name), formats=formats,
-                     command=["python", "oscillator.Result.save"], pending=pending)  # fmt: skip
+    path = write_run(
+        result,
+        claim_output(folder, result.case.name),
+        formats=formats,
+        command=["python", "oscillator.Result.save"],
+        pending=pending,
+    )
     if pending:
         finish_or_warn(lambda: finish_run(path, figures=figures, report=report), path)
     return path
@@ -379,8 +445,11 @@ def finish_or_warn(finish: Callable[[], object], folder: Path) -> None:
     try:
         finish()
     except Exception as error:  # a later step failed: what was computed is safe
-        warnings.warn(f"the figures or report of {folder} could not be made ({type(error).__name__}: {error}); "
-                      f"the tables are written; `oscillator report {folder}` makes them", stacklevel=4)  # fmt: skip
+        warnings.warn(
+            f"the figures or report of {folder} could not be made ({type(error).__name__}: {error}); "
+            f"the tables are written; `oscillator report {folder}` makes them",
+            stacklevel=4,
+        )
 
 
 def read_events_csv(path: Path) -> pd.DataFrame:
@@ -393,7 +462,7 @@ def read_events_csv(path: Path) -> pd.DataFrame:
 # --------------------------------------------------------------------------- finishing
 
 
-def _update(folder: Path, info: dict, *, done: str | None = None, **changes: Any) -> None:
+def _update(folder: Path, info: dict[str, Any], *, done: str | None = None, **changes: Any) -> None:
     """Rewrite ``run.json`` with ``changes``, and with ``done`` taken off ``"pending"``."""
     info.update(changes)
     if done is not None:
@@ -439,8 +508,15 @@ def finish_run(
     chosen = figure_window(case.initial.t0, t_final, case.parameters.period, window)
     if (window is not None or (figures and missing_figures(folder / "figures"))) and not run.trajectory.empty:
         start = (case.initial.t0, *case.initial.y)
-        write_figures(run.trajectory, run.events, case.parameters, start, folder / "figures", title=figure_title(case),
-                      window=chosen)  # fmt: skip
+        write_figures(
+            run.trajectory,
+            run.events,
+            case.parameters,
+            start,
+            folder / "figures",
+            title=figure_title(case),
+            window=chosen,
+        )
         _update(folder, info, figures={"window": [chosen.start, chosen.stop], "label": chosen.label})
     if figures and "figures" in info.get("pending", []):
         _update(folder, info, done="figures")

@@ -1,6 +1,6 @@
 """A branch on disk: its tables, its figures (Fig. 14 with the unstable parts) and a report.
 
-A branch folder is made like a run folder (:mod:`oscillator.io.runs`), in two steps, so that a
+A branch folder is made like a run folder (:mod:`oscillator.report.runs`), in two steps, so that a
 computed branch is never lost to a later step:
 
 1. :func:`write_branch` writes ``branch.parquet``, ``bifurcations.parquet``, the sweep's points
@@ -19,21 +19,22 @@ import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError
+from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, atomic_path, read_untrusted, replace_file
 from oscillator.model.parameters import UNITS, labelled
-from oscillator.orbits.continuation import Branch
+from oscillator.orbits.continuation import BIFURCATION_KINDS, Bifurcation, Branch
 from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
 from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 __all__ = [
@@ -57,8 +58,15 @@ __all__ = [
 PENDING = ("figures", "report")
 _MAX_RUN_JSON = 1 << 20
 
-_MARKERS = {"sliding_onset": "v", "sliding_vanish": "^", "grazing": "s", "fold": "o", "period_doubling": "D",
-            "torus": "*"}  # fmt: skip
+#: Each bifurcation kind's marker on the branch figures.
+BIFURCATION_MARKERS = {
+    Bifurcation.SLIDING_ONSET: "v",
+    Bifurcation.SLIDING_VANISH: "^",
+    Bifurcation.GRAZING: "s",
+    Bifurcation.FOLD: "o",
+    Bifurcation.PERIOD_DOUBLING: "D",
+    Bifurcation.TORUS: "*",
+}
 
 
 def _pieces(points: pd.DataFrame) -> list[slice]:
@@ -78,11 +86,14 @@ def _gaps(branch: Branch) -> list[tuple[float, float]]:
     """The parameter intervals with no period-N orbit on the branch (between a row with an empty
     ``after`` and the next row, with an empty ``before``)."""
     rows, param = branch.bifurcations, branch.param
-    return [(float(rows[param].iloc[k]), float(rows[param].iloc[k + 1])) for k in range(len(rows) - 1)
-            if rows.after.iloc[k] == "" and rows.before.iloc[k + 1] == ""]  # fmt: skip
+    return [
+        (float(rows[param].iloc[k]), float(rows[param].iloc[k + 1]))
+        for k in range(len(rows) - 1)
+        if rows.after.iloc[k] == "" and rows.before.iloc[k + 1] == ""
+    ]
 
 
-def _label_values(ax, rows: pd.DataFrame, param: str, coordinate: str, span: float) -> None:
+def _label_values(ax: Axes, rows: pd.DataFrame, param: str, coordinate: str, span: float) -> None:
     """Each bifurcation's parameter beside its marker; labels of close values stacked, not overlaid."""
     decimals = min(10, max(0, math.ceil(-math.log10(span)) + 5)) if span > 0 else 7
     level, last = 0, -math.inf
@@ -106,22 +117,42 @@ def branch_figure(branch: Branch, coordinate: str, sweep_points: pd.DataFrame | 
     fig = Figure(figsize=(7, 4.5), dpi=150, layout="constrained")
     ax = fig.subplots()
     if sweep_points is not None and len(sweep_points):
-        ax.plot(sweep_points[param], sweep_points[coordinate], "o", color="k", ms=2.5, zorder=3,
-                label="sweep (Poincaré points)")  # fmt: skip
+        ax.plot(
+            sweep_points[param],
+            sweep_points[coordinate],
+            "o",
+            color="k",
+            ms=2.5,
+            zorder=3,
+            label="sweep (Poincaré points)",
+        )
     stable = points.stable.to_numpy(bool)
     labelled_runs = set()
     for piece in _pieces(points):
         for part in _runs(stable, piece):
             is_stable = bool(stable[part.start])
             label = "stable" if is_stable else "unstable"
-            ax.plot(points[param].iloc[part], points[coordinate].iloc[part], "-" if is_stable else "--",
-                    color="C0", lw=1.5, label=None if label in labelled_runs else label)  # fmt: skip
+            ax.plot(
+                points[param].iloc[part],
+                points[coordinate].iloc[part],
+                "-" if is_stable else "--",
+                color="C0",
+                lw=1.5,
+                label=None if label in labelled_runs else label,
+            )
             labelled_runs.add(label)
     for k, (lo, hi) in enumerate(_gaps(branch)):
         ax.axvspan(lo, hi, color="0.85", zorder=0, label=None if k else f"no period-{branch.period} orbit")
     for kind, rows in branch.bifurcations.groupby("kind"):
-        ax.plot(rows[param], rows[coordinate], _MARKERS.get(str(kind), "x"), color="C3", ms=7, mfc="none",
-                label=str(kind).replace("_", " "))  # fmt: skip
+        ax.plot(
+            rows[param],
+            rows[coordinate],
+            BIFURCATION_MARKERS[Bifurcation(kind)],
+            color="C3",
+            ms=7,
+            mfc="none",
+            label=str(kind).replace("_", " "),
+        )
     _label_values(ax, branch.bifurcations, param, coordinate, span=float(np.ptp(points[param])))
     ax.ticklabel_format(useOffset=False)
     ax.xaxis.set_major_locator(MaxNLocator(6))
@@ -145,8 +176,14 @@ def multipliers_figure(branch: Branch) -> Figure:
     for k in range(1, 5):
         moduli = np.abs(points[f"mu{k}"].to_numpy(complex)).clip(min=floor)
         for j, piece in enumerate(_pieces(points)):
-            ax.semilogy(points[param].iloc[piece], moduli[piece], "-", lw=1.2, color=f"C{k - 1}",
-                        label=None if j else f"|mu{k}|")  # fmt: skip
+            ax.semilogy(
+                points[param].iloc[piece],
+                moduli[piece],
+                "-",
+                lw=1.2,
+                color=f"C{k - 1}",
+                label=None if j else f"|mu{k}|",
+            )
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
     for value in branch.bifurcations[param]:
         ax.axvline(value, color="C3", lw=0.6, ls="--")
@@ -187,41 +224,86 @@ def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
     unit = UNITS.get(param, "")
     blocks: list[mk.Block] = [
         mk.Heading(1, (f"{case.name}: period-{branch.period} orbit continued in {param}",)),
-        mk.Paragraph((f"{len(branch.points)} points, traced from {param} = {first:.10g} {way} to {last:.10g}"
-                      f"{' ' + unit if unit else ''}; section at t = {branch.section:g} s. ",
-                      "Complete." if branch.complete else f"Ended early: {branch.message}.")),
-    ]  # fmt: skip
+        mk.Paragraph(
+            (
+                f"{len(branch.points)} points, traced from {param} = {first:.10g} {way} to {last:.10g}"
+                f"{' ' + unit if unit else ''}; section at t = {branch.section:g} s. ",
+                "Complete." if branch.complete else f"Ended early: {branch.message}.",
+            )
+        ),
+    ]
     if case.modified:
         blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += _bifurcation_blocks(branch, increasing=last > first)
+    stable = branch.points.stable
+    blocks.append(mk.Paragraph((f"{int(stable.sum())} stable and {int((~stable).sum())} unstable points.",)))
+    fixed = tuple(
+        (name, f"{getattr(case.parameters, name):.10g}", UNITS.get(name, "") or "-")
+        for name in case.parameters.names()
+        if name != param
+    )
+    blocks += [mk.Heading(2, ("Fixed parameters",)), mk.Table(("parameter", "value", "unit"), fixed)]
+    blocks += [mk.Figure("branch", "the branch"), mk.Figure("multipliers", "the multipliers' moduli")]
+    return blocks
+
+
+def _bifurcation_blocks(branch: Branch, *, increasing: bool) -> list[mk.Block]:
+    """The report's bifurcations: a table with the events on either side, and the gaps."""
+    param = branch.param
+    blocks: list[mk.Block] = []
     none = f"(no period-{branch.period} orbit)"
-    increasing = last > first
     rows = tuple(
-        (f"{getattr(row, param):.10g}", str(row.kind), f"{row.x1:.6g}", f"{row.v1:.6g}", f"{row.x2:.6g}",
-         f"{row.v2:.6g}", "-" if math.isnan(row.jump) else f"{row.jump:.2e}",
-         *((str(row.before) or none, str(row.after) or none) if increasing else
-           (str(row.after) or none, str(row.before) or none)))
+        (
+            f"{getattr(row, param):.10g}",
+            str(row.kind),
+            f"{row.x1:.6g}",
+            f"{row.v1:.6g}",
+            f"{row.x2:.6g}",
+            f"{row.v2:.6g}",
+            "-" if math.isnan(row.jump) else f"{row.jump:.2e}",
+            *(
+                (str(row.before) or none, str(row.after) or none)
+                if increasing
+                else (str(row.after) or none, str(row.before) or none)
+            ),
+        )
         for row in branch.bifurcations.itertuples(index=False)
-    )  # fmt: skip
+    )
     blocks.append(mk.Heading(2, ("Bifurcations",)))
     if rows:
-        blocks.append(mk.Paragraph((f"Each is named by what happens as {param} increases (sliding_onset: a rest "
-                                    "interval appears; sliding_vanish: it vanishes), whichever way the branch "
-                                    "was traced.",)))  # fmt: skip
-        header = (param, "kind", "x1 (m)", "v1 (m/s)", "x2 (m)", "v2 (m/s)", "jump",
-                  f"events at lower {param}", f"events at higher {param}")  # fmt: skip
+        blocks.append(
+            mk.Paragraph(
+                (
+                    f"Each is named by what happens as {param} increases (sliding_onset: a rest "
+                    "interval appears; sliding_vanish: it vanishes), whichever way the branch "
+                    "was traced.",
+                )
+            )
+        )
+        header = (
+            param,
+            "kind",
+            "x1 (m)",
+            "v1 (m/s)",
+            "x2 (m)",
+            "v2 (m/s)",
+            "jump",
+            f"events at lower {param}",
+            f"events at higher {param}",
+        )
         blocks.append(mk.Table(header, rows))
     else:
         blocks.append(mk.Paragraph(("None in the range.",)))
     for lo, hi in _gaps(branch):
-        blocks.append(mk.Paragraph((f"No period-{branch.period} orbit on this branch for {param} between {lo:.10g} "
-                                    f"and {hi:.10g}: simulate there, or look for an orbit of another period "
-                                    "(--period).",)))  # fmt: skip
-    stable = branch.points.stable
-    blocks.append(mk.Paragraph((f"{int(stable.sum())} stable and {int((~stable).sum())} unstable points.",)))
-    fixed = tuple((name, f"{getattr(case.parameters, name):.10g}", UNITS.get(name, "") or "-")
-                  for name in case.parameters.names() if name != param)  # fmt: skip
-    blocks += [mk.Heading(2, ("Fixed parameters",)), mk.Table(("parameter", "value", "unit"), fixed)]
-    blocks += [mk.Figure("branch", "the branch"), mk.Figure("multipliers", "the multipliers' moduli")]
+        blocks.append(
+            mk.Paragraph(
+                (
+                    f"No period-{branch.period} orbit on this branch for {param} between {lo:.10g} "
+                    f"and {hi:.10g}: simulate there, or look for an orbit of another period "
+                    "(--period).",
+                )
+            )
+        )
     return blocks
 
 
@@ -229,7 +311,7 @@ def branch_status(branch: Branch) -> str:
     """``"complete"``, ``"interrupted"`` or ``"incomplete"`` (it ended before ``stop``)."""
     if branch.complete:
         return "complete"
-    return "interrupted" if branch.message.startswith("interrupted") else "incomplete"
+    return "interrupted" if branch.reason is Reason.INTERRUPTED else "incomplete"
 
 
 MULTIPLIERS = tuple(f"mu{k}" for k in range(1, 5))
@@ -269,7 +351,7 @@ def write_branch(
     Returns the folder's path.  On any failure the claim is abandoned (nothing is left behind)
     and the error raised.
     """
-    from oscillator.io.runs import json_text, run_metadata
+    from oscillator.report.runs import json_text, run_metadata
 
     temporary = claim.temporary
     try:
@@ -290,6 +372,7 @@ def write_branch(
             "complete": branch.complete,
             "status": branch_status(branch),
             "failure": branch.message or None,
+            "reason": None if branch.reason is None else branch.reason.value,
             "pending": list(PENDING),
             **run_metadata(command),
         }
@@ -307,20 +390,22 @@ class BranchFolder:
     path: Path
     branch: Branch
     case: Case
-    run: dict
+    run: dict[str, Any]
     sweep_points: pd.DataFrame | None
 
 
 def _damaged(path: Path, what: str) -> InputError:
-    return InputError(f"{printable(str(path))} is damaged: {what}; continue the case again to remake the folder",
-                      field=path.name)  # fmt: skip
+    return InputError(
+        f"{printable(str(path))} is damaged: {what}; continue the case again to remake the folder", field=path.name
+    )
 
 
 def _table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
     """A Parquet table with these columns, of these kinds (``"number"``, ``"text"``, ``"flag"``)."""
     if not path.is_file():
-        raise InputError(f"{printable(str(path.parent))} is not a complete branch folder: {path.name} is missing",
-                         field=path.name)  # fmt: skip
+        raise InputError(
+            f"{printable(str(path.parent))} is not a complete branch folder: {path.name} is missing", field=path.name
+        )
     try:
         frame = pd.read_parquet(path)
     except Exception as exc:  # pyarrow raises many types for a damaged file
@@ -353,11 +438,15 @@ def read_sweep_points(folder: Path, param: str, coordinate: str) -> pd.DataFrame
     folder = Path(folder)
     path = folder / "poincare.parquet"
     if not folder.is_dir():
-        raise InputError(f"{printable(str(folder))} is not a folder; give a folder written by 'oscillator sweep'",
-                         field="over")  # fmt: skip
+        raise InputError(
+            f"{printable(str(folder))} is not a folder; give a folder written by 'oscillator sweep'", field="over"
+        )
     if not path.is_file():
-        raise InputError(f"{printable(str(folder))} holds no finished sweep (no poincare.parquet); give a folder "
-                         "written by 'oscillator sweep'", field="over")  # fmt: skip
+        raise InputError(
+            f"{printable(str(folder))} holds no finished sweep (no poincare.parquet); give a folder "
+            "written by 'oscillator sweep'",
+            field="over",
+        )
     frame = _table(path, {})
     if param not in frame.columns:
         raise InputError(f"the sweep in {printable(str(folder))} is not a sweep of {shown(param)}", field="over")
@@ -365,7 +454,7 @@ def read_sweep_points(folder: Path, param: str, coordinate: str) -> pd.DataFrame
     return frame[[param, coordinate]].reset_index(drop=True)
 
 
-def _run_info(folder: Path) -> dict:
+def _run_info(folder: Path) -> dict[str, Any]:
     path = folder / "run.json"
     info = _json(path)
     if info.get("kind") != "branch":
@@ -384,13 +473,15 @@ def _run_info(folder: Path) -> dict:
     for key in ("failure", "case", "title"):
         if info.get(key) is not None and not isinstance(info[key], str):
             raise _damaged(path, f"{key} is not text")
+    if info.get("reason") is not None and info["reason"] not in tuple(Reason):
+        raise _damaged(path, f"reason must be null or one of {', '.join(Reason)}")
     modified = info.get("modified", [])
     if not isinstance(modified, list) or not all(isinstance(change, str) for change in modified):
         raise _damaged(path, "modified must be a list of texts")
     return info
 
 
-def _json(path: Path) -> dict:
+def _json(path: Path) -> dict[str, Any]:
     import json
 
     text = read_untrusted(path, what="run file", field="run.json", limit=_MAX_RUN_JSON)
@@ -410,20 +501,37 @@ def read_branch(folder: Path) -> BranchFolder:
     param = info["param"]
     moduli = {f"{name}_{part}": "number" for name in MULTIPLIERS for part in ("re", "im")}
     numbers = {param: "number", **dict.fromkeys(STATE, "number")}
-    points = _table(folder / "branch.parquet",
-                    {**numbers, **moduli, "stable": "flag", "signature": "text", "piece": "number"})  # fmt: skip
-    rows = _table(folder / "bifurcations.parquet",
-                  {**numbers, "kind": "text", "jump": "number", "before": "text", "after": "text"})  # fmt: skip
+    points = _table(
+        folder / "branch.parquet", {**numbers, **moduli, "stable": "flag", "signature": "text", "piece": "number"}
+    )
+    rows = _table(
+        folder / "bifurcations.parquet",
+        {**numbers, "kind": "text", "jump": "number", "before": "text", "after": "text"},
+    )
     if points.empty:
         raise _damaged(folder / "branch.parquet", "it has no points")
+    if not rows["kind"].isin(BIFURCATION_KINDS).all():
+        raise _damaged(folder / "bifurcations.parquet", f"kind must be one of {', '.join(BIFURCATION_KINDS)}")
     points = _points_from_disk(points)
     sweep = None
     if (folder / "sweep_points.parquet").exists():
         sweep = _table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})
     case = load_case(folder / "case.toml")
     case = dataclasses.replace(case, name=info.get("case") or folder.name, modified=tuple(info.get("modified", ())))
-    branch = Branch(param, points, rows, float(info["section"]), info["period"], info["complete"],
-                    info.get("failure") or "", case)  # fmt: skip
+    reason = None if info.get("reason") is None else Reason(info["reason"])
+    if reason is None and info.get("status") == "interrupted":  # written before reasons were
+        reason = Reason.INTERRUPTED
+    branch = Branch(
+        param,
+        points,
+        rows,
+        float(info["section"]),
+        info["period"],
+        info["complete"],
+        info.get("failure") or "",
+        reason,
+        case,
+    )
     return BranchFolder(folder, branch, case, info, sweep)
 
 
@@ -431,7 +539,7 @@ def finish_branch(folder: Path) -> BranchFolder:
     """Draw the branch's figures and write its report, each atomically; ``run.json``'s
     ``"pending"`` says what is still to be made, so an interrupted finish is finished by calling
     this again.  A figure file that is missing or empty is drawn again."""
-    from oscillator.io.runs import json_text
+    from oscillator.report.runs import json_text
 
     found = read_branch(folder)
     info, figures = found.run, folder / "figures"
@@ -453,19 +561,24 @@ def finish_branch(folder: Path) -> BranchFolder:
 def save_branch(branch: Branch, folder: Path | str, *, coordinate: str) -> Path:
     """Write ``branch`` as a branch folder into ``folder`` (new), then its figures and report; if
     those fail, the tables stay, a warning says so, and the folder is returned all the same."""
-    from oscillator.io.runs import claim_output, finish_or_warn
+    from oscillator.report.runs import claim_output, finish_or_warn
 
     if branch.case is None:
-        raise InputError("this branch carries no case to save with it; build it with continue_orbit",
-                         field="case")  # fmt: skip
+        raise InputError("this branch carries no case to save with it; build it with continue_orbit", field="case")
     claim = claim_output(Path(folder), f"{branch.case.name}-continue")
-    path = write_branch(branch, branch.case, claim, coordinate=coordinate, sweep_points=None,
-                        command=["python", "oscillator.Branch.save"])  # fmt: skip
+    path = write_branch(
+        branch,
+        branch.case,
+        claim,
+        coordinate=coordinate,
+        sweep_points=None,
+        command=["python", "oscillator.Branch.save"],
+    )
     finish_or_warn(lambda: finish_branch(path), path)
     return path
 
 
-def orbit_info(orbit: Orbit) -> dict:
+def orbit_info(orbit: Orbit) -> dict[str, Any]:
     """What ``run.json`` holds of an orbit under ``"orbit"`` (complex numbers as ``[re, im]``)."""
     return {
         "section": orbit.section,
@@ -489,19 +602,20 @@ def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
     holding ``"kind": "orbit"`` and :func:`orbit_info`; then its figures and report."""
     from oscillator.hybrid.simulate import simulate
     from oscillator.io.files import check_new
-    from oscillator.io.runs import claim_output, finish_or_warn, finish_run, write_run
+    from oscillator.report.runs import claim_output, finish_or_warn, finish_run, write_run
 
     folder = Path(folder)
     check_new(folder)  # before the simulation: a taken name is refused at once
     result = simulate(orbit.one_period())
     claim = claim_output(folder, f"{orbit.case.name}-orbit")
-    path = write_run(result, claim, command=["python", "oscillator.Orbit.save"],
-                     extra={"kind": "orbit", "orbit": orbit_info(orbit)})  # fmt: skip
+    path = write_run(
+        result, claim, command=["python", "oscillator.Orbit.save"], extra={"kind": "orbit", "orbit": orbit_info(orbit)}
+    )
     finish_or_warn(lambda: finish_run(path), path)
     return path
 
 
-def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict) -> Orbit:
+def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict[str, Any]) -> Orbit:
     """The :class:`Orbit` a folder of :func:`save_orbit` holds (``info``: its ``run.json``),
     every field checked."""
     data = info.get("orbit")

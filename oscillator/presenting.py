@@ -1,0 +1,68 @@
+"""How the library's results show themselves: drawn, saved, rendered in Jupyter.
+
+:class:`~oscillator.Result`, :class:`~oscillator.Orbit` and :class:`~oscillator.Branch` live
+in the layers that compute them (hybrid/, orbits/), below the figures, the run folders and the
+reports that present them (report/).  Their ``plot``, ``save`` and ``_repr_html_`` methods call
+the :class:`Presenter` registered here, which the package registers when it is imported
+(``oscillator/__init__.py``, from :mod:`oscillator.views`): the computing layers import nothing
+above them, and the presentation can be swapped (a test registers its own).
+"""
+
+from __future__ import annotations
+
+#: ``typing.TYPE_CHECKING`` without importing ``typing``: ``import oscillator`` imports this
+#: module, and stays a few milliseconds.
+TYPE_CHECKING = False
+
+if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports nothing at run time
+    from pathlib import Path
+    from typing import Protocol
+
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from oscillator.hybrid.result import Result
+    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.shooting import Orbit
+else:
+    Protocol = object
+
+__all__ = ["Presenter", "presenter", "register"]
+
+
+class Presenter(Protocol):
+    """What the results' presentation methods call (a structural type: :class:`oscillator.views.Views`
+    is one)."""
+
+    def plot_result(self, result: Result, panel: str, window: tuple[float, float] | None) -> Figure: ...
+
+    def save_result(self, result: Result, folder: str | Path, *, formats: str, figures: bool, report: bool) -> Path: ...
+
+    def result_html(self, result: Result) -> str: ...
+
+    def save_orbit(self, orbit: Orbit, folder: str | Path) -> Path: ...
+
+    def orbit_html(self, orbit: Orbit) -> str: ...
+
+    def plot_branch(self, branch: Branch, coordinate: str, sweep_points: pd.DataFrame | None) -> Figure: ...
+
+    def plot_multipliers(self, branch: Branch) -> Figure: ...
+
+    def save_branch(self, branch: Branch, folder: str | Path, *, coordinate: str) -> Path: ...
+
+    def branch_html(self, branch: Branch) -> str: ...
+
+
+_registered: list[Presenter] = []
+
+
+def register(presenter: Presenter) -> None:
+    """Use ``presenter`` from now on."""
+    _registered[:] = [presenter]
+
+
+def presenter() -> Presenter:
+    """The registered presenter."""
+    if not _registered:  # only if oscillator/__init__.py was bypassed
+        raise RuntimeError("no presenter is registered: import the oscillator package")
+    return _registered[0]

@@ -1,0 +1,71 @@
+"""The package's :class:`~oscillator.presenting.Presenter`: the results drawn, saved and shown by
+report/ (each module imported when first used, so that ``import oscillator`` stays light)."""
+
+from __future__ import annotations
+
+#: ``typing.TYPE_CHECKING`` without importing ``typing`` (see :mod:`oscillator.presenting`).
+TYPE_CHECKING = False
+
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
+
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from oscillator.hybrid.result import Result
+    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.shooting import Orbit
+
+__all__ = ["Views"]
+
+
+class Views:
+    """Figures from :mod:`oscillator.report.figures` and :mod:`oscillator.report.orbits`, run
+    folders from :mod:`oscillator.report.runs`, rich displays from :mod:`oscillator.report.notebook`."""
+
+    def plot_result(self, result: Result, panel: str, window: tuple[float, float] | None) -> Figure:
+        from oscillator.report.figures import draw_panel
+
+        return draw_panel(
+            result.trajectory, result.events, result.case, panel, window=window, t_final=result.final_state[0]
+        )
+
+    def save_result(self, result: Result, folder: str | Path, *, formats: str, figures: bool, report: bool) -> Path:
+        from oscillator.report.runs import save_result
+
+        return save_result(result, folder, formats=formats, figures=figures, report=report)
+
+    def result_html(self, result: Result) -> str:
+        from oscillator.report.notebook import result_html
+
+        return result_html(result)
+
+    def save_orbit(self, orbit: Orbit, folder: str | Path) -> Path:
+        from oscillator.report.orbits import save_orbit
+
+        return save_orbit(orbit, folder)
+
+    def orbit_html(self, orbit: Orbit) -> str:
+        from oscillator.report.notebook import orbit_html
+
+        return orbit_html(orbit)
+
+    def plot_branch(self, branch: Branch, coordinate: str, sweep_points: pd.DataFrame | None) -> Figure:
+        from oscillator.report.orbits import branch_figure
+
+        return branch_figure(branch, coordinate, sweep_points)
+
+    def plot_multipliers(self, branch: Branch) -> Figure:
+        from oscillator.report.orbits import multipliers_figure
+
+        return multipliers_figure(branch)
+
+    def save_branch(self, branch: Branch, folder: str | Path, *, coordinate: str) -> Path:
+        from oscillator.report.orbits import save_branch
+
+        return save_branch(branch, folder, coordinate=coordinate)
+
+    def branch_html(self, branch: Branch) -> str:
+        from oscillator.report.notebook import branch_html
+
+        return branch_html(branch)
