@@ -326,12 +326,11 @@ def _event_records(case, t_end):
     """The run's events as the supervisor records them (event rows), for timing the table build."""
     from oscillator.engines import build_engine
     from oscillator.hybrid.record import RunRecord
-    from oscillator.hybrid.recording import recording
+    from oscillator.hybrid.recording import SaveAt, recording
     from oscillator.hybrid.supervisor import Supervisor
 
     p, options = case.parameters, case.options
-    policy = recording(grid=None, trajectory=False, max_rows=options.max_trajectory_rows, period=p.period,
-                       keep_events_from=-np.inf)  # fmt: skip
+    policy = recording(SaveAt(steps=False), max_rows=options.max_trajectory_rows, period=p.period)
     record = RunRecord()
     Supervisor(p, options, build_engine(None, p, options), policy).run(case.initial.t0, case.initial.y, t_end, record)
     return record.events.rows

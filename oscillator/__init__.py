@@ -41,6 +41,8 @@ _EXPORTS = {
     "Interrupted": "oscillator.errors",
     "Reason": "oscillator.errors",
     "Result": "oscillator.hybrid.result",
+    "SaveAt": "oscillator.hybrid.recording",
+    "Segment": "oscillator.hybrid.record",
     "Status": "oscillator.hybrid.result",
     "EnergyAudit": "oscillator.hybrid.result",
     "SolverStats": "oscillator.hybrid.result",
@@ -68,6 +70,8 @@ __all__ = [
     "Parameters",
     "Reason",
     "Result",
+    "SaveAt",
+    "Segment",
     "SimulationFailed",
     "SolverOptions",
     "SolverStats",
@@ -84,6 +88,8 @@ __all__ = [
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
+    from oscillator.hybrid.record import Segment
+    from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status
     from oscillator.hybrid.simulate import simulate
     from oscillator.io.cases import Case, ExpectedEvent, case_names, load_case, resolve_case

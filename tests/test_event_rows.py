@@ -18,7 +18,7 @@ from conftest import random_case
 from oscillator import simulate
 from oscillator.engines import build_engine
 from oscillator.hybrid.record import EventLog, RunRecord
-from oscillator.hybrid.recording import recording
+from oscillator.hybrid.recording import SaveAt, recording
 from oscillator.hybrid.supervisor import Supervisor
 from oscillator.io.cases import resolve_case
 from oscillator.io.tables import events_frame
@@ -61,7 +61,7 @@ def test_a_row_reads_back_as_the_event_its_table_row_shows():
     case = random_case(145)
     p, options = case.parameters, case.options
     record = RunRecord()
-    policy = recording(grid=None, trajectory=False, max_rows=10, period=p.period, keep_events_from=-np.inf)
+    policy = recording(SaveAt(steps=False), max_rows=10, period=p.period)
     engine = build_engine(None, p, options)
     try:
         Supervisor(p, options, engine, policy).run(case.initial.t0, case.initial.y, case.t_end, record)

@@ -16,8 +16,8 @@ from conftest import random_case
 from oscillator import InputError, Reason, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.phase_space import Mode
+from oscillator.model.saltation import elementary_switches
 from oscillator.orbits.continuation import continue_orbit
-from oscillator.orbits.saltation import elementary_switches
 from oscillator.orbits.shooting import find_orbit, period_map
 
 #: random_case seeds whose runs cross, rest, release, touch both stops and rest in contact
@@ -246,13 +246,10 @@ def test_going_up_in_q2_the_resting_orbit_ends_where_simulation_says():
 def test_the_cyclic_signature_is_each_mass_s_own_cycle_of_switches():
     """Neither where the section cuts the orbit nor how the masses' events interleave changes
     the signature; a mass's own cycle of switches does."""
-    import pandas as pd
-
-    from oscillator.orbits.shooting import PeriodMap, cyclic_signature
+    from oscillator.orbits.shooting import signature_of
 
     def signature(events):
-        table = pd.DataFrame(events, columns=["t", "mass", "kind"])
-        return str(cyclic_signature(PeriodMap(0.0, 2.0, np.zeros(4), np.zeros(4), [], table)))
+        return str(signature_of([(t, mass, EventKind(kind)) for t, mass, kind in events], 2.0))
 
     a = signature([(0.2, 1, "passable"), (0.7, 2, "sliding_onset"), (0.9, 2, "sliding_vanish"), (1.5, 2, "passable")])
     rotated = signature([(0.1, 2, "sliding_vanish"), (0.6, 2, "passable"), (1.3, 1, "passable"),

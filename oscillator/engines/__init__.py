@@ -91,6 +91,9 @@ class Engine(Protocol):
 
     #: The engine's name, recorded in ``Result.stats.engine``.
     name: str
+    #: The state's length: 8 (``x1, v1, x2, v2`` and the four works), or 24 with the derivative
+    #: of the flow carried along (the compiled CVODE engine, ``variational=True``).
+    size: int
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
         """Integrate ``mode``'s field from ``(t, y)`` from now on."""
@@ -158,9 +161,14 @@ def default_engine() -> str:
     return "cvode"
 
 
-def build_engine(choice: EngineChoice, params: Parameters, options: SolverOptions) -> Engine:
+def build_engine(
+    choice: EngineChoice, params: Parameters, options: SolverOptions, *, variational: bool = False
+) -> Engine:
     """An engine ready for :meth:`Engine.reset`: the default one (``None``), the one called
-    ``choice``, or ``choice(params, options)``."""
+    ``choice``, or ``choice(params, options)``.  With ``variational``, the compiled CVODE engine
+    integrating the derivative of the flow with the state (only it can)."""
+    if variational:
+        return _variational_engine(choice, params, options)
     if choice is None:
         choice = default_engine()
     factory = choice if callable(choice) else engine_factory(choice)
@@ -169,6 +177,20 @@ def build_engine(choice: EngineChoice, params: Parameters, options: SolverOption
     except _unavailable() as reason:
         raise InputError(f"engine {choice!r} is not available here: {reason}", field="engine") from reason
     return engine
+
+
+def _variational_engine(choice: EngineChoice, params: Parameters, options: SolverOptions) -> Engine:
+    if choice not in (None, "cvode"):
+        raise InputError(
+            f"the derivative of the flow (periodic orbits) needs the compiled CVODE engine, not {shown(choice)}",
+            field="engine",
+        )
+    from oscillator.engines.cvode_c import CCvodeEngine
+
+    try:
+        return CCvodeEngine(params, options, variational=True)
+    except _unavailable() as reason:
+        raise InputError(f"the compiled CVODE engine is not available here: {reason}", field="engine") from reason
 
 
 def _unavailable() -> type[Exception]:

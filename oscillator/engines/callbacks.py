@@ -23,11 +23,21 @@ from numba.extending import intrinsic
 from numba.np.numpy_support import carray
 
 from oscillator.compiled import cfunc
-from oscillator.model.kernels import derivative
+from oscillator.model.kernels import derivative, variational_derivative
 from oscillator.model.parameters import Parameters
 from oscillator.model.roots import NUM_ROOTS, root_kernel
+from oscillator.model.types import VARIATIONAL
 
-__all__ = ["COEFFICIENTS", "LAYOUT", "USER_DATA_SIZE", "data_offset", "rhs", "roots"]
+__all__ = [
+    "COEFFICIENTS",
+    "LAYOUT",
+    "USER_DATA_SIZE",
+    "VARIATIONAL_SIZE",
+    "data_offset",
+    "rhs",
+    "roots",
+    "variational_rhs",
+]
 
 #: Positions in the user-data vector.
 LAYOUT = {"t_ref": 0, "s1": 1, "s2": 2, "left": 3, "right": 4, "step": 5, "near": 6}
@@ -37,6 +47,8 @@ COEFFICIENTS = len(LAYOUT)
 USER_DATA_SIZE = COEFFICIENTS + len(Parameters.names())
 #: The state's length: x1, v1, x2, v2 and the four work quadratures.
 SIZE = 8
+#: With the derivative of the flow carried along: and ``Phi``'s 16 entries (:mod:`oscillator.model.kernels`).
+VARIATIONAL_SIZE = VARIATIONAL + 16
 #: Byte offset of ``data`` in the serial vector's content: ``sunindextype`` (int32) and
 #: ``sunbooleantype`` (int) before it.
 DATA_OFFSET = 8
@@ -72,6 +84,16 @@ def rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cov
     state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
     rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
     derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
+    return 0
+
+
+@cfunc(_SIGNATURE, cache=True)
+def variational_rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cover - compiled
+    """``CVRhsFn`` of the state, the works and the derivative of the flow (24 equations)."""
+    d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
+    state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
+    rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
+    variational_derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
     return 0
 
 

@@ -94,8 +94,11 @@ class CCvodeEngine:
 
     name = "cvode"
 
-    def __init__(self, params: Parameters, options: SolverOptions) -> None:
-        self._objects = CvodeObjects()
+    def __init__(self, params: Parameters, options: SolverOptions, *, variational: bool = False) -> None:
+        #: The state's length: 8, or 24 with the derivative of the flow (:mod:`oscillator.model.kernels`).
+        self.size = cb.VARIATIONAL_SIZE if variational else cb.SIZE
+        self._rhs = cb.variational_rhs if variational else cb.rhs
+        self._objects = CvodeObjects(self.size)
         self._api = self._objects.api
         self._messages: list[str] = []
         self._handler = ERROR_HANDLER(self._error)
@@ -103,8 +106,8 @@ class CCvodeEngine:
         self._data[cb.COEFFICIENTS :] = coefficients(params)
         self._data[cb.LAYOUT["step"]] = options.max_step_fraction * params.period
         self._data[cb.LAYOUT["near"]] = options.grazing_displacement_tolerance
-        self._y = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.y), (cb.SIZE,))
-        self._out = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.out), (cb.SIZE,))
+        self._y = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.y), (self.size,))
+        self._out = np.ctypeslib.as_array(self._api.N_VGetArrayPointer(self._objects.out), (self.size,))
         self._found = (ctypes.c_int * NUM_ROOTS)()
         self._directions: dict[Mode, Any] = {}  # mode -> its root directions as a C array
         self._tret = ctypes.c_double()
@@ -112,14 +115,14 @@ class CCvodeEngine:
         self._finalizer = weakref.finalize(self, self._objects.free)
         self._setup(options)
         self._t, self._t_ref, self._t_stop, self._after_root = 0.0, 0.0, math.nan, False
-        self._out_at_root: np.ndarray = np.zeros(cb.SIZE)
+        self._out_at_root: np.ndarray = np.zeros(self.size)
         self._done_evaluations, self._restarts = 0, 0
 
     def _setup(self, options: SolverOptions) -> None:
         api, memory = self._api, self._objects.memory
         api.SUNContext_ClearErrHandlers(self._objects.context)
         api.SUNContext_PushErrHandler(self._objects.context, self._handler, None)
-        check(api.CVodeInit(memory, ctypes.c_void_p(cb.rhs.address), 0.0, self._objects.y), "CVodeInit")
+        check(api.CVodeInit(memory, ctypes.c_void_p(self._rhs.address), 0.0, self._objects.y), "CVodeInit")
         check(api.CVodeSStolerances(memory, options.rtol, options.atol), "CVodeSStolerances")
         check(api.CVodeSetLinearSolver(memory, self._objects.solver, self._objects.matrix), "CVodeSetLinearSolver")
         check(api.CVodeSetUserData(memory, self._data.ctypes.data), "CVodeSetUserData")

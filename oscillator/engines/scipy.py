@@ -78,6 +78,7 @@ class ScipyEngine:
     """
 
     name = "scipy"
+    size = 8
 
     def __init__(
         self,

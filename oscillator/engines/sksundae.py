@@ -45,6 +45,7 @@ class SksundaeEngine:
     """CVODE (Adams, dense Newton) with its rootfinding, through scikit-sundae's Python API."""
 
     name = "sksundae"
+    size = 8
 
     def __init__(self, params: Parameters, options: SolverOptions) -> None:
         self._params = params

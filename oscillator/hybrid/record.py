@@ -9,7 +9,7 @@ import numpy as np
 from oscillator.model.events import WIDTH
 from oscillator.model.phase_space import Mode
 
-__all__ = ["EventLog", "RunRecord"]
+__all__ = ["EventLog", "RunRecord", "Segment"]
 
 
 class EventLog:
@@ -53,6 +53,24 @@ class EventLog:
         self._size += count
 
 
+@dataclass(frozen=True)
+class Segment:
+    """One smooth piece of a run: ``mode``'s flow from ``(t0, y0)`` to ``(t1, y1)``.
+
+    ``y1`` is the state the flow reached, before the switch that ended the piece projected it
+    (the next segment's ``y0``); ``rows`` are the event rows written in ``(t0, t1]``, the
+    switch's last (the first segment's also those written at the start; the last segment's
+    ``t1`` is the run's end, with no switch).  States are ``(x1, v1, x2, v2)``.
+    """
+
+    mode: Mode
+    t0: float
+    y0: np.ndarray
+    t1: float
+    y1: np.ndarray
+    rows: np.ndarray
+
+
 @dataclass
 class RunRecord:
     """The supervisor's record of a run: events, trajectory rows, the last point and the counts."""
@@ -64,6 +82,8 @@ class RunRecord:
     #: ``(t, y, mode)`` of the last point reached, replaced whole (so a Ctrl-C cannot split it).
     last: tuple[float, np.ndarray | None, Mode | None] = (float("nan"), None, None)
     mode_initial: Mode | None = None
+    #: The run's smooth pieces, when they are kept (``SaveAt(segments=True)``).
+    segments: list[Segment] = field(default_factory=list)
     returns: int = 0
     rhs_evaluations: int = 0
     restarts: int = 0

@@ -1,5 +1,5 @@
-"""What a run keeps: the trajectory at the solver's steps, on a grid, or not at all; and the events
-from some time on.
+"""What a run keeps, said once (:class:`SaveAt`): the trajectory at the solver's steps, on a grid,
+or not at all; the events from some time on; the smooth segments; the derivative of the flow.
 
 A :class:`Recording` tells the supervisor where to ask the engine to go next and keeps the rows;
 the supervisor itself knows nothing of the three ways.
@@ -17,10 +17,39 @@ from oscillator.errors import Reason, SimulationFailed
 from oscillator.hybrid.record import RunRecord
 from oscillator.model.phase_space import Mode
 
-__all__ = ["AtSteps", "NoTrajectory", "OnGrid", "Recording", "recording"]
+__all__ = ["AtSteps", "NoTrajectory", "OnGrid", "Recording", "SaveAt", "recording"]
 
 #: Without a trajectory to record, the engine runs this many forcing periods between returns.
 CHUNK_PERIODS = 4
+
+
+@dataclass(frozen=True, eq=False)
+class SaveAt:
+    """What a run keeps (diffrax's ``SaveAt`` is the model).
+
+    Attributes
+    ----------
+    steps : bool
+        The trajectory at every step of the solver (and on both sides of every switch).
+    ts : ndarray or None
+        The trajectory on this grid instead (times within the run); ``steps`` is then ignored.
+        With neither, no trajectory.
+    events_from : float
+        Keep the events at or after this time (all are counted): memory stays flat in a long run.
+    segments : bool
+        Keep each smooth piece of the run: its mode, its start and end (time and state) and the
+        event rows that ended it (``Result.segments``).
+    derivative : bool
+        Integrate the derivative of the flow with the state, through every switch (variational
+        equations and saltation matrices): ``Result.derivative`` is ``d y(t_end) / d y(t0)``, the
+        monodromy matrix of a stroboscopic map.  Needs the compiled CVODE engine.
+    """
+
+    steps: bool = True
+    ts: np.ndarray | None = None
+    events_from: float = -math.inf
+    segments: bool = False
+    derivative: bool = False
 
 
 @dataclass
@@ -137,13 +166,12 @@ class OnGrid(Recording):
             self._next += 1
 
 
-def recording(
-    *, grid: np.ndarray | None, trajectory: bool, max_rows: int, period: float, keep_events_from: float
-) -> Recording:
-    """The policy for a run: with ``trajectory``, on ``grid`` if given, else at the steps; else none."""
+def recording(save: SaveAt, *, max_rows: int, period: float) -> Recording:
+    """The trajectory's policy for a run: on ``save.ts`` if given, else at the steps if
+    ``save.steps``, else none."""
     chunk = CHUNK_PERIODS * period
-    if not trajectory:
-        return NoTrajectory(max_rows, chunk, keep_events_from)
-    if grid is not None:
-        return OnGrid(max_rows, chunk, keep_events_from, grid=np.asarray(grid, dtype=float))
-    return AtSteps(max_rows, chunk, keep_events_from)
+    if save.ts is not None:
+        return OnGrid(max_rows, chunk, save.events_from, grid=np.asarray(save.ts, dtype=float))
+    if save.steps:
+        return AtSteps(max_rows, chunk, save.events_from)
+    return NoTrajectory(max_rows, chunk, save.events_from)

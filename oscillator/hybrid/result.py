@@ -10,10 +10,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from oscillator.errors import Reason
-from oscillator.hybrid.record import RunRecord
+from oscillator.hybrid.record import RunRecord, Segment
 from oscillator.io.cases import Case
 from oscillator.model.energy import POWER_NAMES, mechanical_energy
 from oscillator.model.phase_space import Mode
+from oscillator.model.types import VARIATIONAL
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:
@@ -111,6 +112,11 @@ class _Records:
         return self._trajectory_frame
 
 
+def _derivative(y: np.ndarray) -> np.ndarray | None:
+    """The derivative of the flow a run carried in its state (entries 8 to 24), or None."""
+    return y[VARIATIONAL : VARIATIONAL + 16].reshape(4, 4).copy() if len(y) > VARIATIONAL else None
+
+
 def records_of(events: pd.DataFrame, trajectory: pd.DataFrame) -> _Records:
     """Records holding tables already built (a run folder read back)."""
     records = _Records(np.empty((0, 0)), [])
@@ -148,6 +154,12 @@ class Result:
         Why a partial result stopped (the error's message); empty when complete.
     reason : Reason or None
         Why, for a program to read (:class:`~oscillator.errors.Reason`); None when complete.
+    segments : tuple of Segment
+        The run's smooth pieces, when asked for (``SaveAt(segments=True)``), else empty.
+    derivative : ndarray or None
+        ``d y(t_final) / d y(t0)`` (4 x 4) through every switch, when asked for
+        (``SaveAt(derivative=True)``): over one forcing period from a point of a periodic
+        orbit, its monodromy matrix.
     """
 
     case: Case
@@ -157,6 +169,8 @@ class Result:
     status: Status = Status.COMPLETE
     message: str = ""
     reason: Reason | None = None
+    segments: tuple[Segment, ...] = field(default=(), repr=False, compare=False)
+    derivative: np.ndarray | None = field(default=None, repr=False, compare=False)
     _records: _Records = field(default_factory=lambda: _Records(np.empty((0, 0)), []), repr=False, compare=False)
 
     @property
@@ -227,5 +241,7 @@ class Result:
             status,
             message,
             reason,
+            tuple(record.segments),
+            _derivative(record.y_final),
             _Records(record.events.rows.copy(), record.rows),
         )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -12,7 +13,7 @@ from oscillator.engines import Engine, EngineChoice, build_engine
 from oscillator.errors import InputError, Interrupted, Reason, SimulationFailed
 from oscillator.hybrid.guards import start_problem
 from oscillator.hybrid.record import RunRecord
-from oscillator.hybrid.recording import Recording, recording
+from oscillator.hybrid.recording import SaveAt, recording
 from oscillator.hybrid.result import Result, Status
 from oscillator.hybrid.supervisor import CallbackRaised, Supervisor
 from oscillator.io.cases import Case, resolve_case
@@ -90,6 +91,7 @@ def simulate(
     progress: Callable[[float], None] | None = None,
     keep_events_from: float | None = None,
     engine: EngineChoice = None,
+    save: SaveAt | None = None,
     **overrides: float,
 ) -> Result:
     """Simulate a case from its start to ``t_end``.
@@ -117,6 +119,10 @@ def simulate(
         default where SUNDIALS' libraries load), ``"sksundae"`` (CVODE through scikit-sundae's
         Python API, the fallback) or ``"scipy"``; or a callable ``engine(params, options)`` that
         returns an :class:`~oscillator.engines.Engine`.
+    save : SaveAt, optional
+        What the run keeps, said at once (:class:`~oscillator.SaveAt`: the trajectory at the
+        steps, on a grid or none; the events from a time on; the segments; the derivative of
+        the flow), in place of ``t_eval``, ``record_trajectory`` and ``keep_events_from``.
     **overrides
         Any parameter (``Omega=1.7``), initial value (``x1=3.1``) or solver option
         (``rtol=1e-12``, ``grazing_velocity_tolerance=0.05``).
@@ -146,6 +152,12 @@ def simulate(
     """
     if keep_events_from is not None:
         _time(keep_events_from, "keep_events_from")
+    if save is not None and (t_eval is not None or record_trajectory is not True or keep_events_from is not None):
+        raise InputError(
+            "give what the run keeps either as save=SaveAt(...) or as t_eval, record_trajectory and "
+            "keep_events_from, not both",
+            field="save",
+        )
     case = resolve_case(case, t_end=t_end, keep_events_from=keep_events_from, **overrides)
     if not isinstance(record_trajectory, (bool, np.bool_)):
         raise InputError(
@@ -153,24 +165,37 @@ def simulate(
         )
     if progress is not None and not callable(progress):
         raise InputError(f"progress must be a function of the time (or None), got {shown(progress)}", field="progress")
-    grid = None if t_eval is None else _grid(t_eval, case)
     keep_from = -math.inf if case.keep_events_from is None else case.keep_events_from
+    if save is None:
+        save = SaveAt(
+            steps=bool(record_trajectory), ts=None if t_eval is None else _grid(t_eval, case), events_from=keep_from
+        )
+    save = _checked(save, case, keep_from)
     admit(case)
-    p, options = case.parameters, case.options
-    integrator = build_engine(engine, p, options)
-    policy = recording(
-        grid=grid,
-        trajectory=bool(record_trajectory),
-        max_rows=options.max_trajectory_rows,
-        period=p.period,
-        keep_events_from=keep_from,
-    )
-    return _run(case, integrator, policy, progress)
+    integrator = build_engine(engine, case.parameters, case.options, variational=save.derivative)
+    return _run(case, integrator, save, progress)
 
 
-def _run(case: Case, integrator: Engine, policy: Recording, progress: Callable[[float], None] | None) -> Result:
+def _checked(save: object, case: Case, keep_from: float) -> SaveAt:
+    """``save`` with its grid checked against the case (and the case's ``keep_events_from`` where
+    it says nothing)."""
+    if not isinstance(save, SaveAt):
+        raise InputError(f"save must be an oscillator.SaveAt, got {shown(save)}", field="save")
+    for name in ("steps", "segments", "derivative"):
+        if not isinstance(getattr(save, name), (bool, np.bool_)):
+            raise InputError(f"save.{name} must be True or False, got {shown(getattr(save, name))}", field=name)
+    events_from = _time(save.events_from, "events_from")
+    grid = None if save.ts is None else _grid(save.ts, case)
+    return dataclasses.replace(save, ts=grid, events_from=keep_from if events_from == -math.inf else events_from)
+
+
+def _run(case: Case, integrator: Engine, save: SaveAt, progress: Callable[[float], None] | None) -> Result:
     """Run the supervisor; the result, or the failure with its partial result."""
-    supervisor = Supervisor(case.parameters, case.options, integrator, policy, progress=progress)
+    p, options = case.parameters, case.options
+    policy = recording(save, max_rows=options.max_trajectory_rows, period=p.period)
+    supervisor = Supervisor(
+        p, options, integrator, policy, progress=progress, segments=save.segments, derivative=save.derivative
+    )
     record = RunRecord()
     try:
         supervisor.run(case.initial.t0, case.initial.y, case.t_end, record)

@@ -10,6 +10,11 @@ guards' (:mod:`oscillator.hybrid.guards`).
 
 The state carries four quadratures besides ``(x1, v1, x2, v2)``: the work of the forcing and of
 the feedback and the losses in the dampers and to friction (:mod:`oscillator.model.energy`).
+Asked for the derivative of the flow, the supervisor carries ``Phi = d y(t) / d y(t0)`` too: the
+engine integrates its variational equations with the state (:mod:`oscillator.model.kernels`),
+and at every switch the supervisor resolves, ``Phi`` passes the switch's saltation matrix
+(:func:`oscillator.model.saltation.carried_through`).  Asked for the segments, it keeps each
+smooth piece of the run (:class:`oscillator.hybrid.record.Segment`).
 """
 
 from __future__ import annotations
@@ -30,11 +35,14 @@ from oscillator.hybrid.guards import (
     solver_failure,
     strict_arithmetic,
 )
-from oscillator.hybrid.record import RunRecord
+from oscillator.hybrid.record import RunRecord, Segment
 from oscillator.hybrid.recording import Recording
+from oscillator.model.events import WIDTH
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
+from oscillator.model.saltation import carried_through, rest_projection
 from oscillator.model.switching import MAX_ROWS, initial_mode, resolve_rows
+from oscillator.model.types import VARIATIONAL
 
 __all__ = ["CallbackRaised", "Supervisor"]
 
@@ -60,6 +68,11 @@ class Supervisor:
         What to keep of the trajectory and of the events.
     progress : callable, keyword-only
         Called with the time after every return of the engine.
+    segments : bool, keyword-only
+        Keep each smooth piece of the run in ``record.segments``.
+    derivative : bool, keyword-only
+        Carry the derivative of the flow (the engine must integrate 24 equations); the run's
+        last point then holds it (``y[8:24]``, row by row).
     """
 
     def __init__(
@@ -70,12 +83,21 @@ class Supervisor:
         recording: Recording,
         *,
         progress: Callable[[float], None] | None = None,
+        segments: bool = False,
+        derivative: bool = False,
     ) -> None:
+        if derivative and engine.size < VARIATIONAL + 16:
+            raise ValueError(f"the derivative of the flow needs an engine of 24 equations, not {engine.size}")
         self.params = params
         self.options = options
         self.engine = engine
         self.recording = recording
         self.progress = progress
+        self.segments = segments
+        self.derivative = derivative
+        #: The segment under way: its start and the event rows written since (when segments are kept).
+        self._opened: tuple[float, np.ndarray, Mode] | None = None
+        self._rows: list[np.ndarray] = []
         self._events = EventGuard(options)
         self._caller_errstate = np.geterr()
 
@@ -107,14 +129,22 @@ class Supervisor:
         mode = record.mode_initial = start.mode
         self.recording.events(record, t0, record.events.stage(start.rows))
         self._events.count(start.rows, record.event_count, t0)
-        y = np.zeros(8)
+        self._rows = [start.rows.copy()]
+        y = np.zeros(self.engine.size)
         y[:4] = start.y
+        if self.derivative:
+            y[VARIATIONAL:] = rest_projection(mode).ravel()
         t = t0
         self.recording.start(record, t0, y, mode, t_end)
         record.reached(t, y.copy(), mode)
         while t < t_end:
             self.engine.reset(mode, t, y)
+            self._opened = (t, y[:4].copy(), mode)
             t, y, mode = self._through_mode(record, mode, t, t_end)
+        if self.segments:  # the last piece ends with the run (of length zero after a switch at the end)
+            if self._opened is None:
+                self._opened = (t, y[:4].copy(), mode)
+            self._close(record, t, y)
 
     def _through_mode(self, record: RunRecord, mode: Mode, t: float, t_end: float) -> tuple[float, np.ndarray, Mode]:
         """Advance in ``mode`` until it switches or the run ends; the point and mode reached."""
@@ -135,6 +165,7 @@ class Supervisor:
                 record.root_returns += 1
                 after, state, events = self._resolve_root(record, step, mode)
                 if after != mode:
+                    self._switching(record, t, y, state, mode, after)
                     y[:4] = state
                     mode = after
                     record.reached(t, y, mode)
@@ -143,6 +174,32 @@ class Supervisor:
                 stalls.count(t, events, mode)
             if t >= t_end:
                 return t, y, mode
+
+    def _switching(
+        self, record: RunRecord, t: float, y: np.ndarray, state: np.ndarray, mode: Mode, after: Mode
+    ) -> None:
+        """At a switch, before the state is projected: the derivative of the flow through it
+        (in ``y``), and the segment that ends."""
+        if self.derivative:
+            phi = y[VARIATIONAL:].reshape(4, 4)
+            try:
+                y[VARIATIONAL:] = carried_through(phi, t, y[:4], state, self.params, mode, after).ravel()
+            except ZeroDivisionError as exc:
+                raise SimulationFailed(
+                    f"no derivative of the flow through the switch at t = {t:.10g} s: {exc} (a grazing contact)",
+                    reason=Reason.NO_MONODROMY,
+                    field="orbit",
+                ) from exc
+        if self.segments:
+            self._close(record, t, y)
+
+    def _close(self, record: RunRecord, t: float, y: np.ndarray) -> None:
+        """The segment under way ends at ``(t, y)`` (the flow's state, before any projection)."""
+        assert self._opened is not None
+        t0, y0, mode = self._opened
+        rows = np.concatenate(self._rows) if self._rows else np.empty((0, WIDTH))
+        record.segments.append(Segment(mode, t0, y0, t, y[:4].copy(), rows))
+        self._opened, self._rows = None, []
 
     def _advance(self, target: float, t_end: float, one_step: bool, record: RunRecord, mode: Mode) -> Step:
         try:
@@ -173,6 +230,8 @@ class Supervisor:
         log = record.events
         after, count = resolve_rows(t, state, self.params, mode, step.fired, self.options, log.free(MAX_ROWS), len(log))
         new = log.staged(count)
+        if self.segments and count:
+            self._rows.append(new.copy())
         self.recording.events(record, t, count)
         self._events.count(new, record.event_count, t)
         return after, state, count

@@ -110,19 +110,8 @@ def displacement_values(
 
 def _values(t: float, y: StateLike, p: Parameters, mode: Mode) -> Vector:
     values = np.empty(16)
-    g_values(
-        float(t),
-        float(y[0]),
-        float(y[1]),
-        float(y[2]),
-        float(y[3]),
-        mode.left,
-        mode.right,
-        mode.sign(1),
-        mode.sign(2),
-        coefficients(p),
-        values,
-    )
+    x1, v1, x2, v2 = (float(v) for v in y[:4])
+    g_values(float(t), x1, v1, x2, v2, mode.left, mode.right, mode.sign(1), mode.sign(2), coefficients(p), values)
     return values
 
 
@@ -158,17 +147,7 @@ def displacement_g(t: float, y: StateLike, p: Parameters, mode: Mode, boundary: 
     """
     if boundary not in ("right", "left"):
         raise ValueError(f"boundary must be 'right' or 'left', got {boundary!r}")
-    g0, g1 = displacement_values(
-        float(t),
-        float(y[0]),
-        float(y[1]),
-        float(y[2]),
-        float(y[3]),
-        mode.left,
-        mode.right,
-        mode.sign(1),
-        mode.sign(2),
-        coefficients(p),
-        boundary == "right",
-    )
+    x1, v1, x2, v2 = (float(v) for v in y[:4])
+    s1, s2, c = mode.sign(1), mode.sign(2), coefficients(p)
+    g0, g1 = displacement_values(float(t), x1, v1, x2, v2, mode.left, mode.right, s1, s2, c, boundary == "right")
     return float(g0), float(g1)

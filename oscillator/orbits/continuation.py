@@ -117,6 +117,8 @@ class _Point:
     image: PeriodMap
     tangent: np.ndarray  # in (y, lam / sigma)
     iterations: int
+    #: ``sigma dP/dlam`` here, where it was computed (the corrector's next steps reuse it).
+    column: np.ndarray | None = None
 
     @cached_property
     def multipliers(self) -> np.ndarray:
@@ -276,20 +278,27 @@ class _Continuer:
     def first(self, guess: np.ndarray, lam: float, direction: float) -> _Point:
         """The orbit at ``lam`` from ``guess``, with its tangent pointing ``direction`` in ``lam``."""
         y, image, _ = newton(self.at(lam), self.t0, guess, self.period, tol=self.tol, max_iterations=20)
-        return _Point(y, lam, image, self.tangent(self.jacobian(y, lam, image), None, direction), 0)
+        jacobian = self.jacobian(y, lam, image)
+        return _Point(y, lam, image, self.tangent(jacobian, None, direction), 0, jacobian[:, 4])
 
     def residual(self, y: np.ndarray, lam: float) -> tuple[np.ndarray, PeriodMap]:
         """``P(y) - y`` (zero in the displacement of a mass at rest all period) and the map."""
         image = period_map(self.at(lam), self.t0, y, self.period)
         return fixed_point_system(image)[1], image
 
-    def jacobian(self, y: np.ndarray, lam: float, image: PeriodMap) -> np.ndarray:
+    def jacobian(self, y: np.ndarray, lam: float, image: PeriodMap, column: np.ndarray | None = None) -> np.ndarray:
         """``[M - I, sigma dP/dlam]`` (4 x 5); a mass at rest all period keeps its displacement:
-        its row is ``[e_(x_i), 0]`` (:func:`~oscillator.orbits.shooting.fixed_point_system`)."""
-        h = 1e-6 * max(1.0, abs(lam))
-        plus = period_map(self.at(lam + h), self.t0, y, self.period, derivative=False).end
-        minus = period_map(self.at(lam - h), self.t0, y, self.period, derivative=False).end
-        column = self.sigma * (plus - minus) / (2 * h)
+        its row is ``[e_(x_i), 0]`` (:func:`~oscillator.orbits.shooting.fixed_point_system`).
+
+        ``dP/dlam`` is a central difference (two runs without the derivative), unless ``column``
+        is given (the corrector's steps between two points reuse the last point's: a chord
+        method in ``lam``, exact in ``y``)."""
+        if column is None:
+            h = 1e-6 * max(1.0, abs(lam))
+            plus = period_map(self.at(lam + h), self.t0, y, self.period, derivative=False).end
+            minus = period_map(self.at(lam - h), self.t0, y, self.period, derivative=False).end
+            column = self.sigma * (plus - minus) / (2 * h)
+        column = column.copy()
         column[pinned_rows(image.settled)] = 0.0
         return np.column_stack([fixed_point_system(image)[0], column])
 
@@ -300,20 +309,30 @@ class _Continuer:
         return -t if reference < 0 else t
 
     def correct(
-        self, guess: np.ndarray, tangent: np.ndarray, anchor: np.ndarray, max_iterations: int = 8
+        self,
+        guess: np.ndarray,
+        tangent: np.ndarray,
+        anchor: np.ndarray,
+        max_iterations: int = 8,
+        column: np.ndarray | None = None,
     ) -> _Point | Skipped:
-        """Newton on ``F = 0`` and ``tangent . (u - anchor) = 0`` from ``guess``; why not, if it fails."""
+        """Newton on ``F = 0`` and ``tangent . (u - anchor) = 0`` from ``guess``; why not, if it fails.
+
+        Each step takes ``M`` where it stands (the run that gives ``F`` carries it) and
+        ``dP/dlam`` from ``column`` when given (the last point's); the point found gets its own,
+        computed there, and its tangent from it."""
         u = guess.copy()
         for iteration in range(max_iterations + 1):
             y, lam = u[:4], u[4] * self.sigma
             try:
                 residual, image = self.residual(y, lam)
-                jacobian = self.jacobian(y, lam, image)
+                converged = np.max(np.abs(residual)) <= self.tol * self.scale
+                constraint = float(tangent @ (u - anchor))
+                jacobian = self.jacobian(y, lam, image, None if converged else column)
             except OscillatorError as error:
                 return _skipped(lam, error)
-            constraint = float(tangent @ (u - anchor))
-            if np.max(np.abs(residual)) <= self.tol * self.scale and abs(constraint) <= 1e-9:
-                return _Point(y.copy(), lam, image, self.tangent(jacobian, tangent, 1.0), iteration)
+            if converged and abs(constraint) <= 1e-9:
+                return _Point(y.copy(), lam, image, self.tangent(jacobian, tangent, 1.0), iteration, jacobian[:, 4])
             if iteration == max_iterations:
                 break
             try:
@@ -331,7 +350,7 @@ class _Continuer:
         """The point at arclength ``s`` from ``a`` along its tangent (corrected)."""
         u_a = np.append(a.y, a.lam / self.sigma)
         anchor = u_a + s * a.tangent
-        return self.correct(anchor, a.tangent, anchor)
+        return self.correct(anchor, a.tangent, anchor, column=a.column)
 
 
 def _kind_of_change(before: Signature, after: Signature, increasing: bool) -> Bifurcation:

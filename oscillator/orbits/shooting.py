@@ -1,9 +1,10 @@
 """Periodic orbits by shooting: the stroboscopic map, its derivative through every switch, Newton.
 
-The stroboscopic map ``P: y(t0) -> y(t0 + N T)`` (``T = 2 pi / Omega``) is computed by the same
-supervisor and engine as :func:`oscillator.simulate`; its derivative, the monodromy matrix, is the
-product of each mode's flow derivative (:class:`~oscillator.orbits.variational.ModeFlow`) and of
-the saltation matrix of each switch (:func:`~oscillator.orbits.saltation.saltation_matrix`),
+The stroboscopic map ``P: y(t0) -> y(t0 + N T)`` (``T = 2 pi / Omega``) is one run of
+:func:`oscillator.simulate` that keeps its segments (``SaveAt(segments=True)``); its derivative,
+the monodromy matrix, is carried by the same run (``SaveAt(derivative=True)``): the engine
+integrates each mode's variational equations with the state, and the supervisor applies the
+saltation matrix of each switch it resolves (:func:`oscillator.model.saltation.carried_through`),
 
     M = Phi_n S_n ... Phi_1 S_1 Phi_0.
 
@@ -17,27 +18,23 @@ import dataclasses
 import itertools
 import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from oscillator.engines import build_engine
 from oscillator.errors import InputError, Reason, SimulationFailed
-from oscillator.hybrid.record import RunRecord
-from oscillator.hybrid.recording import NoTrajectory
+from oscillator.hybrid.record import Segment
+from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
-from oscillator.hybrid.simulate import admit, simulate
-from oscillator.hybrid.supervisor import Supervisor
+from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.events import EventKind
+from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, real_argument
 from oscillator.model.phase_space import Mode
-from oscillator.orbits.saltation import rest_projection, saltation_matrix
-from oscillator.orbits.variational import ModeFlow
 from oscillator.presenting import presenter
 from oscillator.text import shown
 
@@ -53,6 +50,7 @@ __all__ = [
     "find_orbit",
     "multipliers_of",
     "period_map",
+    "signature_of",
     "signature_text",
 ]
 
@@ -68,16 +66,6 @@ ORBIT_RTOL = 1e-12
 STATE = ("x1", "v1", "x2", "v2")
 
 
-class _Switches(NoTrajectory):
-    """A recording that keeps the start and the state and mode after every switch, nothing else."""
-
-    def start(self, record: RunRecord, t0: float, y: np.ndarray, mode: Mode, t_end: float) -> None:
-        self.row(record, t0, y, mode)
-
-    def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
-        self.row(record, t, y, mode)
-
-
 @dataclass(frozen=True)
 class PeriodMap:
     """``P(y)`` and what it passed: one evaluation of the stroboscopic map.
@@ -88,32 +76,54 @@ class PeriodMap:
         Start and end of the map (``t1 = t0 + N T``).
     start, end : ndarray
         ``y(t0)`` and ``y(t1)`` = ``P(y(t0))``.
-    switches : list of (t, y, Mode)
-        The start and every switch: the time, the state after it, the mode after it.
-    events : DataFrame
-        The event table over ``[t0, t1]`` (as ``Result.events``).
+    segments : tuple of Segment
+        The run's smooth pieces, in order (:class:`oscillator.hybrid.record.Segment`).
+    result : Result
+        The run itself (its event table is built when :attr:`events` is first read).
     monodromy : ndarray or None
-        ``dP/dy`` (4 x 4), when asked for.
+        ``dP/dy`` (4 x 4), when asked for: the derivative of the flow the run carried through
+        every switch (``SaveAt(derivative=True)``).
     """
 
     t0: float
     t1: float
     start: np.ndarray
     end: np.ndarray
-    switches: list[tuple[float, np.ndarray, Mode]]
-    events: pd.DataFrame
+    segments: tuple[Segment, ...]
+    result: Result = field(repr=False)
     monodromy: np.ndarray | None = None
+
+    @property
+    def switches(self) -> list[tuple[float, np.ndarray, Mode]]:
+        """The start and every switch: the time, the state after it, the mode after it."""
+        return [(segment.t0, segment.y0, segment.mode) for segment in self.segments]
+
+    @property
+    def events(self) -> pd.DataFrame:
+        """The event table over ``[t0, t1]`` (as ``Result.events``)."""
+        return self.result.events
+
+    @property
+    def kinds(self) -> list[tuple[float, int, EventKind]]:
+        """``(t, mass, kind)`` of every event, in order, read from the segments' event rows
+        (no table is built)."""
+        rows = [segment.rows for segment in self.segments if len(segment.rows)]
+        if not rows:
+            return []
+        table = np.concatenate(rows)
+        columns = table[:, [COLUMN["t"], COLUMN["mass"], COLUMN["kind"]]]
+        return [(float(t), int(mass), KINDS[int(kind)]) for t, mass, kind in columns]
 
     @property
     def resting(self) -> tuple[int, ...]:
         """The masses at rest over the whole map (in every mode it passed)."""
-        return tuple(mass for mass in (1, 2) if all(mode.sign(mass) == 0 for _, _, mode in self.switches))
+        return tuple(mass for mass in (1, 2) if all(segment.mode.sign(mass) == 0 for segment in self.segments))
 
     @property
     def settled(self) -> tuple[int, ...]:
         """The masses at rest at the end of the map that never left rest during it: at rest all
         along, or moving at first and then stuck for good."""
-        modes = [mode for _, _, mode in self.switches]
+        modes = [segment.mode for segment in self.segments]
         return tuple(
             mass
             for mass in (1, 2)
@@ -165,53 +175,21 @@ def solve_step(matrix: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
 def period_map(case: Case, t0: float, y: np.ndarray, periods: int = 1, *, derivative: bool = True) -> PeriodMap:
     """``P(y)`` over ``periods`` forcing periods from ``t0``, and its derivative if asked.
 
+    One :func:`~oscillator.simulate` run that keeps no trajectory, only its segments, and with
+    ``derivative`` carries the derivative of the flow through every switch (the monodromy).
+
     Raises
     ------
     SimulationFailed
         The simulation failed, or the orbit grazes a boundary (the map has no derivative there).
     """
-    p, options = case.parameters, case.options
-    t1 = t0 + periods * p.period
+    t1 = t0 + periods * case.parameters.period
     start = np.array(y[:4], dtype=float)
     initial = dataclasses.replace(case.initial, t0=t0, **dict(zip(STATE, start, strict=True)))
-    run_case = dataclasses.replace(case, initial=initial, t_end=t1, expected=())
-    admit(run_case)
-    engine = build_engine(None, p, options)
-    policy = _Switches(options.max_trajectory_rows, 4 * p.period)
-    record = RunRecord()
-    try:
-        Supervisor(p, options, engine, policy).run(t0, tuple(start), t1, record)
-    finally:
-        engine.close()
-    result = Result.from_record(run_case, record, engine=engine.name)
+    run_case = dataclasses.replace(case, initial=initial, t_end=t1, expected=(), keep_events_from=None)
+    result = simulate(run_case, save=SaveAt(steps=False, segments=True, derivative=derivative))
     end = np.asarray(result.final_state[1:], dtype=float)
-    switches = list(record.rows)
-    monodromy = _monodromy(case, switches, t1, options.rtol) if derivative else None
-    return PeriodMap(t0, t1, start, end, switches, result.events, monodromy)
-
-
-def _monodromy(case: Case, switches: list[tuple[float, np.ndarray, Mode]], t1: float, rtol: float) -> np.ndarray:
-    """``M = Phi_n S_n ... S_1 Phi_0`` along the recorded switches (the module's docstring)."""
-    p = case.parameters
-    flow = ModeFlow(p, rtol=min(rtol, 1e-11), atol=min(rtol, 1e-11))
-    try:
-        matrix = np.eye(4)
-        for k, (t_a, y_a, mode) in enumerate(switches):
-            t_b = switches[k + 1][0] if k + 1 < len(switches) else t1
-            y_b, phi = flow(mode, t_a, y_a, t_b)
-            matrix = phi @ rest_projection(mode) @ matrix
-            if k + 1 < len(switches):
-                _, y_next, mode_next = switches[k + 1]
-                try:
-                    salt = saltation_matrix(t_b, y_b, y_next, p, mode, mode_next)
-                except ZeroDivisionError as exc:
-                    raise SimulationFailed(
-                        f"no monodromy matrix: {exc} (a grazing orbit)", reason=Reason.NO_MONODROMY, field="orbit"
-                    ) from exc
-                matrix = salt @ matrix
-        return matrix
-    finally:
-        flow.close()
+    return PeriodMap(t0, t1, start, end, result.segments, result, result.derivative)
 
 
 def event_signature(events: pd.DataFrame) -> tuple[tuple[int, EventKind], ...]:
@@ -251,18 +229,21 @@ class Signature:
 
 
 def cyclic_signature(image: PeriodMap) -> Signature:
-    """The :class:`Signature` of an orbit through ``image``.
+    """The :class:`Signature` of an orbit through ``image`` (:func:`signature_of` its events)."""
+    return signature_of(image.kinds, image.t1 - image.t0)
 
-    Each mass's events over one period are read as a cycle (a switch at both ends of
-    ``[t0, t1]``, there because the orbit is on a boundary at the section, counted once).
+
+def signature_of(events: Sequence[tuple[float, int, EventKind]], span: float) -> Signature:
+    """The :class:`Signature` of the events ``(t, mass, kind)`` of one return of length ``span``.
+
+    Each mass's switches are read as a cycle (a switch at both ends of the return, there because
+    the orbit is on a boundary at the section, counted once).
     """
-    events = image.events[image.events.kind.isin(EventKind.values_where(lambda kind: kind.switches))]
-    span = image.t1 - image.t0
     cycles = []
     for mass in (1, 2):
-        own = events[events["mass"] == mass]
-        kinds, times = [EventKind(kind) for kind in own["kind"]], own["t"].to_numpy(float)
-        if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((times[-1] - times[0]) - span) <= 1e-6 * span:
+        own = [(t, kind) for t, m, kind in events if m == mass and kind.switches]
+        kinds = [kind for _, kind in own]
+        if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((own[-1][0] - own[0][0]) - span) <= 1e-6 * span:
             kinds.pop()
         rotations = [tuple(kinds[k:] + kinds[:k]) for k in range(len(kinds))]
         cycles.append(min(rotations, key=lambda cycle: [kind.value for kind in cycle], default=()))

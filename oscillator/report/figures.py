@@ -19,7 +19,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -93,6 +93,19 @@ class Window:
     start: float
     stop: float
     label: str = ""
+
+
+class Panel(NamedTuple):
+    """What every panel (a)-(d) draws from: the run's tables over the window, its parameters
+    and start, the figure's title and the window."""
+
+    trajectory: pd.DataFrame
+    events: pd.DataFrame
+    p: Parameters
+    t0: float
+    y0: Sequence[float]
+    title: str
+    window: Window
 
 
 def figure_window(t0: float, t_final: float, period: float, window: tuple[float, float] | None = None) -> Window:
@@ -260,15 +273,8 @@ def _finish_time_panel(
     _outside_legend(ax)
 
 
-def _displacements(
-    trajectory: pd.DataFrame,
-    events: pd.DataFrame,
-    p: Parameters,
-    t0: float,
-    y0: Sequence[float],
-    title: str,
-    window: Window,
-) -> Figure:
+def _displacements(panel: Panel) -> Figure:
+    trajectory, events, p, t0, y0, title, window = panel
     fig = Figure(figsize=(10, 4.5), layout="constrained")
     ax = fig.subplots()
     t = trajectory.t
@@ -293,15 +299,8 @@ def _displacements(
     return fig
 
 
-def _velocities(
-    trajectory: pd.DataFrame,
-    events: pd.DataFrame,
-    p: Parameters,
-    t0: float,
-    y0: Sequence[float],
-    title: str,
-    window: Window,
-) -> Figure:
+def _velocities(panel: Panel) -> Figure:
+    trajectory, events, _, t0, y0, title, window = panel
     fig = Figure(figsize=(10, 4.5), layout="constrained")
     ax = fig.subplots()
     t = trajectory.t
@@ -323,15 +322,8 @@ def _with_velocity_boundary(ax: Axes) -> None:
     ax.set_ylim(min(low, -margin), max(high, margin))
 
 
-def _phase(
-    trajectory: pd.DataFrame,
-    events: pd.DataFrame,
-    p: Parameters,
-    t0: float,
-    y0: Sequence[float],
-    title: str,
-    window: Window,
-) -> Figure:
+def _phase(panel: Panel) -> Figure:
+    trajectory, events, p, t0, y0, title, window = panel
     fig = Figure(figsize=(11, 5), layout="constrained")
     axes = fig.subplots(1, 2)
     for ax, mass in zip(axes, (1, 2), strict=True):
@@ -373,15 +365,8 @@ def _phase(
     return fig
 
 
-def _forces(
-    trajectory: pd.DataFrame,
-    events: pd.DataFrame,
-    p: Parameters,
-    t0: float,
-    y0: Sequence[float],
-    title: str,
-    window: Window,
-) -> Figure:
+def _forces(panel: Panel) -> Figure:
+    trajectory, events, p, _, _, title, window = panel
     histories = force_histories(trajectory, p)
     fig = Figure(figsize=(10, 7), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
@@ -452,7 +437,7 @@ def missing_figures(directory: Path) -> list[str]:
     return [name for name in FIGURES if not all(drawn(directory / f"{name}{s}") for s in (".png", ".svg"))]
 
 
-_PANELS: dict[str, Callable[..., Figure]] = {
+_PANELS: dict[str, Callable[[Panel], Figure]] = {
     "fig-a-displacement": _displacements,
     "fig-b-velocity": _velocities,
     "fig-c-phase": _phase,
@@ -527,7 +512,7 @@ def draw_panel(
     end = float(trajectory.t.iloc[-1]) if t_final is None else t_final
     chosen = figure_window(t0, end, case.parameters.period, window)
     clipped, shown_events = _clipped(trajectory, events, chosen)
-    return _PANELS[name](clipped, shown_events, case.parameters, t0, case.initial.y, figure_title(case), chosen)
+    return _PANELS[name](Panel(clipped, shown_events, case.parameters, t0, case.initial.y, figure_title(case), chosen))
 
 
 def draw_figures(
@@ -545,7 +530,8 @@ def draw_figures(
         t_final = float(trajectory.t.iloc[-1]) if len(trajectory) else t0
         window = figure_window(t0, t_final, p.period)
     trajectory, events = _clipped(trajectory, events, window)
-    return {name: panel(trajectory, events, p, t0, y0, title, window) for name, panel in _PANELS.items()}
+    panel = Panel(trajectory, events, p, t0, y0, title, window)
+    return {name: draw(panel) for name, draw in _PANELS.items()}
 
 
 def write_figures(

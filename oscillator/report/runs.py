@@ -407,7 +407,7 @@ def result_of(run: RunFolder) -> Result:
         Status(info.get("status", "complete")),
         info.get("failure") or "",
         None if info.get("reason") is None else Reason(info["reason"]),
-        records_of(run.events, run.trajectory),
+        _records=records_of(run.events, run.trajectory),
     )
 
 

@@ -41,11 +41,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from oscillator.model.fields import state_derivative
+from oscillator.model.kernels import field_jacobian
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
-from oscillator.orbits.variational import field_jacobian
 
-__all__ = ["Boundary", "boundary_of", "elementary_switches", "rest_projection", "saltation_matrix"]
+__all__ = ["Boundary", "boundary_of", "carried_through", "elementary_switches", "rest_projection", "saltation_matrix"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,3 +164,16 @@ def saltation_matrix(
             raise ZeroDivisionError(f"the flow is tangent to the {boundary.name} at t = {t!r}")
         matrix = (np.eye(4) + np.outer(f_plus - f_minus, boundary.normal) / speed) @ matrix
     return matrix
+
+
+def carried_through(
+    phi: np.ndarray, t: float, y_before: np.ndarray, y_after: np.ndarray, p: Parameters, before: Mode, after: Mode
+) -> np.ndarray:
+    """The derivative of the flow ``Phi`` (4 x 4) just after the switch ``before -> after`` at
+    ``t``, from the one just before: ``R(after) S Phi`` with ``S`` the :func:`saltation_matrix`
+    and ``R`` the :func:`rest_projection` of the mode the run goes on in (docs/orbits.md, Sec. 2).
+
+    Raises ``ZeroDivisionError`` at a grazing contact (no saltation matrix there).
+    """
+    carried: np.ndarray = rest_projection(after) @ saltation_matrix(t, y_before, y_after, p, before, after) @ phi
+    return carried
