@@ -20,14 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from oscillator.engines import EngineFailure, Step, StepKind
+from oscillator.engines import EngineFailure, Step
 from oscillator.engines import callbacks as cb
+from oscillator.engines.restarts import Restarts
 from oscillator.engines.sundials import (
     CV_ADAMS,
     CV_NORMAL,
     CV_ONE_STEP,
-    CV_ROOT_RETURN,
-    CV_TSTOP_RETURN,
     ERROR_HANDLER,
     describe,
     flag_name,
@@ -39,10 +38,6 @@ from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions
 
 __all__ = ["CCvodeEngine", "CvodeObjects", "check"]
-
-#: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" after a root return when a
-#: root function is still exactly 0.0 a rounding step later; a restart at the root clears it.
-_CLOSE_ROOTS = -22
 
 
 def check(flag: int, call: str) -> None:
@@ -114,9 +109,9 @@ class CCvodeEngine:
         self._evaluations = ctypes.c_long()
         self._finalizer = weakref.finalize(self, self._objects.free)
         self._setup(options)
-        self._t, self._t_ref, self._t_stop, self._after_root = 0.0, 0.0, math.nan, False
+        self._t, self._t_stop, self._clock = 0.0, math.nan, Restarts()
         self._out_at_root: np.ndarray = np.zeros(self.size)
-        self._done_evaluations, self._restarts = 0, 0
+        self._done_evaluations = 0
 
     def _setup(self, options: SolverOptions) -> None:
         api, memory = self._api, self._objects.memory
@@ -148,7 +143,7 @@ class CCvodeEngine:
 
     @property
     def restarts(self) -> int:
-        return self._restarts
+        return self._clock.count
 
     def close(self) -> None:
         """Free every SUNDIALS object of the engine (it cannot be used afterwards)."""
@@ -159,12 +154,11 @@ class CCvodeEngine:
         self._api.CVodeGetNumRhsEvals(memory, ctypes.byref(self._evaluations))  # the counts restart
         self._done_evaluations += self._evaluations.value
         self._evaluations.value = 0
-        self._t_ref = self._data[cb.LAYOUT["t_ref"]] = self._t
+        self._data[cb.LAYOUT["t_ref"]] = self._t
+        self._clock.restarted(self._t)
         self._messages.clear()
         check(self._api.CVodeReInit(memory, 0.0, self._objects.y), "CVodeReInit")
         self._t_stop = math.nan  # set again before the next step
-        self._restarts += 1
-        self._after_root = False
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
         data = self._data
@@ -179,19 +173,14 @@ class CCvodeEngine:
         self._initialise()
 
     def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
-        api, memory = self._api, self._objects.memory
+        api, memory, clock = self._api, self._objects.memory, self._clock
         while True:
             if t_stop != self._t_stop:  # once per restart: CVODE keeps it until it is reached
-                check(api.CVodeSetStopTime(memory, t_stop - self._t_ref), "CVodeSetStopTime")
+                check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
                 self._t_stop = t_stop
-            flag = api.CVode(
-                memory,
-                target - self._t_ref,
-                self._objects.out,
-                ctypes.byref(self._tret),
-                CV_ONE_STEP if one_step else CV_NORMAL,
-            )
-            if flag == _CLOSE_ROOTS and self._after_root:
+            mode = CV_ONE_STEP if one_step else CV_NORMAL
+            flag = api.CVode(memory, target - clock.t_ref, self._objects.out, ctypes.byref(self._tret), mode)
+            if clock.refused_at_root(flag):
                 self._y[:] = self._out_at_root
                 self._initialise()  # at the root just returned
                 continue
@@ -199,18 +188,14 @@ class CCvodeEngine:
                 said = " ".join(self._messages)
                 raise EngineFailure(f"{describe(flag)}; CVODE: {said}" if said else describe(flag), flag)
             break
-        y = self._out.copy()
-        if flag == CV_ROOT_RETURN:
-            found = self._found
-            api.CVodeGetRootInfo(memory, found)
-            fired = tuple(i for i in range(NUM_ROOTS) if found[i])
-            step = Step(self._t_ref + self._tret.value, y, StepKind.ROOT, fired)
-        elif flag == CV_TSTOP_RETURN:
-            step = Step(t_stop, y, StepKind.TARGET)
-        elif one_step:
-            step = Step(self._t_ref + self._tret.value, y, StepKind.STEP)
-        else:
-            step = Step(target, y, StepKind.TARGET)
-        self._t, self._out_at_root = step.t, y
-        self._after_root = step.kind is StepKind.ROOT
+        step = clock.step(
+            flag, self._tret.value, self._out.copy(), target=target, t_stop=t_stop, one_step=one_step, fired=self._fired
+        )
+        self._t, self._out_at_root = step.t, step.y
         return step
+
+    def _fired(self) -> tuple[int, ...]:
+        """The roots of the last return (CVODE's root information)."""
+        found = self._found
+        self._api.CVodeGetRootInfo(self._objects.memory, found)
+        return tuple(i for i in range(NUM_ROOTS) if found[i])

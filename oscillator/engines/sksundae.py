@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 from sksundae.cvode import CVODE
 
-from oscillator.engines import EngineFailure, Step, StepKind
+from oscillator.engines import EngineFailure, Step
+from oscillator.engines.restarts import Restarts
 from oscillator.model.fields import coefficients
 from oscillator.model.kernels import derivative
 from oscillator.model.parameters import Parameters, SolverOptions
@@ -31,14 +32,6 @@ from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions, root_kernel
 
 __all__ = ["SksundaeEngine"]
-
-#: CVODE's return flags (scikit-sundae ``status``) for a root and for reaching ``tstop``.
-_ROOT_RETURN = 2
-_TSTOP_RETURN = 1
-#: CVODE's CV_ILL_INPUT, returned as "root found at and very near t" when a root function is
-#: exactly 0.0 at the root it just returned and still 0.0 a rounding step later (a difference of
-#: two O(1) velocities that change by less than an ulp); a restart at the root clears it.
-_CLOSE_ROOTS = -22
 
 
 class SksundaeEngine:
@@ -54,13 +47,11 @@ class SksundaeEngine:
         self._problems: dict[Mode, tuple[CVODE, Any]] = {}
         self._solver: CVODE | None = None
         self._roots: Any = None
-        self._t_ref = 0.0  # CVODE's time is tau = t - _t_ref
+        self._clock = Restarts()  # CVODE's time is tau = t - t_ref
         self._t = 0.0
         self._y = np.zeros(8)
-        self._after_root = False
         self._done_evaluations = 0  # of the problems left behind
         self._evaluations = 0  # of the current problem since its last initialisation
-        self._restarts = 0
         # scikit-sundae prints CVODE's error messages to stdout; they are caught here and told
         # in the engine's failure.
         self._output = io.StringIO()
@@ -71,7 +62,7 @@ class SksundaeEngine:
 
     @property
     def restarts(self) -> int:
-        return self._restarts
+        return self._clock.count
 
     def close(self) -> None:
         """Nothing to free by hand: scikit-sundae frees its objects with the solvers."""
@@ -87,10 +78,10 @@ class SksundaeEngine:
         near = self._options.grazing_displacement_tolerance
 
         def rhs(tau: float, y: np.ndarray, yp: np.ndarray) -> None:
-            derivative(self._t_ref + tau, y, yp, c, s1, s2, left, right)
+            derivative(self._clock.t_ref + tau, y, yp, c, s1, s2, left, right)
 
         def roots(tau: float, y: np.ndarray, g: np.ndarray) -> None:
-            root_kernel(self._t_ref + tau, y, g, c, s1, s2, left, right, step, near)
+            root_kernel(self._clock.t_ref + tau, y, g, c, s1, s2, left, right, step, near)
 
         roots.direction = root_directions(mode)  # type: ignore[attr-defined]
         roots.terminal = [True] * NUM_ROOTS  # type: ignore[attr-defined]
@@ -111,12 +102,10 @@ class SksundaeEngine:
         assert self._solver is not None
         self._done_evaluations += self._evaluations
         self._evaluations = 0
-        self._t_ref = self._t
+        self._clock.restarted(self._t)
         self._output.seek(0)
         self._output.truncate()
         self._solver.init_step(0.0, self._y)
-        self._restarts += 1
-        self._after_root = False
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
         self._solver, self._roots = self._problem(mode)
@@ -125,34 +114,37 @@ class SksundaeEngine:
 
     def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
         assert self._solver is not None
-        method = "onestep" if one_step else "normal"
+        method, t_ref = ("onestep" if one_step else "normal"), self._clock.t_ref
         while True:
             with contextlib.redirect_stdout(self._output):
-                out = self._solver.step(target - self._t_ref, method=method, tstop=t_stop - self._t_ref)
-            if out.status == _CLOSE_ROOTS and self._after_root:
+                out = self._solver.step(target - t_ref, method=method, tstop=t_stop - t_ref)
+            if self._clock.refused_at_root(out.status):
                 self._initialise()  # at the root just returned
+                t_ref = self._clock.t_ref
                 continue
             self._evaluations = out.nfev
             if out.status < 0:
                 said = " ".join(self._output.getvalue().split())
                 raise EngineFailure(f"{out.message}; CVODE: {said}" if said else out.message, out.status)
             break
-        y = np.array(out.y, dtype=float)
-        if out.status == _ROOT_RETURN:
-            t = self._t_ref + float(out.t)
-            fired = tuple(int(i) for i in np.flatnonzero(out.i_events[-1]))
-            # scikit-sundae keeps every root in Python lists for the solver's lifetime; empty
-            # them so that memory stays flat in the length of the run.
-            self._roots._i.clear()
-            self._roots._t.clear()
-            self._roots._y.clear()
-            step = Step(t, y, StepKind.ROOT, fired)
-        elif out.status == _TSTOP_RETURN:
-            step = Step(t_stop, y, StepKind.TARGET)
-        elif one_step:
-            step = Step(self._t_ref + float(out.t), y, StepKind.STEP)
-        else:
-            step = Step(target, y, StepKind.TARGET)
-        self._t, self._y = step.t, y
-        self._after_root = step.kind is StepKind.ROOT
+        step = self._clock.step(
+            out.status,
+            float(out.t),
+            np.array(out.y, dtype=float),
+            target=target,
+            t_stop=t_stop,
+            one_step=one_step,
+            fired=lambda: self._fired(out),
+        )
+        self._t, self._y = step.t, step.y
         return step
+
+    def _fired(self, out: Any) -> tuple[int, ...]:
+        """The roots of the last return; scikit-sundae keeps every root in Python lists for the
+        solver's lifetime: they are emptied, so that memory stays flat in the length of the run."""
+        roots = self._roots
+        fired = tuple(int(i) for i in np.flatnonzero(out.i_events[-1]))
+        roots._i.clear()
+        roots._t.clear()
+        roots._y.clear()
+        return fired
