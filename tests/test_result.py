@@ -73,9 +73,14 @@ def test_a_long_rest_under_forcing_is_not_a_stall(build):
 
 
 def test_progress_is_reported_with_increasing_times():
+    """After every return of the engine: at each root, and at most every STEPS_PER_RETURN steps."""
+    from oscillator.hybrid.supervisor import STEPS_PER_RETURN
+
     seen = []
-    simulate("instance-3", progress=seen.append)
-    assert len(seen) > 100 and seen == sorted(seen) and seen[-1] == 4.0
+    result = simulate("instance-3", progress=seen.append)
+    assert seen == sorted(seen) and seen[-1] == 4.0
+    assert result.stats.root_returns <= len(seen) <= result.stats.root_returns + result.stats.returns // 2
+    assert len(seen) >= result.stats.returns / STEPS_PER_RETURN
 
 
 def test_events_can_be_kept_from_a_time_on():

@@ -23,6 +23,7 @@ import numpy as np
 from oscillator.engines import EngineFailure, Step
 from oscillator.engines import callbacks as cb
 from oscillator.engines.restarts import Restarts
+from oscillator.engines.stepping import one_steps
 from oscillator.engines.sundials import (
     CV_ADAMS,
     CV_NORMAL,
@@ -110,6 +111,14 @@ class CCvodeEngine:
         self._finalizer = weakref.finalize(self, self._objects.free)
         self._setup(options)
         self._t, self._t_stop, self._clock = 0.0, math.nan, Restarts()
+        # what the compiled stepping loop takes: CVODE's address, the objects' addresses
+        self._addresses = (
+            ctypes.cast(self._api.CVode, ctypes.c_void_p).value or 0,
+            self._objects.memory or 0,
+            self._objects.out or 0,
+        )
+        self._tau, self._last = np.zeros(1), np.zeros(self.size)
+        self._failure: EngineFailure | None = None  # met by the stepping loop after some steps: raised next
         self._out_at_root: np.ndarray = np.zeros(self.size)
         self._done_evaluations = 0
 
@@ -170,6 +179,7 @@ class CCvodeEngine:
         check(self._api.CVodeSetRootDirection(self._objects.memory, directions), "CVodeSetRootDirection")
         self._t = t
         self._y[:] = y
+        self._failure = None
         self._initialise()
 
     def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
@@ -193,6 +203,52 @@ class CCvodeEngine:
         )
         self._t, self._out_at_root = step.t, step.y
         return step
+
+    def advance_steps(self, target: float, *, t_stop: float, rows: np.ndarray) -> tuple[Step, int]:
+        """:meth:`advance` with ``one_step`` repeated in compiled code (:mod:`oscillator.engines.stepping`)
+        until a root, ``t_stop`` or ``target``, or ``len(rows)`` returns: each return written as
+        a row ``(t, x1, v1, x2, v2)`` of ``rows``.  The last return as a :class:`Step`, and how
+        many rows were written (the last one its row)."""
+        api, memory, clock = self._api, self._objects.memory, self._clock
+        cvode, address, out = self._addresses
+        if self._failure is not None:
+            failure, self._failure = self._failure, None
+            raise failure
+        while True:
+            if t_stop != self._t_stop:
+                check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
+                self._t_stop = t_stop
+            tau = self._tau
+            flag, n = one_steps(
+                cvode,
+                address,
+                target - clock.t_ref,
+                clock.t_ref,
+                out,
+                tau.ctypes.data,
+                tau,
+                self._out,
+                rows,
+                self._last,
+            )
+            if n == 0 and clock.refused_at_root(flag):
+                self._y[:] = self._out_at_root
+                self._initialise()  # at the root just returned
+                continue
+            if flag < 0:
+                said = " ".join(self._messages)
+                failure = EngineFailure(f"{describe(flag)}; CVODE: {said}" if said else describe(flag), flag)
+                if n == 0:
+                    raise failure
+                self._failure = failure  # the steps before it first, as one_step would have returned them
+                flag = 0
+            break
+        reached = float(tau[0]) if self._failure is None else float(rows[n - 1, 0]) - clock.t_ref
+        step = clock.step(
+            flag, reached, self._last.copy(), target=target, t_stop=t_stop, one_step=True, fired=self._fired
+        )
+        self._t, self._out_at_root = step.t, step.y
+        return step, n
 
     def _fired(self) -> tuple[int, ...]:
         """The roots of the last return (CVODE's root information)."""

@@ -119,6 +119,16 @@ class StepGuard:
         self.limit = options.max_num_steps
         self.steps = 0
 
+    @property
+    def room(self) -> int:
+        """How many steps may still be taken before the guard trips (the one that trips it included)."""
+        return self.limit - self.steps + 1
+
+    def count_many(self, n: int, at_root: bool, t: float, y: np.ndarray, mode: Mode) -> None:
+        """``n`` returns at once, the last one at ``(t, y)`` (a root, or a step)."""
+        self.steps += n - 1
+        self.count(at_root, t, y, mode)
+
     def count(self, at_root: bool, t: float, y: np.ndarray, mode: Mode) -> None:
         self.steps = 0 if at_root else self.steps + 1
         if self.steps > self.limit:

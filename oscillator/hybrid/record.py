@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -9,7 +10,7 @@ import numpy as np
 from oscillator.model.events import WIDTH
 from oscillator.model.phase_space import Mode
 
-__all__ = ["EventLog", "RunRecord", "Segment"]
+__all__ = ["EventLog", "RunRecord", "Segment", "TrajectoryRows"]
 
 
 class EventLog:
@@ -53,6 +54,67 @@ class EventLog:
         self._size += count
 
 
+class TrajectoryRows:
+    """A run's trajectory rows ``(t, x1, v1, x2, v2)`` in arrays, each array's rows in one mode:
+    no Python object per row (memory stays flat in the length of the run).
+
+    Rows are appended one at a time (:meth:`append`) or a batch at a time (:meth:`extend`,
+    what the compiled stepping loop writes); the open chunk grows by doubling and is sealed
+    when the mode changes.
+    """
+
+    def __init__(self) -> None:
+        self._chunks: list[tuple[np.ndarray, Mode]] = []
+        self._open = np.empty((0, 5))
+        self._size = 0
+        self._mode: Mode | None = None
+        self._count = 0
+        #: The time of the last row (``-inf`` before the first).
+        self.last_t = -math.inf
+
+    def __len__(self) -> int:
+        return self._count
+
+    def append(self, t: float, y: np.ndarray, mode: Mode) -> None:
+        """One row: the time, the state (its first four entries) and its mode."""
+        free = self._free(mode, 1)
+        free[0, 0] = t
+        free[0, 1:] = y[:4]
+        self._kept(1, t)
+
+    def extend(self, rows: np.ndarray, mode: Mode) -> None:
+        """``rows`` (``n x 5``: time and state), all in ``mode``."""
+        n = len(rows)
+        if n:
+            self._free(mode, n)[:] = rows
+            self._kept(n, float(rows[-1, 0]))
+
+    def chunks(self) -> list[tuple[np.ndarray, Mode]]:
+        """The rows as ``(array, mode)`` pieces, in order."""
+        self._seal()
+        return list(self._chunks)
+
+    def _free(self, mode: Mode, n: int) -> np.ndarray:
+        if mode != self._mode:
+            self._seal()
+            self._mode = mode
+        if self._size + n > len(self._open):
+            grown = np.empty((max(self._size + n, 2 * len(self._open), 64), 5))
+            grown[: self._size] = self._open[: self._size]
+            self._open = grown
+        return self._open[self._size : self._size + n]
+
+    def _kept(self, n: int, t: float) -> None:
+        self._size += n
+        self._count += n
+        self.last_t = t
+
+    def _seal(self) -> None:
+        if self._size and self._mode is not None:
+            self._chunks.append((self._open[: self._size].copy(), self._mode))
+        self._open, self._size = np.empty((0, 5)), 0
+
+
 @dataclass(frozen=True)
 class Segment:
     """One smooth piece of a run: ``mode``'s flow from ``(t0, y0)`` to ``(t1, y1)``.
@@ -76,9 +138,8 @@ class RunRecord:
     """The supervisor's record of a run: events, trajectory rows, the last point and the counts."""
 
     events: EventLog = field(default_factory=EventLog)
-    #: Trajectory rows ``(t, (x1, v1, x2, v2), mode)``, each appended whole (a Ctrl-C between two
-    #: appends of separate columns would leave them of different lengths).
-    rows: list[tuple[float, np.ndarray, Mode]] = field(default_factory=list)
+    #: Trajectory rows (a row is written whole before it counts: a Ctrl-C leaves none half written).
+    rows: TrajectoryRows = field(default_factory=TrajectoryRows)
     #: ``(t, y, mode)`` of the last point reached, replaced whole (so a Ctrl-C cannot split it).
     last: tuple[float, np.ndarray | None, Mode | None] = (float("nan"), None, None)
     mode_initial: Mode | None = None

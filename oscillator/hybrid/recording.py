@@ -106,7 +106,18 @@ class Recording:
                 reason=Reason.MAX_ROWS,
                 field="max_trajectory_rows",
             )
-        record.rows.append((t, y[:4].copy(), mode))
+        record.rows.append(t, y, mode)
+
+    def batch(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
+        """Steps returned together in ``mode`` (rows ``t, x1, v1, x2, v2``); kept by :class:`AtSteps`."""
+
+    def keep(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
+        """Keep a batch of rows (``n x 5``: time and state, all in ``mode``); refuse past ``max_rows``."""
+        room = self.max_rows - len(record.rows)
+        if len(rows) > room:
+            record.rows.extend(rows[:room], mode)
+            self.row(record, float(rows[room, 0]), rows[room, 1:], mode)  # refused, naming the time
+        record.rows.extend(rows, mode)
 
 
 class NoTrajectory(Recording):
@@ -127,6 +138,9 @@ class AtSteps(Recording):
     def returned(self, record: RunRecord, step: Step, mode: Mode, target: float) -> None:
         self.row(record, step.t, step.y, mode)
 
+    def batch(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
+        self.keep(record, rows, mode)
+
     def switched(self, record: RunRecord, t: float, y: np.ndarray, mode: Mode) -> None:
         self.row(record, t, y, mode)
 
@@ -135,9 +149,8 @@ class AtSteps(Recording):
         note of a point and its row (in the progress callback, say).  Not past ``max_rows``
         (a run stopped for that keeps its rows as they are)."""
         t, y, mode = record.last
-        behind = not record.rows or record.rows[-1][0] < t
-        if y is not None and mode is not None and behind and len(record.rows) < self.max_rows:
-            record.rows.append((t, y[:4].copy(), mode))
+        if y is not None and mode is not None and record.rows.last_t < t and len(record.rows) < self.max_rows:
+            record.rows.append(t, y, mode)
 
 
 @dataclass

@@ -10,10 +10,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from oscillator.errors import Reason
-from oscillator.hybrid.record import RunRecord, Segment
+from oscillator.hybrid.record import RunRecord, Segment, TrajectoryRows
 from oscillator.io.cases import Case
 from oscillator.model.energy import POWER_NAMES, mechanical_energy
-from oscillator.model.phase_space import Mode
 from oscillator.model.types import VARIATIONAL
 from oscillator.presenting import presenter
 
@@ -87,9 +86,9 @@ class _Records:
     records let go (a run that nobody reads a table of never imports pandas).  The tables are
     kept here, so every copy of the result (``dataclasses.replace``) reads the same tables."""
 
-    def __init__(self, events: np.ndarray, rows: list[tuple[float, np.ndarray, Mode]]) -> None:
+    def __init__(self, events: np.ndarray, rows: TrajectoryRows) -> None:
         self._events: np.ndarray | None = events
-        self._rows: list[tuple[float, np.ndarray, Mode]] | None = rows
+        self._rows: TrajectoryRows | None = rows
         self._events_frame: pd.DataFrame | None = None
         self._trajectory_frame: pd.DataFrame | None = None
 
@@ -107,7 +106,7 @@ class _Records:
 
             rows = self._rows
             assert rows is not None
-            self._trajectory_frame = trajectory_frame([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
+            self._trajectory_frame = trajectory_frame(rows.chunks())
             self._rows = None
         return self._trajectory_frame
 
@@ -119,7 +118,7 @@ def _derivative(y: np.ndarray) -> np.ndarray | None:
 
 def records_of(events: pd.DataFrame, trajectory: pd.DataFrame) -> _Records:
     """Records holding tables already built (a run folder read back)."""
-    records = _Records(np.empty((0, 0)), [])
+    records = _Records(np.empty((0, 0)), TrajectoryRows())
     records._events_frame, records._trajectory_frame = events, trajectory
     records._events = records._rows = None
     return records
@@ -171,7 +170,9 @@ class Result:
     reason: Reason | None = None
     segments: tuple[Segment, ...] = field(default=(), repr=False, compare=False)
     derivative: np.ndarray | None = field(default=None, repr=False, compare=False)
-    _records: _Records = field(default_factory=lambda: _Records(np.empty((0, 0)), []), repr=False, compare=False)
+    _records: _Records = field(
+        default_factory=lambda: _Records(np.empty((0, 0)), TrajectoryRows()), repr=False, compare=False
+    )
 
     @property
     def events(self) -> pd.DataFrame:

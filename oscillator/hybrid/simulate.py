@@ -108,8 +108,9 @@ def simulate(
     record_trajectory : bool
         Keep trajectory rows (events and the energy audit are always kept).
     progress : callable, optional
-        Called with the current time after every solver step (keep it cheap).  An exception it
-        raises stops the run and reaches the caller unchanged.
+        Called with the current time after every return of the engine: at every root, and with
+        the trajectory at every step, after at most 256 steps (the steps between are taken in
+        compiled code).  An exception it raises stops the run and reaches the caller unchanged.
     keep_events_from : float, optional
         Keep only the events at or after this time in ``Result.events`` (``stats.events``
         counts them all); the case's own (``[run] keep_events_from``) by default. With the

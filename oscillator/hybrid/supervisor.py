@@ -44,7 +44,11 @@ from oscillator.model.saltation import carried_through, rest_projection
 from oscillator.model.switching import MAX_ROWS, initial_mode, resolve_rows
 from oscillator.model.types import VARIATIONAL
 
-__all__ = ["CallbackRaised", "Supervisor"]
+__all__ = ["STEPS_PER_RETURN", "CallbackRaised", "Supervisor"]
+
+#: The most solver steps the compiled stepping loop takes before it comes back (the progress
+#: callback and Ctrl-C are then served; 0.1-1 ms of work).
+STEPS_PER_RETURN = 256
 
 
 class CallbackRaised(Exception):
@@ -98,6 +102,12 @@ class Supervisor:
         #: The segment under way: its start and the event rows written since (when segments are kept).
         self._opened: tuple[float, np.ndarray, Mode] | None = None
         self._rows: list[np.ndarray] = []
+        #: With the trajectory at every step, the engine's compiled stepping loop where it has one
+        #: (:meth:`oscillator.engines.cvode_c.CCvodeEngine.advance_steps`) and the rows it writes.
+        self._stepper: Callable[..., tuple[Step, int]] | None = (
+            getattr(engine, "advance_steps", None) if recording.one_step else None
+        )
+        self._rows_buffer = np.empty((STEPS_PER_RETURN, 5))
         self._events = EventGuard(options)
         self._caller_errstate = np.geterr()
 
@@ -149,18 +159,9 @@ class Supervisor:
     def _through_mode(self, record: RunRecord, mode: Mode, t: float, t_end: float) -> tuple[float, np.ndarray, Mode]:
         """Advance in ``mode`` until it switches or the run ends; the point and mode reached."""
         stalls, steps = StallGuard(), StepGuard(self.options)
-        one_step = self.recording.one_step
         while True:
-            target = self.recording.target(t, t_end)
-            step = self._advance(target, t_end, one_step, record, mode)
-            record.returns += 1
+            step = self._returned(record, mode, t, t_end, steps)
             t, y = step.t, step.y
-            record.reached(t, y, mode)
-            if self.progress is not None:
-                self._report_progress(t)
-            self.recording.returned(record, step, mode, target)
-            if one_step:
-                steps.count(step.kind is StepKind.ROOT, t, y, mode)
             if step.kind is StepKind.ROOT:
                 record.root_returns += 1
                 after, state, events = self._resolve_root(record, step, mode)
@@ -174,6 +175,39 @@ class Supervisor:
                 stalls.count(t, events, mode)
             if t >= t_end:
                 return t, y, mode
+
+    def _returned(self, record: RunRecord, mode: Mode, t: float, t_end: float, steps: StepGuard) -> Step:
+        """The engine's next return (or returns, taken at once in compiled code when the
+        trajectory is kept at every step), recorded; the last one."""
+        target = self.recording.target(t, t_end)
+        if self._stepper is None:
+            step = self._advance(target, t_end, self.recording.one_step, record, mode)
+            record.returns += 1
+            self.recording.returned(record, step, mode, target)
+            if self.recording.one_step:
+                steps.count(step.kind is StepKind.ROOT, step.t, step.y, mode)
+        else:
+            rows = self._rows_buffer[: min(len(self._rows_buffer), steps.room)]
+            step, n = self._advance_steps(target, t_end, rows, record, mode)
+            record.returns += n
+            self.recording.batch(record, rows[:n], mode)
+            steps.count_many(n, step.kind is StepKind.ROOT, step.t, step.y, mode)
+        record.reached(step.t, step.y, mode)
+        if self.progress is not None:
+            self._report_progress(step.t)
+        return step
+
+    def _advance_steps(
+        self, target: float, t_end: float, rows: np.ndarray, record: RunRecord, mode: Mode
+    ) -> tuple[Step, int]:
+        assert self._stepper is not None
+        try:
+            return self._stepper(target, t_stop=t_end, rows=rows)
+        except EngineFailure as failure:
+            assert record.y_final is not None
+            raise solver_failure(
+                self.engine.name, str(failure), failure.flag, record.t_final, record.y_final, mode
+            ) from None
 
     def _switching(
         self, record: RunRecord, t: float, y: np.ndarray, state: np.ndarray, mode: Mode, after: Mode

@@ -62,19 +62,22 @@ def events_frame(rows: np.ndarray) -> pd.DataFrame:
     return pd.DataFrame(data, columns=list(Event.columns()))
 
 
-def trajectory_frame(t: Sequence[float], y: Sequence[np.ndarray], modes: Sequence[Mode]) -> pd.DataFrame:
-    """``Result.trajectory``: ``t, x1, v1, x2, v2, domain1, domain2, system_state``."""
-    state = np.array(y, dtype=float).reshape(-1, 4)
+def trajectory_frame(chunks: Sequence[tuple[np.ndarray, Mode]]) -> pd.DataFrame:
+    """``Result.trajectory``: ``t, x1, v1, x2, v2, domain1, domain2, system_state``, from the
+    rows ``(t, x1, v1, x2, v2)`` in pieces, each piece's rows in one mode."""
+    rows = np.concatenate([rows for rows, _ in chunks]) if chunks else np.empty((0, 5))
+    counts = [len(rows) for rows, _ in chunks]
+    modes = [mode for _, mode in chunks]
     return pd.DataFrame(
         {
-            "t": np.array(t, dtype=float),
-            "x1": state[:, 0],
-            "v1": state[:, 1],
-            "x2": state[:, 2],
-            "v2": state[:, 3],
-            "domain1": np.array([m.domain1 for m in modes], dtype=int),
-            "domain2": np.array([m.domain2 for m in modes], dtype=int),
-            "system_state": [m.system_state for m in modes],
+            "t": rows[:, 0],
+            "x1": rows[:, 1],
+            "v1": rows[:, 2],
+            "x2": rows[:, 3],
+            "v2": rows[:, 4],
+            "domain1": np.repeat(np.array([m.domain1 for m in modes], dtype=int), counts),
+            "domain2": np.repeat(np.array([m.domain2 for m in modes], dtype=int), counts),
+            "system_state": np.repeat(np.array([m.system_state for m in modes], dtype=object), counts).tolist(),
         },
         columns=list(TRAJECTORY_COLUMNS),
     )

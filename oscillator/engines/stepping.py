@@ -1,0 +1,96 @@
+"""CVODE's steps taken in compiled code: the loop that records the trajectory at every step.
+
+With the trajectory kept at the solver's steps, CVODE returns after each internal step
+(``CV_ONE_STEP``); a return to Python for each (a few microseconds of the interpreter, two array
+copies, a row object) costs more than the step.  :func:`one_steps` calls CVODE in a compiled
+loop instead, through its C function pointer (an address passed as an integer, so that the
+loop is compiled once and cached like the callbacks), writes each return as a row
+``(t, x1, v1, x2, v2)`` into a preallocated buffer, and comes back to Python only at a root, at
+the stop time or the target, on a failure, or when the buffer is full.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
+
+from oscillator.compiled import njit
+from oscillator.engines.sundials import CV_ONE_STEP, CV_SUCCESS
+
+__all__ = ["one_steps"]
+
+
+def _call_cvode_typing(
+    typingctx: Any, function: Any, memory: Any, tout: Any, yout: Any, tret: Any, itask: Any
+) -> Any:  # pragma: no cover - compiled
+    """``CVode(memory, tout, yout, &tret, itask)`` through the function's address: every pointer an
+    integer (``int CVode(void*, sunrealtype, N_Vector, sunrealtype*, int)``, cvode.h)."""
+    signature = types.int32(types.intp, types.intp, types.float64, types.intp, types.intp, types.int32)
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        function_, memory_, tout_, yout_, tret_, itask_ = args
+        pointer = ir.IntType(8).as_pointer()
+        double_pointer = ir.DoubleType().as_pointer()
+        prototype = ir.FunctionType(ir.IntType(32), [pointer, ir.DoubleType(), pointer, double_pointer, ir.IntType(32)])
+        callee = builder.inttoptr(function_, prototype.as_pointer())
+        arguments = [
+            builder.inttoptr(memory_, pointer),
+            tout_,
+            builder.inttoptr(yout_, pointer),
+            builder.inttoptr(tret_, double_pointer),
+            itask_,
+        ]
+        return builder.call(callee, arguments)
+
+    return signature, codegen
+
+
+_call_cvode: Any = intrinsic(_call_cvode_typing)
+
+_ROWS = types.Array(types.float64, 2, "C")
+_VECTOR = types.Array(types.float64, 1, "C")
+
+
+@njit(
+    types.Tuple((types.int32, types.int64))(
+        types.intp, types.intp, types.float64, types.float64, types.intp, types.intp, _VECTOR, _VECTOR, _ROWS, _VECTOR
+    ),
+    cache=True,
+)
+def one_steps(  # pragma: no cover - compiled
+    cvode: int,
+    memory: int,
+    tau_target: float,
+    t_ref: float,
+    yout: int,
+    tret_address: int,
+    tret: Any,
+    out: Any,
+    rows: Any,
+    last: Any,
+) -> tuple[int, int]:
+    """Steps of CVODE (``CV_ONE_STEP``) until a root, the stop time, ``tau_target`` or a failure,
+    at most ``len(rows)``; each return written as ``rows[k] = (t_ref + tau, out[0:4])``.
+
+    ``tret`` is the one-element array at ``tret_address`` where CVODE writes the time it
+    reached, ``out`` the data of the output vector ``yout``; ``last`` receives the whole output
+    (state, works and any variational entries) of the last successful return.  Returns CVODE's
+    last flag (a failure's, negative, with no row written for it) and the number of rows written.
+    """
+    n = 0
+    flag = CV_SUCCESS
+    while n < rows.shape[0]:
+        flag = _call_cvode(cvode, memory, tau_target, yout, tret_address, CV_ONE_STEP)
+        if flag < 0:
+            break
+        rows[n, 0] = t_ref + tret[0]
+        for k in range(4):
+            rows[n, 1 + k] = out[k]
+        last[:] = out
+        n += 1
+        if flag != CV_SUCCESS or tret[0] >= tau_target:
+            break
+    return flag, n

@@ -1,0 +1,59 @@
+"""The trajectory at every step, taken in compiled code (engines/stepping.py): the same run, to
+the bit, as CVODE returning to Python after each step (issue 27)."""
+
+import pandas as pd
+import pytest
+
+import oscillator.hybrid.supervisor as supervisor
+from conftest import random_case
+from oscillator import OscillatorError, Reason, simulate
+
+
+@pytest.fixture
+def per_step(monkeypatch):
+    """simulate() with the stepping loop switched off: one return to Python per CVODE step."""
+    original = supervisor.Supervisor.__init__
+
+    def without_loop(self, *args, **options):
+        original(self, *args, **options)
+        self._stepper = None
+
+    def run(*args, **options):
+        with monkeypatch.context() as patch:
+            patch.setattr(supervisor.Supervisor, "__init__", without_loop)
+            return simulate(*args, **options)
+
+    return run
+
+
+@pytest.mark.parametrize("case", ["instance-1", "instance-3", "instance-5", 7, 145, 200])
+def test_the_loop_gives_the_same_run_as_a_return_per_step(case, per_step):
+    case = random_case(case) if isinstance(case, int) else case
+    looped, stepped = simulate(case, t_end=None), per_step(case)
+    pd.testing.assert_frame_equal(looped.events, stepped.events, check_exact=True)
+    pd.testing.assert_frame_equal(looped.trajectory, stepped.trajectory, check_exact=True)
+    assert looped.final_state == stepped.final_state and looped.stats.returns == stepped.stats.returns
+    assert looped.energy == stepped.energy
+
+
+def test_a_failure_inside_the_loop_is_told_after_the_last_step_it_took(per_step):
+    """CVODE fails within a batch: the steps before it are kept, and the failure names the last
+    point reached, as when each step came back to Python."""
+    errors = []
+    for run in (simulate, per_step):
+        with pytest.raises(OscillatorError) as caught:
+            run("instance-3", max_num_steps=60)
+        errors.append(caught.value)
+    looped, stepped = errors
+    assert str(looped) == str(stepped) and looped.reason is stepped.reason is Reason.STEP_LIMIT
+    pd.testing.assert_frame_equal(looped.result.trajectory, stepped.result.trajectory, check_exact=True)
+
+
+def test_max_trajectory_rows_trips_at_the_same_row(per_step):
+    messages = []
+    for run in (simulate, per_step):
+        with pytest.raises(OscillatorError) as caught:
+            run("instance-1", t_end=60.0, max_trajectory_rows=1000)
+        messages.append(str(caught.value))
+        assert len(caught.value.result.trajectory) == 1000
+    assert messages[0] == messages[1]
