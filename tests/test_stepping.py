@@ -1,6 +1,7 @@
 """The trajectory at every step, taken in compiled code (engines/stepping.py): the same run, to
 the bit, as CVODE returning to Python after each step (issue 27)."""
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -16,7 +17,7 @@ def per_step(monkeypatch):
 
     def without_loop(self, *args, **options):
         original(self, *args, **options)
-        self._stepper = None
+        self._stepper = self._grid = None
 
     def run(*args, **options):
         with monkeypatch.context() as patch:
@@ -34,6 +35,19 @@ def test_the_loop_gives_the_same_run_as_a_return_per_step(case, per_step):
     pd.testing.assert_frame_equal(looped.trajectory, stepped.trajectory, check_exact=True)
     assert looped.final_state == stepped.final_state and looped.stats.returns == stepped.stats.returns
     assert looped.energy == stepped.energy
+
+
+@pytest.mark.parametrize("case", ["instance-1", "instance-4", 7, 145])
+def test_the_grid_loop_gives_the_same_run_as_a_return_per_grid_time(case, per_step):
+    case = random_case(case) if isinstance(case, int) else case
+    t0 = simulate(case, record_trajectory=False).case.initial.t0
+    t_end = t0 + 40.0
+    grid = np.append(np.linspace(t0, t_end - 1.0, 997), t_end)  # the end time on the grid, once
+    looped, stepped = simulate(case, t_end=t_end, t_eval=grid), per_step(case, t_end=t_end, t_eval=grid)
+    pd.testing.assert_frame_equal(looped.events, stepped.events, check_exact=True)
+    pd.testing.assert_frame_equal(looped.trajectory, stepped.trajectory, check_exact=True)
+    assert len(looped.trajectory) == len(grid)
+    assert looped.final_state == stepped.final_state and looped.stats.returns == stepped.stats.returns
 
 
 def test_a_failure_inside_the_loop_is_told_after_the_last_step_it_took(per_step):

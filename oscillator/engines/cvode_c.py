@@ -23,11 +23,12 @@ import numpy as np
 from oscillator.engines import EngineFailure, Step
 from oscillator.engines import callbacks as cb
 from oscillator.engines.restarts import Restarts
-from oscillator.engines.stepping import one_steps
+from oscillator.engines.stepping import grid_returns, one_steps
 from oscillator.engines.sundials import (
     CV_ADAMS,
     CV_NORMAL,
     CV_ONE_STEP,
+    CV_SUCCESS,
     ERROR_HANDLER,
     describe,
     flag_name,
@@ -211,9 +212,7 @@ class CCvodeEngine:
         many rows were written (the last one its row)."""
         api, memory, clock = self._api, self._objects.memory, self._clock
         cvode, address, out = self._addresses
-        if self._failure is not None:
-            failure, self._failure = self._failure, None
-            raise failure
+        self._raise_pending()
         while True:
             if t_stop != self._t_stop:
                 check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
@@ -235,13 +234,7 @@ class CCvodeEngine:
                 self._y[:] = self._out_at_root
                 self._initialise()  # at the root just returned
                 continue
-            if flag < 0:
-                said = " ".join(self._messages)
-                failure = EngineFailure(f"{describe(flag)}; CVODE: {said}" if said else describe(flag), flag)
-                if n == 0:
-                    raise failure
-                self._failure = failure  # the steps before it first, as one_step would have returned them
-                flag = 0
+            flag = self._failed(flag, n)
             break
         reached = float(tau[0]) if self._failure is None else float(rows[n - 1, 0]) - clock.t_ref
         step = clock.step(
@@ -249,6 +242,68 @@ class CCvodeEngine:
         )
         self._t, self._out_at_root = step.t, step.y
         return step, n
+
+    def advance_grid(self, grid: np.ndarray, *, t_stop: float, rows: np.ndarray) -> tuple[Step, int]:
+        """:meth:`advance` to each time of ``grid`` in turn, in compiled code
+        (:mod:`oscillator.engines.stepping`), until a root or ``t_stop``, at most ``len(rows)``
+        times: each time reached written as a row ``(t, x1, v1, x2, v2)``.  The last return as a
+        :class:`Step`, and how many rows were written."""
+        api, memory, clock = self._api, self._objects.memory, self._clock
+        cvode, address, out = self._addresses
+        self._raise_pending()
+        while True:
+            if t_stop != self._t_stop:
+                check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
+                self._t_stop = t_stop
+            tau = self._tau
+            arguments = (clock.t_ref, t_stop, out, tau.ctypes.data, tau, self._out, grid, rows, self._last)
+            flag, n = grid_returns(cvode, address, *arguments)
+            if n == 0 and clock.refused_at_root(flag):
+                self._y[:] = self._out_at_root
+                self._initialise()  # at the root just returned
+                continue
+            flag = self._failed(flag, n)
+            break
+        if flag == CV_SUCCESS:  # the last grid time reached (or the state before a failure)
+            step = clock.step(
+                flag,
+                0.0,
+                self._last.copy(),
+                target=float(grid[n - 1]),
+                t_stop=t_stop,
+                one_step=False,
+                fired=self._fired,
+            )
+        else:  # a root before grid[n], or the stop time
+            step = clock.step(
+                flag,
+                float(tau[0]),
+                self._out.copy(),
+                target=float(grid[min(n, len(grid) - 1)]),
+                t_stop=t_stop,
+                one_step=False,
+                fired=self._fired,
+            )
+        self._t, self._out_at_root = step.t, step.y
+        return step, n
+
+    def _raise_pending(self) -> None:
+        if self._failure is not None:
+            failure, self._failure = self._failure, None
+            raise failure
+
+    def _failed(self, flag: int, n: int) -> int:
+        """A failure of CVODE inside a compiled loop: raised at once when no return preceded it,
+        else kept for the next call (the returns before it first, as one call each would have
+        told them) and the flag read as a success."""
+        if flag >= 0:
+            return flag
+        said = " ".join(self._messages)
+        failure = EngineFailure(f"{describe(flag)}; CVODE: {said}" if said else describe(flag), flag)
+        if n == 0:
+            raise failure
+        self._failure = failure
+        return CV_SUCCESS
 
     def _fired(self) -> tuple[int, ...]:
         """The roots of the last return (CVODE's root information)."""

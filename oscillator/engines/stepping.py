@@ -18,9 +18,9 @@ from numba import types
 from numba.extending import intrinsic
 
 from oscillator.compiled import njit
-from oscillator.engines.sundials import CV_ONE_STEP, CV_SUCCESS
+from oscillator.engines.sundials import CV_NORMAL, CV_ONE_STEP, CV_ROOT_RETURN, CV_SUCCESS
 
-__all__ = ["one_steps"]
+__all__ = ["grid_returns", "one_steps"]
 
 
 def _call_cvode_typing(
@@ -92,5 +92,57 @@ def one_steps(  # pragma: no cover - compiled
         last[:] = out
         n += 1
         if flag != CV_SUCCESS or tret[0] >= tau_target:
+            break
+    return flag, n
+
+
+@njit(
+    types.Tuple((types.int32, types.int64))(
+        types.intp,
+        types.intp,
+        types.float64,
+        types.float64,
+        types.intp,
+        types.intp,
+        _VECTOR,
+        _VECTOR,
+        _VECTOR,
+        _ROWS,
+        _VECTOR,
+    ),
+    cache=True,
+)
+def grid_returns(  # pragma: no cover - compiled
+    cvode: int,
+    memory: int,
+    t_ref: float,
+    t_stop: float,
+    yout: int,
+    tret_address: int,
+    tret: Any,
+    out: Any,
+    grid: Any,
+    rows: Any,
+    last: Any,
+) -> tuple[int, int]:
+    """CVODE (``CV_NORMAL``) to each time of ``grid`` in turn, until a root, the stop time or a
+    failure, at most ``len(rows)`` times; each time reached written as ``rows[k] = (grid[k],
+    out[0:4])`` (the stop time's row only when it is the grid's time).  Returns CVODE's last
+    flag and the number of rows written (a root's return writes none)."""
+    n = 0
+    flag = CV_SUCCESS
+    while n < min(rows.shape[0], grid.shape[0]):
+        flag = _call_cvode(cvode, memory, grid[n] - t_ref, yout, tret_address, CV_NORMAL)
+        if flag < 0 or flag == CV_ROOT_RETURN:
+            break
+        t = grid[n] if flag == CV_SUCCESS else t_stop
+        if t != grid[n]:
+            break
+        rows[n, 0] = t
+        for k in range(4):
+            rows[n, 1 + k] = out[k]
+        last[:] = out
+        n += 1
+        if flag != CV_SUCCESS:
             break
     return flag, n

@@ -108,8 +108,14 @@ class Recording:
             )
         record.rows.append(t, y, mode)
 
+    def ahead(self) -> np.ndarray | None:
+        """The grid times still to be reached, for an engine that goes to them in compiled code
+        (:class:`OnGrid`); None for the other policies."""
+        return None
+
     def batch(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
-        """Steps returned together in ``mode`` (rows ``t, x1, v1, x2, v2``); kept by :class:`AtSteps`."""
+        """Returns taken together in ``mode`` (rows ``t, x1, v1, x2, v2``): each step's
+        (:class:`AtSteps`) or each grid time's (:class:`OnGrid`)."""
 
     def keep(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
         """Keep a batch of rows (``n x 5``: time and state, all in ``mode``); refuse past ``max_rows``."""
@@ -171,6 +177,13 @@ class OnGrid(Recording):
         if self._next < self.grid.size:
             return float(self.grid[self._next])
         return super().target(t, t_end)
+
+    def ahead(self) -> np.ndarray | None:
+        return self.grid[self._next :] if self._next < self.grid.size else None
+
+    def batch(self, record: RunRecord, rows: np.ndarray, mode: Mode) -> None:
+        self.keep(record, rows, mode)
+        self._next += len(rows)
 
     def returned(self, record: RunRecord, step: Step, mode: Mode, target: float) -> None:
         on_grid = self._next < self.grid.size

@@ -107,6 +107,8 @@ class Supervisor:
         self._stepper: Callable[..., tuple[Step, int]] | None = (
             getattr(engine, "advance_steps", None) if recording.one_step else None
         )
+        #: On a grid, the engine's compiled loop over the grid's times where it has one.
+        self._grid: Callable[..., tuple[Step, int]] | None = getattr(engine, "advance_grid", None)
         self._rows_buffer = np.empty((STEPS_PER_RETURN, 5))
         self._events = EventGuard(options)
         self._caller_errstate = np.geterr()
@@ -180,29 +182,42 @@ class Supervisor:
         """The engine's next return (or returns, taken at once in compiled code when the
         trajectory is kept at every step), recorded; the last one."""
         target = self.recording.target(t, t_end)
-        if self._stepper is None:
+        grid = self.recording.ahead() if self._grid is not None else None
+        if self._stepper is not None:
+            rows = self._rows_buffer[: min(len(self._rows_buffer), steps.room)]
+            step, n = self._batch(self._stepper, (target,), t_end, rows, record, mode)
+            self.recording.batch(record, rows[:n], mode)
+            steps.count_many(n, step.kind is StepKind.ROOT, step.t, step.y, mode)
+            record.returns += n
+        elif grid is not None and self._grid is not None:
+            step, n = self._batch(self._grid, (grid,), t_end, self._rows_buffer, record, mode)
+            rows = self._rows_buffer[:n]
+            self.recording.batch(record, rows, mode)
+            wrote_last = n > 0 and step.kind is not StepKind.ROOT and rows[-1, 0] == step.t
+            record.returns += n + (not wrote_last)  # a root, or the stop time off the grid, writes no row
+        else:
             step = self._advance(target, t_end, self.recording.one_step, record, mode)
             record.returns += 1
             self.recording.returned(record, step, mode, target)
             if self.recording.one_step:
                 steps.count(step.kind is StepKind.ROOT, step.t, step.y, mode)
-        else:
-            rows = self._rows_buffer[: min(len(self._rows_buffer), steps.room)]
-            step, n = self._advance_steps(target, t_end, rows, record, mode)
-            record.returns += n
-            self.recording.batch(record, rows[:n], mode)
-            steps.count_many(n, step.kind is StepKind.ROOT, step.t, step.y, mode)
         record.reached(step.t, step.y, mode)
         if self.progress is not None:
             self._report_progress(step.t)
         return step
 
-    def _advance_steps(
-        self, target: float, t_end: float, rows: np.ndarray, record: RunRecord, mode: Mode
+    def _batch(
+        self,
+        method: Callable[..., tuple[Step, int]],
+        first: tuple[object, ...],
+        t_end: float,
+        rows: np.ndarray,
+        record: RunRecord,
+        mode: Mode,
     ) -> tuple[Step, int]:
-        assert self._stepper is not None
+        """Returns of the engine taken in compiled code: ``method(*first, t_stop, rows)``."""
         try:
-            return self._stepper(target, t_stop=t_end, rows=rows)
+            return method(*first, t_stop=t_end, rows=rows)
         except EngineFailure as failure:
             assert record.y_final is not None
             raise solver_failure(
