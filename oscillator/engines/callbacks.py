@@ -13,6 +13,7 @@ A serial ``N_Vector`` is ``struct {void* content; ...}`` with ``content`` a
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -87,14 +88,20 @@ def rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cov
     return 0
 
 
-@cfunc(_SIGNATURE, cache=True)
-def variational_rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cover - compiled
+def _variational_rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cover - compiled
     """``CVRhsFn`` of the state, the works and the derivative of the flow (24 equations)."""
     d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
     state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
     rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
     variational_derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
     return 0
+
+
+@functools.cache
+def variational_rhs() -> Any:
+    """The compiled callback of the 24 equations, compiled (or loaded) when first asked for: only
+    the orbit code needs it, and a plain run's first start does not wait for it."""
+    return cfunc(_SIGNATURE, cache=True)(_variational_rhs)
 
 
 @cfunc(_SIGNATURE, cache=True)

@@ -94,7 +94,7 @@ class CCvodeEngine:
     def __init__(self, params: Parameters, options: SolverOptions, *, variational: bool = False) -> None:
         #: The state's length: 8, or 24 with the derivative of the flow (:mod:`oscillator.model.kernels`).
         self.size = cb.VARIATIONAL_SIZE if variational else cb.SIZE
-        self._rhs = cb.variational_rhs if variational else cb.rhs
+        self._rhs = cb.variational_rhs() if variational else cb.rhs
         self._objects = CvodeObjects(self.size)
         self._api = self._objects.api
         self._messages: list[str] = []

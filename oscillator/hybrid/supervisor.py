@@ -101,7 +101,7 @@ class Supervisor:
         self.derivative = derivative
         #: The segment under way: its start and the event rows written since (when segments are kept).
         self._opened: tuple[float, np.ndarray, Mode] | None = None
-        self._rows: list[np.ndarray] = []
+        self._segment_rows: list[np.ndarray] = []
         #: With the trajectory at every step, the engine's compiled stepping loop where it has one
         #: (:meth:`oscillator.engines.cvode_c.CCvodeEngine.advance_steps`) and the rows it writes.
         self._stepper: Callable[..., tuple[Step, int]] | None = (
@@ -141,7 +141,7 @@ class Supervisor:
         mode = record.mode_initial = start.mode
         self.recording.events(record, t0, record.events.stage(start.rows))
         self._events.count(start.rows, record.event_count, t0)
-        self._rows = [start.rows.copy()]
+        self._segment_rows = [start.rows.copy()]
         y = np.zeros(self.engine.size)
         y[:4] = start.y
         if self.derivative:
@@ -179,8 +179,8 @@ class Supervisor:
                 return t, y, mode
 
     def _returned(self, record: RunRecord, mode: Mode, t: float, t_end: float, steps: StepGuard) -> Step:
-        """The engine's next return (or returns, taken at once in compiled code when the
-        trajectory is kept at every step), recorded; the last one."""
+        """The engine's next return, recorded: or its next returns, taken at once in compiled code
+        when the trajectory is kept at every step or on a grid (the last one)."""
         target = self.recording.target(t, t_end)
         grid = self.recording.ahead() if self._grid is not None else None
         if self._stepper is not None:
@@ -246,9 +246,9 @@ class Supervisor:
         """The segment under way ends at ``(t, y)`` (the flow's state, before any projection)."""
         assert self._opened is not None
         t0, y0, mode = self._opened
-        rows = np.concatenate(self._rows) if self._rows else np.empty((0, WIDTH))
+        rows = np.concatenate(self._segment_rows) if self._segment_rows else np.empty((0, WIDTH))
         record.segments.append(Segment(mode, t0, y0, t, y[:4].copy(), rows))
-        self._opened, self._rows = None, []
+        self._opened, self._segment_rows = None, []
 
     def _advance(self, target: float, t_end: float, one_step: bool, record: RunRecord, mode: Mode) -> Step:
         try:
@@ -280,7 +280,7 @@ class Supervisor:
         after, count = resolve_rows(t, state, self.params, mode, step.fired, self.options, log.free(MAX_ROWS), len(log))
         new = log.staged(count)
         if self.segments and count:
-            self._rows.append(new.copy())
+            self._segment_rows.append(new.copy())
         self.recording.events(record, t, count)
         self._events.count(new, record.event_count, t)
         return after, state, count
