@@ -109,6 +109,10 @@ class Supervisor:
         )
         #: On a grid, the engine's compiled loop over the grid's times where it has one.
         self._grid: Callable[..., tuple[Step, int]] | None = getattr(engine, "advance_grid", None)
+        #: Whether the grid loop's last call reached no grid time (a root came first): returns are
+        #: then taken one at a time until one reaches a grid time, so that a sparse grid (the
+        #: sweeps' once a period, among ten roots) does not pay the loop's call at every root.
+        self._grid_idle = False
         self._rows_buffer = np.empty((STEPS_PER_RETURN, 5))
         self._events = EventGuard(options)
         self._caller_errstate = np.geterr()
@@ -189,18 +193,20 @@ class Supervisor:
             self.recording.batch(record, rows[:n], mode)
             steps.count_many(n, step.kind is StepKind.ROOT, step.t, step.y, mode)
             record.returns += n
-        elif grid is not None and self._grid is not None:
+        elif grid is not None and self._grid is not None and not self._grid_idle:
             step, n = self._batch(self._grid, (grid,), t_end, self._rows_buffer, record, mode)
             rows = self._rows_buffer[:n]
             self.recording.batch(record, rows, mode)
             wrote_last = n > 0 and step.kind is not StepKind.ROOT and rows[-1, 0] == step.t
             record.returns += n + (not wrote_last)  # a root, or the stop time off the grid, writes no row
+            self._grid_idle = n == 0
         else:
             step = self._advance(target, t_end, self.recording.one_step, record, mode)
             record.returns += 1
             self.recording.returned(record, step, mode, target)
             if self.recording.one_step:
                 steps.count(step.kind is StepKind.ROOT, step.t, step.y, mode)
+            self._grid_idle = self._grid_idle and step.kind is StepKind.ROOT
         record.reached(step.t, step.y, mode)
         if self.progress is not None:
             self._report_progress(step.t)
