@@ -23,7 +23,7 @@ import numpy as np
 from oscillator.engines import EngineFailure, Step
 from oscillator.engines import callbacks as cb
 from oscillator.engines.restarts import Restarts
-from oscillator.engines.stepping import grid_returns, one_steps
+from oscillator.engines.stepping import cvode_returns
 from oscillator.engines.sundials import (
     CV_ADAMS,
     CV_NORMAL,
@@ -40,6 +40,9 @@ from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions
 
 __all__ = ["CCvodeEngine", "CvodeObjects", "check"]
+
+#: The stepping loop's grid when it takes CVODE's steps (no grid).
+_NO_GRID = np.empty(0)
 
 
 def check(flag: int, call: str) -> None:
@@ -119,6 +122,7 @@ class CCvodeEngine:
             self._objects.out or 0,
         )
         self._tau, self._last = np.zeros(1), np.zeros(self.size)
+        self._tau_address = self._tau.ctypes.data
         self._failure: EngineFailure | None = None  # met by the stepping loop after some steps: raised next
         self._out_at_root: np.ndarray = np.zeros(self.size)
         self._done_evaluations = 0
@@ -210,33 +214,9 @@ class CCvodeEngine:
         until a root, ``t_stop`` or ``target``, or ``len(rows)`` returns: each return written as
         a row ``(t, x1, v1, x2, v2)`` of ``rows``.  The last return as a :class:`Step`, and how
         many rows were written (the last one its row)."""
-        api, memory, clock = self._api, self._objects.memory, self._clock
-        cvode, address, out = self._addresses
-        self._raise_pending()
-        while True:
-            if t_stop != self._t_stop:
-                check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
-                self._t_stop = t_stop
-            tau = self._tau
-            flag, n = one_steps(
-                cvode,
-                address,
-                target - clock.t_ref,
-                clock.t_ref,
-                out,
-                tau.ctypes.data,
-                tau,
-                self._out,
-                rows,
-                self._last,
-            )
-            if n == 0 and clock.refused_at_root(flag):
-                self._y[:] = self._out_at_root
-                self._initialise()  # at the root just returned
-                continue
-            flag = self._failed(flag, n)
-            break
-        reached = float(tau[0]) if self._failure is None else float(rows[n - 1, 0]) - clock.t_ref
+        flag, n = self._returns(_NO_GRID, target, t_stop, rows)
+        clock = self._clock
+        reached = float(self._tau[0]) if self._failure is None else float(rows[n - 1, 0]) - clock.t_ref
         step = clock.step(
             flag, reached, self._last.copy(), target=target, t_stop=t_stop, one_step=True, fired=self._fired
         )
@@ -248,44 +228,47 @@ class CCvodeEngine:
         (:mod:`oscillator.engines.stepping`), until a root or ``t_stop``, at most ``len(rows)``
         times: each time reached written as a row ``(t, x1, v1, x2, v2)``.  The last return as a
         :class:`Step`, and how many rows were written."""
+        flag, n = self._returns(grid, float(grid[0]), t_stop, rows)
+        clock = self._clock
+        if flag == CV_SUCCESS:  # the last grid time reached (or the state before a failure)
+            y, target = self._last.copy(), float(grid[n - 1])
+        else:  # a root before grid[n], or the stop time
+            y, target = self._out.copy(), float(grid[min(n, len(grid) - 1)])
+        step = clock.step(flag, float(self._tau[0]), y, target=target, t_stop=t_stop, one_step=False, fired=self._fired)
+        self._t, self._out_at_root = step.t, step.y
+        return step, n
+
+    def _returns(self, grid: np.ndarray, target: float, t_stop: float, rows: np.ndarray) -> tuple[int, int]:
+        """CVODE's returns in compiled code (:func:`~oscillator.engines.stepping.cvode_returns`):
+        the stop time set, a close-roots refusal after a root cleared by a restart there, a
+        failure raised (or kept for the next call when returns preceded it)."""
         api, memory, clock = self._api, self._objects.memory, self._clock
         cvode, address, out = self._addresses
         self._raise_pending()
         while True:
-            if t_stop != self._t_stop:
+            if t_stop != self._t_stop:  # once per restart: CVODE keeps it until it is reached
                 check(api.CVodeSetStopTime(memory, t_stop - clock.t_ref), "CVodeSetStopTime")
                 self._t_stop = t_stop
             tau = self._tau
-            arguments = (clock.t_ref, t_stop, out, tau.ctypes.data, tau, self._out, grid, rows, self._last)
-            flag, n = grid_returns(cvode, address, *arguments)
+            flag, n = cvode_returns(
+                cvode,
+                address,
+                clock.t_ref,
+                t_stop,
+                target - clock.t_ref,
+                out,
+                self._tau_address,
+                tau,
+                self._out,
+                grid,
+                rows,
+                self._last,
+            )
             if n == 0 and clock.refused_at_root(flag):
                 self._y[:] = self._out_at_root
                 self._initialise()  # at the root just returned
                 continue
-            flag = self._failed(flag, n)
-            break
-        if flag == CV_SUCCESS:  # the last grid time reached (or the state before a failure)
-            step = clock.step(
-                flag,
-                0.0,
-                self._last.copy(),
-                target=float(grid[n - 1]),
-                t_stop=t_stop,
-                one_step=False,
-                fired=self._fired,
-            )
-        else:  # a root before grid[n], or the stop time
-            step = clock.step(
-                flag,
-                float(tau[0]),
-                self._out.copy(),
-                target=float(grid[min(n, len(grid) - 1)]),
-                t_stop=t_stop,
-                one_step=False,
-                fired=self._fired,
-            )
-        self._t, self._out_at_root = step.t, step.y
-        return step, n
+            return self._failed(flag, n), n
 
     def _raise_pending(self) -> None:
         if self._failure is not None:

@@ -2,7 +2,7 @@
 
 With the trajectory kept at the solver's steps, CVODE returns after each internal step
 (``CV_ONE_STEP``); a return to Python for each (a few microseconds of the interpreter, two array
-copies, a row object) costs more than the step.  :func:`one_steps` calls CVODE in a compiled
+copies, a row object) costs more than the step.  :func:`cvode_returns` calls CVODE in a compiled
 loop instead, through its C function pointer (an address passed as an integer, so that the
 loop is compiled once and cached like the callbacks), writes each return as a row
 ``(t, x1, v1, x2, v2)`` into a preallocated buffer, and comes back to Python only at a root, at
@@ -20,7 +20,7 @@ from numba.extending import intrinsic
 from oscillator.compiled import njit
 from oscillator.engines.sundials import CV_NORMAL, CV_ONE_STEP, CV_ROOT_RETURN, CV_SUCCESS
 
-__all__ = ["grid_returns", "one_steps"]
+__all__ = ["cvode_returns"]
 
 
 def _call_cvode_typing(
@@ -56,50 +56,9 @@ _VECTOR = types.Array(types.float64, 1, "C")
 
 @njit(
     types.Tuple((types.int32, types.int64))(
-        types.intp, types.intp, types.float64, types.float64, types.intp, types.intp, _VECTOR, _VECTOR, _ROWS, _VECTOR
-    ),
-    cache=True,
-)
-def one_steps(  # pragma: no cover - compiled
-    cvode: int,
-    memory: int,
-    tau_target: float,
-    t_ref: float,
-    yout: int,
-    tret_address: int,
-    tret: Any,
-    out: Any,
-    rows: Any,
-    last: Any,
-) -> tuple[int, int]:
-    """Steps of CVODE (``CV_ONE_STEP``) until a root, the stop time, ``tau_target`` or a failure,
-    at most ``len(rows)``; each return written as ``rows[k] = (t_ref + tau, out[0:4])``.
-
-    ``tret`` is the one-element array at ``tret_address`` where CVODE writes the time it
-    reached, ``out`` the data of the output vector ``yout``; ``last`` receives the whole output
-    (state, works and any variational entries) of the last successful return.  Returns CVODE's
-    last flag (a failure's, negative, with no row written for it) and the number of rows written.
-    """
-    n = 0
-    flag = CV_SUCCESS
-    while n < rows.shape[0]:
-        flag = _call_cvode(cvode, memory, tau_target, yout, tret_address, CV_ONE_STEP)
-        if flag < 0:
-            break
-        rows[n, 0] = t_ref + tret[0]
-        for k in range(4):
-            rows[n, 1 + k] = out[k]
-        last[:] = out
-        n += 1
-        if flag != CV_SUCCESS or tret[0] >= tau_target:
-            break
-    return flag, n
-
-
-@njit(
-    types.Tuple((types.int32, types.int64))(
         types.intp,
         types.intp,
+        types.float64,
         types.float64,
         types.float64,
         types.intp,
@@ -112,11 +71,12 @@ def one_steps(  # pragma: no cover - compiled
     ),
     cache=True,
 )
-def grid_returns(  # pragma: no cover - compiled
+def cvode_returns(  # pragma: no cover - compiled
     cvode: int,
     memory: int,
     t_ref: float,
     t_stop: float,
+    tau_target: float,
     yout: int,
     tret_address: int,
     tret: Any,
@@ -125,24 +85,41 @@ def grid_returns(  # pragma: no cover - compiled
     rows: Any,
     last: Any,
 ) -> tuple[int, int]:
-    """CVODE (``CV_NORMAL``) to each time of ``grid`` in turn, until a root, the stop time or a
-    failure, at most ``len(rows)`` times; each time reached written as ``rows[k] = (grid[k],
-    out[0:4])`` (the stop time's row only when it is the grid's time).  Returns CVODE's last
-    flag and the number of rows written (a root's return writes none)."""
+    """CVODE's returns, each written as a row ``(t, x1, v1, x2, v2)`` of ``rows``, at most
+    ``len(rows)``, until a root, the stop time or a failure:
+
+    * with an empty ``grid``, its steps (``CV_ONE_STEP``) up to ``tau_target``: every return a
+      row, at ``t_ref + tau``;
+    * else, in turn to each time of ``grid`` (``CV_NORMAL``): a row for each time reached (the
+      stop time's only when it is the grid's time; a root's return writes none).
+
+    ``tret`` is the one-element array at ``tret_address`` where CVODE writes the time it reached,
+    ``out`` the data of the output vector ``yout``; ``last`` receives the whole output (state,
+    works and any variational entries) of the last return that wrote a row.  Returns CVODE's
+    last flag (a failure's, negative, with no row for it) and the number of rows written.
+    """
+    on_grid = grid.shape[0] > 0
+    most = min(rows.shape[0], grid.shape[0]) if on_grid else rows.shape[0]
     n = 0
     flag = CV_SUCCESS
-    while n < min(rows.shape[0], grid.shape[0]):
-        flag = _call_cvode(cvode, memory, grid[n] - t_ref, yout, tret_address, CV_NORMAL)
-        if flag < 0 or flag == CV_ROOT_RETURN:
-            break
-        t = grid[n] if flag == CV_SUCCESS else t_stop
-        if t != grid[n]:
-            break
+    while n < most:
+        if on_grid:
+            flag = _call_cvode(cvode, memory, grid[n] - t_ref, yout, tret_address, CV_NORMAL)
+            if flag < 0 or flag == CV_ROOT_RETURN:
+                break
+            t = grid[n] if flag == CV_SUCCESS else t_stop
+            if t != grid[n]:
+                break
+        else:
+            flag = _call_cvode(cvode, memory, tau_target, yout, tret_address, CV_ONE_STEP)
+            if flag < 0:
+                break
+            t = t_ref + tret[0]
         rows[n, 0] = t
         for k in range(4):
             rows[n, 1 + k] = out[k]
         last[:] = out
         n += 1
-        if flag != CV_SUCCESS:
+        if flag != CV_SUCCESS or (not on_grid and tret[0] >= tau_target):
             break
     return flag, n
