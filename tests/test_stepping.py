@@ -71,3 +71,30 @@ def test_max_trajectory_rows_trips_at_the_same_row(per_step):
         messages.append(str(caught.value))
         assert len(caught.value.result.trajectory) == 1000
     assert messages[0] == messages[1]
+
+
+def test_an_engine_of_the_user_s_without_size_or_loops_runs_a_return_at_a_time():
+    """The Engine protocol of before (no ``size``, no compiled loops) still runs, the same run."""
+    from oscillator.engines.sksundae import SksundaeEngine
+
+    class Wrapped:
+        name = "wrapped"
+
+        def __init__(self, params, options):
+            self._engine = SksundaeEngine(params, options)
+
+        def reset(self, mode, t, y):
+            self._engine.reset(mode, t, y)
+
+        def advance(self, target, *, t_stop, one_step):
+            return self._engine.advance(target, t_stop=t_stop, one_step=one_step)
+
+        def close(self):
+            self._engine.close()
+
+        rhs_evaluations = property(lambda self: self._engine.rhs_evaluations)
+        restarts = property(lambda self: self._engine.restarts)
+
+    wrapped, direct = simulate("instance-3", engine=Wrapped), simulate("instance-3", engine="sksundae")
+    pd.testing.assert_frame_equal(wrapped.events, direct.events, check_exact=True)
+    pd.testing.assert_frame_equal(wrapped.trajectory, direct.trajectory, check_exact=True)

@@ -92,7 +92,8 @@ class Engine(Protocol):
     #: The engine's name, recorded in ``Result.stats.engine``.
     name: str
     #: The state's length: 8 (``x1, v1, x2, v2`` and the four works), or 24 with the derivative
-    #: of the flow carried along (the compiled CVODE engine, ``variational=True``).
+    #: of the flow carried along (the compiled CVODE engine, ``variational=True``); an engine
+    #: without it is taken to integrate 8.
     size: int
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:

@@ -90,8 +90,11 @@ class Supervisor:
         segments: bool = False,
         derivative: bool = False,
     ) -> None:
-        if derivative and engine.size < VARIATIONAL + 16:
-            raise ValueError(f"the derivative of the flow needs an engine of 24 equations, not {engine.size}")
+        #: The state's length: 8, or 24 with the derivative (an engine of the user's without a
+        #: ``size`` integrates the 8 of the state and the works).
+        self.size: int = getattr(engine, "size", VARIATIONAL)
+        if derivative and self.size < VARIATIONAL + 16:
+            raise ValueError(f"the derivative of the flow needs an engine of 24 equations, not {self.size}")
         self.params = params
         self.options = options
         self.engine = engine
@@ -146,7 +149,7 @@ class Supervisor:
         self.recording.events(record, t0, record.events.stage(start.rows))
         self._events.count(start.rows, record.event_count, t0)
         self._segment_rows = [start.rows.copy()]
-        y = np.zeros(self.engine.size)
+        y = np.zeros(self.size)
         y[:4] = start.y
         if self.derivative:
             y[VARIATIONAL:] = rest_projection(mode).ravel()
