@@ -171,7 +171,8 @@ def simulate(
         save = SaveAt(
             steps=bool(record_trajectory), ts=None if t_eval is None else _grid(t_eval, case), events_from=keep_from
         )
-    save = _checked(save, case, keep_from)
+    else:  # the keywords' SaveAt is checked as it is built
+        save = _checked(save, case, keep_from)
     admit(case)
     integrator = build_engine(engine, case.parameters, case.options, variational=save.derivative)
     return _run(case, integrator, save, progress)

@@ -189,14 +189,14 @@ class Supervisor:
         """The engine's next return, recorded: or its next returns, taken at once in compiled code
         when the trajectory is kept at every step or on a grid (the last one)."""
         target = self.recording.target(t, t_end)
-        grid = self.recording.ahead() if self._grid is not None else None
+        grid = self.recording.ahead() if self._grid is not None and not self._grid_idle else None
         if self._stepper is not None:
             rows = self._rows_buffer[: min(len(self._rows_buffer), steps.room)]
             step, n = self._batch(self._stepper, (target,), t_end, rows, record, mode)
             self.recording.batch(record, rows[:n], mode)
             steps.count_many(n, step.kind is StepKind.ROOT, step.t, step.y, mode)
             record.returns += n
-        elif grid is not None and self._grid is not None and not self._grid_idle:
+        elif grid is not None and self._grid is not None:
             step, n = self._batch(self._grid, (grid,), t_end, self._rows_buffer, record, mode)
             rows = self._rows_buffer[:n]
             self.recording.batch(record, rows, mode)
