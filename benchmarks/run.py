@@ -111,6 +111,7 @@ def accuracy_and_baseline(omega: float, window: int = WINDOW) -> dict:
     good = [tol for tol, error in trials if error <= ours_error]
     chosen = max(good) if good else min(trials, key=lambda item: item[1])[0]
     scipy_wall, (events, stats) = best_of(2, lambda: run_scipy(case, t_end, rtol=chosen, atol=chosen))
+    in_cvode = min(_time_in_cvode(case, t_end) for _ in range(3))
     scipy_error = float(np.max(np.abs(switching_times(events) - reference)))
     say(f"Omega = {omega}: ours {ours_wall:.3f} s off, {steps_wall:.3f} s at every step, {grid_wall:.3f} s on a "
         f"grid; SciPy {scipy_wall:.3f} s at rtol {chosen:g}")  # fmt: skip
@@ -119,7 +120,27 @@ def accuracy_and_baseline(omega: float, window: int = WINDOW) -> dict:
             "scipy_rtol": chosen, "scipy_error_s": scipy_error, "scipy_wall_s": scipy_wall,
             "scipy_rhs_calls": stats["rhs_evaluations"], "speedup": scipy_wall / ours_wall,
             "speedup_steps": scipy_wall / steps_wall, "speedup_grid": scipy_wall / grid_wall,
-            "scipy_trials": trials}  # fmt: skip
+            "in_cvode_s": in_cvode, "speedup_bound": scipy_wall / in_cvode, "scipy_trials": trials}  # fmt: skip
+
+
+def _time_in_cvode(case, t_end) -> float:
+    """Seconds spent in CVODE's calls (the integrator, the compiled callbacks, its root finding)
+    during a run with the trajectory off: what is left with no Python at all, which bounds the
+    ratio to SciPy that any supervisor on CVODE can reach."""
+    from oscillator.engines.cvode_c import CCvodeEngine
+
+    spent = [0.0]
+
+    class Timed(CCvodeEngine):
+        def advance(self, *args, **kwargs):
+            started = time.perf_counter()
+            try:
+                return super().advance(*args, **kwargs)
+            finally:
+                spent[0] += time.perf_counter() - started
+
+    simulate(case, t_end=t_end, record_trajectory=False, engine=Timed)
+    return spent[0]
 
 
 def sweep(steps: int | None = None) -> dict:
@@ -205,12 +226,14 @@ def print_baseline(rows: list[dict]) -> None:
     print(f"against SciPy solve_ivp (DOP853, events), {rows[0]['periods']} periods, event times vs a 1e-13 reference:")
     print(f"{'Omega':<8}{'ours err':>10}{'SciPy rtol':>11}{'SciPy err':>11}{'SciPy (s)':>11}   "
           f"{'ours, trajectory: off (s)':>26}{'ratio':>7}{'every step (s)':>16}{'ratio':>7}"
-          f"{'grid (s)':>10}{'ratio':>7}")  # fmt: skip
+          f"{'grid (s)':>10}{'ratio':>7}{'in CVODE (s)':>14}{'bound':>7}")  # fmt: skip
     for row in rows:
         print(f"{row['omega']:<8}{row['ours_error_s']:>10.1e}{row['scipy_rtol']:>11.0e}{row['scipy_error_s']:>11.1e}"
               f"{row['scipy_wall_s']:>11.3f}   {row['ours_wall_s']:>26.3f}{row['speedup']:>7.1f}"
               f"{row['ours_steps_wall_s']:>16.3f}{row['speedup_steps']:>7.1f}{row['ours_grid_wall_s']:>10.3f}"
-              f"{row['speedup_grid']:>7.1f}")  # fmt: skip
+              f"{row['speedup_grid']:>7.1f}{row['in_cvode_s']:>14.3f}{row['speedup_bound']:>7.1f}")  # fmt: skip
+    print("  in CVODE: the run's time inside CVODE's calls alone (trajectory off); bound: SciPy / that, the ratio a")
+    print("  supervisor with no Python cost at all would reach on the same CVODE steps")
 
 
 def print_sweep(s: dict) -> None:
@@ -352,7 +375,9 @@ STARTUP_CHILD = (
 
 
 def startup() -> dict:
-    """Seconds to import and run a short case in a fresh process: numba's cache empty, then filled."""
+    """Seconds to import and run a short case in a fresh process: numba's cache empty, then filled;
+    and the README's first command (`oscillator run instance-3`, without figures) likewise, whose
+    first run compiles with a second process beside it and a progress bar."""
     import tempfile
 
     with tempfile.TemporaryDirectory() as cache:
@@ -360,8 +385,18 @@ def startup() -> dict:
         runs = [subprocess.run([sys.executable, "-c", STARTUP_CHILD], env=env, capture_output=True, text=True,
                                check=True) for _ in range(3)]  # fmt: skip
     cold, *warm = (float(r.stdout.strip().splitlines()[-1]) for r in runs)
-    row = {"cold_s": cold, "warm_s": min(warm)}
-    say(f"first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s")
+    command = [sys.executable, "-m", "oscillator", "run", "instance-3", "--no-plots", "--no-report", "--quiet"]
+    walls = []
+    with tempfile.TemporaryDirectory() as folder:
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(folder) / "cache")}
+        for i in range(2):
+            started = time.perf_counter()
+            subprocess.run([*command, "--out", str(Path(folder) / f"run-{i}")], env=env, check=True,
+                           capture_output=True)  # fmt: skip
+            walls.append(time.perf_counter() - started)
+    row = {"cold_s": cold, "warm_s": min(warm), "cli_cold_s": walls[0], "cli_warm_s": walls[1]}
+    say(f"simulate(): first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s; "
+        f"`oscillator run instance-3`: {walls[0]:.1f} s, then {walls[1]:.1f} s")
     return row
 
 
@@ -382,7 +417,8 @@ def print_per_root(row: dict) -> None:
 
 def print_startup(row: dict) -> None:
     print(f"start-up (import + a 2 s run, fresh process): {row['cold_s']:.1f} s with numba's cache empty, "
-          f"{row['warm_s']:.1f} s with it filled")  # fmt: skip
+          f"{row['warm_s']:.1f} s with it filled; `oscillator run instance-3 --no-plots`: {row['cli_cold_s']:.1f} s "
+          f"with it empty (the first run after an install), {row['cli_warm_s']:.1f} s with it filled")  # fmt: skip
 
 
 def orbits(quick: bool) -> dict:

@@ -118,7 +118,8 @@ def cvode_returns(  # pragma: no cover - compiled
         rows[n, 0] = t
         for k in range(4):
             rows[n, 1 + k] = out[k]
-        last[:] = out
+        for k in range(out.shape[0]):  # not last[:] = out: its shape check compiles numba's string formatting (2.5 s)
+            last[k] = out[k]
         n += 1
         if flag != CV_SUCCESS or (not on_grid and tret[0] >= tau_target):
             break

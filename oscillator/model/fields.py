@@ -16,6 +16,7 @@ import functools
 import math
 
 import numpy as np
+from numba import types
 
 from oscillator.compiled import njit
 from oscillator.model.parameters import Parameters
@@ -35,6 +36,12 @@ __all__ = [
     "state_derivative",
     "static_threshold",
 ]
+
+#: The parameter vector's type in the compiled formulas' signatures.  The small formulas that many
+#: kernels call with constant arguments (``kinetic(c, 1, ...)``) have their one signature given:
+#: else numba compiles them again for each constant (17 versions, 3 s of the first run).
+_C = types.Array(types.float64, 1, "C")
+_f, _i, _b = types.float64, types.int64, types.boolean
 
 # Each formula is written once, as a compiled (numba) scalar function of a parameter vector; the
 # Python functions below and the CVODE kernels (``oscillator.model.kernels``) all call these.
@@ -79,7 +86,10 @@ _MAX_VECTORS = 64
 
 
 def coefficients(p: Parameters) -> Vector:
-    """The parameters as the vector the compiled formulas take (read-only, cached)."""
+    """The parameters as the vector the compiled formulas take (cached: shared, never written to).
+
+    The vector is writable, as the C callbacks' view of CVODE's user data is: a read-only one would
+    make numba compile every formula a second time for it (3 s of the first run)."""
     entry = _VECTORS.get(id(p))
     if entry is not None and entry[0] is p:
         return entry[1]
@@ -92,9 +102,7 @@ def coefficients(p: Parameters) -> Vector:
 
 @functools.lru_cache(maxsize=64)
 def _vector(p: Parameters) -> Vector:
-    vector = np.array([getattr(p, name) for name in Parameters.names()], dtype=np.float64)
-    vector.setflags(write=False)
-    return vector
+    return np.array([getattr(p, name) for name in Parameters.names()], dtype=np.float64)
 
 
 @njit(cache=True)
@@ -131,7 +139,7 @@ def force_rates(
     return r1 / c[M1], r2 / c[M2]
 
 
-@njit(cache=True)
+@njit(_f(_C, _i, _b), cache=True)
 def threshold(c: Vector, mass: int, static: bool) -> float:  # pragma: no cover - compiled
     """``mu g + p_i`` with ``mu = mu_s`` (static) or ``mu_k``: friction plus feedback per unit mass."""
     mu = c[MU_S] if static else c[MU_K]
@@ -149,7 +157,7 @@ def static_threshold(p: Parameters, mass: int) -> float:
     return float(threshold(coefficients(p), mass, True))
 
 
-@njit(cache=True)
+@njit(_f(_C, _i, _i, _f), cache=True)
 def kinetic(c: Vector, mass: int, sign: int, force: float) -> float:  # pragma: no cover - compiled
     """``A_i - s (mu_k g + p_i)``, or 0 at rest; see :func:`kinetic_field`."""
     if sign == 0:
@@ -157,7 +165,7 @@ def kinetic(c: Vector, mass: int, sign: int, force: float) -> float:  # pragma: 
     return force - sign * threshold(c, mass, False)
 
 
-@njit(cache=True)
+@njit(_f(_C, _i, _i, _f), cache=True)
 def barrier(c: Vector, mass: int, sign: int, force: float) -> float:  # pragma: no cover - compiled
     """``A_i - s (mu_s g + p_i)``; see :func:`flow_barrier_field`."""
     return force - sign * threshold(c, mass, True)

@@ -181,7 +181,7 @@ _NAN = math.nan
 _i, _f, _b = types.int64, types.float64, types.boolean
 _MODE = types.UniTuple(_i, 4)
 _VECTOR = types.Array(_f, 1, "C")
-_PARAMS = types.Array(_f, 1, "C", readonly=True)
+_PARAMS = types.Array(_f, 1, "C")
 _ROWS = types.Array(_f, 2, "C")
 _PAIR = types.UniTuple(_f, 2)
 _STEP = types.Tuple((_MODE, _i))
