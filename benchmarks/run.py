@@ -395,8 +395,10 @@ def startup() -> dict:
                            capture_output=True)  # fmt: skip
             walls.append(time.perf_counter() - started)
     row = {"cold_s": cold, "warm_s": min(warm), "cli_cold_s": walls[0], "cli_warm_s": walls[1]}
-    say(f"simulate(): first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s; "
-        f"`oscillator run instance-3`: {walls[0]:.1f} s, then {walls[1]:.1f} s")
+    say(
+        f"simulate(): first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s; "
+        f"`oscillator run instance-3`: {walls[0]:.1f} s, then {walls[1]:.1f} s"
+    )
     return row
 
 
