@@ -1,5 +1,6 @@
 """The C-level CVODE engine: active here, identical to scikit-sundae's, every object freed, errors told."""
 
+import ctypes
 import gc
 import os
 import subprocess
@@ -103,3 +104,17 @@ def test_the_engines_agree_on_random_systems(case):
         assert isinstance(outcomes[1], str) and outcomes[0].split(" with flag")[0] == outcomes[1].split(" with flag")[0]
     else:
         pd.testing.assert_frame_equal(outcomes[0], outcomes[1], check_exact=True)
+
+
+def test_a_mass_at_rest_under_no_force_prints_no_warning(capfd):
+    """m2 at rest with no force on it and no friction (beside a frictionless Duffing oscillator
+    m1): root functions identically zero at restarts; CVODE stops watching them without a word
+    on stdout (its logger printed a warning there at each of the 24 restarts)."""
+    duffing = {"m1": 1.0, "K1": 0.0, "K2": 1.0, "C1": 0.05, "C2": 0.0, "Q1": 7.5, "Omega": 1.0, "x1": 2.5, "v1": 0.0}
+    still = {"mu_k": 0.0, "mu_s": 0.0, "P1": 0.0, "P2": 0.0, "Q2": 0.0, "x2": 0.0, "v2": 0.0, "d": 1e3, "d1": 1e3}
+    result = simulate("instance-1", t0=0.0, t_end=30.0, **duffing, **still)
+    assert result.status.value == "complete" and len(result.events) > 0
+    assert (result.trajectory.v2 == 0.0).all()
+    ctypes.CDLL(None).fflush(None)  # SUNDIALS' logger writes through C's buffered stdout
+    printed = capfd.readouterr()
+    assert printed.out == "" and printed.err == ""

@@ -23,11 +23,9 @@ one Parquet file per table (memory stays flat in the number of points).
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import dataclasses
 import json
 import math
-import multiprocessing
 import os
 import stat
 import time
@@ -41,11 +39,11 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from oscillator.analysis.execution import run_tasks
 from oscillator.analysis.intervals import rest_intervals, runs
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
-from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import SweepSettings, is_whole_number
 from oscillator.text import printable, shown
@@ -468,12 +466,6 @@ def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
 # --------------------------------------------------------------------------- execution
 
 
-def _points_serial(case: Case, settings: SweepSettings, tasks: Tasks) -> Iterator[PointTables]:
-    directions = dict(enumerate(direction for direction, _ in settings.points))
-    for index, value in tasks:
-        yield run_point(case, settings, index, value, direction=directions[index])
-
-
 def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: _Store) -> Iterator[PointTables]:
     """A both-ways sweep: each point from the state the point before it ended in (read from
     its stored summary when resuming), the first from the case's start; after a failed point,
@@ -491,43 +483,6 @@ def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: 
         state = tuple(float(row[f"end_{name}"]) for name in ("x1", "v1", "x2", "v2"))
         ends[index] = state if all(math.isfinite(v) for v in state) else None
         yield point
-
-
-def _points_pool(case: Case, settings: SweepSettings, tasks: Tasks, workers: int) -> Iterator[PointTables]:
-    """A local process pool; at most ``4 workers`` points in flight, so memory stays flat.
-
-    The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator.io.signals`); on an
-    interrupt or an error here they are stopped at once, so nothing outlives the sweep.
-    """
-    context = multiprocessing.get_context("spawn")
-    quiet_resource_tracker()
-    pending = iter(tasks)
-    running: set[cf.Future[Any]] = set()
-    with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
-        pool = cf.ProcessPoolExecutor(
-            max_workers=workers, mp_context=context, initializer=prepare_worker, initargs=(os.getpid(),)
-        )
-
-        def fill() -> None:
-            for index, value in pending:
-                running.add(pool.submit(run_point, case, settings, index, value, direction=settings.points[0][0]))
-                if len(running) >= 4 * workers:
-                    return
-
-        fill()
-    try:
-        while running:
-            finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
-            for future in finished:
-                running.discard(future)
-                yield future.result()
-            fill()
-    except BaseException:
-        for process in list(getattr(pool, "_processes", {}).values()):  # no public way to stop busy workers
-            process.terminate()
-        pool.shutdown(wait=True, cancel_futures=True)  # quick now; frees the pool's semaphores
-        raise
-    pool.shutdown()
 
 
 def _scheduler_address(scheduler: str) -> str:
@@ -570,22 +525,6 @@ def _connect(scheduler: str) -> Any:
             f"scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",
             field="scheduler",
         ) from exc
-
-
-def _points_dask(client: Any, case: Case, settings: SweepSettings, tasks: Tasks) -> Iterator[PointTables]:
-    from distributed import as_completed
-
-    case_on_cluster = client.scatter(case, broadcast=True)
-    direction = settings.points[0][0]  # one way: a both-ways sweep runs in this process
-    futures = [
-        client.submit(run_point, case_on_cluster, settings, i, v, direction=direction, pure=False) for i, v in tasks
-    ]
-    try:
-        for future in as_completed(futures):
-            yield future.result()
-            future.release()
-    finally:
-        client.cancel(futures)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -645,12 +584,15 @@ class Sweep:
                 progress(len(done), len(values))
             if settings.both_ways:  # each point starts where the one before it ended: one after another
                 points: Iterable[PointTables] = _points_following(self.case, settings, tasks, store)
-            elif self._client is not None:
-                points = _points_dask(self._client, self.case, settings, tasks)
-            elif self.workers == 1 or len(tasks) <= 1:
-                points = _points_serial(self.case, settings, tasks)
-            else:
-                points = _points_pool(self.case, settings, tasks, min(self.workers, len(tasks)))
+            else:  # one way: every point from the case's start, in any order, anywhere
+                points = run_tasks(
+                    run_point,
+                    tasks,
+                    shared=(self.case, settings),
+                    keywords={"direction": settings.points[0][0]},
+                    workers=self.workers,
+                    client=self._client,
+                )
             computed = 0
             for point in points:
                 store.write_point(point)

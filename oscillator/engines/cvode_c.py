@@ -138,6 +138,10 @@ class CCvodeEngine:
         check(api.CVodeSetMaxNonlinIters(memory, 3), "CVodeSetMaxNonlinIters")
         check(api.CVodeSetMaxConvFails(memory, 10), "CVodeSetMaxConvFails")
         check(api.CVodeRootInit(memory, NUM_ROOTS, ctypes.c_void_p(cb.roots.address)), "CVodeRootInit")
+        # a root function identically zero at a restart (a mass at rest under no force at all) is
+        # watched no more by CVODE until it moves: nothing to warn about (SUNDIALS' logger printed
+        # a warning on stdout at each restart, into the command's output)
+        check(api.CVodeSetNoInactiveRootWarn(memory), "CVodeSetNoInactiveRootWarn")
         check(api.CVodeSetInitStep(memory, 0.0), "CVodeSetInitStep")
         check(api.CVodeSetMinStep(memory, 0.0), "CVodeSetMinStep")
         check(api.CVodeSetMaxStep(memory, float(self._data[cb.LAYOUT["step"]])), "CVodeSetMaxStep")
