@@ -85,6 +85,7 @@ LAYERS = (
     ("engines", "io"),
     ("hybrid",),
     ("analysis", "orbits"),
+    ("attractors",),
     ("report",),
     ("cli",),
     ("__init__", "__main__", "saved", "views"),

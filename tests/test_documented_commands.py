@@ -35,7 +35,9 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[1]
 COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-COMMANDS = ("list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue")
+COMMANDS = (
+    "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue", "basins", "attractors", "lyapunov"
+)  # fmt: skip
 
 
 @dataclass
@@ -93,6 +95,17 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
     elif command == "continue":  # a coarse branch: the same command, fewer points
         arguments = _set(arguments, "--step", "0.5")
+    elif command in ("basins", "attractors"):  # a 3 x 3 slice, short runs, a coarse bisection
+        for option in ("--x", "--y"):
+            if option in arguments:
+                arguments = list(arguments)
+                arguments[arguments.index(option) + 4] = "3"
+        for option, value in (("--transient", "20"), ("--record", "4"), ("--workers", "1")):
+            arguments = _set(arguments, option, value)
+        if command == "attractors":
+            arguments = _set(_set(arguments, "--steps", "3"), "--tol", "1e-3")
+    elif command == "lyapunov":
+        arguments = _set(_set(arguments, "--periods", "20"), "--transient", "10")
     elif command == "locate":  # both ends are simulated, and must differ; no bisection
         a, b = (float(v) for v in arguments[arguments.index("--between") + 1 :][:2])
         arguments = _set(arguments, "--tolerance", f"{abs(b - a):.17g}")
@@ -152,7 +165,7 @@ def test_every_command_of_a_page_runs_as_shown(tmp_path, monkeypatch, page):
 #: The commands whose --help examples run together, in this order (``report``'s example reads a
 #: folder that ``run``'s example writes); the groups run side by side.
 HELP_GROUPS = {"runs": ("list", "show", "check", "run", "report"), "sweeps": ("sweep", "locate"),
-               "orbits": ("orbit", "continue")}  # fmt: skip
+               "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov")}  # fmt: skip
 
 
 def test_every_command_has_a_help_example_in_a_group():

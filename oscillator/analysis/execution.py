@@ -18,15 +18,35 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing
+import numbers
 import os
+import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
+from oscillator.errors import InputError
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
+from oscillator.text import shown
 
-__all__ = ["run_tasks"]
+__all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "connect", "run_tasks"]
 
 T = TypeVar("T")
+
+#: The most local worker processes per core: more only share the cores.
+MAX_WORKERS_PER_CORE = 4
+
+
+def check_workers(workers: object) -> int:
+    """``workers`` checked (a whole number from 1 to 4 per core), or every core for None."""
+    most = MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if workers is None:
+        return os.cpu_count() or 1
+    if not isinstance(workers, numbers.Integral) or isinstance(workers, bool) or not 1 <= int(workers) <= most:
+        raise InputError(
+            f"workers must be a whole number from 1 to {most} ({MAX_WORKERS_PER_CORE} per core), got {shown(workers)}",
+            field="workers",
+        )
+    return int(workers)
 
 
 def run_tasks(
@@ -104,3 +124,45 @@ def _on_dask(
             future.release()
     finally:
         client.cancel(futures)
+
+
+def _scheduler_address(scheduler: str) -> str:
+    """Refuse an address that is not ``tcp://HOST:PORT`` (or tls://, ucx://, inproc://)."""
+    try:
+        parsed = urllib.parse.urlsplit(scheduler)
+        port = parsed.port
+    except ValueError:  # "tcp://[::1": an unclosed IPv6 bracket; a port that is no number
+        parsed, port = urllib.parse.urlsplit(""), None
+    if (
+        parsed.scheme not in ("tcp", "tls", "ucx", "inproc")
+        or not parsed.hostname
+        or (parsed.scheme != "inproc" and port is None)
+    ):
+        raise InputError(
+            f"scheduler {shown(scheduler)} is not the address of a Dask scheduler; give tcp://HOST:PORT",
+            field="scheduler",
+        )
+    return scheduler
+
+
+def connect(scheduler: str) -> Any:
+    """A Dask client of the scheduler at ``scheduler``, or a clear error."""
+    address = _scheduler_address(scheduler)
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise InputError(
+            "scheduler needs Dask: pip install 'oscillator[dask]' (dask.distributed)", field="scheduler"
+        ) from exc
+    parsed = urllib.parse.urlsplit(address)
+    try:
+        if parsed.scheme in ("tcp", "tls"):  # a refused connection is said at once, not after Dask's retries
+            import socket
+
+            socket.create_connection((parsed.hostname, parsed.port), timeout=10).close()
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError) as exc:
+        raise InputError(
+            f"scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",
+            field="scheduler",
+        ) from exc

@@ -29,7 +29,6 @@ import math
 import os
 import stat
 import time
-import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -39,14 +38,14 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from oscillator.analysis.execution import run_tasks
+from oscillator.analysis.execution import check_workers, connect, run_tasks
 from oscillator.analysis.intervals import rest_intervals, runs
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
 from oscillator.model.events import EventKind
-from oscillator.model.parameters import SweepSettings, is_whole_number
-from oscillator.text import printable, shown
+from oscillator.model.parameters import SweepSettings
+from oscillator.text import printable
 
 __all__ = [
     "TABLES",
@@ -485,48 +484,6 @@ def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: 
         yield point
 
 
-def _scheduler_address(scheduler: str) -> str:
-    """Refuse an address that is not ``tcp://HOST:PORT`` (or tls://, ucx://, inproc://)."""
-    try:
-        parsed = urllib.parse.urlsplit(scheduler)
-        port = parsed.port
-    except ValueError:  # "tcp://[::1": an unclosed IPv6 bracket; a port that is no number
-        parsed, port = urllib.parse.urlsplit(""), None
-    if (
-        parsed.scheme not in ("tcp", "tls", "ucx", "inproc")
-        or not parsed.hostname
-        or (parsed.scheme != "inproc" and port is None)
-    ):
-        raise InputError(
-            f"scheduler {shown(scheduler)} is not the address of a Dask scheduler; give tcp://HOST:PORT",
-            field="scheduler",
-        )
-    return scheduler
-
-
-def _connect(scheduler: str) -> Any:
-    """A Dask client of the scheduler at ``scheduler``, or a clear error."""
-    address = _scheduler_address(scheduler)
-    try:
-        from distributed import Client
-    except ImportError as exc:
-        raise InputError(
-            "scheduler needs Dask: pip install 'oscillator[dask]' (dask.distributed)", field="scheduler"
-        ) from exc
-    parsed = urllib.parse.urlsplit(address)
-    try:
-        if parsed.scheme in ("tcp", "tls"):  # a refused connection is said at once, not after Dask's retries
-            import socket
-
-            socket.create_connection((parsed.hostname, parsed.port), timeout=10).close()
-        return Client(address, timeout="10s")
-    except (OSError, ValueError, TypeError) as exc:
-        raise InputError(
-            f"scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",
-            field="scheduler",
-        ) from exc
-
-
 @dataclasses.dataclass(frozen=True)
 class SweepOutcome:
     """Where a sweep was written and how it went."""
@@ -537,10 +494,6 @@ class SweepOutcome:
     resumed: int
     failed: int
     wall_time: float
-
-
-#: The most local worker processes per core: more only share the cores.
-MAX_WORKERS_PER_CORE = 4
 
 
 class Sweep:
@@ -656,13 +609,8 @@ def open_sweep(
     _check_values(case, settings)
     store = _Store(Path(folder), case, settings)
     store.check()
-    most = MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
-    if workers is not None and (not is_whole_number(workers) or not 1 <= workers <= most):
-        raise InputError(
-            f"workers must be a whole number from 1 to {most} ({MAX_WORKERS_PER_CORE} per core), got {shown(workers)}",
-            field="workers",
-        )
-    client = _connect(scheduler) if scheduler else None
+    workers = check_workers(workers)
+    client = connect(scheduler) if scheduler else None
     try:
         lock = lock_name(
             store.folder,
@@ -673,7 +621,7 @@ def open_sweep(
         if client is not None:
             client.close()
         raise
-    return Sweep(case, settings, store, workers or os.cpu_count() or 1, client, lock)
+    return Sweep(case, settings, store, workers, client, lock)
 
 
 def run_sweep(

@@ -1,4 +1,5 @@
-"""The ``oscillator`` command: list, show, run, check, report, sweep, locate, orbit and continue.
+"""The ``oscillator`` command: list, show, run, check, report, sweep, locate, orbit, continue, basins
+and lyapunov.
 
 The rule for exit codes:
 
@@ -23,7 +24,7 @@ from typing import Annotated
 import typer
 from rich.text import Text
 
-from oscillator.cli import cases, check, console, orbit, run, sweep
+from oscillator.cli import attractors, cases, check, console, orbit, run, sweep
 from oscillator.cli.console import err, out
 from oscillator.text import printable
 from oscillator.version import __version__
@@ -115,4 +116,9 @@ app.command(short_help="Find a periodic orbit and its Floquet multipliers.")(orb
 app.command("continue", short_help="Continue a periodic orbit in a parameter; locate its bifurcations.")(
     orbit.continue_
 )
+app.command(short_help="Basins of attraction over a slice of starting states.")(attractors.basins)
+app.command(short_help="The attractors over a parameter: shares, and where each appears or ends.")(
+    attractors.attractors
+)
+app.command(short_help="The Lyapunov spectrum of a motion.")(attractors.lyapunov)
 app.callback(invoke_without_command=True)(_version)

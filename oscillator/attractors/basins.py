@@ -1,0 +1,162 @@
+"""Basins of attraction over a plane of starting states, computed into a folder that resumes.
+
+A slice of the state space: two of ``x1 v1 x2 v2`` on a grid (:class:`Axis`), the other two
+and the section ``t0`` from the case's start.  Every cell's start is run by
+:func:`~oscillator.attractors.finding.land`, and the landings are kept in the folder as they
+finish (``parts/``: one Parquet file per batch, written atomically), so that a run that was
+killed or interrupted resumes with the same command, no start lost or run twice.  When all are
+in, they are grouped into attractors exactly as :func:`~oscillator.attractors.finding.find_attractors`
+does (in the starts' order, so the result does not depend on the number of workers).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from oscillator.analysis.execution import run_tasks
+from oscillator.attractors.finding import STATE, Attractors, AttractorSettings, Landing, assemble, land
+from oscillator.attractors.store import LandingStore
+from oscillator.errors import InputError
+from oscillator.io.cases import Case, case_to_toml
+from oscillator.text import shown
+
+__all__ = ["Axis", "Basins", "basin_store", "grid_starts", "run_basins"]
+
+#: The most cells along one axis.
+MAX_CELLS = 2000
+#: Landings written per part file.
+BATCH = 64
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the slice: a state component and ``count`` values from ``low`` to ``high``."""
+
+    name: str
+    low: float
+    high: float
+    count: int
+
+    def __post_init__(self) -> None:
+        if self.name not in STATE:
+            raise InputError(
+                f"axis {shown(self.name)} is not a state component; give one of {', '.join(STATE)}", field="axis"
+            )
+        for end in (self.low, self.high):
+            if not (isinstance(end, (int, float)) and not isinstance(end, bool) and math.isfinite(end)):
+                raise InputError(f"axis {self.name}: its ends must be finite numbers, got {shown(end)}", field="axis")
+        if not self.low < self.high:
+            raise InputError(
+                f"axis {self.name}: from {self.low:g} to {self.high:g} is empty; give the lower end first", field="axis"
+            )
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or not 2 <= self.count <= MAX_CELLS:
+            raise InputError(
+                f"axis {self.name}: its count must be a whole number from 2 to {MAX_CELLS}, got {shown(self.count)}",
+                field="axis",
+            )
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.linspace(self.low, self.high, self.count)
+
+
+def grid_starts(case: Case, x: Axis, y: Axis) -> np.ndarray:
+    """The slice's starts, ``(x.count * y.count, 4)``, cell ``(i, j)`` (``i`` along x) at row
+    ``j * x.count + i``; the two other components are the case's start."""
+    if x.name == y.name:
+        raise InputError(f"the two axes are both {x.name}; give two different state components", field="axis")
+    starts = np.tile(np.array(case.initial.y, dtype=float), (x.count * y.count, 1))
+    xs, ys = np.meshgrid(x.values, y.values)
+    starts[:, STATE.index(x.name)] = xs.ravel()
+    starts[:, STATE.index(y.name)] = ys.ravel()
+    return starts
+
+
+@dataclass(frozen=True)
+class Basins:
+    """The basins of a slice: the attractors, and each cell's attractor.
+
+    Attributes
+    ----------
+    found : Attractors
+        The attractors and the labels of every start (row ``j * x.count + i``).
+    x, y : Axis
+        The slice's axes.
+    """
+
+    found: Attractors
+    x: Axis
+    y: Axis
+
+    @property
+    def grid(self) -> np.ndarray:
+        """The attractor of each cell, ``(y.count, x.count)``; -1 where the run failed."""
+        labels: np.ndarray = self.found.labels.attractor.to_numpy()
+        return labels.reshape(self.y.count, self.x.count)
+
+    def table(self) -> pd.DataFrame:
+        """One row per cell: the two axes' values, the attractor, the run's status and reason."""
+        labels = self.found.labels
+        frame = pd.DataFrame({self.x.name: labels[self.x.name], self.y.name: labels[self.y.name]})
+        for column in ("attractor", "period", "status", "reason", "message"):
+            frame[column] = labels[column]
+        return frame
+
+
+def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:
+    """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`)."""
+    identity = {
+        "case": case_to_toml(case),
+        "x": dataclasses.asdict(x),
+        "y": dataclasses.asdict(y),
+        "settings": dataclasses.asdict(settings),
+    }
+    return LandingStore(folder, "basins.json", identity)
+
+
+def run_basins(
+    case: Case,
+    x: Axis,
+    y: Axis,
+    store: LandingStore,
+    *,
+    settings: AttractorSettings,
+    workers: int = 1,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Basins:
+    """Compute the starts not yet in ``store`` (checked), keep them as they finish, and group all.
+
+    ``progress(done, total)`` after every start.  On an interrupt or an error the landings
+    finished so far are in the folder (the batch in hand is written first)."""
+    starts = grid_starts(case, x, y)
+    store.open()
+    landings = store.read()
+    done = {item.index for item in landings}
+    tasks = [(index, tuple(row)) for index, row in enumerate(starts) if index not in done]
+    total = len(starts)
+    if progress is not None:
+        progress(len(landings), total)
+    pending: list[Landing] = []
+    try:
+        for landing in run_tasks(land, tasks, shared=(case, settings), workers=workers, client=client):
+            pending.append(landing)
+            if len(pending) >= BATCH:
+                store.write(pending)
+                landings += pending
+                pending = []
+            if progress is not None:
+                progress(len(landings) + len(pending), total)
+    finally:
+        store.write(pending)
+    landings += pending
+    store.write_status("computed", starts=total, failed=sum(item.status != "ok" for item in landings))
+    return Basins(assemble(case, settings, landings), x, y)

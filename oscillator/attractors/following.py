@@ -1,0 +1,335 @@
+"""The attractors over a parameter: found at each value, matched from value to value, their basin
+fractions, and the parameter values where each one appears or ends, located by bisection.
+
+At each value the starts are the fresh ones (the same at every value: a slice of the state
+space, or the case's start) and one *seed* per attractor of the value before: its last section
+point.  The attractors are grouped as :func:`~oscillator.attractors.finding.find_attractors`
+groups them; an attractor continues one of the value before when that one's seed lands on it
+and it has the same period and cycle of switches, and keeps its number (``id``); any other is
+new.  Basin fractions count the fresh
+starts only.  (The approach of Attractors.jl's ``AttractorSeedContinueMatch``, here with the
+matching by where the seeds go.)
+
+Where an attractor is present at one value and absent at the next, the parameter is bisected
+between them: at the midpoint a run from the attractor's last point (a ``transient``, then the
+recorded periods) tells whether it still lands on an attractor with the same cycle of switches
+and period; the interval is halved until it is shorter than ``tol``.  So a window where two
+attractors coexist (hysteresis) is bounded at both ends to ``tol``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from oscillator.analysis.execution import run_tasks
+from oscillator.attractors.finding import (
+    Attractor,
+    Attractors,
+    AttractorSettings,
+    Landing,
+    assemble,
+    check_states,
+    land,
+)
+from oscillator.attractors.store import LandingStore
+from oscillator.errors import InputError, OscillatorError
+from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import Parameters
+from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.orbits.continuation import Branch
+
+__all__ = ["AttractorsOver", "End", "follow_attractors", "local_branches"]
+
+#: The most parameter values, and the smallest bisection tolerance.
+MAX_VALUES = 10_000
+MIN_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class End:
+    """Where an attractor appears or ends between two parameter values.
+
+    ``inside`` is the last value found with it and ``outside`` the first without it (``|inside -
+    outside| <= tol``); ``becomes`` is the attractor its seed reached at ``outside`` (its name),
+    or ``""`` if the run failed."""
+
+    id: int
+    name: str
+    inside: float
+    outside: float
+    becomes: str
+
+    @property
+    def at(self) -> float:
+        return 0.5 * (self.inside + self.outside)
+
+
+@dataclass(frozen=True)
+class AttractorsOver:
+    """The attractors over a parameter (:func:`follow_attractors`).
+
+    Attributes
+    ----------
+    case : Case
+    param : str
+    values : ndarray
+    found : tuple of Attractors
+        At each value, the attractors (with ids local to that value) and the starts' labels.
+    ids : tuple of dict
+        At each value, local id -> the id kept over the parameter.
+    ends : tuple of End
+        The located appearances and ends.
+    """
+
+    case: Case
+    param: str
+    values: np.ndarray
+    found: tuple[Attractors, ...] = field(repr=False)
+    ids: tuple[dict[int, int], ...] = field(repr=False)
+    fresh: int = 1
+    ends: tuple[End, ...] = ()
+
+    def table(self) -> pd.DataFrame:
+        """One row per value and attractor: the value, ``id``, name, period, cycle of switches,
+        share of the fresh starts with its confidence interval, stability, largest multiplier,
+        largest Lyapunov exponent (aperiodic), section points (JSON)."""
+        from scipy.stats import binomtest
+
+        rows = []
+        for value, found, ids in zip(self.values, self.found, self.ids, strict=True):
+            fresh = found.labels[found.labels["index"] < self.fresh]
+            for attractor in found.attractors:
+                k = int((fresh.attractor == attractor.id).sum())
+                interval = binomtest(k, len(fresh)).proportion_ci(method="wilson")
+                rows.append(_row(self.param, float(value), ids[attractor.id], attractor, k, len(fresh), interval))
+        return pd.DataFrame(rows)
+
+    def ends_table(self) -> pd.DataFrame:
+        columns = ["id", "name", "inside", "outside", "at", "becomes"]
+        return pd.DataFrame([(e.id, e.name, e.inside, e.outside, e.at, e.becomes) for e in self.ends], columns=columns)
+
+
+def _row(
+    param: str, value: float, ident: int, attractor: Attractor, k: int, total: int, interval: Any
+) -> dict[str, Any]:
+    orbit = attractor.orbit
+    return {
+        param: value,
+        "id": ident,
+        "name": attractor.name.split(": ", 1)[-1],
+        "kind": attractor.kind,
+        "period": attractor.period,
+        "signature": attractor.signature,
+        "starts": k,
+        "fraction": k / total if total else math.nan,
+        "low": interval.low,
+        "high": interval.high,
+        "stable": None if orbit is None else bool(orbit.stable),
+        "largest_multiplier": math.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
+        "lyapunov": attractor.lyapunov,
+        "points": json.dumps(attractor.points.tolist()),
+    }
+
+
+def _check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, tol: float) -> np.ndarray:
+    if param not in Parameters.names():
+        raise InputError(
+            f"param {shown(param)} is not a parameter; give one of {', '.join(Parameters.names())}", field="param"
+        )
+    array: np.ndarray = np.asarray(values, dtype=float)
+    if array.ndim != 1 or not 2 <= len(array) <= MAX_VALUES or not np.isfinite(array).all():
+        raise InputError(f"values must be 2 to {MAX_VALUES} finite numbers, got {shown(values)}", field="values")
+    if not (np.all(np.diff(array) > 0) or np.all(np.diff(array) < 0)):
+        raise InputError("values must increase or decrease throughout", field="values")
+    if not (isinstance(tol, (int, float)) and MIN_TOL <= tol):
+        raise InputError(f"tol must be a number >= {MIN_TOL:g}, got {shown(tol)}", field="tol")
+    for end in (array[0], array[-1]):
+        resolve_case(case, **{param: float(end)})  # both ends valid: the constraints are intervals
+    return array
+
+
+def _landings_at(
+    case: Case, settings: AttractorSettings, starts: np.ndarray, workers: int, client: Any
+) -> list[Landing]:
+    tasks = [(index, tuple(row)) for index, row in enumerate(starts)]
+    return list(run_tasks(land, tasks, shared=(case, settings), workers=workers, client=client))
+
+
+def _match(
+    previous: Attractors | None, previous_ids: dict[int, int], found: Attractors, fresh: int, next_id: int
+) -> tuple[dict[int, int], int]:
+    """Local id -> kept id: an attractor that a seed of the value before reached, with the same
+    period and cycle of switches as the seed's, keeps the seed's id (the first such seed); any
+    other gets a new one (a seed that jumped to another kind of motion continues nothing)."""
+    ids: dict[int, int] = {}
+    if previous is not None:
+        labels = found.labels.set_index("index").attractor
+        for k, attractor in enumerate(previous.attractors):
+            local = int(labels.get(fresh + k, -1))
+            if local < 0 or local in ids or previous_ids[attractor.id] in ids.values():
+                continue
+            reached = found.attractors[local]
+            if (reached.period, reached.signature) == (attractor.period, attractor.signature):
+                ids[local] = previous_ids[attractor.id]
+    for attractor in found.attractors:
+        if attractor.id not in ids:
+            ids[attractor.id] = next_id
+            next_id += 1
+    return ids, next_id
+
+
+def follow_attractors(
+    case: Case | str,
+    param: str,
+    values: Sequence[float] | np.ndarray,
+    *,
+    states: Sequence[Sequence[float]] | np.ndarray | None = None,
+    settings: AttractorSettings | None = None,
+    tol: float = 1e-5,
+    workers: int = 1,
+    client: Any = None,
+    store: LandingStore | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    **overrides: float,
+) -> AttractorsOver:
+    """The attractors at each of ``values`` of ``param``, matched from value to value, and where
+    each one appears or ends, to ``tol``.
+
+    Parameters
+    ----------
+    case : Case or str
+    param : str
+        The parameter varied.
+    values : sequence of float
+        Its values, increasing or decreasing (2 to 10,000).
+    states : array of shape (N, 4), optional
+        The fresh starts at every value (the case's start by default).
+    settings : AttractorSettings, optional
+    tol : float
+        The width to which each appearance and end is bisected.
+    workers, client
+        Local processes, or a Dask client.
+    store : LandingStore, optional
+        Keep each value's landings in this folder as it finishes, and read those of values
+        already there (a run that resumes).
+    progress : callable, optional
+        ``progress(done, total)`` after every value.
+    **overrides
+        Parameters and solver options, as for :func:`oscillator.simulate`.
+    """
+    settings = settings or AttractorSettings()
+    case = resolve_case(case, **overrides)
+    array = _check_values(case, param, values, tol)
+    fresh = check_states(case.initial.y if states is None else states)
+    found: list[Attractors] = []
+    ids: list[dict[int, int]] = []
+    next_id = 0
+    for k, value in enumerate(array):
+        point = resolve_case(case, **{param: float(value)})
+        seeds = np.array([a.points[-1] for a in found[-1].attractors]) if found else np.empty((0, 4))
+        starts = np.vstack([fresh, seeds]) if len(seeds) else fresh
+        landings = store.read(f"value-{k:05d}") if store is not None else []
+        if not landings:
+            landings = _landings_at(point, settings, starts, workers, client)
+            if store is not None:
+                store.write(landings, f"value-{k:05d}")
+        here = assemble(point, settings, landings)
+        local, next_id = _match(found[-1] if found else None, ids[-1] if ids else {}, here, len(fresh), next_id)
+        found.append(here)
+        ids.append(local)
+        if progress is not None:
+            progress(k + 1, len(array))
+    over = AttractorsOver(case, param, array, tuple(found), tuple(ids), len(fresh))
+    return dataclasses.replace(over, ends=tuple(_ends(over, settings, tol)))
+
+
+def _ends(over: AttractorsOver, settings: AttractorSettings, tol: float) -> list[End]:
+    """Each attractor's appearance or end between two values where it is present at one only."""
+    ends = []
+    for k in range(len(over.values) - 1):
+        here = {over.ids[k][a.id]: a for a in over.found[k].attractors}
+        there = {over.ids[k + 1][a.id]: a for a in over.found[k + 1].attractors}
+        for ident in sorted(set(here) - set(there)):
+            ends.append(_bisect(over, settings, ident, here[ident], over.values[k], over.values[k + 1], tol))
+        for ident in sorted(set(there) - set(here)):
+            ends.append(_bisect(over, settings, ident, there[ident], over.values[k + 1], over.values[k], tol))
+    return ends
+
+
+def _bisect(
+    over: AttractorsOver,
+    settings: AttractorSettings,
+    ident: int,
+    attractor: Attractor,
+    inside: float,
+    outside: float,
+    tol: float,
+) -> End:
+    """Halve ``[inside, outside]`` until shorter than ``tol``: at the midpoint, does a run from
+    the attractor's last point land on one with its period and cycle of switches?"""
+    seed = attractor.points[-1]
+    becomes = ""
+    while abs(outside - inside) > tol:
+        middle = 0.5 * (inside + outside)
+        point = resolve_case(over.case, **{over.param: float(middle)})
+        landing = land(point, settings, 0, tuple(seed))
+        if landing.status == "ok" and landing.period == attractor.period and landing.signature == attractor.signature:
+            inside, seed = middle, landing.points[-1]
+        else:
+            outside = middle
+            becomes = _described(landing)
+    if not becomes:
+        point = resolve_case(over.case, **{over.param: float(outside)})
+        becomes = _described(land(point, settings, 0, tuple(seed)))
+    return End(ident, attractor.name.split(": ", 1)[-1], float(inside), float(outside), becomes)
+
+
+def _described(landing: Landing) -> str:
+    if landing.status != "ok":
+        return f"failed: {landing.message}"
+    attractor = Attractor(0, landing.period, landing.points, landing.signature, landing.rests, landing.contacts, 1)
+    return attractor.name.split(": ", 1)[-1]
+
+
+def local_branches(over: AttractorsOver) -> list[tuple[int, Branch]]:
+    """The branch of periodic orbits through each periodic attractor (:func:`~oscillator.continue_orbit`
+    from the first value where it was found, to either end of the values): it shows where the
+    orbit goes on beyond the attractor's end (an unstable part, a fold, another cycle of
+    switches).  A continuation that fails is left out."""
+    from oscillator.orbits.continuation import continue_orbit
+
+    branches = []
+    seen: set[int] = set()
+    for value, found, ids in zip(over.values, over.found, over.ids, strict=True):
+        for attractor in found.attractors:
+            ident = ids[attractor.id]
+            if ident in seen or attractor.orbit is None:
+                continue
+            seen.add(ident)
+            for stop in (over.values[0], over.values[-1]):
+                if stop == value:
+                    continue
+                try:
+                    branch = continue_orbit(
+                        over.case,
+                        param=over.param,
+                        start=float(value),
+                        stop=float(stop),
+                        period=attractor.period,
+                        guess=attractor.orbit.state,
+                        transient=0,
+                    )
+                except OscillatorError:
+                    continue
+                branches.append((ident, branch))
+    return branches

@@ -1,0 +1,157 @@
+"""A folder that keeps landings as they finish, so that a search for attractors resumes.
+
+The folder holds a marker file (``basins.json``, ``attractors.json``) with the computation's
+identity (the case as TOML and the settings), ``case.toml``, and ``parts/``: each batch of
+landings one Parquet file written atomically (a temporary name, then a rename), so a killed run
+leaves only whole parts.  Running the same computation into the folder again reads the parts and
+computes only what is missing; another computation is refused before anything is written.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+from oscillator.attractors.finding import STATE, Landing
+from oscillator.errors import InputError
+from oscillator.io.files import atomic_folder, atomic_path, check_name, read_untrusted, replace_file
+from oscillator.text import printable
+
+__all__ = ["LandingStore"]
+
+_MAX_JSON = 1_000_000
+
+
+def landing_row(landing: Landing) -> dict[str, Any]:
+    """A landing as one row of a part (its section points flattened)."""
+    return {
+        "index": landing.index,
+        **dict(zip(STATE, landing.start, strict=True)),
+        "status": landing.status,
+        "reason": landing.reason,
+        "message": landing.message,
+        "period": landing.period,
+        "signature": landing.signature,
+        "rests1": landing.rests[0],
+        "rests2": landing.rests[1],
+        "contacts": landing.contacts,
+        "wall_time": landing.wall_time,
+        "points": landing.points.ravel().tolist(),
+    }
+
+
+def landing_of(row: Any) -> Landing:
+    """:func:`landing_row` read back."""
+    return Landing(
+        int(row.index),
+        (float(row.x1), float(row.v1), float(row.x2), float(row.v2)),
+        str(row.status),
+        str(row.reason),
+        str(row.message),
+        int(row.period),
+        np.asarray(row.points, dtype=float).reshape(-1, 4),
+        str(row.signature),
+        (float(row.rests1), float(row.rests2)),
+        float(row.contacts),
+        float(row.wall_time),
+    )
+
+
+class LandingStore:
+    """A resumable folder of landings; ``marker`` names its identity file (``basins.json``)."""
+
+    def __init__(self, folder: Path, marker: str, identity: dict[str, Any]) -> None:
+        self.folder = Path(folder)
+        self.parts = self.folder / "parts"
+        self.marker = marker
+        self.what = marker.removesuffix(".json")
+        self.identity = identity
+        self.resuming = False
+
+    def check(self) -> None:
+        """Refuse, before anything is created, a folder that cannot hold this computation: a new
+        name must be writable; an existing folder must hold this very computation (it resumes)."""
+        text = printable(str(self.folder))
+        check_name(self.folder, option="folder")
+        if not os.path.lexists(self.folder):
+            return
+        if not self.folder.is_dir():
+            raise InputError(f"folder {text} exists and is not a folder; give a new folder", field="folder")
+        marker = self.folder / self.marker
+        if not os.path.lexists(marker):
+            if any(self.folder.iterdir()):
+                raise InputError(
+                    f"folder {text} exists and is not a {self.what} folder; give a new folder", field="folder"
+                )
+            return
+        raw = read_untrusted(marker, what=f"{self.what} file", field=self.marker, limit=_MAX_JSON)
+        try:
+            stored = json.loads(raw)
+        except (ValueError, RecursionError) as exc:
+            raise InputError(
+                f"{text}/{self.marker} is damaged: it is not JSON; give a new folder", field="folder"
+            ) from exc
+        if not isinstance(stored, dict) or stored.get("identity") != self.identity:
+            raise InputError(
+                f"folder {text} holds another {self.what} computation (another case or settings); give a new "
+                "folder, or the same case and settings to resume it",
+                field="folder",
+            )
+        if not self.parts.is_dir():
+            raise InputError(f"{text} is damaged: its parts/ folder is missing; give a new folder", field="folder")
+        self.resuming = True
+
+    def open(self) -> None:
+        """Create the folder (appearing whole), unless resuming."""
+        if self.resuming:
+            return
+        try:
+            with atomic_folder(self.folder) as temporary:
+                (temporary / "parts").mkdir()
+                (temporary / "case.toml").write_text(str(self.identity["case"]), encoding="utf-8")
+                (temporary / self.marker).write_text(self._status("running"), encoding="utf-8")
+        except OSError as exc:
+            raise InputError(
+                f"folder {printable(str(self.folder))}: cannot create it ({exc.strerror}); choose a writable folder",
+                field="folder",
+            ) from exc
+        self.resuming = True
+
+    def _status(self, status: str, **extra: Any) -> str:
+        return json.dumps({"identity": self.identity, "status": status, **extra}, indent=2, default=str)
+
+    def write_status(self, status: str, **extra: Any) -> None:
+        replace_file(self.folder / self.marker, self._status(status, **extra))
+
+    def read(self, prefix: str = "") -> list[Landing]:
+        """The landings of the parts whose names start with ``prefix`` (a damaged part is refused
+        with its name)."""
+        found = []
+        for part in sorted(self.parts.glob(f"{prefix}*.parquet")):
+            try:
+                frame = pq.read_table(part).to_pandas()
+                found += [landing_of(row) for row in frame.itertuples(index=False)]
+            except Exception as exc:  # pyarrow raises many types for a damaged file
+                if isinstance(exc, MemoryError):
+                    raise
+                raise InputError(
+                    f"{printable(str(part))} is damaged; delete it and run the same command to compute its "
+                    "starts again",
+                    field="folder",
+                ) from exc
+        return found
+
+    def write(self, landings: list[Landing], name: str | None = None) -> None:
+        """A part of these landings, named ``name`` (by default after its first start's index)."""
+        if not landings:
+            return
+        if name is None:
+            name = f"{min(item.index for item in landings):08d}-{len(landings):04d}"
+        with atomic_path(self.parts / f"{name}.parquet") as temporary:
+            pd.DataFrame([landing_row(item) for item in landings]).to_parquet(temporary, index=False)

@@ -1,0 +1,474 @@
+"""``oscillator basins`` (basins of attraction over a slice, resumable, local or on Dask),
+``oscillator attractors`` (the attractors over a parameter, their shares and where each appears
+or ends) and ``oscillator lyapunov`` (the Lyapunov spectrum of a motion)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+from rich import box
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+from rich.text import Text
+
+from oscillator.cli.console import err, fail, load, message, out, say
+from oscillator.cli.inputs import case_from
+from oscillator.errors import InputError, OscillatorError
+from oscillator.text import printable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.attractors.basins import Axis, Basins
+    from oscillator.attractors.finding import AttractorSettings
+    from oscillator.io.cases import Case
+
+__all__ = ["attractors", "basins", "lyapunov"]
+
+AxisOption = tuple[str, float, float, int]
+SetOption = Annotated[list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")]
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")]
+NoPlotsOption = Annotated[bool, typer.Option("--no-plots", help="Skip the figure.")]
+TransientOption = Annotated[int, typer.Option("--transient", metavar="N", help="Forcing periods run before recording.")]
+RecordOption = Annotated[int, typer.Option("--record", metavar="N", help="Forcing periods recorded after it.")]
+WorkersOption = Annotated[
+    int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
+]
+
+
+def _progress(label: str, unit: str) -> tuple[Progress, Callable[[int, int], None]]:
+    """A progress bar on stderr and its callback ``report(done, total)``."""
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[rate]}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    bar = Progress(*columns, console=err, transient=True)
+    task = bar.add_task(printable(label), total=None, rate="")
+    began = time.monotonic()
+    first: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        if not first:
+            first.append(done)
+        new = done - first[0]
+        rate = f"{new / (time.monotonic() - began):.2f} {unit}/s" if new else ""
+        bar.update(task, completed=done, total=total, rate=rate)
+
+    return bar, report
+
+
+def _axis(values: AxisOption, flag: str) -> Axis:
+    from oscillator.attractors.basins import Axis
+
+    name, low, high, count = values
+    try:
+        return Axis(name, low, high, count)
+    except InputError as error:
+        raise InputError(f"{flag}: {error}", field=flag) from None
+
+
+def _settings(transient: int, record: int, max_period: int) -> AttractorSettings:
+    from oscillator.attractors.finding import AttractorSettings
+
+    try:
+        return AttractorSettings(transient=transient, record=record, max_period=max_period)
+    except InputError as error:
+        raise InputError(f"--{error.field}: {error}", field=f"--{error.field}") from None
+
+
+def _new_folder(case: Case, kind: str) -> Path:
+    from oscillator.io.files import default_name
+
+    return Path("runs") / f"{default_name(case.name)}-{kind}-{time.strftime('%Y%m%d-%H%M%S')}"
+
+
+def basins(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    x: Annotated[
+        AxisOption, typer.Option("--x", metavar="NAME LOW HIGH N", help="The slice's first axis: x1, v1, x2 or v2.")
+    ],
+    y: Annotated[AxisOption, typer.Option("--y", metavar="NAME LOW HIGH N", help="The slice's second axis.")],
+    transient: TransientOption = 200,
+    record: RecordOption = 32,
+    max_period: Annotated[int, typer.Option("--max-period", metavar="N", help="The longest period looked for.")] = 16,
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Output folder (default: runs/CASE-basins-YYYYmmdd-HHMMSS); the same folder again resumes.",
+        ),
+    ] = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+    quiet: QuietOption = False,
+) -> None:
+    """Basins of attraction over a slice of starting states: every attractor the starts reach
+    (a periodic orbit with its multipliers, or an aperiodic set with its largest Lyapunov
+    exponent), each cell's attractor, and each attractor's share of the slice.
+
+    The two other state components and the section t0 are the case's start. Writes
+    basins.parquet, attractors.parquet, figures/basins.png and a report. Interrupted or killed,
+    the same command with the same --out resumes where it stopped.
+
+    \b
+    Examples:
+      oscillator basins instance-1 --set Q2=71.165 --x x2 3 6 16 --y v2 -4 4 16 --out runs/basins
+      oscillator basins instance-1 --set Omega=1.85 --x x1 2 5 4 --y v1 -3 3 4 --transient 100 --record 8
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        x_axis, y_axis = _axis(x, "--x"), _axis(y, "--y")
+        settings = _settings(transient, record, max_period)
+        plan = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    store, lock, client, count = plan
+    try:
+        found = _run_basins(resolved, x_axis, y_axis, store, settings, count, client, quiet)
+    except OscillatorError as error:
+        raise fail(f"{message(error)}; the starts finished so far are kept in {store.folder}", 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; the starts finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        lock.release()
+        if client is not None:
+            client.close()
+    _finish_basins(found, store.folder, no_plots, quiet)
+
+
+def _open_basins(
+    case: Case,
+    x: Axis,
+    y: Axis,
+    settings: AttractorSettings,
+    out_dir: Path | None,
+    workers: int | None,
+    scheduler: str | None,
+) -> tuple[Any, Any, Any, int]:
+    """Everything refused before work: the slice, the folder (new, or these basins to resume),
+    the workers, the scheduler; the folder's name locked."""
+    from oscillator.analysis.execution import check_workers
+
+    count = check_workers(workers)
+    load("oscillator.attractors.basins", notice=True)
+    from oscillator.attractors.basins import basin_store, grid_starts
+
+    grid_starts(case, x, y)
+    folder = out_dir if out_dir is not None else _new_folder(case, "basins")
+    store = basin_store(folder, case, x, y, settings)
+    store.check()
+    lock, client = _locked(folder, scheduler)
+    return store, lock, client, count
+
+
+def _locked(folder: Path, scheduler: str | None) -> tuple[Any, Any]:
+    """The folder's name locked for this process, and the Dask client (or None)."""
+    from oscillator.analysis.execution import connect
+    from oscillator.io.files import lock_name
+
+    busy = f"folder {printable(str(folder))} is being computed by another process now; wait for it, or give another"
+    lock = lock_name(folder, busy=busy, option="--out")
+    try:
+        client = connect(scheduler) if scheduler else None
+    except BaseException:
+        lock.release()
+        raise
+    return lock, client
+
+
+def _run_basins(
+    case: Case, x: Axis, y: Axis, store: Any, settings: AttractorSettings, workers: int, client: Any, quiet: bool
+) -> Basins:
+    from oscillator.attractors.basins import run_basins
+
+    if quiet or not err.is_terminal:
+        return run_basins(case, x, y, store, settings=settings, workers=workers, client=client)
+    bar, report = _progress(f"{case.name}: basins", "starts")
+    with bar:
+        return run_basins(case, x, y, store, settings=settings, workers=workers, client=client, progress=report)
+
+
+def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> None:
+    from oscillator.report.attractors import attractor_table, write_basins
+
+    try:
+        problems = write_basins(found, folder, plots=not no_plots)
+    except OSError as error:
+        raise fail(f"cannot write into {printable(str(folder))} ({error}); the starts are kept there", 1) from None
+    if not quiet:
+        table = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+        for column in ("attractor", "share [95 %]", "orbit", "largest |multiplier|"):
+            table.add_column(column)
+        for row in attractor_table(found).itertuples(index=False):
+            orbit = "" if row.kind != "periodic" or row.stable is None else ("stable" if row.stable else "unstable")
+            largest = "" if row.kind != "periodic" else f"{row.largest_multiplier:.4g}"
+            share = f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]"
+            table.add_row(Text(str(row.name)), share, orbit, largest)
+        out.print(table)
+    say(f"written to {printable(str(folder))}")
+    if problems:
+        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
+
+
+def lyapunov(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    periods: Annotated[int, typer.Option("--periods", metavar="N", help="Forcing periods averaged over.")] = 500,
+    transient: Annotated[
+        int, typer.Option("--transient", metavar="N", help="Forcing periods run before averaging.")
+    ] = 100,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option("--out", metavar="DIR", help="Also write lyapunov.parquet, lyapunov.json and the figure there."),
+    ] = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+) -> None:
+    """The Lyapunov spectrum of the motion from the case's start: variational equations with the
+    saltation matrix at every switch, re-orthonormalised every forcing period (QR).
+
+    \b
+    Examples:
+      oscillator lyapunov instance-1 --set Omega=1.85 --periods 200
+      oscillator lyapunov instance-1 --set Omega=1.85 --periods 100 --out runs/lyapunov
+    """
+    from oscillator.io.files import check_new
+
+    try:
+        resolved = case_from(case, None, set_)
+        if out_dir is not None:
+            check_new(out_dir, option="--out")
+        load("oscillator.attractors.lyapunov", notice=True)
+        from oscillator.attractors.lyapunov import lyapunov as spectrum_of
+        from oscillator.orbits.shooting import check_count
+
+        check_count(periods, "--periods", 1, 10_000_000)
+        check_count(transient, "--transient", 0, 10_000_000)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    try:
+        bar, report = _progress(f"{resolved.name}: Lyapunov exponents", "periods")
+        with bar:
+            spectrum = spectrum_of(resolved, periods=periods, transient=transient, progress=report)
+    except OscillatorError as error:
+        raise fail(message(error), 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    exponents = ", ".join(f"{value:.6g}" for value in spectrum.exponents)
+    out.print(Text(f"{printable(resolved.name)}: Lyapunov exponents (1/s), {periods} periods: {exponents}"))
+    out.print(Text(f"  largest {spectrum.largest:.6g} 1/s; Kaplan-Yorke dimension of the map {spectrum.dimension:.4g}"))
+    if out_dir is not None:
+        _write_lyapunov(spectrum, out_dir, no_plots)
+
+
+def _write_lyapunov(spectrum: Any, folder: Path, no_plots: bool) -> None:
+    from oscillator.io.files import claim_folder
+    from oscillator.report.attractors import write_lyapunov
+
+    try:
+        claim = claim_folder(folder, option="--out")
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    try:
+        problems = write_lyapunov(spectrum, claim.temporary, plots=not no_plots)
+        written = claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+    say(f"written to {printable(str(written))}")
+    if problems:
+        raise fail("; ".join(problems), 1)
+
+
+def attractors(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    param: Annotated[str, typer.Option("--param", metavar="NAME", help="The parameter varied.")],
+    start: Annotated[float, typer.Option("--from", metavar="A", help="First value.")],
+    stop: Annotated[float, typer.Option("--to", metavar="B", help="Last value.")],
+    steps: Annotated[int, typer.Option("--steps", metavar="N", help="Number of values.")] = 11,
+    x: Annotated[
+        AxisOption | None,
+        typer.Option("--x", metavar="NAME LOW HIGH N", help="Fresh starts on a slice: its first axis (with --y)."),
+    ] = None,
+    y: Annotated[
+        AxisOption | None, typer.Option("--y", metavar="NAME LOW HIGH N", help="The slice's second axis.")
+    ] = None,
+    tol: Annotated[float, typer.Option("--tol", metavar="TOL", help="Where each attractor ends, to this.")] = 1e-5,
+    transient: TransientOption = 200,
+    record: RecordOption = 32,
+    coordinate: Annotated[
+        str, typer.Option("--coordinate", metavar="NAME", help="The section coordinate drawn: x1, v1, x2 or v2.")
+    ] = "x2",
+    branches: Annotated[
+        bool, typer.Option("--branches/--no-branches", help="Draw the periodic orbits' branches (continue_orbit).")
+    ] = True,
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Output folder (default: runs/CASE-attractors-YYYYmmdd-HHMMSS); the same folder again resumes.",
+        ),
+    ] = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+    quiet: QuietOption = False,
+) -> None:
+    """The attractors over a parameter: at each value every attractor the fresh starts reach (and
+    the seeds from the value before), matched from value to value, each one's share of the fresh
+    starts, and where each one appears or ends, bisected to --tol: the window where two coexist.
+
+    Writes attractors.parquet, ends.parquet, figures/attractors.png and a report. Interrupted or
+    killed, the same command with the same --out resumes at the value it stopped at.
+
+    \b
+    Examples:
+      oscillator attractors instance-1 --param Q2 --from 71.10 --to 71.20 --steps 5 --x x2 3 6 3 --y v2 -4 4 3
+      oscillator attractors instance-1 --param Q2 --from 71.10 --to 71.20 --steps 3 --no-branches --out runs/q2
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        plan = _open_following(resolved, param, start, stop, steps, x, y, tol, transient, record, coordinate, out_dir)
+        values, states, settings, store = plan
+        from oscillator.analysis.execution import check_workers
+
+        count = check_workers(workers)
+        lock, client = _locked(store.folder, scheduler)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    try:
+        over = _run_following(resolved, param, values, states, settings, tol, store, count, client, quiet)
+        found = _branches_of(over) if branches and not no_plots else []
+    except OscillatorError as error:
+        raise fail(f"{message(error)}; the values finished so far are kept in {store.folder}", 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; the values finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        lock.release()
+        if client is not None:
+            client.close()
+    _finish_following(over, store.folder, coordinate, found, no_plots, quiet)
+
+
+def _open_following(
+    case: Case,
+    param: str,
+    start: float,
+    stop: float,
+    steps: int,
+    x: AxisOption | None,
+    y: AxisOption | None,
+    tol: float,
+    transient: int,
+    record: int,
+    coordinate: str,
+    out_dir: Path | None,
+) -> tuple[Any, Any, AttractorSettings, Any]:
+    """Everything refused before work: the values, the slice, the settings, the folder."""
+    import dataclasses
+
+    import numpy as np
+
+    from oscillator.attractors.finding import STATE
+
+    if coordinate not in STATE:
+        raise InputError(f"--coordinate must be one of {', '.join(STATE)}, got {coordinate!r}", field="--coordinate")
+    if isinstance(steps, bool) or not 2 <= steps <= 10_000:
+        raise InputError(f"--steps must be a whole number from 2 to 10000, got {steps!r}", field="--steps")
+    if (x is None) != (y is None):
+        raise InputError("give both --x and --y for a slice of fresh starts, or neither", field="--x")
+    settings = _settings(transient, record, 16)
+    load("oscillator.attractors.following", notice=True)
+    from oscillator.attractors.basins import grid_starts
+    from oscillator.attractors.following import _check_values
+    from oscillator.attractors.store import LandingStore
+    from oscillator.io.cases import case_to_toml
+
+    values = np.linspace(start, stop, steps)
+    _check_values(case, param, values, tol)
+    states = grid_starts(case, _axis(x, "--x"), _axis(y, "--y")) if x is not None and y is not None else None
+    identity = {
+        "case": case_to_toml(case),
+        "param": param,
+        "values": values.tolist(),
+        "states": None if states is None else states.tolist(),
+        "settings": dataclasses.asdict(settings),
+    }
+    folder = out_dir if out_dir is not None else _new_folder(case, "attractors")
+    store = LandingStore(folder, "attractors.json", identity)
+    store.check()
+    return values, states, settings, store
+
+
+def _run_following(
+    case: Case,
+    param: str,
+    values: Any,
+    states: Any,
+    settings: AttractorSettings,
+    tol: float,
+    store: Any,
+    workers: int,
+    client: Any,
+    quiet: bool,
+) -> Any:
+    from oscillator.attractors.following import follow_attractors
+
+    store.open()
+    options = {"states": states, "settings": settings, "tol": tol, "workers": workers, "client": client, "store": store}
+    if quiet or not err.is_terminal:
+        over = follow_attractors(case, param, values, **options)
+    else:
+        bar, report = _progress(f"{case.name}: attractors over {param}", "values")
+        with bar:
+            over = follow_attractors(case, param, values, progress=report, **options)
+    store.write_status("computed", values=len(values))
+    return over
+
+
+def _branches_of(over: Any) -> list[Any]:
+    from oscillator.attractors.following import local_branches
+
+    return local_branches(over)
+
+
+def _finish_following(
+    over: Any, folder: Path, coordinate: str, branches: list[Any], no_plots: bool, quiet: bool
+) -> None:
+    from oscillator.report.attractors import write_following
+
+    try:
+        problems = write_following(over, folder, coordinate=coordinate, branches=branches, plots=not no_plots)
+    except OSError as error:
+        raise fail(f"cannot write into {printable(str(folder))} ({error}); the landings are kept there", 1) from None
+    if not quiet:
+        for end in over.ends:
+            verb = "ends" if (end.outside - end.inside) * (over.values[-1] - over.values[0]) > 0 else "appears"
+            out.print(
+                Text(
+                    f"A{end.id} ({end.name}) {verb} between {over.param} = {min(end.inside, end.outside):.10g} and "
+                    f"{max(end.inside, end.outside):.10g}; "
+                    f"its seed then goes to: {end.becomes}"
+                )
+            )
+    say(f"written to {printable(str(folder))}")
+    if problems:
+        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)

@@ -1,0 +1,381 @@
+"""Basins and Lyapunov spectra written out: tables, figures, a report (text escaped).
+
+A basins folder holds ``basins.parquet`` (one row per cell: the two axes' values, the
+attractor, the run's status), ``attractors.parquet`` (one row per attractor: its name, kind,
+period, cycle of switches, share of the starts with a confidence interval, stability and
+largest multiplier, Lyapunov exponent, section points), ``figures/basins.png`` (and ``.svg``),
+``report.md`` and ``report.html``, beside ``basins.json``, ``case.toml`` and ``parts/``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from oscillator.attractors.basins import Basins
+from oscillator.attractors.finding import STATE, Attractor
+from oscillator.attractors.following import AttractorsOver
+from oscillator.attractors.lyapunov import LyapunovSpectrum
+from oscillator.io.files import atomic_path
+from oscillator.report import markup as mk
+from oscillator.report.figures import figure_title
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+    from oscillator.orbits.continuation import Branch
+
+__all__ = [
+    "attractor_table",
+    "basins_figure",
+    "following_figure",
+    "lyapunov_figure",
+    "write_basins",
+    "write_following",
+    "write_lyapunov",
+]
+
+#: A colour per attractor (more attractors cycle through them), and the failed cells' grey.
+COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive")
+FAILED = "0.6"
+#: A marker per attractor for its own section points, so that coinciding ones stay apart.
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
+def attractor_table(basins: Basins) -> pd.DataFrame:
+    """One row per attractor (and one for failed starts, if any): what it is and its share."""
+    shares = basins.found.fractions().set_index("attractor")
+    rows = []
+    for attractor in basins.found.attractors:
+        share = shares.loc[attractor.id]
+        orbit = attractor.orbit
+        rows.append(
+            {
+                "attractor": attractor.id,
+                "name": attractor.name,
+                "kind": attractor.kind,
+                "period": attractor.period,
+                "signature": attractor.signature,
+                "rests_m1": attractor.rests[0],
+                "rests_m2": attractor.rests[1],
+                "contacts": attractor.contacts,
+                "starts": int(share.starts),
+                "fraction": float(share.fraction),
+                "low": float(share.low),
+                "high": float(share.high),
+                "stable": None if orbit is None else bool(orbit.stable),
+                "largest_multiplier": np.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
+                "lyapunov": attractor.lyapunov,
+                "points": json.dumps(attractor.points.tolist()),
+                "note": attractor.note,
+            }
+        )
+    if -1 in shares.index:
+        share = shares.loc[-1]
+        rows.append(
+            {
+                "attractor": -1,
+                "name": "failed",
+                "kind": "failed",
+                "starts": int(share.starts),
+                "fraction": float(share.fraction),
+                "low": float(share.low),
+                "high": float(share.high),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _color(ident: int) -> str:
+    return FAILED if ident < 0 else COLORS[ident % len(COLORS)]
+
+
+def basins_figure(basins: Basins) -> Figure:
+    """The slice coloured by attractor, a legend naming each with its share, and each
+    attractor's own section points (projected on the slice's plane) drawn on top."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    grid, x, y = basins.grid, basins.x, basins.y
+    idents = sorted(set(np.unique(grid).tolist()))
+    colormap = ListedColormap([_color(i) for i in idents])
+    codes = np.searchsorted(idents, grid)
+    fig = Figure(figsize=(7.5, 6.0), layout="constrained")
+    ax = fig.add_subplot()
+    ax.pcolormesh(x.values, y.values, codes, cmap=colormap, vmin=-0.5, vmax=len(idents) - 0.5, shading="nearest")
+    shares = basins.found.fractions().set_index("attractor")
+    handles: list[Any] = []
+    for attractor in basins.found.attractors:
+        share = shares.loc[attractor.id]
+        label = f"{attractor.name} — {share.fraction:.1%} [{share.low:.1%}, {share.high:.1%}]"
+        marker = MARKERS[attractor.id % len(MARKERS)]
+        handles.append(
+            Line2D([], [], ls="", marker=marker, ms=11, color=_color(attractor.id), mec="black", label=label)
+        )
+        _draw_points(ax, attractor, x.name, y.name)
+    if -1 in shares.index:
+        handles.append(Patch(color=FAILED, label=f"failed — {shares.loc[-1].fraction:.1%}"))
+    ax.set_xlabel(x.name)
+    ax.set_ylabel(y.name)
+    fixed = [
+        f"{name} = {value:g}"
+        for name, value in zip(STATE, basins.found.case.initial.y, strict=True)
+        if name not in (x.name, y.name)
+    ]
+    title = f"{figure_title(basins.found.case)}: basins at t0 = {basins.found.case.initial.t0:g} s, {', '.join(fixed)}"
+    ax.set_title(title, parse_math=False, fontsize=9)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=1, frameon=False)
+    return fig
+
+
+def _draw_points(ax: Any, attractor: Attractor, xname: str, yname: str) -> None:
+    """The attractor's section points projected on the slice's plane: black-edged markers of its
+    colour, one shape per attractor (coinciding points of two attractors stay apart)."""
+    points = attractor.points
+    ax.scatter(
+        points[:, STATE.index(xname)],
+        points[:, STATE.index(yname)],
+        s=70,
+        marker=MARKERS[attractor.id % len(MARKERS)],
+        color=_color(attractor.id),
+        edgecolors="black",
+        linewidths=1.0,
+        zorder=5 + attractor.id,
+        alpha=0.85,
+    )
+
+
+def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
+    """The running averages of the four exponents against the averaging time."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.add_subplot()
+    table = spectrum.convergence
+    for k in range(1, 5):
+        values = table[f"lambda{k}"].to_numpy()
+        if np.isfinite(values).any():
+            ax.plot(table.t, values, label=f"lambda{k} -> {values[-1]:.4g} 1/s")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_xlabel("averaging time (s)")
+    ax.set_ylabel("exponent (1/s)")
+    ax.set_title(f"{figure_title(spectrum.case)}: Lyapunov exponents", parse_math=False, fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def _save(fig: Figure, folder: Path, name: str) -> None:
+    folder.mkdir(exist_ok=True)
+    for suffix in (".png", ".svg"):
+        with atomic_path(folder / f"{name}{suffix}") as temporary:
+            fig.savefig(temporary, format=suffix[1:], dpi=110)
+
+
+def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
+    case, x, y = basins.found.case, basins.x, basins.y
+    settings = basins.found.settings
+    rows = tuple(
+        (
+            str(row.name),
+            str(row.kind),
+            f"{row.starts}",
+            f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]",
+            "" if row.kind != "periodic" or pd.isna(row.stable) else ("stable" if row.stable else "unstable"),
+            "" if pd.isna(row.largest_multiplier) else f"{row.largest_multiplier:.4g}",
+            "" if pd.isna(row.signature) else str(row.signature),
+        )
+        for row in table.itertuples(index=False)
+    )
+    blocks: list[mk.Block] = [
+        mk.Heading(1, (f"{case.name}: basins of attraction",)),
+        mk.Paragraph(
+            (
+                f"{x.count} x {y.count} starts at t0 = {case.initial.t0:g} s, {x.name} from {x.low:g} to {x.high:g} "
+                f"and {y.name} from {y.low:g} to {y.high:g}; each run {settings.transient} forcing periods, then "
+                f"{settings.record} recorded. {len(basins.found.attractors)} attractor(s) found.",
+            )
+        ),
+    ]
+    if case.modified:
+        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    header = ("attractor", "kind", "starts", "share [95% interval]", "orbit", "largest |multiplier|", "switches")
+    caption = "the basins; the markers are each attractor's own section points, projected on the slice's plane"
+    blocks += [mk.Table(header, rows), mk.Figure("basins", caption)]
+    return blocks
+
+
+def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[str]:
+    """Write the tables, the figure and the report into the basins folder (each file atomically).
+    Returns what could not be written (a figure that failed), the tables being written first."""
+    problems = []
+    table = attractor_table(basins)
+    for name, frame in (("basins", basins.table()), ("attractors", table)):
+        with atomic_path(folder / f"{name}.parquet") as temporary:
+            frame.to_parquet(temporary, index=False)
+    if plots:
+        try:
+            _save(basins_figure(basins), folder / "figures", "basins")
+        except Exception as exc:  # a figure's failure keeps the computed tables
+            problems.append(f"figure basins: {exc}")
+    blocks = _basins_blocks(basins, table)
+    if not plots:
+        blocks = [block for block in blocks if not isinstance(block, mk.Figure)]
+    title = f"{basins.found.case.name}: basins of attraction"
+    for name, text in (
+        ("report.md", mk.to_markdown(blocks)),
+        ("report.html", mk.to_html(blocks, folder=folder, title=title)),
+    ):
+        with atomic_path(folder / name) as temporary:
+            temporary.write_text(text, encoding="utf-8")
+    return problems
+
+
+def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = True) -> list[str]:
+    """``lyapunov.parquet`` (the convergence), ``lyapunov.json`` (the exponents), the figure."""
+    problems = []
+    with atomic_path(folder / "lyapunov.parquet") as temporary:
+        spectrum.convergence.to_parquet(temporary, index=False)
+    info = {
+        "case": spectrum.case.name,
+        "modified": list(spectrum.case.modified),
+        "periods": spectrum.periods,
+        "exponents": [float(v) if np.isfinite(v) else str(v) for v in spectrum.exponents],
+        "start": spectrum.start.tolist(),
+        "dimension": spectrum.dimension,
+    }
+    with atomic_path(folder / "lyapunov.json") as temporary:
+        temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
+    if plots:
+        try:
+            _save(lyapunov_figure(spectrum), folder / "figures", "lyapunov")
+        except Exception as exc:  # a figure's failure keeps the computed tables
+            problems.append(f"figure lyapunov: {exc}")
+    return problems
+
+
+def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple[int, Branch]]) -> Figure:
+    """Top: each attractor's section points (``coordinate``) against the parameter, one colour per
+    kept id, the periodic orbits' branches under them (solid where stable, dotted where not) and
+    the located appearances and ends (dashed lines); bottom: each attractor's share of the fresh
+    starts, with its 95 % interval."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    column = STATE.index(coordinate)
+    for ident, branch in branches:
+        points = branch.points
+        stable = points.stable.to_numpy(bool)
+        values, ys = points[over.param].to_numpy(float), points[coordinate].to_numpy(float)
+        top.plot(np.where(stable, values, np.nan), np.where(stable, ys, np.nan), color=_color(ident), lw=0.8, alpha=0.6)
+        top.plot(np.where(~stable, values, np.nan), np.where(~stable, ys, np.nan), color=_color(ident), lw=0.8, ls=":")
+    table = over.table()
+    for ident, rows in table.groupby("id"):
+        color = _color(int(ident))
+        for value, points in zip(rows[over.param], rows.points, strict=True):
+            cloud = np.asarray(json.loads(points), dtype=float).reshape(-1, 4)
+            top.scatter(np.full(len(cloud), value), cloud[:, column], s=14, color=color, zorder=4)
+        label = f"A{int(ident)}: {rows.name.iloc[0]}"
+        bottom.errorbar(
+            rows[over.param],
+            rows.fraction,
+            yerr=[rows.fraction - rows.low, rows.high - rows.fraction],
+            color=color,
+            marker="o",
+            ms=4,
+            capsize=2,
+            label=label,
+        )
+    for end in over.ends:
+        for ax in (top, bottom):
+            ax.axvline(end.at, color=_color(end.id), ls="--", lw=0.8)
+        top.annotate(
+            f"{end.at:.7g}",
+            (end.at, 1.0),
+            xycoords=("data", "axes fraction"),
+            rotation=90,
+            fontsize=7,
+            ha="right",
+            va="top",
+            color="0.25",
+        )
+    top.set_ylabel(f"{coordinate} at the section")
+    bottom.set_ylabel("share of the starts")
+    bottom.set_xlabel(over.param)
+    bottom.set_ylim(-0.05, 1.05)
+    bottom.legend(fontsize=8, loc="center left")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    top.set_title(f"{figure_title(over.case)}: attractors over {over.param}", parse_math=False, fontsize=9)
+    return fig
+
+
+def _following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block]:
+    case, param = over.case, over.param
+    values = over.values
+    blocks: list[mk.Block] = [
+        mk.Heading(1, (f"{case.name}: attractors over {param}",)),
+        mk.Paragraph(
+            (
+                f"{len(values)} values of {param} from {values[0]:.10g} to {values[-1]:.10g}, {over.fresh} fresh "
+                f"start(s) at each, and a seed from each attractor of the value before. "
+                f"{table['id'].nunique() if len(table) else 0} attractor(s) in all.",
+            )
+        ),
+    ]
+    if case.modified:
+        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    ends = tuple((f"A{e.id}", e.name, f"{e.inside:.10g}", f"{e.outside:.10g}", e.becomes) for e in over.ends)
+    if ends:
+        header = ("attractor", "what", f"last {param} with it", f"first {param} without it", "its seed goes to")
+        blocks += [mk.Heading(2, ("Where attractors appear and end",)), mk.Table(header, ends)]
+    rows = tuple(
+        (
+            f"{getattr(row, param):.10g}",
+            f"A{row.id}",
+            str(row.name),
+            f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]",
+        )
+        for row in table.itertuples(index=False)
+    )
+    blocks += [
+        mk.Heading(2, ("Attractors at each value",)),
+        mk.Table((param, "attractor", "what", "share [95% interval]"), rows),
+        mk.Figure("attractors", "each attractor's section points, its share, and the branches of orbits"),
+    ]
+    return blocks
+
+
+def write_following(
+    over: AttractorsOver, folder: Path, *, coordinate: str, branches: list[tuple[int, Branch]], plots: bool = True
+) -> list[str]:
+    """``attractors.parquet``, ``ends.parquet``, the figure and the report, into ``folder``."""
+    problems = []
+    table = over.table()
+    for name, frame in (("attractors", table), ("ends", over.ends_table())):
+        with atomic_path(folder / f"{name}.parquet") as temporary:
+            frame.to_parquet(temporary, index=False)
+    if plots:
+        try:
+            _save(following_figure(over, coordinate, branches), folder / "figures", "attractors")
+        except Exception as exc:  # a figure's failure keeps the computed tables
+            problems.append(f"figure attractors: {exc}")
+    blocks = _following_blocks(over, table)
+    if not plots:
+        blocks = [block for block in blocks if not isinstance(block, mk.Figure)]
+    title = f"{over.case.name}: attractors over {over.param}"
+    for name, text in (
+        ("report.md", mk.to_markdown(blocks)),
+        ("report.html", mk.to_html(blocks, folder=folder, title=title)),
+    ):
+        with atomic_path(folder / name) as temporary:
+            temporary.write_text(text, encoding="utf-8")
+    return problems

@@ -1,0 +1,254 @@
+"""Attractors, basins, Lyapunov exponents and the attractors over a parameter (issue 28).
+
+The hysteresis of Instance 1's system at Omega = 1.6: going down in Q2 the orbit without rest
+ends at 71.1577416, going up the orbit in which m2 rests twice a period lives on to 71.17025
+(located by continuation, issue 14; an independent DOP853 simulation stays on either for 200
+periods between them).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from oscillator import load_case, resolve_case, simulate
+from oscillator.attractors.basins import Axis, basin_store, grid_starts, run_basins
+from oscillator.attractors.finding import AttractorSettings, check_states, find_attractors
+from oscillator.attractors.following import follow_attractors
+from oscillator.attractors.lyapunov import lyapunov, separation_exponent
+from oscillator.errors import InputError
+from oscillator.orbits.shooting import find_orbit
+
+CASE = load_case("instance-1")
+X1, V1 = CASE.initial.x1, CASE.initial.v1
+#: Two starts of the slice x2, v2 at Q2 = 71.165: the first reaches the orbit without rest, the second the one with.
+NO_REST_START, REST_START = (X1, V1, 3.0, 0.0), (X1, V1, 6.0, 0.0)
+QUICK = AttractorSettings(transient=60, record=8)
+#: The linear system: no friction, no feedback, no cubic terms, the stops out of reach.
+LINEAR = {
+    "mu_k": 0.0,
+    "mu_s": 0.0,
+    "P1": 0.0,
+    "P2": 0.0,
+    "K2": 0.0,
+    "K5": 0.0,
+    "C2": 0.0,
+    "C5": 0.0,
+    "d": 1e3,
+    "d1": 1e3,
+}
+#: Ueda's chaotic Duffing oscillator (x'' + 0.05 x' + x^3 = 7.5 cos t) as m1, with dry friction
+#: (mu_k = 0.005, mu_s = 0.01: m1 sticks now and then), m2 at rest under no force.
+UEDA = {"m1": 1.0, "K1": 0.0, "K2": 1.0, "C1": 0.05, "C2": 0.0, "Q1": 7.5, "Omega": 1.0, "mu_k": 0.005,
+        "mu_s": 0.01, "P1": 0.0, "P2": 0.0, "Q2": 0.0, "x2": 0.0, "v2": 0.0, "d": 1e3, "d1": 1e3, "x1": 2.5,
+        "v1": 0.0, "t0": 0.0}  # fmt: skip
+
+
+def _section_end(case, start, periods):
+    """The state after ``periods`` forcing periods from ``start`` at the case's t0 (an independent run)."""
+    begin = dict(zip(("x1", "v1", "x2", "v2"), start, strict=True))
+    run = resolve_case(case, **begin)
+    end = run.initial.t0 + periods * run.parameters.period
+    return np.asarray(simulate(run, t_end=end, record_trajectory=False, keep_events_from=end).final_state[1:])
+
+
+def test_two_period_one_attractors_coexist_at_q2_71_165_and_every_label_holds_for_300_periods():
+    found = find_attractors("instance-1", states=[NO_REST_START, REST_START, NO_REST_START], Q2=71.165, settings=QUICK)
+    assert [a.period for a in found.attractors] == [1, 1]
+    no_rest, rest = found.attractors
+    assert no_rest.rests == (0.0, 0.0) and rest.rests == (0.0, 2.0)
+    assert "sliding_onset" in rest.signature and "sliding_onset" not in no_rest.signature
+    assert no_rest.stable and rest.stable and no_rest.starts == 2 and rest.starts == 1
+    assert found.labels.attractor.tolist() == [0, 1, 0]
+    # each start, run 300 periods by simulate itself, is on the orbit it was labelled with
+    for start, attractor in ((NO_REST_START, no_rest), (REST_START, rest)):
+        end = _section_end(found.case, start, 300)
+        assert np.max(np.abs(end - attractor.orbit.state)) < 1e-7
+        other = rest if attractor is no_rest else no_rest
+        assert np.max(np.abs(end - other.orbit.state)) > 1e-3
+
+
+@pytest.mark.parametrize(("q2", "rests"), [(71.10, 2.0), (71.20, 0.0)])
+def test_one_attractor_on_either_side_of_the_window(q2, rests):
+    found = find_attractors("instance-1", states=[NO_REST_START, REST_START], Q2=q2, settings=QUICK)
+    assert len(found.attractors) == 1 and found.attractors[0].rests[1] == rests
+    assert found.fractions().fraction.tolist() == [1.0]
+
+
+def test_fractions_have_wilson_intervals():
+    found = find_attractors("instance-1", states=[NO_REST_START] * 3 + [REST_START], Q2=71.165, settings=QUICK)
+    shares = found.fractions()
+    assert shares.starts.tolist() == [3, 1] and shares.fraction.tolist() == [0.75, 0.25]
+    # Wilson's 95 % interval for 3 of 4: [0.3006, 0.9544]
+    assert shares.low.iloc[0] == pytest.approx(0.3006, abs=1e-4) and shares.high.iloc[0] == pytest.approx(
+        0.9544, abs=1e-4
+    )
+
+
+def test_a_start_that_fails_is_labelled_with_its_reason_and_counted():
+    found = find_attractors("instance-1", states=[NO_REST_START, (X1, V1, 1e90, 0.0)], Q2=71.165, settings=QUICK)
+    assert found.labels.attractor.tolist() == [0, -1]
+    failed = found.labels.iloc[1]
+    assert failed.status == "failed" and failed.reason and failed.message
+    assert found.fractions().attractor.tolist() == [0, -1]
+
+
+@pytest.mark.parametrize(
+    ("states", "field"), [([(1.0, 2.0, 3.0)], "states"), ([(1.0, 2.0, 3.0, np.nan)], "states"), ([], "states")]
+)
+def test_bad_starts_are_refused(states, field):
+    with pytest.raises(InputError) as caught:
+        check_states(states)
+    assert caught.value.field == field
+
+
+def test_bad_settings_and_axes_are_refused_naming_the_field():
+    with pytest.raises(InputError, match="record"):
+        AttractorSettings(record=1)
+    with pytest.raises(InputError, match="match"):
+        AttractorSettings(match=2.0)
+    with pytest.raises(InputError, match="not a state component"):
+        Axis("Q2", 0.0, 1.0, 3)
+    with pytest.raises(InputError, match="empty"):
+        Axis("x2", 1.0, 0.0, 3)
+    with pytest.raises(InputError, match="count"):
+        Axis("x2", 0.0, 1.0, 1)
+    with pytest.raises(InputError, match="both x2"):
+        grid_starts(CASE, Axis("x2", 0.0, 1.0, 2), Axis("x2", 0.0, 1.0, 2))
+
+
+def test_the_grid_puts_cell_i_j_at_row_j_nx_plus_i():
+    starts = grid_starts(CASE, Axis("x2", 3.0, 6.0, 3), Axis("v2", -1.0, 1.0, 2))
+    assert starts.shape == (6, 4)
+    assert starts[4].tolist() == [X1, V1, 4.5, 1.0]
+    assert (starts[:, 0] == X1).all() and (starts[:, 1] == V1).all()
+
+
+def test_basins_resume_after_an_interrupt_with_no_start_lost_or_run_twice(tmp_path):
+    case = resolve_case("instance-1", Q2=71.165)
+    x, y = Axis("x2", 3.0, 6.0, 3), Axis("v2", -4.0, 4.0, 2)
+    settings = dataclasses.replace(QUICK)
+    folder = tmp_path / "basins"
+
+    def stop_after_two(done, total):
+        if done >= 2:
+            raise KeyboardInterrupt
+
+    store = basin_store(folder, case, x, y, settings)
+    store.check()
+    with pytest.raises(KeyboardInterrupt):
+        run_basins(case, x, y, store, settings=settings, progress=stop_after_two)
+    assert len(store.read()) == 2  # the two finished starts kept
+    again = basin_store(folder, case, x, y, settings)
+    again.check()
+    seen = []
+    basins = run_basins(case, x, y, again, settings=settings, progress=lambda done, total: seen.append(done))
+    assert seen[0] == 2 and seen[-1] == 6  # resumed at 2, four more computed
+    assert sorted(item.index for item in again.read()) == list(range(6))
+    fresh = find_attractors(case, states=grid_starts(case, x, y), settings=settings)
+    assert basins.found.labels.attractor.tolist() == fresh.labels.attractor.tolist()
+    assert basins.grid.shape == (2, 3) and set(basins.grid.ravel()) == {0, 1}
+
+
+def test_a_basins_folder_of_other_basins_or_of_something_else_is_refused(tmp_path):
+    case = resolve_case("instance-1", Q2=71.165)
+    x, y = Axis("x2", 3.0, 6.0, 2), Axis("v2", -4.0, 4.0, 2)
+    store = basin_store(tmp_path / "b", case, x, y, QUICK)
+    store.check()
+    store.open()
+    other = basin_store(tmp_path / "b", case, Axis("x2", 3.0, 6.0, 3), y, QUICK)
+    with pytest.raises(InputError, match="holds another basins computation"):
+        other.check()
+    (tmp_path / "c").mkdir()
+    (tmp_path / "c" / "notes.txt").write_text("mine")
+    with pytest.raises(InputError, match="is not a basins folder"):
+        basin_store(tmp_path / "c", case, x, y, QUICK).check()
+
+
+def test_the_linear_system_has_the_closed_form_exponents():
+    """No friction, no cubic terms, no contact: each mass a damped linear oscillator, exponents
+    -C/(2m) twice (underdamped); the QR average converges as 1/N for the complex pairs."""
+    p = CASE.parameters
+    spectrum = lyapunov("instance-1", periods=400, transient=10, **LINEAR)
+    expected = sorted([-p.C1 / (2 * p.m1)] * 2 + [-p.C4 / (2 * p.m2)] * 2, reverse=True)
+    np.testing.assert_allclose(spectrum.exponents, expected, atol=1e-4)
+    assert spectrum.exponents.sum() == pytest.approx(-p.C1 / p.m1 - p.C4 / p.m2, abs=1e-9)
+
+
+def test_on_a_periodic_orbit_the_exponents_are_its_multipliers_logs_over_the_period():
+    orbit = find_orbit("instance-1", Omega=1.85)
+    period = orbit.case.parameters.period
+    expected = np.log(np.abs(orbit.multipliers)) / period
+    spectrum = lyapunov("instance-1", Omega=1.85, periods=60, transient=100)
+    np.testing.assert_allclose(spectrum.exponents, expected, atol=1e-4)
+    assert spectrum.largest < 0 and spectrum.dimension == 0.0
+
+
+@pytest.mark.slow
+def test_a_chaotic_friction_oscillator_has_a_positive_exponent_that_two_trajectories_confirm():
+    """Ueda's oscillator with dry friction: the largest exponent is positive, settles as the
+    averaging grows, and agrees with Benettin's two-trajectory estimate to 5 %."""
+    spectrum = lyapunov("instance-1", periods=1500, transient=100, **UEDA)
+    largest = spectrum.largest
+    assert largest > 0.05
+    running = spectrum.convergence.lambda1.to_numpy()
+    assert abs(running[749] - running[-1]) < 0.15 * running[-1]  # half the averaging gives nearly the same
+    assert spectrum.exponents[1] == pytest.approx(0.0, abs=1e-3)  # m2 parked: its x2 is neutral
+    assert spectrum.exponents[-1] == -np.inf  # a stuck mass annihilates its velocity's disturbance
+    two = separation_exponent("instance-1", periods=1500, transient=100, distance=1e-7, **UEDA)
+    assert two == pytest.approx(largest, rel=0.05)
+
+
+@pytest.mark.slow
+def test_the_coexistence_window_is_bounded_to_1e_4_by_following_the_attractors():
+    over = follow_attractors(
+        "instance-1", "Q2", [71.10, 71.165, 71.20], states=[NO_REST_START, REST_START], settings=QUICK, tol=1e-5
+    )
+    table = over.table()
+    assert table.groupby("Q2").size().tolist() == [1, 2, 1]  # the two coexist in the middle only
+    ends = {end.name: end for end in over.ends}
+    assert set(ends) == {"period-1, no rest", "period-1, m2 rests 2/period"}
+    assert abs(ends["period-1, no rest"].at - 71.1577416) < 1e-4
+    assert abs(ends["period-1, m2 rests 2/period"].at - 71.17025) < 1e-4
+    assert all(abs(end.inside - end.outside) <= 1e-5 for end in over.ends)
+    assert ends["period-1, no rest"].becomes == "period-1, m2 rests 2/period"
+
+
+@pytest.mark.slow
+def test_the_same_attractors_come_out_for_any_number_of_workers():
+    starts = [NO_REST_START, REST_START, (X1, V1, 5.0, 2.0), (X1, V1, 4.0, -2.0)]
+    one = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK, workers=1)
+    two = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK, workers=2)
+    assert one.labels.equals(two.labels)
+    for a, b in zip(one.attractors, two.attractors, strict=True):
+        assert np.array_equal(a.points, b.points) and a.signature == b.signature
+
+
+@pytest.mark.parametrize(
+    ("arguments", "said"),
+    [
+        (
+            ["basins", "instance-1", "--x", "q1", "0", "1", "3", "--y", "v2", "0", "1", "3"],
+            "--x: axis 'q1' is not a state",
+        ),
+        (["basins", "instance-1", "--x", "x2", "0", "1", "3", "--y", "v2", "1", "0", "3"], "--y: axis v2: from 1 to 0"),
+        (["basins", "instance-1", "--x", "x2", "0", "1", "3", "--y", "v2", "0", "1", "3", "--record", "1"], "--record"),
+        (["attractors", "instance-1", "--param", "Zz", "--from", "1", "--to", "2"], "--param 'Zz' is not a parameter"),
+        (
+            ["attractors", "instance-1", "--param", "Q2", "--from", "1", "--to", "2", "--x", "x2", "0", "1", "3"],
+            "both --x",
+        ),
+        (["lyapunov", "instance-1", "--periods", "0"], "--periods must be a whole number"),
+    ],
+)
+def test_the_commands_refuse_bad_input_in_one_line_before_any_work(tmp_path, monkeypatch, arguments, said):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    done = CliRunner().invoke(app, arguments)
+    assert done.exit_code == 2 and said in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []  # nothing created
