@@ -52,9 +52,21 @@ _EXPORTS = {
     "find_orbit": "oscillator.orbits.shooting",
     "Branch": "oscillator.orbits.continuation",
     "continue_orbit": "oscillator.orbits.continuation",
+    "Attractor": "oscillator.attractors.finding",
+    "Attractors": "oscillator.attractors.finding",
+    "AttractorSettings": "oscillator.attractors.finding",
+    "find_attractors": "oscillator.attractors.finding",
+    "LyapunovSpectrum": "oscillator.attractors.lyapunov",
+    "lyapunov": "oscillator.attractors.lyapunov",
+    "AttractorsOver": "oscillator.attractors.following",
+    "follow_attractors": "oscillator.attractors.following",
 }
 
 __all__ = [
+    "Attractor",
+    "AttractorSettings",
+    "Attractors",
+    "AttractorsOver",
     "Branch",
     "Case",
     "EnergyAudit",
@@ -64,6 +76,7 @@ __all__ = [
     "InitialState",
     "InputError",
     "Interrupted",
+    "LyapunovSpectrum",
     "Mode",
     "Orbit",
     "OscillatorError",
@@ -79,14 +92,20 @@ __all__ = [
     "SweepSettings",
     "case_names",
     "continue_orbit",
+    "find_attractors",
     "find_orbit",
+    "follow_attractors",
     "load_case",
+    "lyapunov",
     "read_run",
     "resolve_case",
     "simulate",
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.attractors.finding import Attractor, Attractors, AttractorSettings, find_attractors
+    from oscillator.attractors.following import AttractorsOver, follow_attractors
+    from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.hybrid.record import Segment
     from oscillator.hybrid.recording import SaveAt

@@ -343,6 +343,8 @@ def find_attractors(
     case: Case | str,
     *,
     states: Sequence[Sequence[float]] | np.ndarray | None = None,
+    transient: int | None = None,
+    record: int | None = None,
     settings: AttractorSettings | None = None,
     workers: int = 1,
     client: Any = None,
@@ -357,6 +359,8 @@ def find_attractors(
         A case or a shipped case's name.
     states : array of shape (N, 4), optional
         The starts ``(x1, v1, x2, v2)`` at the case's ``t0``; the case's own start by default.
+    transient, record : int, optional
+        Forcing periods run before recording, and recorded (``settings``' by default).
     settings : AttractorSettings, optional
         Transient, recorded periods, tolerances (the defaults of :class:`AttractorSettings`).
     workers : int
@@ -376,6 +380,8 @@ def find_attractors(
     [(1, True)]
     """
     settings = settings or AttractorSettings()
+    chosen = {name: value for name, value in (("transient", transient), ("record", record)) if value is not None}
+    settings = dataclasses.replace(settings, **chosen) if chosen else settings
     case = resolve_case(case, **overrides)
     starts = check_states(case.initial.y if states is None else states)
     landings = []

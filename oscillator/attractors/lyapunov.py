@@ -56,7 +56,7 @@ class LyapunovSpectrum:
         ``(x1, v1, x2, v2)`` where the averaging began, at ``t0 + (transient + frame) T``.
     convergence : DataFrame
         The running averages after each period: ``period``, ``t`` (s of averaging) and
-        ``lambda1`` ... ``lambda4`` in the order of the frame's columns.
+        ``lambda1`` ... ``lambda4``, the frame's columns in the order of the exponents.
     """
 
     case: Case
@@ -158,9 +158,15 @@ def lyapunov(
         rows.append((k + 1, (k + 1) * period, *(sums / ((k + 1) * period))))
         if progress is not None:
             progress(k + 1, periods)
-    convergence = pd.DataFrame(rows, columns=["period", "t", "lambda1", "lambda2", "lambda3", "lambda4"])
-    exponents = np.sort(sums / (periods * period))[::-1]
-    return LyapunovSpectrum(case, exponents, periods, start_state, convergence)
+    exponents = sums / (periods * period)
+    order = np.argsort(-exponents, kind="stable")  # the frame's columns, largest final exponent first
+    table = np.array(rows)
+    convergence = pd.DataFrame(
+        np.column_stack([table[:, :2], table[:, 2:][:, order]]),
+        columns=["period", "t", "lambda1", "lambda2", "lambda3", "lambda4"],
+    )
+    convergence["period"] = convergence["period"].astype(int)
+    return LyapunovSpectrum(case, exponents[order], periods, start_state, convergence)
 
 
 def separation_exponent(

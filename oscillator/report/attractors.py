@@ -10,6 +10,7 @@ largest multiplier, Lyapunov exponent, section points), ``figures/basins.png`` (
 from __future__ import annotations
 
 import json
+import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -166,7 +167,8 @@ def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
     ax.set_xscale("log")
     ax.set_xlabel("averaging time (s)")
     ax.set_ylabel("exponent (1/s)")
-    ax.set_title(f"{figure_title(spectrum.case)}: Lyapunov exponents", parse_math=False, fontsize=9)
+    title = textwrap.fill(f"Lyapunov exponents of {figure_title(spectrum.case)}", 90)
+    ax.set_title(title, parse_math=False, fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return fig
