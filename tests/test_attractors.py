@@ -150,6 +150,11 @@ def test_basins_resume_after_an_interrupt_with_no_start_lost_or_run_twice(tmp_pa
     fresh = find_attractors(case, states=grid_starts(case, x, y), settings=settings)
     assert basins.found.labels.attractor.tolist() == fresh.labels.attractor.tolist()
     assert basins.grid.shape == (2, 3) and set(basins.grid.ravel()) == {0, 1}
+    # every cell of each basin, run 300 periods by simulate itself, ends on its attractor's orbit
+    orbits = {a.id: a.orbit.state for a in basins.found.attractors}
+    for row in basins.found.labels.itertuples(index=False):
+        end = _section_end(case, (row.x1, row.v1, row.x2, row.v2), 300)
+        assert np.max(np.abs(end - orbits[row.attractor])) < 1e-7
 
 
 def test_a_basins_folder_of_other_basins_or_of_something_else_is_refused(tmp_path):
@@ -252,3 +257,73 @@ def test_the_commands_refuse_bad_input_in_one_line_before_any_work(tmp_path, mon
     done = CliRunner().invoke(app, arguments)
     assert done.exit_code == 2 and said in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []  # nothing created
+
+
+@pytest.mark.slow
+def test_the_starts_run_on_a_dask_cluster_give_the_same_attractors():
+    distributed = pytest.importorskip("distributed")
+    starts = [NO_REST_START, REST_START, (X1, V1, 5.0, 2.0)]
+    here = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            there = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK, client=client)
+    assert here.labels.equals(there.labels)
+
+
+@pytest.mark.slow
+def test_an_aperiodic_attractor_is_told_chaotic_by_its_largest_exponent():
+    found = find_attractors("instance-1", settings=AttractorSettings(transient=100, record=40), **UEDA)
+    (attractor,) = found.attractors
+    assert attractor.period == 0 and attractor.kind == "chaotic" and attractor.lyapunov > 0.05
+    assert attractor.name.startswith("A0: chaotic")
+
+
+def test_the_basins_report_escapes_the_case_s_text(tmp_path):
+    from oscillator.attractors.basins import Basins
+    from oscillator.report.attractors import write_basins
+
+    case = dataclasses.replace(
+        resolve_case("instance-1", Q2=71.165), name="<img src=x onerror=alert(1)> *b* [l](http://e)"
+    )
+    x, y = Axis("x2", 3.0, 6.0, 2), Axis("v2", -4.0, 4.0, 2)
+    found = find_attractors(case, states=grid_starts(case, x, y), settings=QUICK)
+    assert write_basins(Basins(found, x, y), tmp_path, plots=False) == []
+    page = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "<img src=x" not in page and "&lt;img src=x" in page
+    from markdown_it import MarkdownIt
+
+    rendered = MarkdownIt("commonmark").render((tmp_path / "report.md").read_text(encoding="utf-8"))
+    assert "<img" not in rendered and "<em>" not in rendered and "<a " not in rendered
+    assert "&lt;img src=x onerror=alert(1)&gt; *b* [l](http://e)" in rendered
+
+
+def test_following_resumes_at_the_value_it_stopped_at(tmp_path, monkeypatch):
+    import oscillator.attractors.following as following
+    from oscillator.attractors.store import LandingStore
+
+    case = resolve_case("instance-1")
+    values = [71.10, 71.20]
+    options = {"states": [NO_REST_START, REST_START], "settings": QUICK, "tol": 0.02}
+
+    def store():
+        folder = LandingStore(tmp_path / "over", "attractors.json", {"case": "x", "values": values})
+        folder.check()
+        folder.open()
+        return folder
+
+    def stop_after_the_first(done, total):
+        if done == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        follow_attractors(case, "Q2", values, store=store(), progress=stop_after_the_first, **options)
+    assert [p.name for p in sorted((tmp_path / "over" / "parts").iterdir())] == ["value-00000.parquet"]
+    computed = []
+    real = following._landings_at
+    monkeypatch.setattr(following, "_landings_at", lambda *args: computed.append(1) or real(*args))
+    resumed = follow_attractors(case, "Q2", values, store=store(), **options)
+    monkeypatch.undo()
+    assert len(computed) == 1  # the second value only
+    fresh = follow_attractors(case, "Q2", values, **options)
+    assert resumed.table().drop(columns="points").equals(fresh.table().drop(columns="points"))
+    assert [(e.id, e.inside, e.outside) for e in resumed.ends] == [(e.id, e.inside, e.outside) for e in fresh.ends]

@@ -5,17 +5,15 @@ or ends) and ``oscillator lyapunov`` (the Lyapunov spectrum of a motion)."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich import box
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
 
-from oscillator.cli.console import err, fail, load, message, out, say
+from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from
 from oscillator.errors import InputError, OscillatorError
 from oscillator.text import printable
@@ -40,31 +38,6 @@ SchedulerOption = Annotated[
     str | None,
     typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
 ]
-
-
-def _progress(label: str, unit: str) -> tuple[Progress, Callable[[int, int], None]]:
-    """A progress bar on stderr and its callback ``report(done, total)``."""
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.fields[rate]}"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-    )
-    bar = Progress(*columns, console=err, transient=True)
-    task = bar.add_task(printable(label), total=None, rate="")
-    began = time.monotonic()
-    first: list[int] = []
-
-    def report(done: int, total: int) -> None:
-        if not first:
-            first.append(done)
-        new = done - first[0]
-        rate = f"{new / (time.monotonic() - began):.2f} {unit}/s" if new else ""
-        bar.update(task, completed=done, total=total, rate=rate)
-
-    return bar, report
 
 
 def _axis(values: AxisOption, flag: str) -> Axis:
@@ -198,7 +171,7 @@ def _run_basins(
 
     if quiet or not err.is_terminal:
         return run_basins(case, x, y, store, settings=settings, workers=workers, client=client)
-    bar, report = _progress(f"{case.name}: basins", "starts")
+    bar, report = progress_bar(f"{case.name}: basins", "starts")
     with bar:
         return run_basins(case, x, y, store, settings=settings, workers=workers, client=client, progress=report)
 
@@ -261,7 +234,7 @@ def lyapunov(
     except OscillatorError as error:
         raise fail(message(error)) from None
     try:
-        bar, report = _progress(f"{resolved.name}: Lyapunov exponents", "periods")
+        bar, report = progress_bar(f"{resolved.name}: Lyapunov exponents", "periods")
         with bar:
             spectrum = spectrum_of(resolved, periods=periods, transient=transient, progress=report)
     except OscillatorError as error:
@@ -437,7 +410,7 @@ def _run_following(
     if quiet or not err.is_terminal:
         over = follow_attractors(case, param, values, **options)
     else:
-        bar, report = _progress(f"{case.name}: attractors over {param}", "values")
+        bar, report = progress_bar(f"{case.name}: attractors over {param}", "values")
         with bar:
             over = follow_attractors(case, param, values, progress=report, **options)
     store.write_status("computed", values=len(values))

@@ -12,16 +12,19 @@ import os
 import re
 import subprocess
 import sys
+import time
+from collections.abc import Callable
 
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.text import Text
 
 from oscillator.errors import OscillatorError
 from oscillator.io.signals import interrupts_deferred
 from oscillator.text import printable
 
-__all__ = ["FLAGS", "err", "fail", "load", "message", "out", "say"]
+__all__ = ["FLAGS", "err", "fail", "load", "message", "out", "progress_bar", "say"]
 
 #: The library's argument names and the command line's flags for them.
 FLAGS = {
@@ -190,3 +193,29 @@ def message(error: OscillatorError) -> str:
     if flag is not None and text.startswith(error.field or ""):
         text = flag + text[len(error.field or "") :]
     return re.sub(r"`(\w+)`", lambda m: FLAGS.get(m.group(1), m.group(1)), text)
+
+
+def progress_bar(label: str, unit: str) -> tuple[Progress, Callable[[int, int], None]]:
+    """A progress bar on stderr and its callback ``report(done, total)``, with the rate in ``unit``
+    per second counted from the first report (a resumed computation's earlier work is not in it)."""
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[rate]}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    bar = Progress(*columns, console=err, transient=True)
+    task = bar.add_task(printable(label), total=None, rate="")
+    began = time.monotonic()
+    first: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        if not first:
+            first.append(done)
+        new = done - first[0]
+        rate = f"{new / (time.monotonic() - began):.2f} {unit}/s" if new else ""
+        bar.update(task, completed=done, total=total, rate=rate)
+
+    return bar, report

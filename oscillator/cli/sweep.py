@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from oscillator.cli.console import err, fail, load, message, out, say
+from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from, sweep_settings
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, is_shipped
@@ -24,31 +23,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.analysis.locate import Location
 
 __all__ = ["locate", "sweep"]
-
-
-def _sweep_progress(name: str, settings: SweepSettings) -> tuple[Progress, Callable[[int, int], None]]:
-    """A progress bar and its callback ``report(done, total)``."""
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.fields[rate]}"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-    )
-    bar = Progress(*columns, console=err, transient=True)
-    task = bar.add_task(f"{printable(name)}: {settings.param}", total=len(settings.points), rate="")
-    began = time.monotonic()
-    first: list[int] = []
-
-    def report(done: int, total: int) -> None:
-        if not first:
-            first.append(done)
-        new = done - first[0]
-        rate = f"{new / (time.monotonic() - began):.2f} points/s" if new else ""
-        bar.update(task, completed=done, total=total, rate=rate)
-
-    return bar, report
 
 
 #: ``--both-ways``: to the last value and back, each value from the previous one's end.
@@ -138,7 +112,7 @@ def _run_with_progress(plan: Any, name: str, settings: SweepSettings, quiet: boo
     """Run the sweep, with a progress bar where a person watches."""
     if quiet or not err.is_terminal:
         return plan.run()
-    bar, report_progress = _sweep_progress(name, settings)
+    bar, report_progress = progress_bar(f"{name}: {settings.param}", "points")
     with bar:
         return plan.run(report_progress)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -214,23 +215,27 @@ def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
     return blocks
 
 
-def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[str]:
-    """Write the tables, the figure and the report into the basins folder (each file atomically).
-    Returns what could not be written (a figure that failed), the tables being written first."""
+def _write_folder(
+    folder: Path,
+    tables: dict[str, pd.DataFrame],
+    figure: tuple[str, Callable[[], Figure]] | None,
+    blocks: list[mk.Block],
+    title: str,
+) -> list[str]:
+    """The tables first, then the figure (its failure kept as a problem, the tables safe), then
+    the report without the figure if there is none; every file written atomically."""
     problems = []
-    table = attractor_table(basins)
-    for name, frame in (("basins", basins.table()), ("attractors", table)):
+    for name, frame in tables.items():
         with atomic_path(folder / f"{name}.parquet") as temporary:
             frame.to_parquet(temporary, index=False)
-    if plots:
+    if figure is not None:
+        name, draw = figure
         try:
-            _save(basins_figure(basins), folder / "figures", "basins")
+            _save(draw(), folder / "figures", name)
         except Exception as exc:  # a figure's failure keeps the computed tables
-            problems.append(f"figure basins: {exc}")
-    blocks = _basins_blocks(basins, table)
-    if not plots:
+            problems.append(f"figure {name}: {exc}")
+    else:
         blocks = [block for block in blocks if not isinstance(block, mk.Figure)]
-    title = f"{basins.found.case.name}: basins of attraction"
     for name, text in (
         ("report.md", mk.to_markdown(blocks)),
         ("report.html", mk.to_html(blocks, folder=folder, title=title)),
@@ -238,6 +243,16 @@ def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[st
         with atomic_path(folder / name) as temporary:
             temporary.write_text(text, encoding="utf-8")
     return problems
+
+
+def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[str]:
+    """Write the tables, the figure and the report into the basins folder (each file atomically).
+    Returns what could not be written (a figure that failed), the tables being written first."""
+    table = attractor_table(basins)
+    figure = ("basins", lambda: basins_figure(basins)) if plots else None
+    title = f"{basins.found.case.name}: basins of attraction"
+    tables = {"basins": basins.table(), "attractors": table}
+    return _write_folder(folder, tables, figure, _basins_blocks(basins, table), title)
 
 
 def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = True) -> list[str]:
@@ -360,24 +375,8 @@ def write_following(
     over: AttractorsOver, folder: Path, *, coordinate: str, branches: list[tuple[int, Branch]], plots: bool = True
 ) -> list[str]:
     """``attractors.parquet``, ``ends.parquet``, the figure and the report, into ``folder``."""
-    problems = []
     table = over.table()
-    for name, frame in (("attractors", table), ("ends", over.ends_table())):
-        with atomic_path(folder / f"{name}.parquet") as temporary:
-            frame.to_parquet(temporary, index=False)
-    if plots:
-        try:
-            _save(following_figure(over, coordinate, branches), folder / "figures", "attractors")
-        except Exception as exc:  # a figure's failure keeps the computed tables
-            problems.append(f"figure attractors: {exc}")
-    blocks = _following_blocks(over, table)
-    if not plots:
-        blocks = [block for block in blocks if not isinstance(block, mk.Figure)]
+    figure = ("attractors", lambda: following_figure(over, coordinate, branches)) if plots else None
     title = f"{over.case.name}: attractors over {over.param}"
-    for name, text in (
-        ("report.md", mk.to_markdown(blocks)),
-        ("report.html", mk.to_html(blocks, folder=folder, title=title)),
-    ):
-        with atomic_path(folder / name) as temporary:
-            temporary.write_text(text, encoding="utf-8")
-    return problems
+    tables = {"attractors": table, "ends": over.ends_table()}
+    return _write_folder(folder, tables, figure, _following_blocks(over, table), title)
