@@ -327,3 +327,50 @@ def test_following_resumes_at_the_value_it_stopped_at(tmp_path, monkeypatch):
     fresh = follow_attractors(case, "Q2", values, **options)
     assert resumed.table().drop(columns="points").equals(fresh.table().drop(columns="points"))
     assert [(e.id, e.inside, e.outside) for e in resumed.ends] == [(e.id, e.inside, e.outside) for e in fresh.ends]
+
+
+def test_regimes_are_named_by_period_rests_and_contacts():
+    from oscillator.attractors.atlas import regime_of
+
+    assert regime_of(1, (0.0, 2.0), 0.0, -0.3, 3.9) == "P1 m2 rests"
+    assert regime_of(2, (1.0, 0.0), 0.5, -0.1, 3.9) == "P2 m1 rests contact"
+    assert regime_of(0, (0.0, 0.0), 0.0, 0.1, 6.28) == "chaotic"
+    assert regime_of(0, (0.0, 0.0), 0.0, 0.0, 6.28) == "quasi-periodic"
+    assert regime_of(0, (0.0, 0.0), 0.0, float("nan"), 6.28) == "aperiodic"
+
+
+def test_the_atlas_agrees_with_the_sweeps_sliding_along_fig_14s_line_and_resumes(tmp_path, monkeypatch):
+    """Along Q2 = 71 the Omega sweep finds m2 sliding at 1.6 and not at 1.55 or 1.65: so does
+    the atlas; the atlas killed after its first row computes only the second when run again."""
+    import oscillator.attractors.atlas as atlas_module
+    from oscillator import SweepSettings
+    from oscillator.analysis.sweeps import run_point
+    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, atlas_identity, run_atlas
+    from oscillator.attractors.store import LandingStore
+
+    x, y = AtlasAxis("Omega", 1.55, 1.65, 3), AtlasAxis("Q2", 70.5, 71.0, 2)
+    settings = AtlasSettings()
+
+    def store():
+        folder = LandingStore(tmp_path / "atlas", "atlas.json", atlas_identity(CASE, x, y, settings))
+        folder.check()
+        folder.open()
+        return folder
+
+    def stop_after_the_first_row(done, total):
+        if done == x.count + 1:  # the first point of the second row: the first is kept
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_atlas(CASE, x, y, settings=settings, store=store(), progress=stop_after_the_first_row)
+    rows = []
+    real = atlas_module.atlas_row
+    monkeypatch.setattr(atlas_module, "atlas_row", lambda *a, **k: rows.append(a[4]) or real(*a, **k))
+    atlas = run_atlas(CASE, x, y, settings=settings, store=store())
+    assert rows == [1]
+    line = atlas.table[atlas.table.Q2 == 71.0].sort_values("Omega")
+    sweep = SweepSettings(param="Omega", start=1.55, stop=1.65, steps=3, transient=100, record=20)
+    sliding = [bool(run_point(CASE, sweep, i, v).summary.sliding.iloc[0]) for i, v in enumerate(x.values)]
+    assert sliding == [False, True, False]
+    assert [regime.endswith("m2 rests") for regime in line.regime] == sliding
+    assert (atlas.table.lyapunov < 0).all() and (atlas.table.period == 1).all()

@@ -36,7 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 COMMANDS = (
-    "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue", "basins", "attractors", "lyapunov"
+    "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue",
+    "basins", "attractors", "lyapunov", "atlas",
 )  # fmt: skip
 
 
@@ -104,6 +105,11 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
         if command == "attractors":
             arguments = _set(_set(arguments, "--steps", "3"), "--tol", "1e-3")
+    elif command == "atlas":  # a 3 x 2 plane, in this process
+        for option, count in (("--x", "3"), ("--y", "2")):
+            arguments = list(arguments)
+            arguments[arguments.index(option) + 4] = count
+        arguments = _set(arguments, "--workers", "1")
     elif command == "lyapunov":
         arguments = _set(_set(arguments, "--periods", "20"), "--transient", "10")
     elif command == "locate":  # both ends are simulated, and must differ; no bisection
@@ -165,7 +171,8 @@ def test_every_command_of_a_page_runs_as_shown(tmp_path, monkeypatch, page):
 #: The commands whose --help examples run together, in this order (``report``'s example reads a
 #: folder that ``run``'s example writes); the groups run side by side.
 HELP_GROUPS = {"runs": ("list", "show", "check", "run", "report"), "sweeps": ("sweep", "locate"),
-               "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov")}  # fmt: skip
+               "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov"),
+               "atlas": ("atlas",)}  # fmt: skip
 
 
 def test_every_command_has_a_help_example_in_a_group():

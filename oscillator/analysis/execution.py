@@ -28,7 +28,7 @@ from oscillator.errors import InputError
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.text import shown
 
-__all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "connect", "run_tasks"]
+__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_workers", "connect", "run_tasks"]
 
 T = TypeVar("T")
 
@@ -57,54 +57,88 @@ def run_tasks(
     keywords: dict[str, Any] | None = None,
     workers: int = 1,
     client: Any = None,
+    pool: Pool | None = None,
 ) -> Iterator[T]:
     """``function(*shared, *task, **keywords)`` for every task, yielded as each finishes (in the
-    tasks' order when run in this process)."""
+    tasks' order when run in this process).  ``pool``: an open :class:`Pool` to run them on (kept
+    open afterwards, for the next batch), instead of one started for these tasks."""
     tasks = list(tasks)
     keywords = keywords or {}
     if client is not None:
         return _on_dask(client, function, tasks, shared, keywords)
+    if pool is not None:
+        return pool.run(function, tasks, shared, keywords)
     if workers <= 1 or len(tasks) <= 1:
         return (function(*shared, *task, **keywords) for task in tasks)
-    return _on_pool(function, tasks, shared, keywords, min(workers, len(tasks)))
+    return _once(function, tasks, shared, keywords, min(workers, len(tasks)))
 
 
-def _on_pool(
+def _once(
     function: Callable[..., T],
     tasks: list[tuple[Any, ...]],
     shared: tuple[Any, ...],
     keywords: dict[str, Any],
     workers: int,
 ) -> Iterator[T]:
-    context = multiprocessing.get_context("spawn")
-    quiet_resource_tracker()
-    pending = iter(tasks)
-    running: set[cf.Future[T]] = set()
-    with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
-        pool = cf.ProcessPoolExecutor(
-            max_workers=workers, mp_context=context, initializer=prepare_worker, initargs=(os.getpid(),)
-        )
+    with Pool(workers) as pool:
+        yield from pool.run(function, tasks, shared, keywords)
+
+
+class Pool:
+    """A local pool of ``spawn``-ed worker processes, for several batches of tasks in turn.
+
+    The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator.io.signals`); when
+    the block is left by an interrupt or an error they are stopped at once, so nothing outlives
+    the caller."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = workers
+        quiet_resource_tracker()
+        with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
+            self._executor = cf.ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=prepare_worker,
+                initargs=(os.getpid(),),
+            )
+
+    def __enter__(self) -> Pool:
+        return self
+
+    def __exit__(self, kind: object, *_: object) -> None:
+        if kind is None:
+            self._executor.shutdown()
+            return
+        for process in list(getattr(self._executor, "_processes", {}).values()):  # no public way to stop busy ones
+            process.terminate()
+        self._executor.shutdown(wait=True, cancel_futures=True)  # quick now; frees the pool's semaphores
+
+    def run(
+        self,
+        function: Callable[..., T],
+        tasks: list[tuple[Any, ...]],
+        shared: tuple[Any, ...],
+        keywords: dict[str, Any],
+    ) -> Iterator[T]:
+        """The tasks' results as they finish; at most ``4 workers`` tasks in flight, so that
+        memory stays flat."""
+        pending = iter(tasks)
+        running: set[cf.Future[T]] = set()
 
         def fill() -> None:
             for task in pending:
-                running.add(pool.submit(function, *shared, *task, **keywords))
-                if len(running) >= 4 * workers:
+                with interrupts_ignored():
+                    running.add(self._executor.submit(function, *shared, *task, **keywords))
+                if len(running) >= 4 * self.workers:
                     return
 
         fill()
-    try:
         while running:
             finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for future in finished:
                 running.discard(future)
                 yield future.result()
             fill()
-    except BaseException:
-        for process in list(getattr(pool, "_processes", {}).values()):  # no public way to stop busy workers
-            process.terminate()
-        pool.shutdown(wait=True, cancel_futures=True)  # quick now; frees the pool's semaphores
-        raise
-    pool.shutdown()
 
 
 def _on_dask(

@@ -147,6 +147,26 @@ class LandingStore:
                 ) from exc
         return found
 
+    def write_table(self, frame: pd.DataFrame, name: str) -> None:
+        """A part holding ``frame``, named ``name``."""
+        with atomic_path(self.parts / f"{name}.parquet") as temporary:
+            frame.to_parquet(temporary, index=False)
+
+    def read_table(self, name: str) -> pd.DataFrame | None:
+        """The part ``name`` (None if there is none; a damaged one is refused with its name)."""
+        part = self.parts / f"{name}.parquet"
+        if not part.is_file():
+            return None
+        try:
+            return pq.read_table(part).to_pandas()
+        except Exception as exc:  # pyarrow raises many types for a damaged file
+            if isinstance(exc, MemoryError):
+                raise
+            raise InputError(
+                f"{printable(str(part))} is damaged; delete it and run the same command to compute it again",
+                field="folder",
+            ) from exc
+
     def write(self, landings: list[Landing], name: str | None = None) -> None:
         """A part of these landings, named ``name`` (by default after its first start's index)."""
         if not landings:

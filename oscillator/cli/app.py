@@ -121,4 +121,5 @@ app.command(short_help="The attractors over a parameter: shares, and where each 
     attractors.attractors
 )
 app.command(short_help="The Lyapunov spectrum of a motion.")(attractors.lyapunov)
+app.command(short_help="The regime atlas over two parameters.")(attractors.atlas)
 app.callback(invoke_without_command=True)(_version)

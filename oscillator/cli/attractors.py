@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.finding import AttractorSettings
     from oscillator.io.cases import Case
 
-__all__ = ["attractors", "basins", "lyapunov"]
+__all__ = ["atlas", "attractors", "basins", "lyapunov"]
 
 AxisOption = tuple[str, float, float, int]
 SetOption = Annotated[list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")]
@@ -442,6 +442,116 @@ def _finish_following(
                     f"its seed then goes to: {end.becomes}"
                 )
             )
+    say(f"written to {printable(str(folder))}")
+    if problems:
+        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
+
+
+PlaneAxis = tuple[str, float, float, int]
+
+
+def atlas(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    x: Annotated[PlaneAxis, typer.Option("--x", metavar="NAME LOW HIGH N", help="The first parameter's axis.")],
+    y: Annotated[PlaneAxis, typer.Option("--y", metavar="NAME LOW HIGH N", help="The second parameter's axis.")],
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Output folder (default: runs/CASE-atlas-YYYYmmdd-HHMMSS); the same folder again resumes.",
+        ),
+    ] = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+    quiet: QuietOption = False,
+) -> None:
+    """The regime atlas over two parameters: at every point the attractors (from the case's start
+    and seeds from the row before), each one's period, rests and contacts per period, impact
+    velocity and largest Lyapunov exponent; the regime of each, and where several coexist.
+
+    Writes atlas.parquet, figures/atlas.png (Fig. 14's lines marked) and a report. Rows are kept as
+    they finish: the same command with the same --out resumes.
+
+    \b
+    Examples:
+      oscillator atlas instance-1 --x Omega 1.3 1.85 12 --y Q2 68.5 72 8 --out runs/atlas
+    """
+    try:
+        resolved = case_from(case, None, set_)
+        x_axis, y_axis = _plane_axis(x, "--x"), _plane_axis(y, "--y")
+        if x_axis.name == y_axis.name:
+            raise InputError(f"--y: both axes are {x_axis.name}; give two different parameters", field="--y")
+        from oscillator.analysis.execution import check_workers
+        from oscillator.attractors.atlas import AtlasSettings, atlas_identity
+        from oscillator.attractors.store import LandingStore
+
+        count = check_workers(workers)
+        for axis in (x_axis, y_axis):
+            for value in (axis.low, axis.high):
+                case_from(case, None, [*(set_ or []), f"{axis.name}={value!r}"])
+        settings = AtlasSettings()
+        folder = out_dir if out_dir is not None else _new_folder(resolved, "atlas")
+        store = LandingStore(folder, "atlas.json", atlas_identity(resolved, x_axis, y_axis, settings))
+        store.check()
+        load("oscillator.attractors.atlas", notice=True)
+        lock, client = _locked(folder, scheduler)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    try:
+        found = _run_atlas(resolved, x_axis, y_axis, settings, store, count, client, quiet)
+    except OscillatorError as error:
+        raise fail(f"{message(error)}; the rows finished so far are kept in {store.folder}", 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; the rows finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        lock.release()
+        if client is not None:
+            client.close()
+    _finish_atlas(found, store.folder, no_plots, quiet)
+
+
+def _plane_axis(values: PlaneAxis, flag: str) -> Any:
+    from oscillator.attractors.atlas import AtlasAxis
+
+    name, low, high, count = values
+    try:
+        return AtlasAxis(name, low, high, count)
+    except InputError as error:
+        raise InputError(f"{flag}: {error}", field=flag) from None
+
+
+def _run_atlas(case: Case, x: Any, y: Any, settings: Any, store: Any, workers: int, client: Any, quiet: bool) -> Any:
+    from oscillator.attractors.atlas import run_atlas
+
+    store.open()
+    options = {"settings": settings, "store": store, "workers": workers, "client": client}
+    if quiet or not err.is_terminal:
+        found = run_atlas(case, x, y, **options)
+    else:
+        bar, report = progress_bar(f"{case.name}: atlas", "points")
+        with bar:
+            found = run_atlas(case, x, y, progress=report, **options)
+    store.write_status("computed", points=x.count * y.count)
+    return found
+
+
+def _finish_atlas(found: Any, folder: Path, no_plots: bool, quiet: bool) -> None:
+    from oscillator.report.attractors import write_atlas
+
+    try:
+        problems = write_atlas(found, folder, plots=not no_plots)
+    except OSError as error:
+        raise fail(f"cannot write into {printable(str(folder))} ({error}); the rows are kept there", 1) from None
+    if not quiet:
+        first = found.table[found.table.attractor <= 0]
+        for regime, count in first.regime.value_counts().items():
+            out.print(Text(f"  {regime}: {count} points"))
+        out.print(Text(f"  several attractors coexist at {int((first.coexisting > 1).sum())} points"))
     say(f"written to {printable(str(folder))}")
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)

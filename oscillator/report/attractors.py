@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from oscillator.attractors.atlas import Atlas
 from oscillator.attractors.basins import Basins
 from oscillator.attractors.finding import STATE, Attractor
 from oscillator.attractors.following import AttractorsOver
@@ -32,10 +33,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.continuation import Branch
 
 __all__ = [
+    "atlas_figure",
     "attractor_table",
     "basins_figure",
     "following_figure",
     "lyapunov_figure",
+    "write_atlas",
     "write_basins",
     "write_following",
     "write_lyapunov",
@@ -380,3 +383,82 @@ def write_following(
     title = f"{over.case.name}: attractors over {over.param}"
     tables = {"attractors": table, "ends": over.ends_table()}
     return _write_folder(folder, tables, figure, _following_blocks(over, table), title)
+
+
+#: Fig. 14's two lines through the plane: Q2 = 71 (the Omega sweep) and Omega = 1.6 (the Q2 sweep).
+FIG_14_LINES = {"Q2": 71.0, "Omega": 1.6}
+
+
+def atlas_figure(atlas: Atlas) -> Figure:
+    """The plane coloured by regime (of each point's first attractor), points where several
+    attractors coexist hatched, and Fig. 14's two lines where they cross the window."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    codes, coexisting, regimes = atlas.grid()
+    palette = [COLORS[k % len(COLORS)] for k in range(len(regimes))]
+    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+    ax = fig.add_subplot()
+    x, y = atlas.x.values, atlas.y.values
+    shown = np.ma.masked_less(codes, 0)
+    ax.pcolormesh(x, y, shown, cmap=ListedColormap(palette), vmin=-0.5, vmax=len(regimes) - 0.5, shading="nearest")
+    if (codes < 0).any():
+        ax.pcolormesh(x, y, np.ma.masked_greater_equal(codes, 0), cmap=ListedColormap([FAILED]), shading="nearest")
+    several = np.ma.masked_less(coexisting, 2)
+    if several.count():
+        ax.pcolor(x, y, several, hatch="////", alpha=0.0, shading="nearest")
+    handles = [Patch(color=color, label=regime) for color, regime in zip(palette, regimes, strict=True)]
+    if several.count():
+        handles.append(Patch(facecolor="white", edgecolor="black", hatch="////", label="several attractors coexist"))
+    for name, value in FIG_14_LINES.items():
+        if name == atlas.x.name and atlas.x.low <= value <= atlas.x.high:
+            ax.axvline(value, color="black", lw=1.2, ls="--")
+            handles.append(_line_handle(f"Fig. 14: {name} = {value:g}"))
+        if name == atlas.y.name and atlas.y.low <= value <= atlas.y.high:
+            ax.axhline(value, color="black", lw=1.2, ls="--")
+            handles.append(_line_handle(f"Fig. 14: {name} = {value:g}"))
+    ax.set_xlabel(atlas.x.name)
+    ax.set_ylabel(atlas.y.name)
+    title = f"{figure_title(atlas.case)}: regimes over {atlas.x.name} and {atlas.y.name}"
+    ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
+    return fig
+
+
+def _line_handle(label: str) -> Any:
+    """A legend entry for a dashed black line."""
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], color="black", lw=1.2, ls="--", label=label)
+
+
+def _atlas_blocks(atlas: Atlas) -> list[mk.Block]:
+    case, x, y, table = atlas.case, atlas.x, atlas.y, atlas.table
+    first = table[table.attractor <= 0]
+    counts = first.regime.value_counts()
+    rows = tuple((str(regime), str(int(count)), f"{count / len(first):.1%}") for regime, count in counts.items())
+    several = int((first.coexisting > 1).sum())
+    blocks: list[mk.Block] = [
+        mk.Heading(1, (f"{case.name}: regime atlas over {x.name} and {y.name}",)),
+        mk.Paragraph(
+            (
+                f"{x.count} x {y.count} points, {x.name} from {x.low:g} to {x.high:g} and {y.name} from {y.low:g} to "
+                f"{y.high:g}; at {several} of them several attractors coexist.",
+            )
+        ),
+    ]
+    if case.modified:
+        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += [
+        mk.Table(("regime (first attractor)", "points", "share"), rows),
+        mk.Figure("atlas", "the regimes over the plane; hatched where several attractors coexist"),
+    ]
+    return blocks
+
+
+def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
+    """``atlas.parquet`` (one row per attractor of each point), the figure and the report."""
+    figure = ("atlas", lambda: atlas_figure(atlas)) if plots else None
+    title = f"{atlas.case.name}: regime atlas"
+    return _write_folder(folder, {"atlas": atlas.table}, figure, _atlas_blocks(atlas), title)
