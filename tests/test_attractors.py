@@ -374,3 +374,48 @@ def test_the_atlas_agrees_with_the_sweeps_sliding_along_fig_14s_line_and_resumes
     assert sliding == [False, True, False]
     assert [regime.endswith("m2 rests") for regime in line.regime] == sliding
     assert (atlas.table.lyapunov < 0).all() and (atlas.table.period == 1).all()
+
+
+def _crossing(curve, value):
+    """Where the curve crosses ``y = value`` (linear between the two points around it)."""
+    x, y = curve.points[curve.x].to_numpy(), curve.points[curve.y].to_numpy()
+    k = int(np.flatnonzero(np.diff(np.sign(y - value)) != 0)[0])
+    return x[k] + (value - y[k]) * (x[k + 1] - x[k]) / (y[k + 1] - y[k])
+
+
+@pytest.mark.slow
+def test_the_sliding_curve_passes_through_the_bifurcations_located_in_one_parameter():
+    """From Q2 = 71.1577416 at Omega = 1.6 (where the orbit without rest ends: continuation in Q2,
+    issue 14) the curve crosses Q2 = 71 at Omega = 1.5993948 (where the Omega sweep's sliding
+    begins: `oscillator locate`), both to 1e-6."""
+    from oscillator.orbits.curves import trace_curve
+
+    curve = trace_curve("instance-1", kind="sliding", x="Omega", y="Q2", at=(1.6, 71.1577416),
+                        window=((1.595, 1.605), (70.98, 71.16)), step=0.15, max_points=12)  # fmt: skip
+    start = curve.points[curve.points.Omega == 1.6].Q2.iloc[0]
+    assert abs(start - 71.1577416) < 1e-6
+    assert abs(_crossing(curve, 71.0) - 1.5993948) < 1e-6
+    assert any(end.startswith("left the window") for end in curve.ends)
+    # across the curve the motion changes: just outside, the orbit without rest is gone and a run
+    # from it lands on the orbit in which m2 rests; just inside it stays
+    middle = curve.points.iloc[len(curve.points) // 2]
+    inside_kind = curve.inside
+    for offset, rests in ((+2e-3, 0.0), (-2e-3, 2.0)):
+        case = resolve_case("instance-1", Omega=float(middle.Omega), Q2=float(middle.Q2) + offset)
+        found = find_attractors(case, states=[NO_REST_START], settings=QUICK)
+        assert found.attractors[0].rests[1] == rests, (offset, inside_kind)
+
+
+@pytest.mark.slow
+def test_the_atlas_is_the_same_for_any_number_of_workers_and_on_dask():
+    distributed = pytest.importorskip("distributed")
+    from oscillator.attractors.atlas import AtlasAxis, run_atlas
+
+    x, y = AtlasAxis("Omega", 1.55, 1.65, 4), AtlasAxis("Q2", 70.9, 71.2, 3)
+    one = run_atlas(CASE, x, y, workers=1)
+    two = run_atlas(CASE, x, y, workers=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            dask = run_atlas(CASE, x, y, client=client)
+    assert one.table.equals(two.table) and one.table.equals(dask.table)
+    assert len(one.table.drop_duplicates(["row", "column"])) == 12

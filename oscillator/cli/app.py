@@ -122,4 +122,5 @@ app.command(short_help="The attractors over a parameter: shares, and where each 
 )
 app.command(short_help="The Lyapunov spectrum of a motion.")(attractors.lyapunov)
 app.command(short_help="The regime atlas over two parameters.")(attractors.atlas)
+app.command(short_help="Trace a bifurcation curve in a plane of two parameters.")(attractors.curve)
 app.callback(invoke_without_command=True)(_version)

@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.finding import AttractorSettings
     from oscillator.io.cases import Case
 
-__all__ = ["atlas", "attractors", "basins", "lyapunov"]
+__all__ = ["atlas", "attractors", "basins", "curve", "lyapunov"]
 
 AxisOption = tuple[str, float, float, int]
 SetOption = Annotated[list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")]
@@ -555,3 +555,122 @@ def _finish_atlas(found: Any, folder: Path, no_plots: bool, quiet: bool) -> None
     say(f"written to {printable(str(folder))}")
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
+
+
+RangeOption = tuple[str, float, float]
+
+
+def curve(
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    kind: Annotated[
+        str, typer.Option("--kind", metavar="KIND", help="sliding, sliding_onset, sliding_vanish, grazing, fold, ...")
+    ],
+    at: Annotated[
+        str, typer.Option("--at", metavar="X=A,Y=B", help="A point near the curve, e.g. Omega=1.6,Q2=71.15.")
+    ],
+    x: Annotated[RangeOption, typer.Option("--x", metavar="NAME LOW HIGH", help="The first parameter and its range.")],
+    y: Annotated[RangeOption, typer.Option("--y", metavar="NAME LOW HIGH", help="The second parameter and its range.")],
+    period: Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return.")] = 1,
+    step: Annotated[float, typer.Option("--step", metavar="S", help="The step, as a fraction of the window.")] = 0.05,
+    over: Annotated[
+        Path | None, typer.Option("--over", metavar="ATLAS_DIR", help="Draw the curve over this atlas's regimes.")
+    ] = None,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", metavar="DIR", help="Output folder (default: runs/CASE-curve-...).")
+    ] = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+) -> None:
+    """Trace a bifurcation curve in a plane of two parameters: from a bifurcation that `oscillator
+    continue` located, each point located to 1e-8 by a continuation across the curve from its
+    inside, until the curve leaves the window or ends (said how).
+
+    \b
+    Examples:
+      oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.1577416 --x Omega 1.59 1.62 --y Q2 70.9 71.3
+    """
+    from oscillator.io.files import check_new
+
+    try:
+        resolved = case_from(case, None, set_)
+        point = _at(at, x[0], y[0])
+        folder = out_dir if out_dir is not None else _new_folder(resolved, "curve")
+        check_new(folder, option="--out")
+        atlas_found = _read_atlas(over, resolved) if over is not None else None
+        load("oscillator.orbits.curves", notice=True)
+        from oscillator.orbits.curves import trace_curve
+
+        window = ((x[1], x[2]), (y[1], y[2]))
+        options: dict[str, Any] = {
+            "kind": kind,
+            "x": x[0],
+            "y": y[0],
+            "at": point,
+            "window": window,
+            "period": period,
+            "step": step,
+        }
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    try:
+        bar, report = progress_bar(f"{resolved.name}: {kind} curve", "points")
+        with bar:
+            found = trace_curve(resolved, progress=lambda n: report(n, n), **options)
+    except OscillatorError as error:
+        raise fail(message(error), 1) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; nothing was written", 130) from None
+    for end in found.ends:
+        out.print(Text(f"  one end: {end}"))
+    _write_curve(found, folder, atlas_found, no_plots)
+
+
+def _at(text: str, x: str, y: str) -> tuple[float, float]:
+    """``--at X=A,Y=B`` as ``(A, B)`` in the order of ``--x`` and ``--y``."""
+    from oscillator.io.expressions import parse_value
+
+    values: dict[str, float] = {}
+    for part in text.split(","):
+        name, _, value = part.partition("=")
+        number = parse_value(value.strip(), field="--at") if value else None
+        if not isinstance(number, (int, float)) or isinstance(number, bool):
+            raise InputError(f"--at must be {x}=A,{y}=B, got {text!r}", field="--at")
+        values[name.strip()] = float(number)
+    if set(values) != {x, y}:
+        raise InputError(f"--at must name {x} and {y} (the --x and --y parameters), got {text!r}", field="--at")
+    return values[x], values[y]
+
+
+def _read_atlas(folder: Path, case: Case) -> Any:
+    """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json)."""
+    import json
+
+    import pandas as pd
+
+    from oscillator.attractors.atlas import Atlas, AtlasAxis
+    from oscillator.io.files import read_untrusted
+
+    try:
+        info = json.loads(read_untrusted(folder / "atlas.json", what="atlas file", field="--over", limit=1_000_000))
+        identity = info["identity"]
+        axes = [AtlasAxis(**identity[name]) for name in ("x", "y")]
+        table = pd.read_parquet(folder / "atlas.parquet")
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise InputError(f"--over {printable(str(folder))} holds no finished atlas ({error})", field="--over") from None
+    return Atlas(case, axes[0], axes[1], table)
+
+
+def _write_curve(found: Any, folder: Path, atlas_found: Any, no_plots: bool) -> None:
+    from oscillator.io.files import claim_folder
+    from oscillator.report.attractors import write_curve
+
+    claim = claim_folder(folder, option="--out")
+    try:
+        problems = write_curve(found, claim.temporary, atlas=atlas_found, plots=not no_plots)
+        written = claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+    say(f"written to {printable(str(written))}")
+    if problems:
+        raise fail("; ".join(problems), 1)

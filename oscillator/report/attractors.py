@@ -24,6 +24,7 @@ from oscillator.attractors.finding import STATE, Attractor
 from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.io.files import atomic_path
+from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
 
@@ -36,10 +37,12 @@ __all__ = [
     "atlas_figure",
     "attractor_table",
     "basins_figure",
+    "curve_figure",
     "following_figure",
     "lyapunov_figure",
     "write_atlas",
     "write_basins",
+    "write_curve",
     "write_following",
     "write_lyapunov",
 ]
@@ -394,7 +397,7 @@ def atlas_figure(atlas: Atlas) -> Figure:
     attractors coexist hatched, and Fig. 14's two lines where they cross the window."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch
+    from matplotlib.patches import Patch, Rectangle
 
     codes, coexisting, regimes = atlas.grid()
     palette = [COLORS[k % len(COLORS)] for k in range(len(regimes))]
@@ -405,11 +408,13 @@ def atlas_figure(atlas: Atlas) -> Figure:
     ax.pcolormesh(x, y, shown, cmap=ListedColormap(palette), vmin=-0.5, vmax=len(regimes) - 0.5, shading="nearest")
     if (codes < 0).any():
         ax.pcolormesh(x, y, np.ma.masked_greater_equal(codes, 0), cmap=ListedColormap([FAILED]), shading="nearest")
-    several = np.ma.masked_less(coexisting, 2)
-    if several.count():
-        ax.pcolor(x, y, several, hatch="////", alpha=0.0, shading="nearest")
+    several = coexisting > 1
+    dx, dy = (x[1] - x[0], y[1] - y[0])
+    for row, column in zip(*np.nonzero(several), strict=True):  # each such cell hatched
+        corner = (x[column] - dx / 2, y[row] - dy / 2)
+        ax.add_patch(Rectangle(corner, dx, dy, fill=False, hatch="////", lw=0.0, edgecolor="black"))
     handles = [Patch(color=color, label=regime) for color, regime in zip(palette, regimes, strict=True)]
-    if several.count():
+    if several.any():
         handles.append(Patch(facecolor="white", edgecolor="black", hatch="////", label="several attractors coexist"))
     for name, value in FIG_14_LINES.items():
         if name == atlas.x.name and atlas.x.low <= value <= atlas.x.high:
@@ -462,3 +467,56 @@ def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
     figure = ("atlas", lambda: atlas_figure(atlas)) if plots else None
     title = f"{atlas.case.name}: regime atlas"
     return _write_folder(folder, {"atlas": atlas.table}, figure, _atlas_blocks(atlas), title)
+
+
+def curve_figure(curve: Curve, atlas: Atlas | None = None) -> Figure:
+    """The bifurcation curve in its plane, over the atlas's regimes when one is given."""
+    fig = atlas_figure(atlas) if atlas is not None else None
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(7.0, 5.5), layout="constrained")
+        ax = fig.add_subplot()
+        ax.set_xlabel(curve.x)
+        ax.set_ylabel(curve.y)
+        ax.grid(alpha=0.3)
+    else:
+        ax = fig.axes[0]
+    ax.plot(
+        curve.points[curve.x],
+        curve.points[curve.y],
+        color="black",
+        lw=1.6,
+        marker=".",
+        ms=4,
+        label=f"{curve.kind} curve",
+    )
+    title = f"{curve.kind} curve of the orbit {curve.inside}"
+    ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=8)
+    if atlas is None:
+        ax.legend(fontsize=8)
+    return fig
+
+
+def write_curve(curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots: bool = True) -> list[str]:
+    """``curve.parquet``, ``curve.json`` (how it ended, its folds), the figure and the report."""
+    info = {
+        "kind": curve.kind,
+        "x": curve.x,
+        "y": curve.y,
+        "inside": curve.inside,
+        "ends": list(curve.ends),
+        "folds": [list(f) for f in curve.folds],
+    }
+    with atomic_path(folder / "curve.json") as temporary:
+        temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
+    rows = tuple((f"{row[0]:.10g}", f"{row[1]:.10g}") for row in curve.points[[curve.x, curve.y]].to_numpy())
+    blocks: list[mk.Block] = [
+        mk.Heading(1, (f"{curve.kind} curve in {curve.x} and {curve.y}",)),
+        mk.Paragraph((f"The border of the orbit {curve.inside}; {len(curve.points)} points.",)),
+        mk.Bullets(tuple((f"one end: {end}",) for end in curve.ends)),
+        mk.Table((curve.x, curve.y), rows),
+        mk.Figure("curve", "the curve" + (" over the atlas's regimes" if atlas is not None else "")),
+    ]
+    figure = ("curve", lambda: curve_figure(curve, atlas)) if plots else None
+    return _write_folder(folder, {"curve": curve.points}, figure, blocks, f"{curve.kind} curve")

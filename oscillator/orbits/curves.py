@@ -1,0 +1,343 @@
+"""Bifurcation curves in a plane of two parameters: where a bifurcation located by
+:func:`~oscillator.orbits.continuation.continue_orbit` happens as both parameters change.
+
+A bifurcation of a period-N orbit is where an orbit *of one kind* ends: the kind on the side the
+branch came from (its cycle of switches).  The curve is the border of the region where that kind
+exists, and is traced by a predictor-corrector in the plane, scaled by the window (each parameter
+divided by its range):
+
+* the predictor steps along the curve's secant (its first step along the first parameter, both
+  ways from the start);
+* the corrector is a 1-D location along the normal: on the line through the predicted point
+  along the parameter nearest the normal, ``continue_orbit`` runs from a point ``depth`` inside
+  (where the kind surely exists, and the other kind of a hysteresis window does not) outward
+  past the predicted point, and locates where the kind ends, to ``tol`` (1e-8 by default) by its
+  own bisection.
+
+Newton's method started at the border itself can land on the orbit of the other kind (the two
+differ by 1e-3 at a sliding bifurcation with hysteresis), and a nonsmooth border has no
+derivative for an augmented Newton system; the continuation from inside follows its own branch
+and meets the border from the side it belongs to.  A step whose corrector finds no border is
+halved; below ``min_step`` the curve ends there: where the bifurcation stops existing (a
+codimension-two point) or meets another (a merge).  A turn of the curve back in one parameter (a
+fold of the curve) is passed, and recorded.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import InputError, OscillatorError
+from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import Parameters
+from oscillator.orbits.continuation import Bifurcation, Branch, continue_orbit
+from oscillator.orbits.shooting import (
+    ORBIT_RTOL,
+    check_count,
+)
+from oscillator.text import shown
+
+__all__ = ["CURVE_KINDS", "Curve", "trace_curve"]
+
+#: The kinds a curve can be traced for (``continue_orbit``'s, ``sliding`` for either sliding kind).
+CURVE_KINDS = ("sliding", *(kind.value for kind in Bifurcation if kind is not Bifurcation.TORUS))
+
+
+@dataclass(frozen=True)
+class _Kind:
+    """What is inside: an orbit with this cycle of switches (its text, as branches write it)."""
+
+    signature: str
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A bifurcation curve in the plane of ``x`` and ``y``.
+
+    Attributes
+    ----------
+    kind : str
+    x, y : str
+        The two parameters.
+    points : DataFrame
+        The curve in order, from one end to the other: ``x``'s and ``y``'s values (columns named
+        after them).
+    ends : tuple of str
+        How each end ended (the first for the start of ``points``, the second for its end).
+    folds : tuple of tuple of float
+        Where the curve turned back in one of the parameters (``(x, y)``).
+    inside : str
+        The inside orbit's cycle of switches.
+    """
+
+    kind: str
+    x: str
+    y: str
+    points: pd.DataFrame = field(repr=False)
+    ends: tuple[str, str]
+    folds: tuple[tuple[float, float], ...]
+    inside: str
+
+
+class _Tracer:
+    """The curve's plane, the inside kind and the corrector."""
+
+    def __init__(
+        self,
+        case: Case,
+        x: str,
+        y: str,
+        window: tuple[tuple[float, float], tuple[float, float]],
+        kind: _Kind,
+        period: int,
+        tol: float,
+        side: float,
+    ) -> None:
+        self.case, self.x, self.y, self.window, self.kind = case, x, y, window, kind
+        self.period, self.tol, self.side = period, tol, side
+        self.spans = np.array([window[0][1] - window[0][0], window[1][1] - window[1][0]])
+        self.t0 = case.initial.t0
+
+    def inward(self, tangent: np.ndarray) -> np.ndarray:
+        """The unit normal (scaled) pointing into the region of the kind: the same side of the
+        tangent all along the curve."""
+        normal: np.ndarray = self.side * np.array([-tangent[1], tangent[0]])
+        return normal
+
+    def in_window(self, point: np.ndarray) -> bool:
+        (xlo, xhi), (ylo, yhi) = self.window
+        return bool(xlo <= point[0] <= xhi and ylo <= point[1] <= yhi)
+
+    def locate(
+        self, predicted: np.ndarray, inward: np.ndarray, depth: float, guess: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The border on the line through ``predicted`` along the parameter nearest ``inward``:
+        ``continue_orbit`` from ``depth`` (scaled) inside to ``depth`` outside; the border's point
+        and the orbit where the continuation started (inside: the next step's guess), or None."""
+        axis = 1 if abs(inward[1]) >= abs(inward[0]) else 0
+        names = (self.x, self.y)
+        sign = math.copysign(1.0, inward[axis])
+        inside_at = predicted[axis] + sign * depth * self.spans[axis]
+        outside_at = predicted[axis] - sign * depth * self.spans[axis]
+        line = resolve_case(self.case, **{names[1 - axis]: float(predicted[1 - axis])})
+        try:
+            branch = continue_orbit(
+                line,
+                param=names[axis],
+                start=float(inside_at),
+                stop=float(outside_at),
+                period=self.period,
+                guess=guess,
+                transient=0,
+                step=0.1,
+                locate_tol=self.tol,
+                max_points=200,
+            )
+        except OscillatorError:
+            return None
+        if _signature_at_start(branch) != self.kind.signature:
+            return None  # the start is not of the kind: the step went too far
+        rows = branch.bifurcations
+        ends = rows[rows.before.astype(str) == self.kind.signature]
+        if ends.empty:
+            return None
+        row = ends.iloc[0]
+        point = predicted.copy()
+        point[axis] = float(row[names[axis]])
+        first = branch.points.iloc[0]
+        return point, np.array([first.x1, first.v1, first.x2, first.v2], dtype=float)
+
+
+def _signature_at_start(branch: Branch) -> str:
+    return str(branch.points.signature.iloc[0]) if len(branch.points) else ""
+
+
+def _start(
+    case: Case, kind: str, x: str, y: str, at: tuple[float, float], period: int, span: float
+) -> tuple[_Kind, float, float, np.ndarray]:
+    """The bifurcation of ``kind`` nearest ``at`` on the line of ``y`` at ``x = at[0]``, located by
+    ``continue_orbit`` over ``y`` within ``span`` of it, from both sides: the inside kind (the
+    side the branch came from), its ``y``, which way is inside in ``y`` (+1 or -1) and the orbit
+    where that branch started (inside)."""
+    line = resolve_case(case, **{x: at[0]})
+    best = None
+    for start, stop in ((at[1] + span, at[1] - span), (at[1] - span, at[1] + span)):
+        try:
+            branch = continue_orbit(line, param=y, start=start, stop=stop, period=period, step=0.1)
+        except OscillatorError:
+            continue
+        rows = branch.bifurcations
+        wanted = rows[rows.kind.str.startswith(kind)] if kind == "sliding" else rows[rows.kind == kind]
+        wanted = wanted[wanted.before.astype(str) == _signature_at_start(branch)]
+        for row in wanted.itertuples(index=False):
+            distance = abs(getattr(row, y) - at[1])
+            if best is None or distance < best[0]:
+                first = branch.points.iloc[0]
+                orbit = np.array([first.x1, first.v1, first.x2, first.v2], dtype=float)
+                best = (distance, float(getattr(row, y)), math.copysign(1.0, start - at[1]), orbit, str(row.before))
+    if best is None:
+        raise InputError(
+            f"no {kind} bifurcation of the period-{period} orbit within {span:g} of {y} = {at[1]:.10g} at {x} = "
+            f"{at[0]:.10g}; give --at nearer to one (oscillator continue locates them)",
+            field="at",
+        )
+    _, where, inside, orbit, signature = best
+    return _Kind(signature), where, inside, orbit
+
+
+def trace_curve(
+    case: Case | str,
+    *,
+    kind: str,
+    x: str,
+    y: str,
+    at: tuple[float, float],
+    window: tuple[tuple[float, float], tuple[float, float]],
+    period: int = 1,
+    step: float = 0.02,
+    min_step: float = 1e-4,
+    tol: float = 1e-8,
+    max_points: int = 400,
+    progress: Callable[[int], None] | None = None,
+    **overrides: float,
+) -> Curve:
+    """The curve in the plane of ``x`` and ``y`` on which the ``kind`` bifurcation near ``at``
+    happens, traced both ways until it leaves ``window`` or ends.
+
+    Parameters
+    ----------
+    case : Case or str
+    kind : str
+        One of :data:`CURVE_KINDS` (``sliding``: either sliding kind).
+    x, y : str
+        The two parameters.
+    at : (float, float)
+        A point near the curve: ``(x, y)``, e.g. a bifurcation ``continue_orbit`` located in ``y``.
+    window : ((float, float), (float, float))
+        The plane's window: ``x``'s and ``y``'s ranges.
+    period : int
+    step, min_step : float
+        The predictor's step, and the smallest before the curve is said to end, as fractions of
+        the window (scaled).
+    tol : float
+        Each point is located to this in both parameters.
+    max_points : int
+    progress : callable, optional
+        ``progress(points)`` after each point.
+    **overrides
+        Parameters and solver options.
+    """
+    case = _checked(case, kind, x, y, at, window, step, min_step, tol, max_points, overrides)
+    span = 0.02 * (window[1][1] - window[1][0])
+    inside_kind, y0, inside, orbit = _start(case, kind, x, y, at, period, span)
+    # the first tangent is +x; inside is +y or -y of it: that side stays the inside all along
+    tracer = _Tracer(case, x, y, window, inside_kind, period, tol, side=inside)
+    first = np.array([at[0], y0])
+    tangent = _first_tangent(tracer, first, orbit)
+    halves = [
+        _walk(tracer, first, orbit, direction * tangent, step, min_step, max_points, progress)
+        for direction in (-1.0, 1.0)
+    ]
+    (back, end_back, folds_back), (ahead, end_ahead, folds_ahead) = halves
+    ordered = [*back[::-1], first, *ahead]
+    table = pd.DataFrame([(p[0], p[1]) for p in ordered], columns=[x, y])
+    return Curve(kind, x, y, table, (end_back, end_ahead), tuple(folds_back + folds_ahead), inside_kind.signature)
+
+
+def _first_tangent(tracer: _Tracer, first: np.ndarray, orbit: np.ndarray) -> np.ndarray:
+    """The curve's direction at its start (scaled, with a positive first component): the chord to
+    the border located a little further along the first parameter; along that parameter if none
+    is found there (the curve is then steep, and the walk's halving finds its way)."""
+    found = tracer.locate(first + np.array([1e-3, 0.0]) * tracer.spans, np.array([0.0, tracer.side]), 0.02, orbit)
+    if found is None:
+        return np.array([1.0, 0.0])
+    chord: np.ndarray = (found[0] - first) / tracer.spans
+    unit: np.ndarray = chord / np.linalg.norm(chord)
+    return unit
+
+
+def _walk(
+    tracer: _Tracer,
+    first: np.ndarray,
+    orbit: np.ndarray,
+    tangent: np.ndarray,
+    step: float,
+    min_step: float,
+    max_points: int,
+    progress: Callable[[int], None] | None,
+) -> tuple[list[np.ndarray], str, list[tuple[float, float]]]:
+    """The curve from ``first`` along ``tangent`` (scaled), until it leaves the window or ends."""
+    points: list[np.ndarray] = []
+    folds: list[tuple[float, float]] = []
+    here, h = first, step
+    if tangent[0] < 0:  # walking the other way: the inside is on the other side of the tangent
+        tracer = _Tracer(
+            tracer.case, tracer.x, tracer.y, tracer.window, tracer.kind, tracer.period, tracer.tol, side=-tracer.side
+        )
+    while len(points) < max_points:
+        predicted = here + h * tangent * tracer.spans
+        found = tracer.locate(predicted, tracer.inward(tangent), max(2 * h, 0.02), orbit)
+        if found is None:
+            h *= 0.5
+            if h < min_step:
+                end = (
+                    f"ended at {tracer.x} = {here[0]:.10g}, {tracer.y} = {here[1]:.10g}: the border of its kind "
+                    f"was not found beyond, within {min_step:g} of the window (a codimension-two point, or a merge)"
+                )
+                return points, end, folds
+            continue
+        point, orbit = found
+        if not tracer.in_window(point):
+            return points, f"left the window at {tracer.x} = {point[0]:.10g}, {tracer.y} = {point[1]:.10g}", folds
+        chord = (point - here) / tracer.spans
+        new_tangent = chord / np.linalg.norm(chord)
+        if any(tangent[k] * new_tangent[k] < 0 and abs(tangent[k]) > 1e-3 for k in (0, 1)):
+            folds.append((float(here[0]), float(here[1])))
+        points.append(point)
+        here, tangent = point, new_tangent
+        h = min(step, 2.0 * h)
+        if progress is not None:
+            progress(len(points))
+    return points, f"stopped after {max_points} points", folds
+
+
+def _checked(
+    case: Case | str,
+    kind: str,
+    x: str,
+    y: str,
+    at: tuple[float, float],
+    window: tuple[tuple[float, float], tuple[float, float]],
+    step: float,
+    min_step: float,
+    tol: float,
+    max_points: int,
+    overrides: dict[str, float],
+) -> Case:
+    if kind not in CURVE_KINDS:
+        raise InputError(f"kind must be one of {', '.join(CURVE_KINDS)}, got {shown(kind)}", field="kind")
+    for name, value in (("x", x), ("y", y)):
+        if value not in Parameters.names():
+            raise InputError(f"{name} {shown(value)} is not a parameter", field=name)
+    if x == y:
+        raise InputError(f"x and y are both {x}; give two different parameters", field="y")
+    (xlo, xhi), (ylo, yhi) = window
+    if not (all(math.isfinite(v) for v in (xlo, xhi, ylo, yhi)) and xlo < xhi and ylo < yhi):
+        raise InputError(f"window must be two ranges low < high, got {shown(window)}", field="window")
+    if not (xlo <= at[0] <= xhi and ylo <= at[1] <= yhi):
+        raise InputError(f"at {shown(at)} is outside the window", field="at")
+    if not (0 < min_step <= step <= 0.5) or not tol > 0:
+        raise InputError("step must be in (0, 0.5], min_step in (0, step] and tol > 0", field="step")
+    check_count(max_points, "max_points", 1, 100_000)
+    resolved = resolve_case(case, **overrides)
+    for point in ((xlo, ylo), (xhi, yhi)):
+        resolve_case(resolved, **{x: point[0], y: point[1]})
+    tight = {
+        name: min(getattr(resolved.options, name), ORBIT_RTOL) for name in ("rtol", "atol") if name not in overrides
+    }
+    return resolve_case(resolved, **tight)
