@@ -419,3 +419,21 @@ def test_the_atlas_is_the_same_for_any_number_of_workers_and_on_dask():
             dask = run_atlas(CASE, x, y, client=client)
     assert one.table.equals(two.table) and one.table.equals(dask.table)
     assert len(one.table.drop_duplicates(["row", "column"])) == 12
+
+
+@pytest.mark.slow
+def test_a_grazing_curve_passes_through_the_grazing_continuation_locates():
+    """At Q2 = 71, continuation in Omega locates a grazing of the orbit in which m2 rests twice;
+    the grazing curve traced from Q2 = 70.95 crosses Q2 = 71 there, to 1e-6."""
+    from oscillator import continue_orbit
+    from oscillator.orbits.curves import trace_curve
+
+    branch = continue_orbit("instance-1", param="Omega", start=1.605, stop=1.609, Q2=71.0)
+    grazing = float(branch.bifurcations[branch.bifurcations.kind == "grazing"].Omega.iloc[0])
+    curve = trace_curve("instance-1", kind="grazing", x="Q2", y="Omega", at=(70.95, grazing),
+                        window=((70.9, 71.1), (1.605, 1.609)), step=0.2, max_points=6)  # fmt: skip
+    q2, omega = curve.points.Q2.to_numpy(), curve.points.Omega.to_numpy()
+    k = int(np.flatnonzero(np.diff(np.sign(q2 - 71.0)) != 0)[0])
+    crossing = omega[k] + (71.0 - q2[k]) * (omega[k + 1] - omega[k]) / (q2[k + 1] - q2[k])
+    assert abs(crossing - grazing) < 1e-6
+    assert "sliding_onset" in curve.inside

@@ -233,7 +233,7 @@ def trace_curve(
         Parameters and solver options.
     """
     case = _checked(case, kind, x, y, at, window, step, min_step, tol, max_points, overrides)
-    span = 0.02 * (window[1][1] - window[1][0])
+    span = 0.1 * (window[1][1] - window[1][0])
     inside_kind, y0, inside, orbit = _start(case, kind, x, y, at, period, span)
     # the first tangent is +x; inside is +y or -y of it: that side stays the inside all along
     tracer = _Tracer(case, x, y, window, inside_kind, period, tol, side=inside)
