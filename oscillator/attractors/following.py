@@ -19,6 +19,7 @@ attractors coexist (hysteresis) is bounded at both ends to ``tol``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -29,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import run_tasks
+from oscillator.analysis.execution import Pool, run_tasks
 from oscillator.attractors.finding import (
     Attractor,
     Attractors,
@@ -159,10 +160,10 @@ def _check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, 
 
 
 def _landings_at(
-    case: Case, settings: AttractorSettings, starts: np.ndarray, workers: int, client: Any
+    case: Case, settings: AttractorSettings, starts: np.ndarray, client: Any, pool: Pool | None
 ) -> list[Landing]:
     tasks = [(index, tuple(row)) for index, row in enumerate(starts)]
-    return list(run_tasks(land, tasks, shared=(case, settings), workers=workers, client=client))
+    return list(run_tasks(land, tasks, shared=(case, settings), client=client, pool=pool))
 
 
 def _match(
@@ -231,6 +232,25 @@ def follow_attractors(
     case = resolve_case(case, **overrides)
     array = _check_values(case, param, values, tol)
     fresh = check_states(case.initial.y if states is None else states)
+    with contextlib.ExitStack() as stack:  # one pool of workers for every value
+        pool = stack.enter_context(Pool(workers)) if client is None and workers > 1 else None
+        found, ids = _values(case, param, array, fresh, settings, client, pool, store, progress)
+    over = AttractorsOver(case, param, array, tuple(found), tuple(ids), len(fresh))
+    return dataclasses.replace(over, ends=tuple(_ends(over, settings, tol)))
+
+
+def _values(
+    case: Case,
+    param: str,
+    array: np.ndarray,
+    fresh: np.ndarray,
+    settings: AttractorSettings,
+    client: Any,
+    pool: Pool | None,
+    store: LandingStore | None,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[list[Attractors], list[dict[int, int]]]:
+    """Each value's attractors from the fresh starts and the seeds of the value before, matched."""
     found: list[Attractors] = []
     ids: list[dict[int, int]] = []
     next_id = 0
@@ -240,7 +260,7 @@ def follow_attractors(
         starts = np.vstack([fresh, seeds]) if len(seeds) else fresh
         landings = store.read(f"value-{k:05d}") if store is not None else []
         if not landings:
-            landings = _landings_at(point, settings, starts, workers, client)
+            landings = _landings_at(point, settings, starts, client, pool)
             if store is not None:
                 store.write(landings, f"value-{k:05d}")
         here = assemble(point, settings, landings)
@@ -249,8 +269,7 @@ def follow_attractors(
         ids.append(local)
         if progress is not None:
             progress(k + 1, len(array))
-    over = AttractorsOver(case, param, array, tuple(found), tuple(ids), len(fresh))
-    return dataclasses.replace(over, ends=tuple(_ends(over, settings, tol)))
+    return found, ids
 
 
 def _ends(over: AttractorsOver, settings: AttractorSettings, tol: float) -> list[End]:
