@@ -27,6 +27,7 @@ from oscillator.io.files import atomic_path
 from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
+from oscillator.report.orbits import modified_blocks
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -213,8 +214,7 @@ def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
             )
         ),
     ]
-    if case.modified:
-        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += modified_blocks(case)
     header = ("attractor", "kind", "starts", "share [95% interval]", "orbit", "largest |multiplier|", "switches")
     caption = "the basins; the markers are each attractor's own section points, projected on the slice's plane"
     blocks += [mk.Table(header, rows), mk.Figure("basins", caption)]
@@ -354,8 +354,7 @@ def _following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Bloc
             )
         ),
     ]
-    if case.modified:
-        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += modified_blocks(case)
     ends = tuple((f"A{e.id}", e.name, f"{e.inside:.10g}", f"{e.outside:.10g}", e.becomes) for e in over.ends)
     if ends:
         header = ("attractor", "what", f"last {param} with it", f"first {param} without it", "its seed goes to")
@@ -453,8 +452,7 @@ def _atlas_blocks(atlas: Atlas) -> list[mk.Block]:
             )
         ),
     ]
-    if case.modified:
-        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += modified_blocks(case)
     blocks += [
         mk.Table(("regime (first attractor)", "points", "share"), rows),
         mk.Figure("atlas", "the regimes over the plane; hatched where several attractors coexist"),

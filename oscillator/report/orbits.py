@@ -44,6 +44,7 @@ __all__ = [
     "draw_branch",
     "draw_multipliers",
     "finish_branch",
+    "modified_blocks",
     "multipliers_figure",
     "orbit_info",
     "orbit_of_folder",
@@ -214,6 +215,13 @@ def draw_multipliers(branch: Branch, path: Path) -> None:
     _save(multipliers_figure(branch), path)
 
 
+def modified_blocks(case: Case) -> list[mk.Block]:
+    """A paragraph naming what the overrides changed from the case as written (none if nothing)."""
+    if not case.modified:
+        return []
+    return [mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), "."))]
+
+
 def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
     """The report: what was continued and which way, the bifurcations (named as the parameter
     increases, with the events on its lower and higher side), the fixed parameters and the
@@ -232,8 +240,7 @@ def report_blocks(branch: Branch, case: Case) -> list[mk.Block]:
             )
         ),
     ]
-    if case.modified:
-        blocks.append(mk.Paragraph(("Changed from the case as written: ", ", ".join(case.modified), ".")))
+    blocks += modified_blocks(case)
     blocks += _bifurcation_blocks(branch, increasing=last > first)
     stable = branch.points.stable
     blocks.append(mk.Paragraph((f"{int(stable.sum())} stable and {int((~stable).sum())} unstable points.",)))
