@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from oscillator.io.files import as_folder
+
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
     from oscillator.orbits.continuation import Branch
@@ -28,7 +30,7 @@ def read_run(folder: str | Path) -> Result | Orbit | Branch:
     """
     from oscillator.report.runs import folder_kind, read_run_folder, result_of
 
-    folder = Path(folder)
+    folder = as_folder(folder)
     if folder_kind(folder) == "branch":
         from oscillator.report.orbits import read_branch
 

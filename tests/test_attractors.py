@@ -15,7 +15,16 @@ import pytest
 
 from oscillator import load_case, resolve_case, simulate
 from oscillator.attractors.basins import Axis, basin_store, grid_starts, run_basins
-from oscillator.attractors.finding import AttractorSettings, check_states, find_attractors
+from oscillator.attractors.finding import (
+    AttractorSettings,
+    Landing,
+    check_states,
+    find_attractors,
+    group,
+    interleaving,
+    share_text,
+    unsettled,
+)
 from oscillator.attractors.following import follow_attractors
 from oscillator.attractors.lyapunov import lyapunov, separation_exponent
 from oscillator.errors import InputError
@@ -437,3 +446,110 @@ def test_a_grazing_curve_passes_through_the_grazing_continuation_locates():
     crossing = omega[k] + (71.0 - q2[k]) * (omega[k + 1] - omega[k]) / (q2[k + 1] - q2[k])
     assert abs(crossing - grazing) < 1e-6
     assert "sliding_onset" in curve.inside
+
+
+def _contact_onsets_by_hand(case, start, settings, periods):
+    """Contact onsets per period over the last ``periods`` recorded periods, read off the event
+    table: one onset per distinct (time, stop), whatever the number of rows that write it."""
+    begin = dict(zip(("x1", "v1", "x2", "v2"), start, strict=True))
+    run = resolve_case(case, **begin)
+    T, t0 = run.parameters.period, run.initial.t0
+    end = t0 + (settings.transient + settings.record) * T
+    events = simulate(run, t_end=end, keep_events_from=end - periods * T - 1e-9 * T, record_trajectory=False).events
+    onsets = events[events.kind.str.endswith("_contact_onset")]
+    return {(round(t, 9), kind) for t, kind in zip(onsets.t, onsets.kind, strict=True)}, periods
+
+
+@pytest.mark.parametrize(
+    ("case", "start"),
+    [
+        # Instance 1's system with the masses close: m1 reaches m2's stop twice a period, nothing else.
+        (resolve_case("instance-1", Omega=1.4857142857142858, d=1.6, t0=1.0), (3.0, 0.0, 4.0, 0.0)),
+        # A random system whose period-1 orbit touches m2's stop twice and the right stop once.
+        ("random-24", None),
+    ],
+)
+def test_contacts_between_the_masses_are_counted_once_per_contact(case, start):
+    from conftest import random_case
+
+    if case == "random-24":
+        case = random_case(24)
+        start = tuple(case.initial.y)
+    settings = AttractorSettings(transient=100, record=16)
+    found = find_attractors(case, states=[start], settings=settings)
+    (attractor,) = found.attractors
+    onsets, periods = _contact_onsets_by_hand(case, start, settings, attractor.period)
+    assert attractor.contacts == len(onsets) / periods
+    left = sum(kind == "left_contact_onset" for _, kind in onsets)
+    assert left >= 2 and attractor.contacts in (2.0, 3.0)
+
+
+def _ueda_section_points(periods):
+    """Section points of Ueda's oscillator with friction after a transient (one long run)."""
+    case = resolve_case("instance-1", **UEDA)
+    T = case.parameters.period
+    marks = 200 * T + T * np.arange(periods)
+    result = simulate(case, t_end=float(marks[-1]), t_eval=marks, keep_events_from=float(marks[-1]))
+    return result.trajectory[["x1", "v1", "x2", "v2"]].to_numpy()
+
+
+def _aperiodic(index, points):
+    return Landing(index, (0.0, 0.0, 0.0, 0.0), points=points)
+
+
+def test_thin_samples_of_one_chaotic_set_are_grouped_as_one_attractor():
+    # 40 windows of 33 section points of one chaotic trajectory: what 40 starts recording 32 periods
+    # each give.  Any two windows may look apart (their points are sparse); together they interleave.
+    points = _ueda_section_points(40 * 33)
+    windows = [points[33 * k : 33 * (k + 1)] for k in range(40)]
+    found, labels = group([_aperiodic(k, w) for k, w in enumerate(windows)], AttractorSettings())
+    assert len(found) == 1 and found[0].starts == 40 and set(labels.values()) == {0}
+    assert unsettled(found) == []
+    # the same windows moved off by twice the set's extent are another attractor, said to be apart
+    extent = np.ptp(points, axis=0)
+    moved = [_aperiodic(40 + k, w + 2 * extent) for k, w in enumerate(windows[:10])]
+    found, labels = group([_aperiodic(k, w) for k, w in enumerate(windows)] + moved, AttractorSettings())
+    assert [a.starts for a in found] == [40, 10] and unsettled(found) == []
+    assert {labels[k] for k in range(40)} != {labels[k] for k in range(40, 50)}
+
+
+def test_two_sets_that_partly_overlap_are_kept_apart_with_a_warning():
+    rng = np.random.default_rng(0)
+    a, b = rng.uniform(0, 1, (200, 4)), rng.uniform(0, 1, (200, 4)) + 0.3  # boxes overlapping by 0.7^4
+    assert interleaving(a, rng.uniform(0, 1, (200, 4))) > 0.8  # two samples of one box interleave
+    assert interleaving(a, b + 0.9) < 0.01  # boxes apart do not
+    found, _ = group([_aperiodic(0, a), _aperiodic(1, b)], AttractorSettings())
+    assert len(found) == 2
+    (warning,) = unsettled(found)
+    assert "A0 and A1 may be one aperiodic attractor" in warning and "--record" in warning
+
+
+def test_attractors_are_numbered_by_what_they_are_not_by_which_start_met_them_first():
+    forward = find_attractors("instance-1", states=[REST_START, NO_REST_START], Q2=71.165, settings=QUICK)
+    backward = find_attractors("instance-1", states=[NO_REST_START, REST_START], Q2=71.165, settings=QUICK)
+    assert [a.rests for a in forward.attractors] == [a.rests for a in backward.attractors] == [(0, 0), (0, 2)]
+    assert forward.labels.attractor.tolist() == [1, 0] and backward.labels.attractor.tolist() == [0, 1]
+
+
+def test_a_mass_resting_throughout_is_named_so_and_its_rest_time_is_one():
+    case = resolve_case("instance-1", **UEDA)
+    found = find_attractors(case, settings=AttractorSettings(transient=50, record=8, lyapunov_periods=0))
+    (attractor,) = found.attractors
+    assert attractor.period == 0 and attractor.rests == (0.0, 0.0)
+    assert attractor.rest_time[1] == 1.0 and attractor.rest_time[0] < 0.5  # m2 parked, m1 sticks now and then
+    assert "m2 rests throughout" in attractor.name and "no rest" not in attractor.name
+
+
+def test_a_periodic_attractor_s_exponent_is_its_largest_multiplier_s_log_over_its_period():
+    found = find_attractors("instance-1", states=[NO_REST_START], Q2=71.165, settings=QUICK)
+    (attractor,) = found.attractors
+    largest = np.max(np.abs(attractor.orbit.multipliers))
+    assert attractor.lyapunov == pytest.approx(np.log(largest) / (attractor.period * found.case.parameters.period))
+    assert attractor.lyapunov < 0
+
+
+def test_the_share_of_a_single_start_has_no_interval():
+    found = find_attractors("instance-1", states=[NO_REST_START], Q2=71.165, settings=QUICK)
+    share = found.fractions().iloc[0]
+    assert share.fraction == 1.0 and np.isnan(share.low) and np.isnan(share.high)
+    assert share_text(share.fraction, share.low, share.high) == "100.0%"

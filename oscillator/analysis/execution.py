@@ -17,23 +17,33 @@ The function is called as ``function(*shared, *task, **keywords)``.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import multiprocessing
 import numbers
 import os
 import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
-from oscillator.errors import InputError
+from oscillator.errors import InputError, OscillatorError
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.text import shown
 
-__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_workers", "connect", "run_tasks"]
+__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_runner", "check_workers", "connect", "run_tasks"]
 
 T = TypeVar("T")
 
 #: The most local worker processes per core: more only share the cores.
 MAX_WORKERS_PER_CORE = 4
+#: The exit status of a worker that was asked, while it imported the caller's script, to start
+#: workers of its own: the script runs its work at import, with no ``__main__`` guard.
+_UNGUARDED_SCRIPT = 86
+_UNGUARDED_MESSAGE = (
+    "workers: the worker processes stopped as they started, because the script runs its work when it is "
+    "imported: each worker imports the script again (processes are started with spawn). Put the code that "
+    'runs with workers > 1 under `if __name__ == "__main__":`, or run with workers=1'
+)
 
 
 def check_workers(workers: object) -> int:
@@ -47,6 +57,24 @@ def check_workers(workers: object) -> int:
             field="workers",
         )
     return int(workers)
+
+
+def check_runner(workers: object, client: object = None, progress: object = None) -> int:
+    """The options of a many-start computation checked at its entry, before any work:
+    ``workers`` (:func:`check_workers`), ``client`` (a ``dask.distributed.Client`` or None) and
+    ``progress`` (a callable or None).  Returns the number of workers."""
+    if client is not None and not callable(getattr(client, "submit", None)):
+        hint = " (for an address, connect first: oscillator.analysis.execution.connect(address))"
+        raise InputError(
+            f"client must be a dask.distributed.Client or None, got {shown(client)}"
+            + (hint if isinstance(client, str) else ""),
+            field="client",
+        )
+    if progress is not None and not callable(progress):
+        raise InputError(
+            f"progress must be a function progress(done, total) or None, got {shown(progress)}", field="progress"
+        )
+    return check_workers(workers)
 
 
 def run_tasks(
@@ -92,6 +120,10 @@ class Pool:
     the caller."""
 
     def __init__(self, workers: int) -> None:
+        if getattr(multiprocessing.current_process(), "_inheriting", False):
+            # This is a worker importing a script that has no `if __name__ == "__main__":` guard:
+            # end it quietly, and let the parent say why (multiprocessing would raise here).
+            raise SystemExit(_UNGUARDED_SCRIPT)
         self.workers = workers
         quiet_resource_tracker()
         with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
@@ -127,7 +159,10 @@ class Pool:
 
         def fill() -> None:
             for task in pending:
-                with interrupts_ignored():
+                # A submit may spawn a worker, which must be born ignoring SIGINT; once all are
+                # running, a Ctrl-C during a submit is the parent's, as anywhere else.
+                spawning = len(getattr(self._executor, "_processes", None) or {}) < self.workers
+                with interrupts_ignored() if spawning else contextlib.nullcontext():
                     running.add(self._executor.submit(function, *shared, *task, **keywords))
                 if len(running) >= 4 * self.workers:
                     return
@@ -137,8 +172,28 @@ class Pool:
             finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for future in finished:
                 running.discard(future)
-                yield future.result()
+                try:
+                    result = future.result()
+                except BrokenProcessPool as exc:
+                    error = self._broken()
+                    raise error from (None if isinstance(error, InputError) else exc)
+                yield result
             fill()
+
+    def _broken(self) -> Exception:
+        """Why the pool broke: a script without a ``__main__`` guard (said so, with the fix), or
+        a worker that died (killed, out of memory)."""
+        processes = list(getattr(self._executor, "_processes", {}).values())
+        for process in processes:  # the broken pool is stopping them all: their status comes at once
+            process.join(timeout=10)
+        codes = [process.exitcode for process in processes]
+        if _UNGUARDED_SCRIPT in codes:
+            return InputError(_UNGUARDED_MESSAGE, field="workers")
+        return OscillatorError(
+            "a worker process died (killed, or out of memory); run again (a resumable computation goes on where "
+            "it stopped), with fewer workers if memory is short",
+            field="workers",
+        )
 
 
 def _on_dask(

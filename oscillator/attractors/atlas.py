@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import Pool, run_tasks
+from oscillator.analysis.execution import Pool, check_runner, run_tasks
 from oscillator.attractors.finding import Attractor, AttractorSettings, group, land
 from oscillator.attractors.lyapunov import lyapunov
 from oscillator.errors import InputError, OscillatorError
@@ -132,9 +132,17 @@ class AtlasSettings:
         )
 
 
-def regime_of(period: int, rests: tuple[float, float], contacts: float, largest: float, forcing: float) -> str:
+def regime_of(
+    period: int,
+    rests: tuple[float, float],
+    contacts: float,
+    largest: float,
+    forcing: float,
+    rest_time: tuple[float, float] = (0.0, 0.0),
+) -> str:
     """The regime's label: ``P<n>`` (or ``chaotic``, ``quasi-periodic``, ``aperiodic``), then
-    ``m1 rests`` / ``m2 rests`` and ``contact`` when they happen."""
+    ``m1 rests`` / ``m2 rests`` (rest intervals, or at rest throughout) and ``contact`` when they
+    happen."""
     if period:
         label = f"P{period}"
     elif math.isfinite(largest) and largest * forcing > CHAOTIC:
@@ -143,7 +151,8 @@ def regime_of(period: int, rests: tuple[float, float], contacts: float, largest:
         label = "quasi-periodic"
     else:
         label = "aperiodic"
-    parts = [label] + [f"m{mass} rests" for mass, rate in zip((1, 2), rests, strict=True) if rate]
+    resting = zip((1, 2), rests, rest_time, strict=True)
+    parts = [label] + [f"m{mass} rests" for mass, rate, share in resting if rate or share > 0]
     if contacts:
         parts.append("contact")
     return " ".join(parts)
@@ -214,7 +223,9 @@ def atlas_point(
                 "column": column,
                 "attractor": attractor.id,
                 "coexisting": len(found),
-                "regime": regime_of(attractor.period, attractor.rests, attractor.contacts, largest, forcing),
+                "regime": regime_of(
+                    attractor.period, attractor.rests, attractor.contacts, largest, forcing, attractor.rest_time
+                ),
                 "period": attractor.period,
                 "rests_m1": attractor.rests[0],
                 "rests_m2": attractor.rests[1],
@@ -322,6 +333,7 @@ def run_atlas(
     ``store`` (:class:`~oscillator.attractors.store.LandingStore`), each row kept as it finishes
     and the rows already there read back (a run that resumes)."""
     settings = settings or AtlasSettings()
+    workers = check_runner(workers, client, progress)
     if x.name == y.name:
         raise InputError(f"both axes are {x.name}; give two different parameters", field="axis")
     with contextlib.ExitStack() as stack:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import run_tasks
+from oscillator.analysis.execution import check_runner, run_tasks
 from oscillator.attractors.finding import STATE, Attractors, AttractorSettings, Landing, assemble, land
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
@@ -137,6 +137,7 @@ def run_basins(
 
     ``progress(done, total)`` after every start.  On an interrupt or an error the landings
     finished so far are in the folder (the batch in hand is written first)."""
+    workers = check_runner(workers, client, progress)
     starts = grid_starts(case, x, y)
     store.open()
     landings = store.read()

@@ -21,6 +21,7 @@ from a quasi-periodic one (zero).
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -30,7 +31,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import run_tasks
+from oscillator.analysis.execution import check_runner, run_tasks
+from oscillator.analysis.intervals import rest_intervals
 from oscillator.analysis.sweeps import detect_period
 from oscillator.attractors.lyapunov import lyapunov
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
@@ -48,6 +50,13 @@ MAX_STARTS = 1_000_000
 #: ``lambda_1 T`` above which an aperiodic attractor is called chaotic, and below whose size it is
 #: called quasi-periodic (the exponent is zero within what the averaging resolves).
 CHAOTIC = 0.01
+#: Two aperiodic landings are one attractor when their points :func:`interleaving` at least this
+#: much (1: as two samples of one set; 0: sets apart) ...
+INTERLEAVED = 0.5
+#: ... and the grouping is said not to be settled where two sets kept apart interleave more than this.
+UNSETTLED = 0.1
+#: The most section points an aperiodic attractor pools from its landings, to tell later ones by.
+SET_POINTS = 4096
 
 
 @dataclass(frozen=True)
@@ -103,8 +112,9 @@ class Landing:
     points: np.ndarray = field(default_factory=lambda: np.empty((0, 4)), repr=False)  #: recorded section points
     signature: str = ""  #: each mass's cycle of switches over one period (periodic landings)
     rests: tuple[float, float] = (0.0, 0.0)  #: rest intervals per forcing period, of m1 and m2
-    contacts: float = 0.0  #: contact onsets (either stop) per forcing period
+    contacts: float = 0.0  #: contact onsets (either stop; a contact between the masses once) per forcing period
     wall_time: float = 0.0
+    rest_time: tuple[float, float] = (0.0, 0.0)  #: the fraction of the time m1 and m2 rest (1: throughout)
 
 
 def _section_case(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[Case, np.ndarray]:
@@ -138,7 +148,13 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
     kinds = [(float(t), int(m), EventKind(k)) for t, m, k in zip(events.t, events["mass"], events.kind, strict=True)]
     mine = [(t, m, kind) for t, m, kind in kinds if t >= last - 1e-9 * period]
     rests = tuple(sum(kind.starts_rest for _, m, kind in mine if m == mass) / window for mass in (1, 2))
-    contacts = sum(kind.contact_starts for _, _, kind in mine) / window
+    first = result.trajectory.iloc[len(marks) - 1 - window]  # the state where the window starts
+    rest_time = tuple(
+        sum(b - a for a, b in rest_intervals(events, mass, int(first[f"domain{mass}"]) == 0, last, float(marks[-1])))
+        / (window * period)
+        for mass in (1, 2)
+    )
+    contacts = sum(kind.contact_starts and kind.stands_for_event(m) for _, m, kind in mine) / window
     signature = str(signature_of(mine, n * period)) if n else ""
     return Landing(
         index,
@@ -149,6 +165,7 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
         rests=(float(rests[0]), float(rests[1])),
         contacts=float(contacts),
         wall_time=time.perf_counter() - started,
+        rest_time=(float(rest_time[0]), float(rest_time[1])),
     )
 
 
@@ -177,9 +194,17 @@ class Attractor:
         The periodic orbit refined by Newton from its cycle (multipliers, stability); None for an
         aperiodic set or when Newton failed (``note`` says why).
     lyapunov : float
-        The largest Lyapunov exponent (1/s) of an aperiodic set (NaN when not computed).
+        The largest Lyapunov exponent (1/s): ``log |mu_1| / (n T)`` of a refined periodic orbit
+        (its largest Floquet multiplier; 0 where a mass rests all period, ``-inf`` where the
+        flow collapses every direction), the QR average of an aperiodic set; NaN when not
+        computed.
     note : str
         What the refinement met.
+    forcing_period : float
+        ``T`` of the case it was found in.
+    rest_time : tuple of float
+        The fraction of the time m1 and m2 rest (1: a mass that rests throughout, with no rest
+        interval beginning).
     """
 
     id: int
@@ -193,6 +218,23 @@ class Attractor:
     lyapunov: float = math.nan
     note: str = ""
     forcing_period: float = math.nan
+    rest_time: tuple[float, float] = (0.0, 0.0)
+
+    @classmethod
+    def of_landing(cls, ident: int, landing: Landing) -> Attractor:
+        """The attractor a landing has reached, as far as the landing tells (one start, its cycle
+        or its recorded set; not refined)."""
+        points = landing.points[-landing.period :] if landing.period else landing.points
+        return cls(
+            ident,
+            landing.period,
+            points,
+            landing.signature,
+            landing.rests,
+            landing.contacts,
+            1,
+            rest_time=landing.rest_time,
+        )
 
     @property
     def kind(self) -> str:
@@ -211,7 +253,11 @@ class Attractor:
     def name(self) -> str:
         """A label for legends and tables: ``"A0: period-1, m2 rests 2/period"``."""
         what = f"period-{self.period}" if self.period else self.kind
-        parts = [f"m{mass} rests {rate:g}/period" for mass, rate in zip((1, 2), self.rests, strict=True) if rate]
+        parts = [
+            f"m{mass} rests {rate:g}/period" if rate else f"m{mass} rests throughout"
+            for mass, rate, share in zip((1, 2), self.rests, self.rest_time, strict=True)
+            if rate or share > 0
+        ]
         if self.contacts:
             parts.append(f"{self.contacts:g} contacts/period")
         return f"A{self.id}: {what}" + (", " + ", ".join(parts) if parts else ", no rest")
@@ -227,45 +273,134 @@ def _cycle_distance(a: np.ndarray, b: np.ndarray) -> float:
     return min(float(np.max(np.linalg.norm(a - np.roll(b, r, axis=0), axis=1))) for r in range(len(b)))
 
 
-def _set_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """The median distance from a point of ``a`` to the set ``b``."""
-    gaps = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-    return float(np.median(np.min(gaps, axis=1)))
+def interleaving(a: np.ndarray, b: np.ndarray) -> float:
+    """How much two point sets interleave: the share of all their points whose nearest other
+    point belongs to the other set, over the share expected were both samples of one set
+    (``2 |a| |b| / (n (n - 1))``).  About 1 for two samples of one attractor, however sparse;
+    near 0 for two sets apart.  Distances are taken in units of the union's extent in each
+    component, so that displacements and velocities weigh alike."""
+    from scipy.spatial import cKDTree
+
+    both = np.vstack([a, b])
+    n = len(both)
+    if len(a) == 0 or len(b) == 0 or n < 3:
+        return 0.0
+    extent = np.ptp(both, axis=0)
+    scaled = both / np.where(extent > 0, extent, 1.0)
+    _, nearest = cKDTree(scaled).query(scaled, k=2)
+    owner = np.arange(n) >= len(a)
+    crossing = float(np.mean(owner[nearest[:, 1]] != owner))
+    return crossing / (2.0 * len(a) * len(b) / (n * (n - 1)))
 
 
-def _same(landing: Landing, points: np.ndarray, period: int, signature: str, settings: AttractorSettings) -> bool:
-    if landing.period != period or landing.signature != signature:
+def _same_cycle(landing: Landing, attractor: Attractor, settings: AttractorSettings) -> bool:
+    if landing.period != attractor.period or landing.signature != attractor.signature:
         return False
-    mine = landing.points[-period:] if period else landing.points
-    scale = 1.0 + max(float(np.max(np.abs(mine))), float(np.max(np.abs(points))))
-    if period:
-        return _cycle_distance(mine, points) <= settings.match * scale
-    size = max(float(np.ptp(mine, axis=0).max()), float(np.ptp(points, axis=0).max()))
-    near = 0.1 * size + settings.match * scale
-    return _set_distance(mine, points) <= near and _set_distance(points, mine) <= near
+    mine = landing.points[-attractor.period :]
+    scale = 1.0 + max(float(np.max(np.abs(mine))), float(np.max(np.abs(attractor.points))))
+    return _cycle_distance(mine, attractor.points) <= settings.match * scale
+
+
+def _merged(keep: Attractor, other: Attractor) -> Attractor:
+    """One aperiodic attractor of two: its starts added up, its points pooled (at most
+    :data:`SET_POINTS`, the earlier ones kept)."""
+    points = np.vstack([keep.points, other.points])[:SET_POINTS]
+    return dataclasses.replace(keep, points=points, starts=keep.starts + other.starts)
 
 
 def group(landings: Iterable[Landing], settings: AttractorSettings) -> tuple[list[Attractor], dict[int, int]]:
     """The attractors of the landings, and each landing's attractor (``index -> id``, failed ones
-    absent), numbered in the starts' order."""
+    absent), in :func:`ordered` order: the same starts give the same attractors, numbered the
+    same, for any number of workers and in any command.
+
+    A periodic landing joins the attractor with its period, its cycle of switches and its cycle of
+    section points (within ``match``); an aperiodic one joins the aperiodic attractor whose
+    points it :func:`interleaving` most, if at least :data:`INTERLEAVED`, and adds its points to
+    it.  Then aperiodic attractors whose pooled points interleave are merged (two samples of one
+    set that met no common landing on the way)."""
     found: list[Attractor] = []
-    labels: dict[int, int] = {}
+    members: list[list[int]] = []
     for landing in sorted(landings, key=lambda item: item.index):
         if landing.status != "ok":
             continue
-        for k, attractor in enumerate(found):
-            if _same(landing, attractor.points, attractor.period, attractor.signature, settings):
-                labels[landing.index] = attractor.id
-                found[k] = dataclasses.replace(attractor, starts=attractor.starts + 1)
-                break
+        k = _joined(landing, found, settings)
+        if k is None:
+            found.append(Attractor.of_landing(len(found), landing))
+            members.append([landing.index])
+            continue
+        if landing.period:
+            found[k] = dataclasses.replace(found[k], starts=found[k].starts + 1)
         else:
-            points = landing.points[-landing.period :] if landing.period else landing.points
-            attractor = Attractor(
-                len(found), landing.period, points, landing.signature, landing.rests, landing.contacts, 1
+            found[k] = _merged(found[k], dataclasses.replace(found[k], points=landing.points, starts=1))
+        members[k].append(landing.index)
+    found, members = _merge_interleaved(found, members)
+    return ordered(found, members)
+
+
+def _joined(landing: Landing, found: list[Attractor], settings: AttractorSettings) -> int | None:
+    """The attractor of ``found`` the landing belongs to, or None."""
+    if landing.period:
+        return next((k for k, a in enumerate(found) if _same_cycle(landing, a, settings)), None)
+    scores = [(interleaving(landing.points, a.points), k) for k, a in enumerate(found) if not a.period]
+    best = max(scores, default=(0.0, -1))
+    return best[1] if best[0] >= INTERLEAVED else None
+
+
+def _merge_interleaved(found: list[Attractor], members: list[list[int]]) -> tuple[list[Attractor], list[list[int]]]:
+    """The aperiodic attractors whose points interleave, merged (the first one keeps the rest)."""
+    merged = True
+    while merged:
+        merged = False
+        aperiodic = [k for k, a in enumerate(found) if not a.period]
+        for i, j in itertools.combinations(aperiodic, 2):
+            if interleaving(found[i].points, found[j].points) >= INTERLEAVED:
+                found[i] = _merged(found[i], found[j])
+                members[i] += members[j]
+                del found[j], members[j]
+                merged = True
+                break
+    return found, members
+
+
+def order_key(attractor: Attractor) -> tuple[Any, ...]:
+    """What orders attractors, whatever the order the starts met them: periodic ones first by
+    period, rests, contacts and cycle of switches, then by their section points; aperiodic ones
+    last, by the centre of their points."""
+    if attractor.period:
+        first = min(tuple(np.round(point, 6)) for point in attractor.points)
+        return (0, attractor.period, attractor.rests, attractor.contacts, attractor.signature, first)
+    return (
+        1,
+        0,
+        attractor.rests,
+        attractor.contacts,
+        "",
+        tuple(np.round(np.asarray(attractor.points).mean(axis=0), 3)),
+    )
+
+
+def ordered(found: list[Attractor], members: list[list[int]]) -> tuple[list[Attractor], dict[int, int]]:
+    """The attractors sorted by :func:`order_key` and numbered from 0, and each member's number."""
+    order = sorted(range(len(found)), key=lambda k: order_key(found[k]))
+    attractors = [dataclasses.replace(found[k], id=new) for new, k in enumerate(order)]
+    labels = {index: new for new, k in enumerate(order) for index in members[k]}
+    return attractors, labels
+
+
+def unsettled(attractors: Sequence[Attractor]) -> list[str]:
+    """Warnings where the grouping of aperiodic sets is not settled: two sets kept apart whose
+    points interleave more than :data:`UNSETTLED` (they may be one attractor, sampled too thinly)."""
+    aperiodic = [a for a in attractors if not a.period]
+    said = []
+    for a, b in itertools.combinations(aperiodic, 2):
+        score = interleaving(a.points, b.points)
+        if score >= UNSETTLED:
+            said.append(
+                f"A{a.id} and A{b.id} may be one aperiodic attractor: their section points interleave "
+                f"({score:.2f}; 1 for two samples of one set, 0 for sets apart); record more periods (--record) to "
+                "tell"
             )
-            found.append(attractor)
-            labels[landing.index] = attractor.id
-    return found, labels
+    return said
 
 
 def _refined(case: Case, attractor: Attractor, settings: AttractorSettings) -> Attractor:
@@ -276,7 +411,9 @@ def _refined(case: Case, attractor: Attractor, settings: AttractorSettings) -> A
             orbit = find_orbit(case, period=attractor.period, guess=attractor.points[-1], transient=0)
         except OscillatorError as error:
             return dataclasses.replace(attractor, forcing_period=period, note=f"not refined: {error}")
-        return dataclasses.replace(attractor, orbit=orbit, forcing_period=period, note=orbit.note)
+        with np.errstate(divide="ignore"):  # a multiplier 0: the flow collapses every direction
+            largest = float(np.log(np.max(np.abs(orbit.multipliers)))) / (attractor.period * period)
+        return dataclasses.replace(attractor, orbit=orbit, lyapunov=largest, forcing_period=period, note=orbit.note)
     if settings.lyapunov_periods == 0:
         return dataclasses.replace(attractor, forcing_period=period)
     try:
@@ -299,27 +436,59 @@ class Attractors:
     labels : DataFrame
         One row per start: ``index``, ``x1 v1 x2 v2`` (the start), ``attractor`` (its id, -1 for
         a failed start), ``status``, ``reason``, ``message``, ``period``.
+    warnings : tuple of str
+        Where the grouping is not settled (:func:`unsettled`); empty when it is.
     """
 
     case: Case
     settings: AttractorSettings
     attractors: tuple[Attractor, ...]
     labels: pd.DataFrame = field(repr=False)
+    warnings: tuple[str, ...] = ()
 
     def fractions(self, confidence: float = 0.95) -> pd.DataFrame:
-        """Each attractor's share of the starts (failed ones counted, as ``-1``), with Wilson's
-        confidence interval: ``attractor, name, starts, fraction, low, high``."""
-        from scipy.stats import binomtest
-
+        """Each attractor's share of the starts (failed ones counted, as ``-1``), with its
+        :func:`share_interval`: ``attractor, name, starts, fraction, low, high``."""
         total = len(self.labels)
         rows = []
         names = {a.id: a.name for a in self.attractors}
         counts = self.labels.attractor.value_counts()
         for ident in [a.id for a in self.attractors] + ([-1] if (self.labels.attractor == -1).any() else []):
             k = int(counts.get(ident, 0))
-            interval = binomtest(k, total).proportion_ci(confidence_level=confidence, method="wilson")
-            rows.append((ident, names.get(ident, "failed"), k, k / total, interval.low, interval.high))
+            rows.append((ident, names.get(ident, "failed"), k, k / total, *share_interval(k, total, confidence)))
         return pd.DataFrame(rows, columns=["attractor", "name", "starts", "fraction", "low", "high"])
+
+
+def share_interval(k: int, total: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson's interval for the share of the sampled starting states that reach an attractor,
+    estimated from ``k`` of ``total`` starts (the share of a slice's area, for a grid of it);
+    NaN for fewer than two starts, where it says nothing."""
+    if total < 2:
+        return math.nan, math.nan
+    from scipy.stats import binomtest
+
+    interval = binomtest(k, total).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(interval.low), float(interval.high)
+
+
+def share_text(fraction: float, low: float, high: float) -> str:
+    """A share for people: ``"61.7 % [58.4 %, 64.8 %]"``, or ``"100.0 %"`` without an interval."""
+    if math.isnan(low):
+        return f"{fraction:.1%}"
+    return f"{fraction:.1%} [{low:.1%}, {high:.1%}]"
+
+
+def check_settings(settings: object) -> AttractorSettings:
+    """``settings`` if it is an :class:`AttractorSettings`, the defaults for None, else refused."""
+    if settings is None:
+        return AttractorSettings()
+    if not isinstance(settings, AttractorSettings):
+        raise InputError(
+            f"settings must be an AttractorSettings (or None for the defaults), got {shown(settings)}; give "
+            "AttractorSettings(transient=..., record=...)",
+            field="settings",
+        )
+    return settings
 
 
 def check_states(states: object) -> np.ndarray:
@@ -363,8 +532,11 @@ def find_attractors(
         Forcing periods run before recording, and recorded (``settings``' by default).
     settings : AttractorSettings, optional
         Transient, recorded periods, tolerances (the defaults of :class:`AttractorSettings`).
-    workers : int
-        Local processes (1: this process).
+    workers : int or None
+        Local processes (1: this process; None: one per core; at most 4 per core).  They are
+        started with ``spawn``, which imports the calling script again in each: in a script, call
+        with ``workers > 1`` under ``if __name__ == "__main__":`` (without it the call raises
+        :class:`~oscillator.errors.InputError` saying so).
     client : dask.distributed.Client, optional
         Run the starts on this Dask cluster instead.
     progress : callable, optional
@@ -379,7 +551,8 @@ def find_attractors(
     >>> [(a.period, a.stable) for a in found.attractors]
     [(1, True)]
     """
-    settings = settings or AttractorSettings()
+    settings = check_settings(settings)
+    workers = check_runner(workers, client, progress)
     chosen = {name: value for name, value in (("transient", transient), ("record", record)) if value is not None}
     settings = dataclasses.replace(settings, **chosen) if chosen else settings
     case = resolve_case(case, **overrides)
@@ -402,4 +575,4 @@ def assemble(case: Case, settings: AttractorSettings, landings: list[Landing]) -
         for item in sorted(landings, key=lambda item: item.index)
     ]
     columns = ["index", *STATE, "attractor", "status", "reason", "message", "period"]
-    return Attractors(case, settings, refined, pd.DataFrame(rows, columns=columns))
+    return Attractors(case, settings, refined, pd.DataFrame(rows, columns=columns), tuple(unsettled(found)))

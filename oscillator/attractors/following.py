@@ -30,15 +30,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import Pool, run_tasks
+from oscillator.analysis.execution import Pool, check_runner, run_tasks
 from oscillator.attractors.finding import (
     Attractor,
     Attractors,
     AttractorSettings,
     Landing,
     assemble,
+    check_settings,
     check_states,
     land,
+    share_interval,
 )
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError
@@ -103,15 +105,13 @@ class AttractorsOver:
     def table(self) -> pd.DataFrame:
         """One row per value and attractor: the value, ``id``, name, period, cycle of switches,
         share of the fresh starts with its confidence interval, stability, largest multiplier,
-        largest Lyapunov exponent (aperiodic), section points (JSON)."""
-        from scipy.stats import binomtest
-
+        largest Lyapunov exponent, section points (JSON)."""
         rows = []
         for value, found, ids in zip(self.values, self.found, self.ids, strict=True):
             fresh = found.labels[found.labels["index"] < self.fresh]
             for attractor in found.attractors:
                 k = int((fresh.attractor == attractor.id).sum())
-                interval = binomtest(k, len(fresh)).proportion_ci(method="wilson")
+                interval = share_interval(k, len(fresh))
                 rows.append(_row(self.param, float(value), ids[attractor.id], attractor, k, len(fresh), interval))
         return pd.DataFrame(rows)
 
@@ -121,7 +121,7 @@ class AttractorsOver:
 
 
 def _row(
-    param: str, value: float, ident: int, attractor: Attractor, k: int, total: int, interval: Any
+    param: str, value: float, ident: int, attractor: Attractor, k: int, total: int, interval: tuple[float, float]
 ) -> dict[str, Any]:
     orbit = attractor.orbit
     return {
@@ -133,8 +133,8 @@ def _row(
         "signature": attractor.signature,
         "starts": k,
         "fraction": k / total if total else math.nan,
-        "low": interval.low,
-        "high": interval.high,
+        "low": interval[0],
+        "high": interval[1],
         "stable": None if orbit is None else bool(orbit.stable),
         "largest_multiplier": math.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
         "lyapunov": attractor.lyapunov,
@@ -147,7 +147,10 @@ def _check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, 
         raise InputError(
             f"param {shown(param)} is not a parameter; give one of {', '.join(Parameters.names())}", field="param"
         )
-    array: np.ndarray = np.asarray(values, dtype=float)
+    try:
+        array: np.ndarray = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):  # text, a generator, a ragged list
+        array = np.empty((0, 0))
     if array.ndim != 1 or not 2 <= len(array) <= MAX_VALUES or not np.isfinite(array).all():
         raise InputError(f"values must be 2 to {MAX_VALUES} finite numbers, got {shown(values)}", field="values")
     if not (np.all(np.diff(array) > 0) or np.all(np.diff(array) < 0)):
@@ -219,7 +222,8 @@ def follow_attractors(
     tol : float
         The width to which each appearance and end is bisected.
     workers, client
-        Local processes, or a Dask client.
+        Local processes (as for :func:`~oscillator.attractors.finding.find_attractors`: under a
+        ``__main__`` guard in a script), or a Dask client.
     store : LandingStore, optional
         Keep each value's landings in this folder as it finishes, and read those of values
         already there (a run that resumes).
@@ -228,7 +232,10 @@ def follow_attractors(
     **overrides
         Parameters and solver options, as for :func:`oscillator.simulate`.
     """
-    settings = settings or AttractorSettings()
+    settings = check_settings(settings)
+    workers = check_runner(workers, client, progress)
+    if store is not None and not isinstance(store, LandingStore):
+        raise InputError(f"store must be a LandingStore or None, got {shown(store)}", field="store")
     case = resolve_case(case, **overrides)
     array = _check_values(case, param, values, tol)
     fresh = check_states(case.initial.y if states is None else states)
@@ -316,8 +323,7 @@ def _bisect(
 def _described(landing: Landing) -> str:
     if landing.status != "ok":
         return f"failed: {landing.message}"
-    attractor = Attractor(0, landing.period, landing.points, landing.signature, landing.rests, landing.contacts, 1)
-    return attractor.name.split(": ", 1)[-1]
+    return Attractor.of_landing(0, landing).name.split(": ", 1)[-1]
 
 
 def local_branches(over: AttractorsOver) -> list[tuple[int, Branch]]:

@@ -26,6 +26,9 @@ from oscillator.text import printable
 __all__ = ["LandingStore"]
 
 _MAX_JSON = 1_000_000
+#: The layout and meaning of the parts; a folder of another format is refused (format 2: a contact
+#: between the masses is counted once, not once per mass; the rest time of each mass is kept).
+FORMAT = 2
 
 
 def landing_row(landing: Landing) -> dict[str, Any]:
@@ -42,6 +45,8 @@ def landing_row(landing: Landing) -> dict[str, Any]:
         "rests2": landing.rests[1],
         "contacts": landing.contacts,
         "wall_time": landing.wall_time,
+        "rest_time1": landing.rest_time[0],
+        "rest_time2": landing.rest_time[1],
         "points": landing.points.ravel().tolist(),
     }
 
@@ -60,6 +65,7 @@ def landing_of(row: Any) -> Landing:
         (float(row.rests1), float(row.rests2)),
         float(row.contacts),
         float(row.wall_time),
+        (float(row.rest_time1), float(row.rest_time2)),
     )
 
 
@@ -103,8 +109,16 @@ class LandingStore:
                 "folder, or the same case and settings to resume it",
                 field="folder",
             )
-        if not self.parts.is_dir():
-            raise InputError(f"{text} is damaged: its parts/ folder is missing; give a new folder", field="folder")
+        if stored.get("format") != FORMAT:
+            raise InputError(
+                f"folder {text} was written by another version of oscillator (its parts count contacts "
+                "differently); give a new folder",
+                field="folder",
+            )
+        if self.parts.is_symlink() or not self.parts.is_dir():
+            raise InputError(
+                f"{text} is damaged: its parts/ is missing or is a link; give a new folder", field="folder"
+            )
         self.resuming = True
 
     def open(self) -> None:
@@ -124,7 +138,8 @@ class LandingStore:
         self.resuming = True
 
     def _status(self, status: str, **extra: Any) -> str:
-        return json.dumps({"identity": self.identity, "status": status, **extra}, indent=2, default=str)
+        marker = {"identity": self.identity, "format": FORMAT, "status": status, **extra}
+        return json.dumps(marker, indent=2, default=str)
 
     def write_status(self, status: str, **extra: Any) -> None:
         replace_file(self.folder / self.marker, self._status(status, **extra))

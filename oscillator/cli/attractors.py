@@ -13,7 +13,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
+from oscillator.cli.console import err, fail, load, message, out, progress_bar, say, warn
 from oscillator.cli.inputs import case_from
 from oscillator.errors import InputError, OscillatorError
 from oscillator.text import printable
@@ -177,6 +177,7 @@ def _run_basins(
 
 
 def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> None:
+    from oscillator.attractors.finding import share_text
     from oscillator.report.attractors import attractor_table, write_basins
 
     try:
@@ -185,14 +186,16 @@ def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> 
         raise fail(f"cannot write into {printable(str(folder))} ({error}); the starts are kept there", 1) from None
     if not quiet:
         table = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
-        for column in ("attractor", "share [95 %]", "orbit", "largest |multiplier|"):
+        for column in ("attractor", "share of starts [95 %]", "orbit", "largest |multiplier|"):
             table.add_column(column)
         for row in attractor_table(found).itertuples(index=False):
             orbit = "" if row.kind != "periodic" or row.stable is None else ("stable" if row.stable else "unstable")
             largest = "" if row.kind != "periodic" else f"{row.largest_multiplier:.4g}"
-            share = f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]"
+            share = share_text(row.fraction, row.low, row.high)
             table.add_row(Text(str(row.name)), share, orbit, largest)
         out.print(table)
+    for warning in found.found.warnings:
+        warn(warning)
     say(f"written to {printable(str(folder))}")
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)

@@ -77,6 +77,12 @@ def say(*parts: str | tuple[str, str]) -> None:
     out.print(Text.assemble(*((printable(p[0]), p[1]) if isinstance(p, tuple) else printable(p) for p in parts)))
 
 
+def warn(message: str) -> None:
+    """A warning on stderr: the computation went on, but the user should know (user text is
+    never markup)."""
+    err.print(Text.assemble(("warning:", "bold yellow"), " ", printable(message)))
+
+
 #: What a command says when numba compiles the kernels (the first run after an install).
 COMPILING = "compiling the numerical kernels once (about 10 s); later runs start in about a second"
 #: Seconds of loading after which the command says so even if the cache seemed full (stale): loading

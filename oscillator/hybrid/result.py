@@ -12,6 +12,7 @@ import numpy as np
 from oscillator.errors import Reason
 from oscillator.hybrid.record import RunRecord, Segment, TrajectoryRows
 from oscillator.io.cases import Case
+from oscillator.io.files import as_folder
 from oscillator.model.energy import POWER_NAMES, mechanical_energy
 from oscillator.model.types import VARIATIONAL
 from oscillator.presenting import presenter
@@ -206,7 +207,7 @@ class Result:
         (``formats``: ``"csv"``, ``"parquet"`` or ``"both"``), ``trajectory.parquet``,
         ``case.toml``, ``run.json``, then the figures and the report.  ``folder`` must be new.
         :func:`oscillator.read_run` reads it back.  Returns the folder's path."""
-        return presenter().save_result(self, folder, formats=formats, figures=figures, report=report)
+        return presenter().save_result(self, as_folder(folder), formats=formats, figures=figures, report=report)
 
     def _repr_html_(self) -> str:
         """The status, the counts, the energy residual and the first events (Jupyter)."""

@@ -33,6 +33,7 @@ from pathlib import Path
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.text import printable, unsafe_characters
+from oscillator.text import shown as shown_value
 
 __all__ = [
     "FolderClaim",
@@ -250,6 +251,14 @@ def default_name(text: str) -> str:
         name = "_" + name[1:]
     cut = name.encode("utf-8")[:_DEFAULT_NAME_MAX].decode("utf-8", "ignore")
     return cut or "case"
+
+
+def as_folder(value: object, *, option: str = "folder") -> Path:
+    """``value`` as a :class:`~pathlib.Path` if it names a folder (text or a path), else refused
+    naming ``option``."""
+    if isinstance(value, str) or (isinstance(value, os.PathLike) and isinstance(os.fspath(value), str)):
+        return Path(value)
+    raise InputError(f"{option} must be a folder's name (text or a Path), got {shown_value(value)}", field=option)
 
 
 def check_name(folder: Path, *, option: str) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, fields
 from typing import Literal
 
@@ -18,7 +18,7 @@ import numpy as np
 
 from oscillator.model.phase_space import boundary_label, state_label
 
-__all__ = ["COLUMN", "Event", "EventKind", "decode", "decode_column", "event_of_row"]
+__all__ = ["COLUMN", "Event", "EventKind", "decode", "decode_column", "event_of_row", "one_row_per_event"]
 
 
 class EventKind(enum.StrEnum):
@@ -77,11 +77,24 @@ class EventKind(enum.StrEnum):
         contact change switches both masses' fields."""
         return self.contact == "left"
 
+    def stands_for_event(self, mass: int) -> bool:
+        """Whether the row of ``mass`` stands for its event when events are counted: an event of
+        both masses (:attr:`both_masses`) is written once per mass, and only its m1 row counts."""
+        return not self.both_masses or mass == 1
+
     @classmethod
     def values_where(cls, test: Callable[[EventKind], bool]) -> list[str]:
         """The values (the ``kind`` column's text) of the kinds that pass ``test``:
         ``events.kind.isin(EventKind.values_where(lambda k: k.starts_rest))``."""
         return [kind.value for kind in cls if test(kind)]
+
+
+def one_row_per_event(kinds: Iterable[str], masses: Iterable[int]) -> np.ndarray:
+    """A mask of event-table rows (their ``kind`` and ``mass`` columns) that keeps one row per
+    event: counting ``events[mask]`` counts each left-contact change once, not once per mass."""
+    return np.array(
+        [EventKind(kind).stands_for_event(int(mass)) for kind, mass in zip(kinds, masses, strict=True)], dtype=bool
+    )
 
 
 _CONTACT: dict[EventKind, Literal["right", "left"]] = {

@@ -33,6 +33,7 @@ import pandas as pd
 
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case, resolve_case
+from oscillator.io.files import as_folder
 from oscillator.model.parameters import Parameters, real_argument
 from oscillator.orbits.shooting import (
     MAX_TRANSIENT,
@@ -252,7 +253,7 @@ class Branch:
     def save(self, folder: str | Path, *, coordinate: str | None = None) -> Path:
         """Write the branch as ``oscillator continue`` does (tables, ``case.toml``, ``run.json``,
         figures, report) into ``folder``, a new one; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_branch(self, folder, coordinate=_coordinate(coordinate or self.coordinate))
+        return presenter().save_branch(self, as_folder(folder), coordinate=_coordinate(coordinate or self.coordinate))
 
     def _repr_html_(self) -> str:
         return presenter().branch_html(self)

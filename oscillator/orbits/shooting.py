@@ -31,6 +31,7 @@ from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case
+from oscillator.io.files import as_folder
 from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, real_argument
@@ -332,7 +333,7 @@ class Orbit:
         """Write the orbit as a run folder of one return (tables, figures, report) whose
         ``run.json`` holds the orbit (``"kind": "orbit"``: state, multipliers, monodromy,
         verdict); :func:`oscillator.read_run` reads it back as an :class:`Orbit`."""
-        return presenter().save_orbit(self, folder)
+        return presenter().save_orbit(self, as_folder(folder))
 
     def _repr_html_(self) -> str:
         return presenter().orbit_html(self)

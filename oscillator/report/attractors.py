@@ -20,7 +20,7 @@ import pandas as pd
 
 from oscillator.attractors.atlas import Atlas
 from oscillator.attractors.basins import Basins
-from oscillator.attractors.finding import STATE, Attractor
+from oscillator.attractors.finding import STATE, Attractor, share_text
 from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.io.files import atomic_path
@@ -122,7 +122,7 @@ def basins_figure(basins: Basins) -> Figure:
     handles: list[Any] = []
     for attractor in basins.found.attractors:
         share = shares.loc[attractor.id]
-        label = f"{attractor.name} — {share.fraction:.1%} [{share.low:.1%}, {share.high:.1%}]"
+        label = f"{attractor.name} — {share_text(share.fraction, share.low, share.high)}"
         marker = MARKERS[attractor.id % len(MARKERS)]
         handles.append(
             Line2D([], [], ls="", marker=marker, ms=11, color=_color(attractor.id), mec="black", label=label)
@@ -197,7 +197,7 @@ def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
             str(row.name),
             str(row.kind),
             f"{row.starts}",
-            f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]",
+            share_text(row.fraction, row.low, row.high),
             "" if row.kind != "periodic" or pd.isna(row.stable) else ("stable" if row.stable else "unstable"),
             "" if pd.isna(row.largest_multiplier) else f"{row.largest_multiplier:.4g}",
             "" if pd.isna(row.signature) else str(row.signature),
@@ -215,9 +215,14 @@ def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
         ),
     ]
     blocks += modified_blocks(case)
+    blocks += [mk.Paragraph((f"Warning: {warning}.",)) for warning in basins.found.warnings]
     header = ("attractor", "kind", "starts", "share [95% interval]", "orbit", "largest |multiplier|", "switches")
     caption = "the basins; the markers are each attractor's own section points, projected on the slice's plane"
-    blocks += [mk.Table(header, rows), mk.Figure("basins", caption)]
+    note = (
+        "The share is the fraction of the slice's starts that reach the attractor; the interval, Wilson's 95 % "
+        "interval for the fraction of the whole slice, as estimated from that many starts (none for one start)."
+    )
+    blocks += [mk.Table(header, rows), mk.Paragraph((note,)), mk.Figure("basins", caption)]
     return blocks
 
 
@@ -364,7 +369,7 @@ def _following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Bloc
             f"{getattr(row, param):.10g}",
             f"A{row.id}",
             str(row.name),
-            f"{row.fraction:.1%} [{row.low:.1%}, {row.high:.1%}]",
+            share_text(row.fraction, row.low, row.high),
         )
         for row in table.itertuples(index=False)
     )

@@ -16,7 +16,7 @@ import pandas as pd
 from oscillator.analysis.intervals import spans
 from oscillator.io.cases import Case
 from oscillator.io.files import replace_file
-from oscillator.model.events import EventKind
+from oscillator.model.events import EventKind, one_row_per_event
 from oscillator.model.phase_space import domain_label
 from oscillator.report.figures import FIGURES
 from oscillator.report.markup import Block, Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
@@ -155,9 +155,10 @@ def _summarised_log(events: pd.DataFrame) -> list[str]:
         return transition_log(events)
     half = LOGGED_EVENTS // 2
     middle = events.iloc[half:-half]
-    counts = ", ".join(f"{kind} {count:,}" for kind, count in middle.kind.value_counts().items())
+    counted = middle[one_row_per_event(middle.kind, middle["mass"])]  # a left-contact change once
+    counts = ", ".join(f"{kind} {count:,}" for kind, count in counted.kind.value_counts().items())
     gap = (
-        f"… {len(middle):,} events from t = {middle.t.iloc[0]:.4f} s to t = {middle.t.iloc[-1]:.4f} s are not "
+        f"… {len(counted):,} events from t = {middle.t.iloc[0]:.4f} s to t = {middle.t.iloc[-1]:.4f} s are not "
         f"listed here ({counts}); events.parquet holds them all"
     )
     return [*transition_log(events.iloc[:half]), gap, *transition_log(events.iloc[-half:])]

@@ -1,0 +1,93 @@
+"""Bad input to the global analyses' Python API: one InputError naming the field, before any work
+(issue 35, hostile input IV, item 9), and a script without a ``__main__`` guard (item 3)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+import oscillator
+from oscillator import find_attractors, lyapunov
+from oscillator.attractors.following import follow_attractors
+from oscillator.errors import InputError
+
+MISUSES = [
+    # (call, the field the message names)
+    (lambda: find_attractors("instance-1", settings="fast"), "settings"),
+    (lambda: find_attractors("instance-1", workers="2"), "workers"),
+    (lambda: find_attractors("instance-1", workers=0), "workers"),
+    (lambda: find_attractors("instance-1", workers=-1), "workers"),
+    (lambda: find_attractors("instance-1", workers=2.5), "workers"),
+    (lambda: find_attractors("instance-1", workers=True), "workers"),
+    (lambda: find_attractors("instance-1", workers=10**6), "workers"),  # at most 4 per core
+    (lambda: find_attractors("instance-1", client="tcp://127.0.0.1:8786"), "client"),
+    (lambda: find_attractors("instance-1", progress="x"), "progress"),
+    (lambda: lyapunov("instance-1", progress="x"), "progress"),
+    (lambda: follow_attractors("instance-1", "Q2", "abc"), "values"),
+    (lambda: follow_attractors("instance-1", "Q2", (v for v in (70.0, 71.0))), "values"),
+    (lambda: follow_attractors("instance-1", "Q2", [70.0, 71.0], settings="x"), "settings"),
+    (lambda: follow_attractors("instance-1", "Q2", [70.0, 71.0], store="x"), "store"),
+    (lambda: follow_attractors("instance-1", "Q2", [70.0, 71.0], workers=None, progress=1), "progress"),
+    (lambda: oscillator.read_run(None), "folder"),
+    (lambda: oscillator.read_run(123), "folder"),
+    (lambda: oscillator.read_run(b"runs/x"), "folder"),
+]
+
+
+@pytest.mark.parametrize(("call", "field"), MISUSES)
+def test_misuse_of_the_global_api_is_one_input_error_naming_the_field(call, field):
+    with pytest.raises(InputError) as raised:
+        call()
+    assert raised.value.field == field
+    assert field in str(raised.value)
+
+
+def test_saving_to_something_that_is_not_a_folder_name_is_refused():
+    result = oscillator.simulate("instance-1", t_end=1.5)
+    for bad in (None, 5, b"x"):
+        with pytest.raises(InputError, match="folder must be a folder's name"):
+            result.save(bad)
+
+
+def test_a_script_without_a_main_guard_gets_one_error_naming_the_guard(tmp_path):
+    script = tmp_path / "plain.py"
+    script.write_text(
+        textwrap.dedent(
+            """
+            from oscillator import find_attractors
+            from oscillator.errors import InputError
+            try:
+                find_attractors("instance-1", states=[[0, 0, 3, 0], [0, 0, 6, 0]], transient=2, record=2, workers=2)
+            except InputError as error:
+                print("REFUSED", error.field, error)
+            """
+        ),
+        encoding="utf-8",
+    )
+    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "REFUSED workers" in done.stdout
+    assert 'if __name__ == "__main__":' in done.stdout
+    assert "Traceback" not in done.stderr  # the workers end quietly: the parent alone explains
+
+
+def test_the_same_script_with_the_guard_runs_on_two_workers(tmp_path):
+    script = tmp_path / "guarded.py"
+    script.write_text(
+        textwrap.dedent(
+            """
+            from oscillator import find_attractors
+            if __name__ == "__main__":
+                found = find_attractors("instance-1", states=[[0, 0, 3, 0], [0, 0, 6, 0]], transient=2, record=2,
+                                        workers=2)
+                print("STARTS", len(found.labels))
+            """
+        ),
+        encoding="utf-8",
+    )
+    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "STARTS 2" in done.stdout
