@@ -234,6 +234,40 @@ def _scheduler_address(scheduler: str) -> str:
     return scheduler
 
 
+#: Seconds a scheduler has to greet a new connection.
+_GREETING_TIMEOUT = 10.0
+#: The largest first frame a Dask scheduler's greeting (its handshake) can plausibly have, in bytes.
+_GREETING_MOST = 1 << 20
+
+
+def _probe(scheduler: str, host: str, port: int, *, greets: bool) -> None:
+    """Connect to the scheduler's port and, over plain TCP, read the start of its greeting: a Dask
+    scheduler sends its handshake at once, framed by its size as 8 bytes (little-endian).  A
+    server that sends nothing (a web server waiting for a request) or something else (an SSH
+    banner, read as a frame size of exabytes) is not one, and Dask would wait on it or try to
+    allocate that much."""
+    import socket
+    import struct
+
+    with socket.create_connection((host, port), timeout=_GREETING_TIMEOUT) as probe:
+        if not greets:
+            return
+        received = b""
+        try:
+            while len(received) < 8 and (chunk := probe.recv(8 - len(received))):
+                received += chunk
+        except TimeoutError:
+            pass
+    size = struct.unpack("<Q", received)[0] if len(received) == 8 else 0
+    if not 0 < size <= _GREETING_MOST:
+        said = "said nothing" if not received else f"sent {received!r}"
+        raise InputError(
+            f"scheduler {shown(scheduler)} is not a Dask scheduler (it {said} within {_GREETING_TIMEOUT:g} s of "
+            "connecting, where a Dask scheduler greets at once); check the address and port",
+            field="scheduler",
+        )
+
+
 def connect(scheduler: str) -> Any:
     """A Dask client of the scheduler at ``scheduler``, or a clear error."""
     address = _scheduler_address(scheduler)
@@ -246,10 +280,10 @@ def connect(scheduler: str) -> Any:
     parsed = urllib.parse.urlsplit(address)
     try:
         if parsed.scheme in ("tcp", "tls"):  # a refused connection is said at once, not after Dask's retries
-            import socket
-
-            socket.create_connection((parsed.hostname, parsed.port), timeout=10).close()
+            _probe(scheduler, parsed.hostname or "", parsed.port or 0, greets=parsed.scheme == "tcp")
         return Client(address, timeout="10s")
+    except InputError:
+        raise
     except (OSError, ValueError, TypeError) as exc:
         raise InputError(
             f"scheduler {shown(scheduler)}: cannot reach the Dask scheduler ({exc}); check the address",

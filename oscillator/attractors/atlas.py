@@ -35,7 +35,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
 from oscillator.orbits.shooting import check_count, period_map
-from oscillator.text import shown
+from oscillator.text import printable, shown
 
 __all__ = [
     "Atlas",
@@ -345,6 +345,36 @@ def run_atlas(
     return Atlas(case, x, y, frame)
 
 
+def _checked_row(table: pd.DataFrame, row: int, count: int, part: Any) -> pd.DataFrame:
+    """A stored row of the atlas, checked: every column there with its type, the row's number,
+    each of its ``count`` points once or more and no other; else refused naming the part."""
+    why = ""
+    missing = [name for name in COLUMNS if name not in table.columns]
+    if missing:
+        why = f"no column {', '.join(missing)}"
+    else:
+        kinds = {"int64": pd.api.types.is_integer_dtype, "float64": pd.api.types.is_numeric_dtype}
+        wrong = [
+            name for name, dtype in COLUMNS.items() if not kinds.get(dtype, pd.api.types.is_string_dtype)(table[name])
+        ]
+        if wrong:
+            why = f"column {', '.join(wrong)} of the wrong type"
+        else:
+            table = table[list(COLUMNS)].astype(COLUMNS)
+    if not why and (not (table["row"] == row).all() or set(table["column"]) != set(range(count)) or not len(table)):
+        why = f"its rows are not row {row}'s points 0 to {count - 1}"
+    if not why and not table.status.isin(["ok", "failed"]).all():
+        why = "a status that is neither ok nor failed"
+    elif not why and not np.isfinite(table.loc[table.status == "ok", ["x1", "v1", "x2", "v2"]].to_numpy()).all():
+        why = "a state that is not a number"
+    if why:
+        raise InputError(
+            f"{printable(str(part))} is damaged ({why}); delete it and run the same command to compute that row again",
+            field="folder",
+        )
+    return table
+
+
 def _rows(
     case: Case,
     x: AtlasAxis,
@@ -360,6 +390,8 @@ def _rows(
     total = x.count * y.count
     for row in range(y.count):
         table = store.read_table(f"row-{row:05d}") if store is not None else None
+        if table is not None:
+            table = _checked_row(table, row, x.count, store.parts / f"row-{row:05d}.parquet")
         if table is None:
 
             def step(count: int, done: int = row * x.count) -> None:

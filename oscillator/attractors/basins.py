@@ -140,7 +140,7 @@ def run_basins(
     workers = check_runner(workers, client, progress)
     starts = grid_starts(case, x, y)
     store.open()
-    landings = store.read()
+    landings = store.read(starts)
     done = {item.index for item in landings}
     tasks = [(index, tuple(row)) for index, row in enumerate(starts) if index not in done]
     total = len(starts)

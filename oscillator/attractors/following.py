@@ -265,7 +265,7 @@ def _values(
         point = resolve_case(case, **{param: float(value)})
         seeds = np.array([a.points[-1] for a in found[-1].attractors]) if found else np.empty((0, 4))
         starts = np.vstack([fresh, seeds]) if len(seeds) else fresh
-        landings = store.read(f"value-{k:05d}") if store is not None else []
+        landings = store.read(starts, f"value-{k:05d}") if store is not None else []
         if not landings:
             landings = _landings_at(point, settings, starts, client, pool)
             if store is not None:

@@ -69,6 +69,19 @@ def landing_of(row: Any) -> Landing:
     )
 
 
+def _foreign(landing: Landing, starts: np.ndarray, seen: set[int]) -> str:
+    """Why a stored landing is not one of this computation's (empty if it is)."""
+    if not 0 <= landing.index < len(starts) or landing.index in seen:
+        return f"start {landing.index} is not one of its starts or is there twice"
+    if not np.array_equal(np.asarray(landing.start), starts[landing.index]):
+        return f"start {landing.index} is not the start of that number"
+    if landing.status not in ("ok", "failed") or (landing.status == "ok" and not np.isfinite(landing.points).all()):
+        return f"start {landing.index} has no status or section points that are not numbers"
+    if landing.status == "ok" and (landing.period < 0 or len(landing.points) < max(landing.period, 1)):
+        return f"start {landing.index} has fewer section points than its period"
+    return ""
+
+
 class LandingStore:
     """A resumable folder of landings; ``marker`` names its identity file (``basins.json``)."""
 
@@ -144,23 +157,46 @@ class LandingStore:
     def write_status(self, status: str, **extra: Any) -> None:
         replace_file(self.folder / self.marker, self._status(status, **extra))
 
-    def read(self, prefix: str = "") -> list[Landing]:
-        """The landings of the parts whose names start with ``prefix`` (a damaged part is refused
-        with its name)."""
-        found = []
+    def read(self, starts: np.ndarray, prefix: str = "") -> list[Landing]:
+        """The landings of the parts whose names start with ``prefix``, each checked against
+        ``starts`` (the computation's starts, by index): a damaged part, or one holding a start
+        that is not this computation's or one already read, is refused with its name."""
+        found: list[Landing] = []
+        seen: set[int] = set()
         for part in sorted(self.parts.glob(f"{prefix}*.parquet")):
+            self._plain(part)
             try:
                 frame = pq.read_table(part).to_pandas()
-                found += [landing_of(row) for row in frame.itertuples(index=False)]
+                landings = [landing_of(row) for row in frame.itertuples(index=False)]
             except Exception as exc:  # pyarrow raises many types for a damaged file
                 if isinstance(exc, MemoryError):
                     raise
-                raise InputError(
-                    f"{printable(str(part))} is damaged; delete it and run the same command to compute its "
-                    "starts again",
-                    field="folder",
-                ) from exc
+                raise self._damaged(part, "it cannot be read") from exc
+            for landing in landings:
+                why = _foreign(landing, starts, seen)
+                if why:
+                    raise self._damaged(part, why)
+                seen.add(landing.index)
+            found += landings
         return found
+
+    def _plain(self, part: Path) -> None:
+        """Refuse a part that is a link or not a file: a resume folder is untrusted, and nothing
+        is read or written through a link in it."""
+        if part.is_symlink() or not part.is_file():
+            raise InputError(
+                f"{printable(str(part))} is a link or not a file; a {self.what} folder holds plain files only: give "
+                "a new folder",
+                field="folder",
+            )
+
+    @staticmethod
+    def _damaged(part: Path, why: str) -> InputError:
+        return InputError(
+            f"{printable(str(part))} is damaged ({why}); delete it and run the same command to compute its starts "
+            "again",
+            field="folder",
+        )
 
     def write_table(self, frame: pd.DataFrame, name: str) -> None:
         """A part holding ``frame``, named ``name``."""
@@ -170,8 +206,9 @@ class LandingStore:
     def read_table(self, name: str) -> pd.DataFrame | None:
         """The part ``name`` (None if there is none; a damaged one is refused with its name)."""
         part = self.parts / f"{name}.parquet"
-        if not part.is_file():
+        if not os.path.lexists(part):
             return None
+        self._plain(part)
         try:
             return pq.read_table(part).to_pandas()
         except Exception as exc:  # pyarrow raises many types for a damaged file

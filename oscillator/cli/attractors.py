@@ -197,6 +197,13 @@ def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> 
     for warning in found.found.warnings:
         warn(warning)
     say(f"written to {printable(str(folder))}")
+    if not found.found.attractors:
+        labels = found.found.labels
+        raise fail(
+            f"every start failed ({labels.reason.iloc[0]}: {labels.message.iloc[0]}); the starts' reasons are in "
+            f"{printable(str(folder))}/basins.parquet",
+            1,
+        )
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 

@@ -55,6 +55,13 @@ FAILED = "0.6"
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
 
+#: The columns of ``attractors.parquet`` (the same when every start failed and there is no attractor).
+ATTRACTOR_COLUMNS = (
+    "attractor name kind period signature rests_m1 rests_m2 contacts rest_time_m1 rest_time_m2 starts fraction low "
+    "high stable largest_multiplier lyapunov points note"
+).split()
+
+
 def attractor_table(basins: Basins) -> pd.DataFrame:
     """One row per attractor (and one for failed starts, if any): what it is and its share."""
     shares = basins.found.fractions().set_index("attractor")
@@ -72,6 +79,8 @@ def attractor_table(basins: Basins) -> pd.DataFrame:
                 "rests_m1": attractor.rests[0],
                 "rests_m2": attractor.rests[1],
                 "contacts": attractor.contacts,
+                "rest_time_m1": attractor.rest_time[0],
+                "rest_time_m2": attractor.rest_time[1],
                 "starts": int(share.starts),
                 "fraction": float(share.fraction),
                 "low": float(share.low),
@@ -96,7 +105,7 @@ def attractor_table(basins: Basins) -> pd.DataFrame:
                 "high": float(share.high),
             }
         )
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=ATTRACTOR_COLUMNS)
 
 
 def _color(ident: int) -> str:
@@ -124,39 +133,65 @@ def basins_figure(basins: Basins) -> Figure:
         share = shares.loc[attractor.id]
         label = f"{attractor.name} — {share_text(share.fraction, share.low, share.high)}"
         marker = MARKERS[attractor.id % len(MARKERS)]
-        handles.append(
-            Line2D([], [], ls="", marker=marker, ms=11, color=_color(attractor.id), mec="black", label=label)
-        )
+        if attractor.period:
+            handles.append(
+                Line2D([], [], ls="", marker=marker, ms=11, color=_color(attractor.id), mec="black", label=label)
+            )
+        else:  # its basin's colour; its points are the black dots
+            handles.append(Patch(facecolor=_color(attractor.id), edgecolor="black", label=f"{label} (dots: its set)"))
         _draw_points(ax, attractor, x.name, y.name)
     if -1 in shares.index:
         handles.append(Patch(color=FAILED, label=f"failed — {shares.loc[-1].fraction:.1%}"))
-    ax.set_xlabel(x.name)
-    ax.set_ylabel(y.name)
+    ax.set_xlabel(state_label(x.name))
+    ax.set_ylabel(state_label(y.name))
     fixed = [
-        f"{name} = {value:g}"
+        f"{name} = {value:g} {unit_of(name)}"
         for name, value in zip(STATE, basins.found.case.initial.y, strict=True)
         if name not in (x.name, y.name)
     ]
-    title = f"{figure_title(basins.found.case)}: basins at t0 = {basins.found.case.initial.t0:g} s, {', '.join(fixed)}"
-    ax.set_title(title, parse_math=False, fontsize=9)
+    what = f"basins at t0 = {basins.found.case.initial.t0:g} s, {', '.join(fixed)}"
+    ax.set_title(wrapped_title(basins.found.case, what), parse_math=False, fontsize=9)
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=1, frameon=False)
     return fig
 
 
+def unit_of(name: str) -> str:
+    """The unit of a state component: ``m`` for a displacement, ``m/s`` for a velocity."""
+    return "m" if name.startswith("x") else "m/s"
+
+
+def state_label(name: str) -> str:
+    """An axis label for a state component, with its unit: ``x2 (m)``."""
+    return f"{name} ({unit_of(name)})"
+
+
+def wrapped_title(case: Any, what: str) -> str:
+    """The case (with what its overrides changed) and what the figure shows, wrapped to the
+    figure's width: a long list of changed values is not cut off."""
+    import textwrap
+
+    return textwrap.fill(f"{figure_title(case)}: {what}", width=100)
+
+
 def _draw_points(ax: Any, attractor: Attractor, xname: str, yname: str) -> None:
-    """The attractor's section points projected on the slice's plane: black-edged markers of its
-    colour, one shape per attractor (coinciding points of two attractors stay apart)."""
+    """The attractor's section points projected on the slice's plane.  A periodic attractor's few
+    points: black-edged markers of its colour, one shape per attractor, smaller for each later
+    attractor so that coinciding points of two attractors both show; an aperiodic set's many
+    points: small black dots that draw its shape."""
     points = attractor.points
+    xs, ys = points[:, STATE.index(xname)], points[:, STATE.index(yname)]
+    if not attractor.period:
+        ax.scatter(xs, ys, s=2, marker=".", color="black", linewidths=0, alpha=0.6, zorder=4, rasterized=True)
+        return
     ax.scatter(
-        points[:, STATE.index(xname)],
-        points[:, STATE.index(yname)],
-        s=70,
+        xs,
+        ys,
+        s=max(150 - 50 * attractor.id, 30),
         marker=MARKERS[attractor.id % len(MARKERS)],
         color=_color(attractor.id),
         edgecolors="black",
         linewidths=1.0,
         zorder=5 + attractor.id,
-        alpha=0.85,
     )
 
 
