@@ -55,6 +55,25 @@ UEDA = {"m1": 1.0, "K1": 0.0, "K2": 1.0, "C1": 0.05, "C2": 0.0, "Q1": 7.5, "Omeg
         "v1": 0.0, "t0": 0.0}  # fmt: skip
 
 
+#: A curve command whose every argument is good (the tests add one that is not).
+CURVE = [
+    "curve",
+    "instance-1",
+    "--kind",
+    "sliding",
+    "--at",
+    "Omega=1.6,Q2=71.1",
+    "--x",
+    "Omega",
+    "1.59",
+    "1.62",
+    "--y",
+    "Q2",
+    "70.9",
+    "71.3",
+]
+
+
 def _section_end(case, start, periods):
     """The state after ``periods`` forcing periods from ``start`` at the case's t0 (an independent run)."""
     begin = dict(zip(("x1", "v1", "x2", "v2"), start, strict=True))
@@ -255,6 +274,11 @@ def test_the_same_attractors_come_out_for_any_number_of_workers():
             "both --x",
         ),
         (["lyapunov", "instance-1", "--periods", "0"], "--periods must be a whole number"),
+        ([*CURVE, "--kind", "bogus"], "--kind must be one of sliding"),
+        ([*CURVE[:-2], "nan", "71.3"], "--y range of Q2 must be two finite numbers"),
+        ([*CURVE, "--step", "0"], "--step must be a fraction of the window"),
+        ([*CURVE, "--period", "0"], "--period must be a whole number"),
+        ([*CURVE, "--at", "Omega=1.7,Q2=71.1"], "--at Omega = 1.7, Q2 = 71.1 is outside the window"),
     ],
 )
 def test_the_commands_refuse_bad_input_in_one_line_before_any_work(tmp_path, monkeypatch, arguments, said):
@@ -653,3 +677,33 @@ def test_ueda_s_basins_with_the_default_settings_give_one_chaotic_attractor():
     (attractor,) = found.attractors
     assert attractor.kind == "chaotic" and attractor.starts == 225 and found.warnings == ()
     assert 0.09 < attractor.lyapunov < 0.13  # Ueda's attractor: 0.1097 1/s over 1500 periods (docs/attractors.md)
+
+
+def test_the_curve_command_and_trace_curve_take_the_same_step_by_default():
+    import inspect
+
+    from oscillator.cli.attractors import curve
+    from oscillator.orbits.curves import DEFAULT_STEP, trace_curve
+
+    cli_default = inspect.signature(curve).parameters["step"].default
+    assert cli_default == inspect.signature(trace_curve).parameters["step"].default == DEFAULT_STEP
+
+
+def test_the_figures_draw_a_chaotic_set_as_dots_and_name_every_exponent():
+    from oscillator.attractors.basins import Basins
+    from oscillator.report.attractors import basins_figure, lyapunov_figure
+
+    case = resolve_case("instance-1", **UEDA)
+    x, y = Axis("x1", -3.0, 3.0, 2), Axis("v1", -6.0, 6.0, 2)
+    found = find_attractors(
+        case, states=grid_starts(case, x, y), settings=AttractorSettings(transient=30, record=40, lyapunov_periods=0)
+    )
+    figure = basins_figure(Basins(found, x, y))
+    ax = figure.axes[0]
+    (dots,) = [c for c in ax.collections if len(c.get_offsets()) == len(found.attractors[0].points)]
+    assert len(dots.get_offsets()) > 100 and np.all(dots.get_sizes() <= 4)  # a set, not 100 large markers
+    assert ax.get_xlabel() == "x1 (m)" and ax.get_ylabel() == "v1 (m/s)"
+    assert all(len(line) <= 100 for line in ax.get_title().splitlines())
+    spectrum = lyapunov(case, periods=40, transient=10)
+    labels = lyapunov_figure(spectrum).axes[0].get_legend_handles_labels()[1]
+    assert len(labels) == 4 and any("-inf 1/s throughout" in label for label in labels)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
 import sys
 import textwrap
@@ -91,3 +92,32 @@ def test_the_same_script_with_the_guard_runs_on_two_workers(tmp_path):
     done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert "STARTS 2" in done.stdout
+
+
+def test_a_scheduler_address_where_no_dask_scheduler_listens_is_refused_without_hanging():
+    import http.server
+    import socket
+    import threading
+
+    from oscillator.analysis.execution import connect
+
+    web = http.server.HTTPServer(("127.0.0.1", 0), http.server.SimpleHTTPRequestHandler)  # says nothing first
+    threading.Thread(target=web.serve_forever, daemon=True).start()
+    ssh = socket.create_server(("127.0.0.1", 0))  # greets with a banner that Dask would read as a frame size
+
+    def banner():
+        peer, _ = ssh.accept()
+        with peer, contextlib.suppress(OSError):  # the probe hangs up after the banner
+            peer.sendall(b"SSH-2.0-OpenSSH_9.2\r\n")
+            peer.recv(1)
+
+    threading.Thread(target=banner, daemon=True).start()
+    try:
+        with pytest.raises(InputError, match=r"is not a Dask scheduler \(it sent b.SSH-2\.0-"):
+            connect(f"tcp://127.0.0.1:{ssh.getsockname()[1]}")
+        with pytest.raises(InputError, match=r"is not a Dask scheduler \(it said nothing within 10 s"):
+            connect(f"tcp://127.0.0.1:{web.server_address[1]}")
+    finally:
+        web.shutdown()
+        web.server_close()
+        ssh.close()

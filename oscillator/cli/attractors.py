@@ -608,7 +608,7 @@ def curve(
         check_new(folder, option="--out")
         atlas_found = _read_atlas(over, resolved) if over is not None else None
         load("oscillator.orbits.curves", notice=True)
-        from oscillator.orbits.curves import trace_curve
+        from oscillator.orbits.curves import check_curve, trace_curve
 
         window = ((x[1], x[2]), (y[1], y[2]))
         options: dict[str, Any] = {
@@ -620,6 +620,7 @@ def curve(
             "period": period,
             "step": step,
         }
+        check_curve(resolved, **options)  # every argument refused here, before any work (exit 2)
     except OscillatorError as error:
         raise fail(message(error)) from None
     try:

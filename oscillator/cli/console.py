@@ -48,6 +48,10 @@ FLAGS = {
     "section": "--section",
     "over": "--over",
     "keep_events_from": "--keep-events-from",
+    "kind": "--kind",
+    "at": "--at",
+    "x": "--x",
+    "y": "--y",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.

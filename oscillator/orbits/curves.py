@@ -42,9 +42,11 @@ from oscillator.orbits.shooting import (
 )
 from oscillator.text import shown
 
-__all__ = ["CURVE_KINDS", "Curve", "trace_curve"]
+__all__ = ["CURVE_KINDS", "DEFAULT_STEP", "Curve", "check_curve", "trace_curve"]
 
 #: The kinds a curve can be traced for (``continue_orbit``'s, ``sliding`` for either sliding kind).
+#: The predictor's step, as a fraction of the window (``oscillator curve --step`` has the same default).
+DEFAULT_STEP = 0.05
 CURVE_KINDS = ("sliding", *(kind.value for kind in Bifurcation if kind is not Bifurcation.TORUS))
 
 
@@ -199,7 +201,7 @@ def trace_curve(
     at: tuple[float, float],
     window: tuple[tuple[float, float], tuple[float, float]],
     period: int = 1,
-    step: float = 0.02,
+    step: float = DEFAULT_STEP,
     min_step: float = 1e-4,
     tol: float = 1e-8,
     max_points: int = 400,
@@ -232,7 +234,10 @@ def trace_curve(
     **overrides
         Parameters and solver options.
     """
-    case = _checked(case, kind, x, y, at, window, step, min_step, tol, max_points, overrides)
+    case = check_curve(case, kind=kind, x=x, y=y, at=at, window=window, period=period, step=step, **overrides)
+    check_count(max_points, "max_points", 1, 100_000)
+    if not (0 < min_step <= step) or not tol > 0:
+        raise InputError("min_step must be in (0, step] and tol > 0", field="min_step")
     span = 0.1 * (window[1][1] - window[1][0])
     inside_kind, y0, inside, orbit = _start(case, kind, x, y, at, period, span)
     # the first tangent is +x; inside is +y or -y of it: that side stays the inside all along
@@ -306,19 +311,20 @@ def _walk(
     return points, f"stopped after {max_points} points", folds
 
 
-def _checked(
+def check_curve(
     case: Case | str,
+    *,
     kind: str,
     x: str,
     y: str,
     at: tuple[float, float],
     window: tuple[tuple[float, float], tuple[float, float]],
-    step: float,
-    min_step: float,
-    tol: float,
-    max_points: int,
-    overrides: dict[str, float],
+    period: int = 1,
+    step: float = DEFAULT_STEP,
+    **overrides: float,
 ) -> Case:
+    """:func:`trace_curve`'s arguments checked before any work, each refusal an
+    :class:`~oscillator.errors.InputError` naming its argument; the case to trace in."""
     if kind not in CURVE_KINDS:
         raise InputError(f"kind must be one of {', '.join(CURVE_KINDS)}, got {shown(kind)}", field="kind")
     for name, value in (("x", x), ("y", y)):
@@ -327,13 +333,20 @@ def _checked(
     if x == y:
         raise InputError(f"x and y are both {x}; give two different parameters", field="y")
     (xlo, xhi), (ylo, yhi) = window
-    if not (all(math.isfinite(v) for v in (xlo, xhi, ylo, yhi)) and xlo < xhi and ylo < yhi):
-        raise InputError(f"window must be two ranges low < high, got {shown(window)}", field="window")
+    for name, param, (low, high) in (("x", x, (xlo, xhi)), ("y", y, (ylo, yhi))):
+        if not (math.isfinite(low) and math.isfinite(high) and low < high):
+            raise InputError(
+                f"{name} range of {param} must be two finite numbers low < high, got {low!r} {high!r}", field=name
+            )
     if not (xlo <= at[0] <= xhi and ylo <= at[1] <= yhi):
-        raise InputError(f"at {shown(at)} is outside the window", field="at")
-    if not (0 < min_step <= step <= 0.5) or not tol > 0:
-        raise InputError("step must be in (0, 0.5], min_step in (0, step] and tol > 0", field="step")
-    check_count(max_points, "max_points", 1, 100_000)
+        raise InputError(
+            f"at {x} = {at[0]!r}, {y} = {at[1]!r} is outside the window ({x} {xlo:g} to {xhi:g}, {y} {ylo:g} to "
+            f"{yhi:g}); give a point inside it",
+            field="at",
+        )
+    if not (isinstance(step, (int, float)) and 0 < step <= 0.5):
+        raise InputError(f"step must be a fraction of the window in (0, 0.5], got {shown(step)}", field="step")
+    check_count(period, "period", 1, 1000)
     resolved = resolve_case(case, **overrides)
     for point in ((xlo, ylo), (xhi, yhi)):
         resolve_case(resolved, **{x: point[0], y: point[1]})

@@ -206,6 +206,8 @@ def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
         values = table[f"lambda{k}"].to_numpy()
         if np.isfinite(values).any():
             ax.plot(table.t, values, label=f"lambda{k} -> {values[-1]:.4g} 1/s")
+        else:  # nothing to draw: said in the legend all the same
+            ax.plot([], [], ls="none", label=f"lambda{k} = {values[-1]:.4g} 1/s throughout (not drawn)")
     ax.axhline(0.0, color="0.5", lw=0.8)
     ax.set_xscale("log")
     ax.set_xlabel("averaging time (s)")
