@@ -30,7 +30,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.text import shown
 
-__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_runner", "check_workers", "connect", "run_tasks"]
+__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_progress", "check_runner", "check_workers", "connect", "run_tasks"]
 
 T = TypeVar("T")
 
@@ -70,11 +70,16 @@ def check_runner(workers: object, client: object = None, progress: object = None
             + (hint if isinstance(client, str) else ""),
             field="client",
         )
+    check_progress(progress)
+    return check_workers(workers)
+
+
+def check_progress(progress: object) -> None:
+    """Refuse a ``progress`` that is neither None nor a function ``progress(done, total)``."""
     if progress is not None and not callable(progress):
         raise InputError(
             f"progress must be a function progress(done, total) or None, got {shown(progress)}", field="progress"
         )
-    return check_workers(workers)
 
 
 def run_tasks(

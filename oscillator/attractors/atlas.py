@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.analysis.execution import Pool, check_runner, run_tasks
-from oscillator.attractors.finding import Attractor, AttractorSettings, group, land
+from oscillator.attractors.finding import Attractor, AttractorSettings, group, land, largest_exponent
 from oscillator.attractors.lyapunov import lyapunov
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
@@ -166,8 +166,7 @@ def _largest_exponent(case: Case, attractor: Attractor, settings: AtlasSettings)
         if attractor.period:
             image = period_map(case, case.initial.t0, attractor.points[-1], attractor.period, derivative=True)
             assert image.monodromy is not None
-            with np.errstate(divide="ignore"):
-                return float(np.log(np.max(np.abs(np.linalg.eigvals(image.monodromy))))) / (attractor.period * period)
+            return largest_exponent(np.linalg.eigvals(image.monodromy), attractor.period * period)
         spectrum = lyapunov(case, guess=attractor.points[-1], transient=0, periods=settings.lyapunov_periods)
         return spectrum.largest
     except OscillatorError:

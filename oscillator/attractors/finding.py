@@ -301,11 +301,11 @@ def _same_cycle(landing: Landing, attractor: Attractor, settings: AttractorSetti
     return _cycle_distance(mine, attractor.points) <= settings.match * scale
 
 
-def _merged(keep: Attractor, other: Attractor) -> Attractor:
-    """One aperiodic attractor of two: its starts added up, its points pooled (at most
+def _pooled(keep: Attractor, points: np.ndarray, starts: int) -> Attractor:
+    """An aperiodic attractor with more starts and their points pooled into its own (at most
     :data:`SET_POINTS`, the earlier ones kept)."""
-    points = np.vstack([keep.points, other.points])[:SET_POINTS]
-    return dataclasses.replace(keep, points=points, starts=keep.starts + other.starts)
+    pool = np.vstack([keep.points, points])[:SET_POINTS]
+    return dataclasses.replace(keep, points=pool, starts=keep.starts + starts)
 
 
 def group(landings: Iterable[Landing], settings: AttractorSettings) -> tuple[list[Attractor], dict[int, int]]:
@@ -331,7 +331,7 @@ def group(landings: Iterable[Landing], settings: AttractorSettings) -> tuple[lis
         if landing.period:
             found[k] = dataclasses.replace(found[k], starts=found[k].starts + 1)
         else:
-            found[k] = _merged(found[k], dataclasses.replace(found[k], points=landing.points, starts=1))
+            found[k] = _pooled(found[k], landing.points, 1)
         members[k].append(landing.index)
     found, members = _merge_interleaved(found, members)
     return ordered(found, members)
@@ -354,7 +354,7 @@ def _merge_interleaved(found: list[Attractor], members: list[list[int]]) -> tupl
         aperiodic = [k for k, a in enumerate(found) if not a.period]
         for i, j in itertools.combinations(aperiodic, 2):
             if interleaving(found[i].points, found[j].points) >= INTERLEAVED:
-                found[i] = _merged(found[i], found[j])
+                found[i] = _pooled(found[i], found[j].points, found[j].starts)
                 members[i] += members[j]
                 del found[j], members[j]
                 merged = True
@@ -403,6 +403,13 @@ def unsettled(attractors: Sequence[Attractor]) -> list[str]:
     return said
 
 
+def largest_exponent(multipliers: np.ndarray, span: float) -> float:
+    """The largest Lyapunov exponent of a periodic orbit: ``log |mu_1| / span`` from its Floquet
+    multipliers over one return of ``span`` seconds (``-inf`` where every multiplier is 0)."""
+    with np.errstate(divide="ignore"):  # a multiplier 0: the flow collapses every direction
+        return float(np.log(np.max(np.abs(multipliers)))) / span
+
+
 def _refined(case: Case, attractor: Attractor, settings: AttractorSettings) -> Attractor:
     """The attractor with its orbit (periodic) or its largest Lyapunov exponent (aperiodic)."""
     period = case.parameters.period
@@ -411,8 +418,7 @@ def _refined(case: Case, attractor: Attractor, settings: AttractorSettings) -> A
             orbit = find_orbit(case, period=attractor.period, guess=attractor.points[-1], transient=0)
         except OscillatorError as error:
             return dataclasses.replace(attractor, forcing_period=period, note=f"not refined: {error}")
-        with np.errstate(divide="ignore"):  # a multiplier 0: the flow collapses every direction
-            largest = float(np.log(np.max(np.abs(orbit.multipliers)))) / (attractor.period * period)
+        largest = largest_exponent(orbit.multipliers, attractor.period * period)
         return dataclasses.replace(attractor, orbit=orbit, lyapunov=largest, forcing_period=period, note=orbit.note)
     if settings.lyapunov_periods == 0:
         return dataclasses.replace(attractor, forcing_period=period)

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import check_runner
+from oscillator.analysis.execution import check_progress
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.shooting import check_count, check_guess, period_map
@@ -142,7 +142,7 @@ def lyapunov(
     """
     periods = check_count(periods, "periods", 1, MAX_PERIODS)
     transient = check_count(transient, "transient", 0, MAX_PERIODS)
-    check_runner(1, None, progress)
+    check_progress(progress)
     case = resolve_case(case, **overrides)
     t, y = _start(case, guess, transient)
     start_state, frame = y, np.eye(4)
