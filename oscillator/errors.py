@@ -9,7 +9,7 @@ it in one line instead of a traceback.  Two kinds are told apart by type:
   the partial :class:`~oscillator.hybrid.result.Result` up to the last point reached.
 
 A Ctrl-C during a run or a continuation raises :class:`Interrupted`, a ``KeyboardInterrupt`` that
-carries the partial result the same way (a ``Result``, or the ``Branch`` traced so far).
+carries the partial result the same way (a ``Result``, or the ``Branch`` or ``Curve`` traced so far).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
     from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.curves import Curve
 
 __all__ = ["InputError", "Interrupted", "OscillatorError", "Reason", "SimulationFailed"]
 
@@ -117,9 +118,10 @@ class SimulationFailed(OscillatorError):
 
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C during a run or a continuation; ``result`` is what was computed so far: the partial
-    ``Result`` of :func:`~oscillator.simulate` (``Status.INTERRUPTED``), or the ``Branch`` of
-    :func:`~oscillator.continue_orbit` traced so far (``complete`` False)."""
+    ``Result`` of :func:`~oscillator.simulate` (``Status.INTERRUPTED``), the ``Branch`` of
+    :func:`~oscillator.continue_orbit` traced so far (``complete`` False), or the ``Curve`` of
+    :func:`~oscillator.orbits.curves.trace_curve` traced so far (an unfinished end ``"interrupted"``)."""
 
-    def __init__(self, result: Result | Branch) -> None:
+    def __init__(self, result: Result | Branch | Curve) -> None:
         super().__init__("interrupted by the user")
         self.result = result

@@ -297,7 +297,7 @@ def test_the_starts_run_on_a_dask_cluster_give_the_same_attractors():
     distributed = pytest.importorskip("distributed")
     starts = [NO_REST_START, REST_START, (X1, V1, 5.0, 2.0)]
     here = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as client:
             there = find_attractors("instance-1", states=starts, Q2=71.165, settings=QUICK, client=client)
     assert here.labels.equals(there.labels)
@@ -447,7 +447,7 @@ def test_the_atlas_is_the_same_for_any_number_of_workers_and_on_dask():
     x, y = AtlasAxis("Omega", 1.55, 1.65, 4), AtlasAxis("Q2", 70.9, 71.2, 3)
     one = run_atlas(CASE, x, y, workers=1)
     two = run_atlas(CASE, x, y, workers=2)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as client:
             dask = run_atlas(CASE, x, y, client=client)
     assert one.table.equals(two.table) and one.table.equals(dask.table)
@@ -707,3 +707,26 @@ def test_the_figures_draw_a_chaotic_set_as_dots_and_name_every_exponent():
     spectrum = lyapunov(case, periods=40, transient=10)
     labels = lyapunov_figure(spectrum).axes[0].get_legend_handles_labels()[1]
     assert len(labels) == 4 and any("-inf 1/s throughout" in label for label in labels)
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_a_curve_is_traced_keeps_the_points_traced_so_far(tmp_path):
+    """Interrupted at the start of the curve's second half: the first half is written, and the
+    second end says it was interrupted (exit 130, no traceback)."""
+    import json
+    import signal
+
+    import pandas as pd
+
+    from conftest import start_reaching
+
+    arguments = [*CURVE, "--at", "Omega=1.6,Q2=71.1577416", "--out", "c"]  # at the sliding bifurcation
+    process = start_reaching("oscillator.orbits.curves._walk", arguments, call=2, cwd=tmp_path)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=600)
+    assert process.returncode == 130 and "Traceback" not in stderr, stderr
+    ends = json.loads((tmp_path / "c" / "curve.json").read_text(encoding="utf-8"))["ends"]
+    points = pd.read_parquet(tmp_path / "c" / "curve.parquet")
+    assert ends[0].startswith("left the window") and ends[1] == "interrupted"
+    assert f"the {len(points)} points traced so far are written to c" in stderr and len(points) > 2
+    assert [p.name for p in tmp_path.iterdir()] == ["c"]  # no temporary folder left

@@ -51,7 +51,7 @@ def test_process_pool_gives_the_same_rows(case, serial, tmp_path):
 
 def test_dask_local_cluster_gives_the_same_rows(case, serial, tmp_path):
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         run_sweep(case, SweepSettings(**SMALL), tmp_path / "dask", scheduler=cluster.scheduler_address)
     assert_same_tables(serial, read_sweep(tmp_path / "dask"))
 

@@ -210,7 +210,10 @@ def _on_dask(
 ) -> Iterator[T]:
     from distributed import as_completed
 
-    on_cluster = [client.scatter(item, broadcast=True) for item in shared]
+    # hash=False: a key of this call's own.  With Dask's default (a key from the data's hash), the
+    # next batch's identical data (an atlas's next row) would share the key of this batch's, which
+    # is released when this batch ends, and its tasks are cancelled for "lost dependencies".
+    on_cluster = [client.scatter(item, broadcast=True, hash=False) for item in shared]
     futures = [client.submit(function, *on_cluster, *task, pure=False, **keywords) for task in tasks]
     try:
         for future in as_completed(futures):

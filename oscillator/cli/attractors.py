@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, cast
 
 import typer
 from rich import box
@@ -15,13 +15,15 @@ from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say, warn
 from oscillator.cli.inputs import case_from
-from oscillator.errors import InputError, OscillatorError
+from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.basins import Axis, Basins
     from oscillator.attractors.finding import AttractorSettings
     from oscillator.io.cases import Case
+    from oscillator.io.files import FolderClaim
+    from oscillator.orbits.curves import Curve
 
 __all__ = ["atlas", "attractors", "basins", "curve", "lyapunov"]
 
@@ -621,19 +623,19 @@ def curve(
             "step": step,
         }
         check_curve(resolved, **options)  # every argument refused here, before any work (exit 2)
+        from oscillator.io.files import claim_folder
+
+        claim = claim_folder(folder, option="--out")  # an unwritable --out is refused before the work too
     except OscillatorError as error:
         raise fail(message(error)) from None
-    try:
-        bar, report = progress_bar(f"{resolved.name}: {kind} curve", "points")
-        with bar:
-            found = trace_curve(resolved, progress=lambda n: report(n, n), **options)
-    except OscillatorError as error:
-        raise fail(message(error), 1) from None
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
+    found, interrupted = _trace(trace_curve, resolved, options, claim)
     for end in found.ends:
         out.print(Text(f"  one end: {end}"))
-    _write_curve(found, folder, atlas_found, no_plots)
+    _write_curve(found, claim, atlas_found, no_plots)
+    if interrupted:
+        raise fail(f"interrupted; the {len(found.points)} points traced so far are written to {claim.target}", 130)
 
 
 def _at(text: str, x: str, y: str) -> tuple[float, float]:
@@ -671,14 +673,43 @@ def _read_atlas(folder: Path, case: Case) -> Any:
     return Atlas(case, axes[0], axes[1], table)
 
 
-def _write_curve(found: Any, folder: Path, atlas_found: Any, no_plots: bool) -> None:
-    from oscillator.io.files import claim_folder
+def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderClaim) -> tuple[Curve, bool]:
+    """The curve, and whether it was interrupted (the points traced so far); the claim abandoned
+    when there is nothing to write."""
+    try:
+        bar, report = progress_bar(f"{case.name}: {options['kind']} curve", "points")
+        with bar:
+            return trace_curve(case, progress=lambda n: report(n, n), **options), False
+    except OscillatorError as error:
+        claim.abandon()
+        raise fail(message(error), 1) from None
+    except Interrupted as interrupt:  # the points traced so far are kept
+        return cast("Curve", interrupt.result), True
+    except KeyboardInterrupt:
+        claim.abandon()
+        raise fail("interrupted before the curve's first point was found; nothing was written", 130) from None
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+def _write_curve(found: Curve, claim: FolderClaim, atlas_found: Any, no_plots: bool) -> None:
+    """The curve written into the claimed folder, which appears whole; a failure to write says
+    so in one line (exit 1) and leaves nothing."""
+    from oscillator.io.signals import interrupts_deferred
     from oscillator.report.attractors import write_curve
 
-    claim = claim_folder(folder, option="--out")
+    target = printable(str(claim.target))
     try:
-        problems = write_curve(found, claim.temporary, atlas=atlas_found, plots=not no_plots)
-        written = claim.commit()
+        with interrupts_deferred():  # Ctrl-C waits until the folder is whole
+            problems = write_curve(found, claim.temporary, atlas=atlas_found, plots=not no_plots)
+            written = claim.commit()
+    except (OSError, OscillatorError) as error:
+        claim.abandon()
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        raise fail(f"cannot write the curve to {target}: {reason}; nothing was written", 1) from None
+    except KeyboardInterrupt:  # held until the folder was whole: it is written
+        raise fail(f"interrupted; the curve is written to {target}", 130) from None
     except BaseException:
         claim.abandon()
         raise

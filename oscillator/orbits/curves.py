@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError, OscillatorError
+from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
 from oscillator.orbits.continuation import Bifurcation, Branch, continue_orbit
@@ -231,6 +231,12 @@ def trace_curve(
     max_points : int
     progress : callable, optional
         ``progress(points)`` after each point.
+
+    Raises
+    ------
+    Interrupted
+        On Ctrl-C, with the curve traced so far as its ``result`` (an unfinished end says
+        ``"interrupted"``).
     **overrides
         Parameters and solver options.
     """
@@ -239,19 +245,32 @@ def trace_curve(
     if not (0 < min_step <= step) or not tol > 0:
         raise InputError("min_step must be in (0, step] and tol > 0", field="min_step")
     span = 0.1 * (window[1][1] - window[1][0])
-    inside_kind, y0, inside, orbit = _start(case, kind, x, y, at, period, span)
-    # the first tangent is +x; inside is +y or -y of it: that side stays the inside all along
-    tracer = _Tracer(case, x, y, window, inside_kind, period, tol, side=inside)
-    first = np.array([at[0], y0])
-    tangent = _first_tangent(tracer, first, orbit)
-    halves = [
-        _walk(tracer, first, orbit, direction * tangent, step, min_step, max_points, progress)
-        for direction in (-1.0, 1.0)
-    ]
-    (back, end_back, folds_back), (ahead, end_ahead, folds_ahead) = halves
-    ordered = [*back[::-1], first, *ahead]
-    table = pd.DataFrame([(p[0], p[1]) for p in ordered], columns=[x, y])
-    return Curve(kind, x, y, table, (end_back, end_ahead), tuple(folds_back + folds_ahead), inside_kind.signature)
+    try:
+        inside_kind, y0, inside, orbit = _start(case, kind, x, y, at, period, span)
+        # the first tangent is +x; inside is +y or -y of it: that side stays the inside all along
+        tracer = _Tracer(case, x, y, window, inside_kind, period, tol, side=inside)
+        first = np.array([at[0], y0])
+        tangent = _first_tangent(tracer, first, orbit)
+    except KeyboardInterrupt:  # before the curve's first point: nothing to carry (not a branch's Interrupted)
+        raise KeyboardInterrupt from None
+    back: list[np.ndarray] = []
+    ahead: list[np.ndarray] = []
+    folds: list[tuple[float, float]] = []
+    ends = ["interrupted", "interrupted"]
+
+    def curve() -> Curve:
+        ordered = [*back[::-1], first, *ahead]
+        table = pd.DataFrame([(p[0], p[1]) for p in ordered], columns=[x, y])
+        return Curve(kind, x, y, table, (ends[0], ends[1]), tuple(folds), inside_kind.signature)
+
+    try:
+        for k, (direction, points) in enumerate(((-1.0, back), (1.0, ahead))):
+            ends[k] = _walk(
+                tracer, first, orbit, direction * tangent, step, min_step, max_points, points, folds, progress
+            )
+    except KeyboardInterrupt:
+        raise Interrupted(curve()) from None
+    return curve()
 
 
 def _first_tangent(tracer: _Tracer, first: np.ndarray, orbit: np.ndarray) -> np.ndarray:
@@ -274,11 +293,13 @@ def _walk(
     step: float,
     min_step: float,
     max_points: int,
+    points: list[np.ndarray],
+    folds: list[tuple[float, float]],
     progress: Callable[[int], None] | None,
-) -> tuple[list[np.ndarray], str, list[tuple[float, float]]]:
-    """The curve from ``first`` along ``tangent`` (scaled), until it leaves the window or ends."""
-    points: list[np.ndarray] = []
-    folds: list[tuple[float, float]] = []
+) -> str:
+    """The curve from ``first`` along ``tangent`` (scaled), until it leaves the window or ends:
+    its points and folds appended to ``points`` and ``folds`` as they are found (so that an
+    interrupt keeps them), and how it ended."""
     here, h = first, step
     if tangent[0] < 0:  # walking the other way: the inside is on the other side of the tangent
         tracer = _Tracer(
@@ -294,11 +315,11 @@ def _walk(
                     f"ended at {tracer.x} = {here[0]:.10g}, {tracer.y} = {here[1]:.10g}: the border of its kind "
                     f"was not found beyond, within {min_step:g} of the window (a codimension-two point, or a merge)"
                 )
-                return points, end, folds
+                return end
             continue
         point, orbit = found
         if not tracer.in_window(point):
-            return points, f"left the window at {tracer.x} = {point[0]:.10g}, {tracer.y} = {point[1]:.10g}", folds
+            return f"left the window at {tracer.x} = {point[0]:.10g}, {tracer.y} = {point[1]:.10g}"
         chord = (point - here) / tracer.spans
         new_tangent = chord / np.linalg.norm(chord)
         if any(tangent[k] * new_tangent[k] < 0 and abs(tangent[k]) > 1e-3 for k in (0, 1)):
@@ -308,7 +329,7 @@ def _walk(
         h = min(step, 2.0 * h)
         if progress is not None:
             progress(len(points))
-    return points, f"stopped after {max_points} points", folds
+    return f"stopped after {max_points} points"
 
 
 def check_curve(
