@@ -730,3 +730,79 @@ def test_ctrl_c_while_a_curve_is_traced_keeps_the_points_traced_so_far(tmp_path)
     assert ends[0].startswith("left the window") and ends[1] == "interrupted"
     assert f"the {len(points)} points traced so far are written to c" in stderr and len(points) > 2
     assert [p.name for p in tmp_path.iterdir()] == ["c"]  # no temporary folder left
+
+
+@pytest.mark.parametrize(
+    "command", [["lyapunov", "instance-1", "--periods", "5"], [*CURVE, "--at", "Omega=1.6,Q2=71.16"]]
+)
+def test_an_out_folder_that_cannot_be_written_is_refused_before_the_work(tmp_path, monkeypatch, command):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a-file").write_text("mine")
+    done = CliRunner().invoke(app, [*command, "--out", "a-file/x"])
+    assert done.exit_code == 2 and "--out a-file/x: cannot write in a-file" in done.stderr
+    assert done.stdout == ""  # nothing was computed
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
+
+
+def test_a_full_disk_while_the_starts_are_kept_is_one_line_and_exit_1(tmp_path, monkeypatch):
+    import errno
+
+    from typer.testing import CliRunner
+
+    from oscillator.attractors.store import LandingStore
+    from oscillator.cli.app import app
+
+    def full(self, landings, name=None):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(LandingStore, "write", full)
+    arguments = ["basins", "instance-1", "--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2", "--transient", "20"]
+    done = CliRunner().invoke(app, [*arguments, "--record", "4", "--workers", "1", "--out", "b"])
+    assert done.exit_code == 1
+    assert done.stderr.strip() == (
+        "error: cannot write into b (No space left on device); the starts finished so far are kept there: free the "
+        "space and run the same command to resume"
+    )
+
+
+@pytest.mark.parametrize(
+    ("command", "said"),
+    [
+        (["basins", "instance-1", "--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2"], "every start failed"),
+        (
+            [
+                "attractors",
+                "instance-1",
+                "--param",
+                "Q2",
+                "--from",
+                "71.1",
+                "--to",
+                "71.2",
+                "--steps",
+                "2",
+                "--no-branches",
+            ],
+            "every start failed at every value",
+        ),
+        (
+            ["atlas", "instance-1", "--x", "Omega", "1.5", "1.6", "2", "--y", "Q2", "70", "71", "2"],
+            "every point failed",
+        ),
+    ],
+)
+def test_a_computation_where_every_start_fails_keeps_its_tables_and_exits_1(tmp_path, monkeypatch, command, said):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    done = CliRunner().invoke(app, [*command, "--set", "max_num_steps=5", "--workers", "1", "--out", "o", "-q"])
+    assert done.exit_code == 1 and f"error: {said} (CVODE failed" in done.stderr
+    assert "CV_TOO_MUCH_WORK" in done.stderr and "Traceback" not in done.stderr
+    assert any(p.suffix == ".parquet" for p in (tmp_path / "o").iterdir())  # the tables are kept

@@ -76,6 +76,10 @@ class End:
     def at(self) -> float:
         return 0.5 * (self.inside + self.outside)
 
+    def change(self, start: float, stop: float) -> str:
+        """``"ends"`` if the attractor is lost going from ``start`` to ``stop``, else ``"appears"``."""
+        return "ends" if (self.outside - self.inside) * (stop - start) > 0 else "appears"
+
 
 @dataclass(frozen=True)
 class AttractorsOver:
@@ -116,8 +120,12 @@ class AttractorsOver:
         return pd.DataFrame(rows)
 
     def ends_table(self) -> pd.DataFrame:
-        columns = ["id", "name", "inside", "outside", "at", "becomes"]
-        return pd.DataFrame([(e.id, e.name, e.inside, e.outside, e.at, e.becomes) for e in self.ends], columns=columns)
+        """One row per end: ``id, name, change`` (``appears`` or ``ends`` along the values, from the
+        first to the last), ``inside, outside, at, becomes``."""
+        start, stop = float(self.values[0]), float(self.values[-1])
+        columns = ["id", "name", "change", "inside", "outside", "at", "becomes"]
+        rows = [(e.id, e.name, e.change(start, stop), e.inside, e.outside, e.at, e.becomes) for e in self.ends]
+        return pd.DataFrame(rows, columns=columns)
 
 
 def _row(

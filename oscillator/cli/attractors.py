@@ -61,6 +61,16 @@ def _settings(transient: int, record: int, max_period: int) -> AttractorSettings
         raise InputError(f"--{error.field}: {error}", field=f"--{error.field}") from None
 
 
+def _unwritable(error: OSError, folder: Path, what: str) -> typer.Exit:
+    """The one-line failure (exit 1) of a resumable computation that could not write into its
+    folder: what it finished is kept there."""
+    return fail(
+        f"cannot write into {printable(str(folder))} ({error.strerror or error}); the {what} finished so far are "
+        "kept there: free the space and run the same command to resume",
+        1,
+    )
+
+
 def _new_folder(case: Case, kind: str) -> Path:
     from oscillator.io.files import default_name
 
@@ -117,6 +127,8 @@ def basins(
         found = _run_basins(resolved, x_axis, y_axis, store, settings, count, client, quiet)
     except OscillatorError as error:
         raise fail(f"{message(error)}; the starts finished so far are kept in {store.folder}", 1) from None
+    except OSError as error:  # a full disk, the folder taken away: what was written stays
+        raise _unwritable(error, store.folder, "starts") from None
     except KeyboardInterrupt:
         raise fail("interrupted; the starts finished so far are kept: run the same command to resume", 130) from None
     finally:
@@ -202,7 +214,7 @@ def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> 
     if not found.found.attractors:
         labels = found.found.labels
         raise fail(
-            f"every start failed ({labels.reason.iloc[0]}: {labels.message.iloc[0]}); the starts' reasons are in "
+            f"every start failed ({labels.message.iloc[0]}); the starts' reasons are in "
             f"{printable(str(folder))}/basins.parquet",
             1,
         )
@@ -231,7 +243,7 @@ def lyapunov(
       oscillator lyapunov instance-1 --set Omega=1.85 --periods 200
       oscillator lyapunov instance-1 --set Omega=1.85 --periods 100 --out runs/lyapunov
     """
-    from oscillator.io.files import check_new
+    from oscillator.io.files import check_new, claim_folder
 
     try:
         resolved = case_from(case, None, set_)
@@ -243,40 +255,32 @@ def lyapunov(
 
         check_count(periods, "--periods", 1, 10_000_000)
         check_count(transient, "--transient", 0, 10_000_000)
+        claim = claim_folder(out_dir, option="--out") if out_dir is not None else None  # writable, before the work
     except OscillatorError as error:
         raise fail(message(error)) from None
     try:
         bar, report = progress_bar(f"{resolved.name}: Lyapunov exponents", "periods")
         with bar:
             spectrum = spectrum_of(resolved, periods=periods, transient=transient, progress=report)
-    except OscillatorError as error:
-        raise fail(message(error), 1) from None
-    except KeyboardInterrupt:
-        raise fail("interrupted; nothing was written", 130) from None
+    except BaseException as error:
+        if claim is not None:
+            claim.abandon()
+        if isinstance(error, OscillatorError):
+            raise fail(message(error), 1) from None
+        if isinstance(error, KeyboardInterrupt):
+            raise fail("interrupted; nothing was written", 130) from None
+        raise
     exponents = ", ".join(f"{value:.6g}" for value in spectrum.exponents)
     out.print(Text(f"{printable(resolved.name)}: Lyapunov exponents (1/s), {periods} periods: {exponents}"))
     out.print(Text(f"  largest {spectrum.largest:.6g} 1/s; Kaplan-Yorke dimension of the map {spectrum.dimension:.4g}"))
-    if out_dir is not None:
-        _write_lyapunov(spectrum, out_dir, no_plots)
+    if claim is not None:
+        _write_lyapunov(spectrum, claim, no_plots)
 
 
-def _write_lyapunov(spectrum: Any, folder: Path, no_plots: bool) -> None:
-    from oscillator.io.files import claim_folder
+def _write_lyapunov(spectrum: Any, claim: FolderClaim, no_plots: bool) -> None:
     from oscillator.report.attractors import write_lyapunov
 
-    try:
-        claim = claim_folder(folder, option="--out")
-    except OscillatorError as error:
-        raise fail(message(error)) from None
-    try:
-        problems = write_lyapunov(spectrum, claim.temporary, plots=not no_plots)
-        written = claim.commit()
-    except BaseException:
-        claim.abandon()
-        raise
-    say(f"written to {printable(str(written))}")
-    if problems:
-        raise fail("; ".join(problems), 1)
+    _write_claimed(claim, lambda folder: write_lyapunov(spectrum, folder, plots=not no_plots), "the exponents")
 
 
 def attractors(
@@ -344,6 +348,8 @@ def attractors(
         found = _branches_of(over) if branches and not no_plots else []
     except OscillatorError as error:
         raise fail(f"{message(error)}; the values finished so far are kept in {store.folder}", 1) from None
+    except OSError as error:  # a full disk, the folder taken away: what was written stays
+        raise _unwritable(error, store.folder, "values") from None
     except KeyboardInterrupt:
         raise fail("interrupted; the values finished so far are kept: run the same command to resume", 130) from None
     finally:
@@ -446,7 +452,7 @@ def _finish_following(
         raise fail(f"cannot write into {printable(str(folder))} ({error}); the landings are kept there", 1) from None
     if not quiet:
         for end in over.ends:
-            verb = "ends" if (end.outside - end.inside) * (over.values[-1] - over.values[0]) > 0 else "appears"
+            verb = end.change(float(over.values[0]), float(over.values[-1]))
             out.print(
                 Text(
                     f"A{end.id} ({end.name}) {verb} between {over.param} = {min(end.inside, end.outside):.10g} and "
@@ -455,6 +461,9 @@ def _finish_following(
                 )
             )
     say(f"written to {printable(str(folder))}")
+    if not any(found.attractors for found in over.found):
+        labels = over.found[0].labels
+        raise fail(f"every start failed at every value ({labels.message.iloc[0]}); the tables are in {folder}", 1)
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 
@@ -518,6 +527,8 @@ def atlas(
         found = _run_atlas(resolved, x_axis, y_axis, settings, store, count, client, quiet)
     except OscillatorError as error:
         raise fail(f"{message(error)}; the rows finished so far are kept in {store.folder}", 1) from None
+    except OSError as error:  # a full disk, the folder taken away: what was written stays
+        raise _unwritable(error, store.folder, "rows") from None
     except KeyboardInterrupt:
         raise fail("interrupted; the rows finished so far are kept: run the same command to resume", 130) from None
     finally:
@@ -565,6 +576,8 @@ def _finish_atlas(found: Any, folder: Path, no_plots: bool, quiet: bool) -> None
             out.print(Text(f"  {regime}: {count} points"))
         out.print(Text(f"  several attractors coexist at {int((first.coexisting > 1).sum())} points"))
     say(f"written to {printable(str(folder))}")
+    if (found.table.status == "failed").all():
+        raise fail(f"every point failed ({found.table.message.iloc[0]}); the tables are in {folder}", 1)
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 
@@ -694,22 +707,28 @@ def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderC
 
 
 def _write_curve(found: Curve, claim: FolderClaim, atlas_found: Any, no_plots: bool) -> None:
-    """The curve written into the claimed folder, which appears whole; a failure to write says
-    so in one line (exit 1) and leaves nothing."""
-    from oscillator.io.signals import interrupts_deferred
     from oscillator.report.attractors import write_curve
+
+    _write_claimed(claim, lambda folder: write_curve(found, folder, atlas=atlas_found, plots=not no_plots), "the curve")
+
+
+def _write_claimed(claim: FolderClaim, write: Any, what: str) -> None:
+    """``write(folder)`` into the claimed folder, which appears whole; a failure to write says so
+    in one line (exit 1) and leaves nothing; a Ctrl-C waits until the folder is whole.  The
+    problems ``write`` returns (a figure that failed: the tables are kept) exit 1 after."""
+    from oscillator.io.signals import interrupts_deferred
 
     target = printable(str(claim.target))
     try:
-        with interrupts_deferred():  # Ctrl-C waits until the folder is whole
-            problems = write_curve(found, claim.temporary, atlas=atlas_found, plots=not no_plots)
+        with interrupts_deferred():
+            problems = write(claim.temporary)
             written = claim.commit()
     except (OSError, OscillatorError) as error:
         claim.abandon()
         reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise fail(f"cannot write the curve to {target}: {reason}; nothing was written", 1) from None
+        raise fail(f"cannot write {what} to {target}: {reason}; nothing was written", 1) from None
     except KeyboardInterrupt:  # held until the folder was whole: it is written
-        raise fail(f"interrupted; the curve is written to {target}", 130) from None
+        raise fail(f"interrupted; {what} written to {target}", 130) from None
     except BaseException:
         claim.abandon()
         raise

@@ -397,9 +397,14 @@ def _following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Bloc
         ),
     ]
     blocks += modified_blocks(case)
-    ends = tuple((f"A{e.id}", e.name, f"{e.inside:.10g}", f"{e.outside:.10g}", e.becomes) for e in over.ends)
+    start, stop = float(values[0]), float(values[-1])
+    ends = tuple(
+        (f"A{e.id}", e.name, e.change(start, stop), f"{e.inside:.10g}", f"{e.outside:.10g}", e.becomes)
+        for e in over.ends
+    )
     if ends:
-        header = ("attractor", "what", f"last {param} with it", f"first {param} without it", "its seed goes to")
+        change = f"as {param} goes from {start:.10g} to {stop:.10g}, it"
+        header = ("attractor", "what", change, f"last {param} with it", f"first {param} without it", "its seed goes to")
         blocks += [mk.Heading(2, ("Where attractors appear and end",)), mk.Table(header, ends)]
     rows = tuple(
         (
