@@ -806,3 +806,17 @@ def test_a_computation_where_every_start_fails_keeps_its_tables_and_exits_1(tmp_
     assert done.exit_code == 1 and f"error: {said} (CVODE failed" in done.stderr
     assert "CV_TOO_MUCH_WORK" in done.stderr and "Traceback" not in done.stderr
     assert any(p.suffix == ".parquet" for p in (tmp_path / "o").iterdir())  # the tables are kept
+
+
+def test_a_resumed_command_says_how_much_it_read_back(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    arguments = ["basins", "instance-1", "--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2", "--transient", "20"]
+    arguments += ["--record", "4", "--workers", "1", "--out", "b"]
+    first = CliRunner().invoke(app, arguments)
+    assert first.exit_code == 0 and "resumed" not in first.stdout
+    again = CliRunner().invoke(app, arguments)
+    assert again.exit_code == 0 and "resumed: 4 of the 4 starts read from b, the rest computed" in again.stdout

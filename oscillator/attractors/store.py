@@ -92,6 +92,8 @@ class LandingStore:
         self.what = marker.removesuffix(".json")
         self.identity = identity
         self.resuming = False
+        #: What was read back from earlier runs: landings (:meth:`read`) and tables (:meth:`read_table`).
+        self.reused = {"landings": 0, "tables": 0}
 
     def check(self) -> None:
         """Refuse, before anything is created, a folder that cannot hold this computation: a new
@@ -178,6 +180,7 @@ class LandingStore:
                     raise self._damaged(part, why)
                 seen.add(landing.index)
             found += landings
+        self.reused["landings"] += len(found)
         return found
 
     def _plain(self, part: Path) -> None:
@@ -210,7 +213,9 @@ class LandingStore:
             return None
         self._plain(part)
         try:
-            return pq.read_table(part).to_pandas()
+            table = pq.read_table(part).to_pandas()
+            self.reused["tables"] += 1
+            return table
         except Exception as exc:  # pyarrow raises many types for a damaged file
             if isinstance(exc, MemoryError):
                 raise

@@ -71,6 +71,13 @@ def _unwritable(error: OSError, folder: Path, what: str) -> typer.Exit:
     )
 
 
+def _say_reused(store: Any, reused: int, what: str, quiet: bool) -> None:
+    """How much of a resumed computation was read back from its folder instead of computed:
+    ``what`` names it (``"of the 900 starts"``)."""
+    if reused and not quiet:
+        say(f"resumed: {reused} {what} read from {printable(str(store.folder))}, the rest computed")
+
+
 def _new_folder(case: Case, kind: str) -> Path:
     from oscillator.io.files import default_name
 
@@ -135,6 +142,7 @@ def basins(
         lock.release()
         if client is not None:
             client.close()
+    _say_reused(store, store.reused["landings"], f"of the {x_axis.count * y_axis.count} starts", quiet)
     _finish_basins(found, store.folder, no_plots, quiet)
 
 
@@ -356,6 +364,7 @@ def attractors(
         lock.release()
         if client is not None:
             client.close()
+    _say_reused(store, store.reused["landings"], "starts (of every value's fresh starts and seeds)", quiet)
     _finish_following(over, store.folder, coordinate, found, no_plots, quiet)
 
 
@@ -535,6 +544,7 @@ def atlas(
         lock.release()
         if client is not None:
             client.close()
+    _say_reused(store, store.reused["tables"], f"of the {found.y.count} rows", quiet)
     _finish_atlas(found, store.folder, no_plots, quiet)
 
 
