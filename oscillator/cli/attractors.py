@@ -13,6 +13,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
+from oscillator.analysis.execution import check_workers
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say, warn
 from oscillator.cli.inputs import case_from
 from oscillator.errors import InputError, Interrupted, OscillatorError
@@ -142,8 +143,7 @@ def basins(
         lock.release()
         if client is not None:
             client.close()
-    _say_reused(store, store.reused["landings"], f"of the {x_axis.count * y_axis.count} starts", quiet)
-    _finish_basins(found, store.folder, no_plots, quiet)
+    _finish_basins(found, store, no_plots, quiet)
 
 
 def _open_basins(
@@ -157,8 +157,6 @@ def _open_basins(
 ) -> tuple[Any, Any, Any, int]:
     """Everything refused before work: the slice, the folder (new, or these basins to resume),
     the workers, the scheduler; the folder's name locked."""
-    from oscillator.analysis.execution import check_workers
-
     count = check_workers(workers)
     load("oscillator.attractors.basins", notice=True)
     from oscillator.attractors.basins import basin_store, grid_starts
@@ -198,7 +196,9 @@ def _run_basins(
         return run_basins(case, x, y, store, settings=settings, workers=workers, client=client, progress=report)
 
 
-def _finish_basins(found: Basins, folder: Path, no_plots: bool, quiet: bool) -> None:
+def _finish_basins(found: Basins, store: Any, no_plots: bool, quiet: bool) -> None:
+    _say_reused(store, store.reused["landings"], f"of the {found.x.count * found.y.count} starts", quiet)
+    folder = store.folder
     from oscillator.attractors.finding import share_text
     from oscillator.report.attractors import attractor_table, write_basins
 
@@ -343,8 +343,6 @@ def attractors(
         resolved = case_from(case, None, set_)
         plan = _open_following(resolved, param, start, stop, steps, x, y, tol, transient, record, coordinate, out_dir)
         values, states, settings, store = plan
-        from oscillator.analysis.execution import check_workers
-
         count = check_workers(workers)
         lock, client = _locked(store.folder, scheduler)
     except OscillatorError as error:
@@ -364,8 +362,7 @@ def attractors(
         lock.release()
         if client is not None:
             client.close()
-    _say_reused(store, store.reused["landings"], "starts (of every value's fresh starts and seeds)", quiet)
-    _finish_following(over, store.folder, coordinate, found, no_plots, quiet)
+    _finish_following(over, store, coordinate, found, no_plots, quiet)
 
 
 def _open_following(
@@ -450,9 +447,9 @@ def _branches_of(over: Any) -> list[Any]:
     return local_branches(over)
 
 
-def _finish_following(
-    over: Any, folder: Path, coordinate: str, branches: list[Any], no_plots: bool, quiet: bool
-) -> None:
+def _finish_following(over: Any, store: Any, coordinate: str, branches: list[Any], no_plots: bool, quiet: bool) -> None:
+    _say_reused(store, store.reused["landings"], "starts (of every value's fresh starts and seeds)", quiet)
+    folder = store.folder
     from oscillator.report.attractors import write_following
 
     try:
@@ -514,7 +511,6 @@ def atlas(
         x_axis, y_axis = _plane_axis(x, "--x"), _plane_axis(y, "--y")
         if x_axis.name == y_axis.name:
             raise InputError(f"--y: both axes are {x_axis.name}; give two different parameters", field="--y")
-        from oscillator.analysis.execution import check_workers
         from oscillator.attractors.atlas import AtlasSettings, atlas_identity
         from oscillator.attractors.store import LandingStore
 
@@ -544,8 +540,7 @@ def atlas(
         lock.release()
         if client is not None:
             client.close()
-    _say_reused(store, store.reused["tables"], f"of the {found.y.count} rows", quiet)
-    _finish_atlas(found, store.folder, no_plots, quiet)
+    _finish_atlas(found, store, no_plots, quiet)
 
 
 def _plane_axis(values: PlaneAxis, flag: str) -> Any:
@@ -573,7 +568,9 @@ def _run_atlas(case: Case, x: Any, y: Any, settings: Any, store: Any, workers: i
     return found
 
 
-def _finish_atlas(found: Any, folder: Path, no_plots: bool, quiet: bool) -> None:
+def _finish_atlas(found: Any, store: Any, no_plots: bool, quiet: bool) -> None:
+    _say_reused(store, store.reused["tables"], f"of the {found.y.count} rows", quiet)
+    folder = store.folder
     from oscillator.report.attractors import write_atlas
 
     try:
