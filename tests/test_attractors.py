@@ -820,3 +820,23 @@ def test_a_resumed_command_says_how_much_it_read_back(tmp_path, monkeypatch):
     assert first.exit_code == 0 and "resumed" not in first.stdout
     again = CliRunner().invoke(app, arguments)
     assert again.exit_code == 0 and "resumed: 4 of the 4 starts read from b, the rest computed" in again.stdout
+
+
+def test_a_curve_over_an_atlas_of_other_axes_or_a_damaged_one_is_refused_before_the_work(tmp_path, monkeypatch):
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    atlas = ["atlas", "instance-1", "--x", "Omega", "1.59", "1.62", "2", "--y", "Q2", "70.9", "71.3", "2"]
+    assert CliRunner().invoke(app, [*atlas, "--workers", "1", "--out", "a", "-q"]).exit_code == 0
+    swapped = ["curve", "instance-1", "--kind", "sliding", "--at", "Q2=71.16,Omega=1.6", "--x", "Q2", "70.9", "71.3"]
+    done = CliRunner().invoke(app, [*swapped, "--y", "Omega", "1.59", "1.62", "--over", "a", "--out", "c"])
+    assert done.exit_code == 2 and "--over a: its atlas is over Omega and Q2, the curve in Q2 and Omega" in done.stderr
+    table = pd.read_parquet(tmp_path / "a" / "atlas.parquet")
+    table["row"] += 5
+    table.to_parquet(tmp_path / "a" / "atlas.parquet")
+    done = CliRunner().invoke(app, [*CURVE, "--over", "a", "--out", "c"])
+    assert done.exit_code == 2 and "--over a: its atlas.parquet is damaged" in done.stderr
+    assert not (tmp_path / "c").exists()

@@ -628,7 +628,7 @@ def curve(
         point = _at(at, x[0], y[0])
         folder = out_dir if out_dir is not None else _new_folder(resolved, "curve")
         check_new(folder, option="--out")
-        atlas_found = _read_atlas(over, resolved) if over is not None else None
+        atlas_found = _read_atlas(over, resolved, x[0], y[0]) if over is not None else None
         load("oscillator.orbits.curves", notice=True)
         from oscillator.orbits.curves import check_curve, trace_curve
 
@@ -674,8 +674,9 @@ def _at(text: str, x: str, y: str) -> tuple[float, float]:
     return values[x], values[y]
 
 
-def _read_atlas(folder: Path, case: Case) -> Any:
-    """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json)."""
+def _read_atlas(folder: Path, case: Case, x: str, y: str) -> Any:
+    """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json), checked before
+    any work: its axes must be the curve's ``x`` and ``y``, in that order, and its table whole."""
     import json
 
     import pandas as pd
@@ -690,7 +691,20 @@ def _read_atlas(folder: Path, case: Case) -> Any:
         table = pd.read_parquet(folder / "atlas.parquet")
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise InputError(f"--over {printable(str(folder))} holds no finished atlas ({error})", field="--over") from None
-    return Atlas(case, axes[0], axes[1], table)
+    if (axes[0].name, axes[1].name) != (x, y):
+        raise InputError(
+            f"--over {printable(str(folder))}: its atlas is over {axes[0].name} and {axes[1].name}, the curve in {x} "
+            f"and {y}; give the atlas's axes as --x and --y, in its order",
+            field="--over",
+        )
+    found = Atlas(case, axes[0], axes[1], table)
+    try:
+        found.grid()  # every point in its cell, or the table is damaged
+    except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
+        raise InputError(
+            f"--over {printable(str(folder))}: its atlas.parquet is damaged ({error})", field="--over"
+        ) from None
+    return found
 
 
 def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderClaim) -> tuple[Curve, bool]:
