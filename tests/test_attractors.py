@@ -274,6 +274,10 @@ def test_the_same_attractors_come_out_for_any_number_of_workers():
             "both --x",
         ),
         (["lyapunov", "instance-1", "--periods", "0"], "--periods must be a whole number"),
+        (
+            ["basins", "instance-1", "--x", "x2", "0", "1", "2000", "--y", "v2", "0", "1", "2000"],
+            "the slice has 2000 x 2000 = 4,000,000 starts, more than 1,000,000",
+        ),
         ([*CURVE, "--kind", "bogus"], "--kind must be one of sliding"),
         ([*CURVE[:-2], "nan", "71.3"], "--y range of Q2 must be two finite numbers"),
         ([*CURVE, "--step", "0"], "--step must be a fraction of the window"),
@@ -840,3 +844,23 @@ def test_a_curve_over_an_atlas_of_other_axes_or_a_damaged_one_is_refused_before_
     done = CliRunner().invoke(app, [*CURVE, "--over", "a", "--out", "c"])
     assert done.exit_code == 2 and "--over a: its atlas.parquet is damaged" in done.stderr
     assert not (tmp_path / "c").exists()
+
+
+def test_the_attractors_marker_names_its_slice_not_every_start(tmp_path, monkeypatch):
+    """A marker that listed every start outgrew the size a marker may be read at (1 MB) at 120 x 110."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    command = ["attractors", "instance-1", "--param", "Q2", "--from", "71.1", "--to", "71.2", "--steps", "2"]
+    command += ["--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2", "--transient", "20", "--record", "4"]
+    done = CliRunner().invoke(app, [*command, "--no-branches", "--no-plots", "--workers", "1", "--out", "o", "-q"])
+    assert done.exit_code == 0, done.stderr
+    marker = json.loads((tmp_path / "o" / "attractors.json").read_text(encoding="utf-8"))
+    assert marker["identity"]["states"] == [
+        {"name": "x2", "low": 3.0, "high": 6.0, "count": 2},
+        {"name": "v2", "low": -4.0, "high": 4.0, "count": 2},
+    ]

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.analysis.execution import check_runner, run_tasks
-from oscillator.attractors.finding import STATE, Attractors, AttractorSettings, Landing, assemble, land
+from oscillator.attractors.finding import MAX_STARTS, STATE, Attractors, AttractorSettings, Landing, assemble, land
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, case_to_toml
@@ -73,6 +73,12 @@ def grid_starts(case: Case, x: Axis, y: Axis) -> np.ndarray:
     ``j * x.count + i``; the two other components are the case's start."""
     if x.name == y.name:
         raise InputError(f"the two axes are both {x.name}; give two different state components", field="axis")
+    if x.count * y.count > MAX_STARTS:
+        raise InputError(
+            f"the slice has {x.count} x {y.count} = {x.count * y.count:,} starts, more than {MAX_STARTS:,}; give "
+            "fewer cells",
+            field="axis",
+        )
     starts = np.tile(np.array(case.initial.y, dtype=float), (x.count * y.count, 1))
     xs, ys = np.meshgrid(x.values, y.values)
     starts[:, STATE.index(x.name)] = xs.ravel()

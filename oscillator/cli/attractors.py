@@ -401,12 +401,13 @@ def _open_following(
 
     values = np.linspace(start, stop, steps)
     _check_values(case, param, values, tol)
-    states = grid_starts(case, _axis(x, "--x"), _axis(y, "--y")) if x is not None and y is not None else None
+    axes = (_axis(x, "--x"), _axis(y, "--y")) if x is not None and y is not None else None
+    states = grid_starts(case, *axes) if axes is not None else None
     identity = {
         "case": case_to_toml(case),
         "param": param,
         "values": values.tolist(),
-        "states": None if states is None else states.tolist(),
+        "states": None if axes is None else [dataclasses.asdict(axis) for axis in axes],  # the slice, not its starts
         "settings": dataclasses.asdict(settings),
     }
     folder = out_dir if out_dir is not None else _new_folder(case, "attractors")
