@@ -278,6 +278,14 @@ def test_the_same_attractors_come_out_for_any_number_of_workers():
             ["basins", "instance-1", "--x", "x2", "0", "1", "2000", "--y", "v2", "0", "1", "2000"],
             "the slice has 2000 x 2000 = 4,000,000 starts, more than 1,000,000",
         ),
+        (
+            ["lyapunov", "instance-1", "--set", "Omega=1e90", "--periods", "5"],
+            "its forcing period, 6.28e-90 s, is lost",
+        ),
+        (
+            ["attractors", "instance-1", "--param", "Q2", "--from", "71", "--to", "inf"],
+            "--from and --to must be finite",
+        ),
         ([*CURVE, "--kind", "bogus"], "--kind must be one of sliding"),
         ([*CURVE[:-2], "nan", "71.3"], "--y range of Q2 must be two finite numbers"),
         ([*CURVE, "--step", "0"], "--step must be a fraction of the window"),
@@ -864,3 +872,20 @@ def test_the_attractors_marker_names_its_slice_not_every_start(tmp_path, monkeyp
         {"name": "x2", "low": 3.0, "high": 6.0, "count": 2},
         {"name": "v2", "low": -4.0, "high": 4.0, "count": 2},
     ]
+
+
+def test_a_damaged_part_on_the_command_line_is_exit_2_and_says_nothing_is_kept(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    arguments = ["basins", "instance-1", "--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2", "--transient", "20"]
+    arguments += ["--record", "4", "--workers", "1", "--out", "b", "-q"]
+    assert CliRunner().invoke(app, arguments).exit_code == 0
+    (part,) = (tmp_path / "b" / "parts").iterdir()
+    (part.parent / "00000100-0004.parquet").write_bytes(part.read_bytes())  # the same starts a second time
+    done = CliRunner().invoke(app, arguments)
+    assert done.exit_code == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "00000100-0004.parquet is damaged (start 0 is not one of its starts or is there twice)" in done.stderr
+    assert "kept" not in done.stderr

@@ -41,7 +41,7 @@ import pyarrow.parquet as pq
 from oscillator.analysis.execution import check_workers, connect, run_tasks
 from oscillator.analysis.intervals import rest_intervals, runs
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
-from oscillator.io.cases import Case, case_to_toml, resolve_case
+from oscillator.io.cases import Case, case_to_toml, resolve_case, section_times
 from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import SweepSettings
@@ -179,15 +179,7 @@ def _point_case(
     param = settings.param
     begin = {} if from_state is None else dict(zip(("x1", "v1", "x2", "v2"), from_state, strict=True))
     point = resolve_case(case, **{param: value}, **begin)
-    period, t0 = point.parameters.period, point.initial.t0
-    marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
-    if not (np.isfinite(marks).all() and np.all(np.diff(marks) > 0) and marks[0] >= t0 and marks[-1] > t0):
-        raise InputError(
-            f"{param} = {value!r}: its forcing period, {period:.3g} s, is lost beside t0 = {t0:g} s in "
-            f"floating point; give a {param} of physical size",
-            field=param,
-        )
-    return point, marks
+    return point, section_times(point, settings.transient, settings.transient + settings.record)
 
 
 def _periods_with_rest(intervals: list[tuple[float, float]], start: float, period: float, record: int) -> int:

@@ -37,7 +37,7 @@ from oscillator.analysis.sweeps import detect_period
 from oscillator.attractors.lyapunov import lyapunov
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.simulate import simulate
-from oscillator.io.cases import Case, resolve_case
+from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.events import EventKind
 from oscillator.orbits.shooting import Orbit, check_count, find_orbit, signature_of
 from oscillator.text import shown
@@ -120,9 +120,7 @@ class Landing:
 def _section_case(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[Case, np.ndarray]:
     begin = dict(zip(STATE, (float(v) for v in start), strict=True))
     point = resolve_case(case, **begin)
-    t0, period = point.initial.t0, point.parameters.period
-    marks = t0 + period * np.arange(settings.transient, settings.transient + settings.record + 1)
-    return point, marks
+    return point, section_times(point, settings.transient, settings.transient + settings.record)
 
 
 def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[float]) -> Landing:

@@ -28,7 +28,7 @@ import pandas as pd
 
 from oscillator.analysis.execution import check_progress
 from oscillator.hybrid.simulate import simulate
-from oscillator.io.cases import Case, resolve_case
+from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.orbits.shooting import check_count, check_guess, period_map
 
 __all__ = ["LyapunovSpectrum", "lyapunov", "separation_exponent"]
@@ -144,6 +144,8 @@ def lyapunov(
     transient = check_count(transient, "transient", 0, MAX_PERIODS)
     check_progress(progress)
     case = resolve_case(case, **overrides)
+    for k in (0, transient + periods - 1):  # the period resolved beside the first and the last section times
+        section_times(case, k, k + 1)
     t, y = _start(case, guess, transient)
     start_state, frame = y, np.eye(4)
     sums, rows = np.zeros(4), []

@@ -4,7 +4,9 @@ or ends) and ``oscillator lyapunov`` (the Lyapunov spectrum of a motion)."""
 
 from __future__ import annotations
 
+import contextlib
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, cast
 
@@ -60,6 +62,27 @@ def _settings(transient: int, record: int, max_period: int) -> AttractorSettings
         return AttractorSettings(transient=transient, record=record, max_period=max_period)
     except InputError as error:
         raise InputError(f"--{error.field}: {error}", field=f"--{error.field}") from None
+
+
+@contextlib.contextmanager
+def _computing(store: Any, what: str, lock: Any, client: Any) -> Iterator[None]:
+    """The block that computes a resumable folder's ``what`` (starts, values, rows): each way it
+    can stop said in one line, what it finished kept; then the folder's lock and the Dask client
+    released."""
+    try:
+        yield
+    except InputError as error:  # refused before it ran (a damaged part, a value the model refuses)
+        raise fail(message(error)) from None
+    except OscillatorError as error:
+        raise fail(f"{message(error)}; the {what} finished so far are kept in {store.folder}", 1) from None
+    except OSError as error:  # a full disk, the folder taken away: what was written stays
+        raise _unwritable(error, store.folder, what) from None
+    except KeyboardInterrupt:
+        raise fail(f"interrupted; the {what} finished so far are kept: run the same command to resume", 130) from None
+    finally:
+        lock.release()
+        if client is not None:
+            client.close()
 
 
 def _unwritable(error: OSError, folder: Path, what: str) -> typer.Exit:
@@ -131,18 +154,8 @@ def basins(
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
     store, lock, client, count = plan
-    try:
+    with _computing(store, "starts", lock, client):
         found = _run_basins(resolved, x_axis, y_axis, store, settings, count, client, quiet)
-    except OscillatorError as error:
-        raise fail(f"{message(error)}; the starts finished so far are kept in {store.folder}", 1) from None
-    except OSError as error:  # a full disk, the folder taken away: what was written stays
-        raise _unwritable(error, store.folder, "starts") from None
-    except KeyboardInterrupt:
-        raise fail("interrupted; the starts finished so far are kept: run the same command to resume", 130) from None
-    finally:
-        lock.release()
-        if client is not None:
-            client.close()
     _finish_basins(found, store, no_plots, quiet)
 
 
@@ -273,8 +286,8 @@ def lyapunov(
     except BaseException as error:
         if claim is not None:
             claim.abandon()
-        if isinstance(error, OscillatorError):
-            raise fail(message(error), 1) from None
+        if isinstance(error, OscillatorError):  # refused before it ran (exit 2), or failed on the way (1)
+            raise fail(message(error), 2 if isinstance(error, InputError) else 1) from None
         if isinstance(error, KeyboardInterrupt):
             raise fail("interrupted; nothing was written", 130) from None
         raise
@@ -349,19 +362,9 @@ def attractors(
         raise fail(message(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
-    try:
+    with _computing(store, "values", lock, client):
         over = _run_following(resolved, param, values, states, settings, tol, store, count, client, quiet)
         found = _branches_of(over) if branches and not no_plots else []
-    except OscillatorError as error:
-        raise fail(f"{message(error)}; the values finished so far are kept in {store.folder}", 1) from None
-    except OSError as error:  # a full disk, the folder taken away: what was written stays
-        raise _unwritable(error, store.folder, "values") from None
-    except KeyboardInterrupt:
-        raise fail("interrupted; the values finished so far are kept: run the same command to resume", 130) from None
-    finally:
-        lock.release()
-        if client is not None:
-            client.close()
     _finish_following(over, store, coordinate, found, no_plots, quiet)
 
 
@@ -399,6 +402,8 @@ def _open_following(
     from oscillator.attractors.store import LandingStore
     from oscillator.io.cases import case_to_toml
 
+    if not (np.isfinite(start) and np.isfinite(stop)):
+        raise InputError(f"--from and --to must be finite numbers, got {start!r} and {stop!r}", field="--to")
     values = np.linspace(start, stop, steps)
     _check_values(case, param, values, tol)
     axes = (_axis(x, "--x"), _axis(y, "--y")) if x is not None and y is not None else None
@@ -529,18 +534,8 @@ def atlas(
         raise fail(message(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
-    try:
+    with _computing(store, "rows", lock, client):
         found = _run_atlas(resolved, x_axis, y_axis, settings, store, count, client, quiet)
-    except OscillatorError as error:
-        raise fail(f"{message(error)}; the rows finished so far are kept in {store.folder}", 1) from None
-    except OSError as error:  # a full disk, the folder taken away: what was written stays
-        raise _unwritable(error, store.folder, "rows") from None
-    except KeyboardInterrupt:
-        raise fail("interrupted; the rows finished so far are kept: run the same command to resume", 130) from None
-    finally:
-        lock.release()
-        if client is not None:
-            client.close()
     _finish_atlas(found, store, no_plots, quiet)
 
 

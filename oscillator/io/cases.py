@@ -19,6 +19,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.expressions import parse_value
 from oscillator.io.files import read_untrusted
@@ -34,7 +36,7 @@ from oscillator.model.parameters import (
 )
 from oscillator.text import printable, shown, unsafe_characters
 
-__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "resolve_case"]
+__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "resolve_case", "section_times"]
 
 #: The largest case file read (bytes); the article's cases are about 2 kB.
 MAX_CASE_BYTES = 1 << 20
@@ -505,3 +507,18 @@ def case_to_toml(case: Case) -> str:
         settings = dataclasses.asdict(case.sweep)
         data["sweep"] = {key: settings[name] for key, name in _SWEEP_KEYS.items()}
     return tomli_w.dumps(data, multiline_strings=True)
+
+
+def section_times(case: Case, first: int, last: int) -> np.ndarray:
+    """The stroboscopic section's times ``t0 + k T`` for ``k = first .. last``, refused (naming
+    Omega) where the forcing period is lost beside ``t0`` in floating point: the times would not
+    increase, and every run from them would fail on a time it cannot reach."""
+    t0, period = case.initial.t0, case.parameters.period
+    marks: np.ndarray = t0 + period * np.arange(first, last + 1)
+    if not (np.isfinite(marks).all() and np.all(np.diff(marks) > 0) and marks[0] >= t0 and marks[-1] > t0):
+        raise InputError(
+            f"Omega = {case.parameters.Omega!r}: its forcing period, {period:.3g} s, is lost beside t0 = {t0:g} s in "
+            "floating point; give an Omega of physical size",
+            field="Omega",
+        )
+    return marks
