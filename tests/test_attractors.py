@@ -889,3 +889,31 @@ def test_a_damaged_part_on_the_command_line_is_exit_2_and_says_nothing_is_kept(t
     assert done.exit_code == 2 and len(done.stderr.strip().splitlines()) == 1
     assert "00000100-0004.parquet is damaged (start 0 is not one of its starts or is there twice)" in done.stderr
     assert "kept" not in done.stderr
+
+
+@pytest.mark.parametrize("by", ["regime", "period", "coexisting", "lyapunov", "impact_velocity"])
+def test_the_atlas_is_drawn_by_each_measure_with_fig_14_s_lines_off_the_data(by):
+    import pandas as pd
+
+    from oscillator.attractors.atlas import Atlas, AtlasAxis
+    from oscillator.report.attractors import atlas_figure
+
+    x, y = AtlasAxis("Omega", 1.55, 1.65, 3), AtlasAxis("Q2", 70.5, 71.5, 3)
+    rows = [
+        {"row": r, "column": c, "attractor": 0, "coexisting": 1 + (r == c == 1), "regime": "P1 m2 rests" if c == 1
+         else "P1", "period": 1, "lyapunov": -0.1 * (1 + c), "impact_velocity": float(r), "status": "ok"}
+        for r in range(3) for c in range(3)
+    ]  # fmt: skip
+    figure = atlas_figure(Atlas(CASE, x, y, pd.DataFrame(rows)), by=by)
+    ax = figure.axes[0]
+    assert [line for line in ax.get_lines() if len(line.get_xdata())] == []  # no line across the data
+    sides = ax.child_axes  # the ticks on the frame: secondary axes
+    labels = [t.get_text() for side in sides for t in side.get_xticklabels() + side.get_yticklabels()]
+    assert "Fig. 14: Omega = 1.6" in labels and "Fig. 14:\nQ2 = 71" in labels
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "several attractors coexist" in legend
+    if by in ("lyapunov", "impact_velocity"):
+        assert len(figure.axes) >= 2  # a colour bar
+    else:
+        categories = len({row[by] for row in rows})
+        assert len([t for t in legend if not t.startswith(("Fig. 14", "several"))]) == categories

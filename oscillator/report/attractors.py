@@ -9,9 +9,10 @@ largest multiplier, Lyapunov exponent, section points), ``figures/basins.png`` (
 
 from __future__ import annotations
 
+import functools
 import json
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +24,7 @@ from oscillator.attractors.basins import Basins
 from oscillator.attractors.finding import STATE, Attractor, share_text
 from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.lyapunov import LyapunovSpectrum
+from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
 from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
@@ -266,24 +268,24 @@ def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
 def _write_folder(
     folder: Path,
     tables: dict[str, pd.DataFrame],
-    figure: tuple[str, Callable[[], Figure]] | None,
+    figures: Sequence[tuple[str, Callable[[], Figure]]],
     blocks: list[mk.Block],
     title: str,
 ) -> list[str]:
-    """The tables first, then the figure (its failure kept as a problem, the tables safe), then
-    the report without the figure if there is none; every file written atomically."""
+    """The tables first, then the figures (a failure kept as a problem, the tables safe), then
+    the report, without the figures that were not drawn; every file written atomically."""
     problems = []
     for name, frame in tables.items():
         with atomic_path(folder / f"{name}.parquet") as temporary:
             frame.to_parquet(temporary, index=False)
-    if figure is not None:
-        name, draw = figure
+    drawn = set()
+    for name, draw in figures:
         try:
             _save(draw(), folder / "figures", name)
+            drawn.add(name)
         except Exception as exc:  # a figure's failure keeps the computed tables
             problems.append(f"figure {name}: {exc}")
-    else:
-        blocks = [block for block in blocks if not isinstance(block, mk.Figure)]
+    blocks = [block for block in blocks if not isinstance(block, mk.Figure) or block.name in drawn]
     for name, text in (
         ("report.md", mk.to_markdown(blocks)),
         ("report.html", mk.to_html(blocks, folder=folder, title=title)),
@@ -297,7 +299,7 @@ def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[st
     """Write the tables, the figure and the report into the basins folder (each file atomically).
     Returns what could not be written (a figure that failed), the tables being written first."""
     table = attractor_table(basins)
-    figure = ("basins", lambda: basins_figure(basins)) if plots else None
+    figure = [("basins", lambda: basins_figure(basins))] if plots else []
     title = f"{basins.found.case.name}: basins of attraction"
     tables = {"basins": basins.table(), "attractors": table}
     return _write_folder(folder, tables, figure, _basins_blocks(basins, table), title)
@@ -428,7 +430,7 @@ def write_following(
 ) -> list[str]:
     """``attractors.parquet``, ``ends.parquet``, the figure and the report, into ``folder``."""
     table = over.table()
-    figure = ("attractors", lambda: following_figure(over, coordinate, branches)) if plots else None
+    figure = [("attractors", lambda: following_figure(over, coordinate, branches))] if plots else []
     title = f"{over.case.name}: attractors over {over.param}"
     tables = {"attractors": table, "ends": over.ends_table()}
     return _write_folder(folder, tables, figure, _following_blocks(over, table), title)
@@ -438,50 +440,112 @@ def write_following(
 FIG_14_LINES = {"Q2": 71.0, "Omega": 1.6}
 
 
-def atlas_figure(atlas: Atlas) -> Figure:
-    """The plane coloured by regime (of each point's first attractor), points where several
-    attractors coexist hatched, and Fig. 14's two lines where they cross the window."""
-    from matplotlib.colors import ListedColormap
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Patch, Rectangle
+#: What an atlas figure can be coloured by: the column of the atlas's table, and how it is named.
+ATLAS_MEASURES = {
+    "regime": "regime of the first attractor",
+    "period": "period of the first attractor (0: aperiodic)",
+    "coexisting": "number of coexisting attractors",
+    "lyapunov": "largest Lyapunov exponent of the first attractor (1/s)",
+    "impact_velocity": "largest impact velocity over the attractors (m/s)",
+}
+#: Fig. 14's two lines, each in its own colour, marked by a tick on the frame.
+FIG_14_COLORS = {"Omega": "tab:red", "Q2": "tab:purple"}
 
-    codes, coexisting, regimes = atlas.grid()
-    palette = [COLORS[k % len(COLORS)] for k in range(len(regimes))]
+
+def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
+    """The plane coloured by one of :data:`ATLAS_MEASURES`: categories (regime, period, number of
+    attractors) in a legend, the exponent and the impact velocity on a colour bar; points where
+    several attractors coexist hatched; Fig. 14's lines marked on the frame (outside the data,
+    each in its own colour), not drawn across it."""
+    from matplotlib.figure import Figure
+
+    if by not in ATLAS_MEASURES:
+        raise InputError(f"by must be one of {', '.join(ATLAS_MEASURES)}, got {by!r}", field="by")
     fig = Figure(figsize=(8.0, 6.5), layout="constrained")
     ax = fig.add_subplot()
-    x, y = atlas.x.values, atlas.y.values
-    shown = np.ma.masked_less(codes, 0)
-    ax.pcolormesh(x, y, shown, cmap=ListedColormap(palette), vmin=-0.5, vmax=len(regimes) - 0.5, shading="nearest")
+    handles = _atlas_values(fig, ax, atlas, by)
+    codes, coexisting, _ = atlas.grid()
     if (codes < 0).any():
-        ax.pcolormesh(x, y, np.ma.masked_greater_equal(codes, 0), cmap=ListedColormap([FAILED]), shading="nearest")
-    several = coexisting > 1
-    dx, dy = (x[1] - x[0], y[1] - y[0])
-    for row, column in zip(*np.nonzero(several), strict=True):  # each such cell hatched
-        corner = (x[column] - dx / 2, y[row] - dy / 2)
-        ax.add_patch(Rectangle(corner, dx, dy, fill=False, hatch="////", lw=0.0, edgecolor="black"))
-    handles = [Patch(color=color, label=regime) for color, regime in zip(palette, regimes, strict=True)]
-    if several.any():
-        handles.append(Patch(facecolor="white", edgecolor="black", hatch="////", label="several attractors coexist"))
-    for name, value in FIG_14_LINES.items():
-        if name == atlas.x.name and atlas.x.low <= value <= atlas.x.high:
-            ax.axvline(value, color="black", lw=1.2, ls="--")
-            handles.append(_line_handle(f"Fig. 14: {name} = {value:g}"))
-        if name == atlas.y.name and atlas.y.low <= value <= atlas.y.high:
-            ax.axhline(value, color="black", lw=1.2, ls="--")
-            handles.append(_line_handle(f"Fig. 14: {name} = {value:g}"))
+        from matplotlib.colors import ListedColormap
+        from matplotlib.patches import Patch
+
+        failed = np.ma.masked_greater_equal(codes, 0)
+        ax.pcolormesh(atlas.x.values, atlas.y.values, failed, cmap=ListedColormap([FAILED]), shading="nearest")
+        handles.append(Patch(color=FAILED, label="failed"))
+    handles += _hatch_coexisting(ax, atlas, coexisting > 1)
+    handles += _fig_14_marks(ax, atlas)
     ax.set_xlabel(atlas.x.name)
     ax.set_ylabel(atlas.y.name)
-    title = f"{figure_title(atlas.case)}: regimes over {atlas.x.name} and {atlas.y.name}"
+    title = f"{figure_title(atlas.case)}: {ATLAS_MEASURES[by]} over {atlas.x.name} and {atlas.y.name}"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
+    if handles:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
     return fig
 
 
-def _line_handle(label: str) -> Any:
-    """A legend entry for a dashed black line."""
+def _atlas_values(fig: Figure, ax: Any, atlas: Atlas, by: str) -> list[Any]:
+    """The cells coloured by ``by``; the legend's entries for a category, none for a colour bar."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    x, y = atlas.x.values, atlas.y.values
+    table = atlas.table[atlas.table.status == "ok"]
+    if by in ("lyapunov", "impact_velocity"):
+        frame = table if by == "impact_velocity" else table[table.attractor <= 0]
+        values = np.full((atlas.y.count, atlas.x.count), np.nan)
+        cells = frame.groupby(["row", "column"])[by].max()
+        values[cells.index.get_level_values(0), cells.index.get_level_values(1)] = cells.to_numpy()
+        finite = np.ma.masked_invalid(np.where(np.isfinite(values), values, np.nan))
+        mesh = ax.pcolormesh(x, y, finite, cmap="viridis", shading="nearest")
+        fig.colorbar(mesh, ax=ax, label=ATLAS_MEASURES[by])
+        return []
+    first = table[table.attractor <= 0].drop_duplicates(["row", "column"])
+    labels = first.regime if by == "regime" else first[by].astype(int)
+    categories = sorted(labels.unique().tolist())
+    codes = np.full((atlas.y.count, atlas.x.count), -1)
+    codes[first.row, first.column] = [categories.index(value) for value in labels]
+    palette = [COLORS[k % len(COLORS)] for k in range(len(categories))]
+    shown = np.ma.masked_less(codes, 0)
+    ax.pcolormesh(x, y, shown, cmap=ListedColormap(palette), vmin=-0.5, vmax=len(categories) - 0.5, shading="nearest")
+    name = {"regime": "", "period": "period ", "coexisting": "attractors: "}[by]
+    return [Patch(color=color, label=f"{name}{value}") for color, value in zip(palette, categories, strict=True)]
+
+
+def _hatch_coexisting(ax: Any, atlas: Atlas, several: np.ndarray) -> list[Any]:
+    """Each cell where several attractors coexist hatched; its legend entry."""
+    from matplotlib.patches import Patch, Rectangle
+
+    x, y = atlas.x.values, atlas.y.values
+    dx, dy = (x[1] - x[0], y[1] - y[0])
+    for row, column in zip(*np.nonzero(several), strict=True):
+        corner = (x[column] - dx / 2, y[row] - dy / 2)
+        ax.add_patch(Rectangle(corner, dx, dy, fill=False, hatch="////", lw=0.0, edgecolor="black"))
+    if not several.any():
+        return []
+    return [Patch(facecolor="white", edgecolor="black", hatch="////", label="several attractors coexist")]
+
+
+def _fig_14_marks(ax: Any, atlas: Atlas) -> list[Any]:
+    """Fig. 14's lines where they cross the window: a long tick on the frame's opposite side (the
+    top for a value of x, the right for one of y), labelled, each line in its own colour, so that
+    the data under them stays visible."""
     from matplotlib.lines import Line2D
 
-    return Line2D([], [], color="black", lw=1.2, ls="--", label=label)
+    handles = []
+    for name, value in FIG_14_LINES.items():
+        color = FIG_14_COLORS[name]
+        if name == atlas.x.name and atlas.x.low <= value <= atlas.x.high:
+            side = ax.secondary_xaxis("top")
+            side.set_xticks([value], labels=[f"Fig. 14: {name} = {value:g}"])
+        elif name == atlas.y.name and atlas.y.low <= value <= atlas.y.high:
+            side = ax.secondary_yaxis("right")
+            side.set_yticks([value], labels=[f"Fig. 14:\n{name} = {value:g}"])
+        else:
+            continue
+        side.tick_params(color=color, labelcolor=color, length=12, width=3, labelsize=8)
+        label = f"Fig. 14's line {name} = {value:g} (the tick on the frame)"
+        handles.append(Line2D([], [], color=color, lw=3, label=label))
+    return handles
 
 
 def _atlas_blocks(atlas: Atlas) -> list[mk.Block]:
@@ -500,16 +564,25 @@ def _atlas_blocks(atlas: Atlas) -> list[mk.Block]:
         ),
     ]
     blocks += modified_blocks(case)
+    blocks += [mk.Table(("regime (first attractor)", "points", "share"), rows)]
     blocks += [
-        mk.Table(("regime (first attractor)", "points", "share"), rows),
-        mk.Figure("atlas", "the regimes over the plane; hatched where several attractors coexist"),
+        mk.Figure(atlas_figure_name(by), f"the {what} over the plane; hatched where several attractors coexist")
+        for by, what in ATLAS_MEASURES.items()
     ]
     return blocks
 
 
+def atlas_figure_name(by: str) -> str:
+    """The file name of the atlas's figure coloured by ``by``: ``atlas`` for the regimes,
+    ``atlas-lyapunov`` and so on for the others."""
+    return "atlas" if by == "regime" else f"atlas-{by.replace('_', '-')}"
+
+
 def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
-    """``atlas.parquet`` (one row per attractor of each point), the figure and the report."""
-    figure = ("atlas", lambda: atlas_figure(atlas)) if plots else None
+    """``atlas.parquet`` (one row per attractor of each point), a figure for each of
+    :data:`ATLAS_MEASURES` and the report."""
+    measures = ATLAS_MEASURES if plots else {}
+    figure = [(atlas_figure_name(by), functools.partial(atlas_figure, atlas, by)) for by in measures]
     title = f"{atlas.case.name}: regime atlas"
     return _write_folder(folder, {"atlas": atlas.table}, figure, _atlas_blocks(atlas), title)
 
@@ -563,5 +636,5 @@ def write_curve(curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots
         mk.Table((curve.x, curve.y), rows),
         mk.Figure("curve", "the curve" + (" over the atlas's regimes" if atlas is not None else "")),
     ]
-    figure = ("curve", lambda: curve_figure(curve, atlas)) if plots else None
+    figure = [("curve", lambda: curve_figure(curve, atlas))] if plots else []
     return _write_folder(folder, {"curve": curve.points}, figure, blocks, f"{curve.kind} curve")
