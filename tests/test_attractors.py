@@ -917,3 +917,21 @@ def test_the_atlas_is_drawn_by_each_measure_with_fig_14_s_lines_off_the_data(by)
     else:
         categories = len({row[by] for row in rows})
         assert len([t for t in legend if not t.startswith(("Fig. 14", "several"))]) == categories
+
+
+def test_attractors_over_a_parameter_are_numbered_as_basins_numbers_them_and_drawn_within_their_own_switches():
+    from oscillator.report.attractors import following_figure
+
+    over = follow_attractors(
+        "instance-1", "Q2", [71.10, 71.20], states=[NO_REST_START, REST_START], settings=QUICK, tol=1e-3
+    )
+    table = over.table()
+    # the resting orbit is met first (at 71.10), yet the orbit without rest is A0, as in basins
+    assert table.set_index("Q2").id.to_dict() == {71.10: 1, 71.20: 0}
+    basins_order = find_attractors("instance-1", states=[REST_START, NO_REST_START], Q2=71.165, settings=QUICK)
+    assert [a.rests for a in basins_order.attractors] == [(0.0, 0.0), (0.0, 2.0)]
+    figure = following_figure(over, "x2", [])
+    legend = [t.get_text() for t in figure.axes[1].get_legend().get_texts()]
+    assert any(text.startswith("A1 ends at Q2 = 71.1") for text in legend)  # 71.17025 within tol
+    assert any(text.startswith("A0 appears at Q2 = 71.15") for text in legend)
+    assert len(figure.axes[0].texts) == 0  # no label clipped at the top: the ends are in the legend

@@ -40,6 +40,7 @@ from oscillator.attractors.finding import (
     check_settings,
     check_states,
     land,
+    order_key,
     share_interval,
 )
 from oscillator.attractors.store import LandingStore
@@ -200,6 +201,18 @@ def _match(
     return ids, next_id
 
 
+def _renumbered(found: list[Attractors], ids: list[dict[int, int]]) -> list[dict[int, int]]:
+    """The kept ids renumbered by :func:`~oscillator.attractors.finding.order_key` of each one's
+    first attractor, so that ``A0`` names the same orbit here as in ``basins`` wherever both meet
+    it, whichever value met it first."""
+    first: dict[int, Attractor] = {}
+    for here, local in zip(found, ids, strict=True):
+        for attractor in here.attractors:
+            first.setdefault(local[attractor.id], attractor)
+    order = {kept: new for new, kept in enumerate(sorted(first, key=lambda kept: order_key(first[kept])))}
+    return [{k: order[kept] for k, kept in local.items()} for local in ids]
+
+
 def follow_attractors(
     case: Case | str,
     param: str,
@@ -250,6 +263,7 @@ def follow_attractors(
     with contextlib.ExitStack() as stack:  # one pool of workers for every value
         pool = stack.enter_context(Pool(workers)) if client is None and workers > 1 else None
         found, ids = _values(case, param, array, fresh, settings, client, pool, store, progress)
+    ids = _renumbered(found, ids)
     over = AttractorsOver(case, param, array, tuple(found), tuple(ids), len(fresh))
     return dataclasses.replace(over, ends=tuple(_ends(over, settings, tol)))
 

@@ -338,47 +338,45 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
     fig = Figure(figsize=(8.0, 7.0), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
     column = STATE.index(coordinate)
-    for ident, branch in branches:
+    table = over.table()
+    signatures = table.drop_duplicates("id").set_index("id").signature
+    for ident, branch in branches:  # each only where the orbit keeps its attractor's cycle of switches
         points = branch.points
+        own = (points.signature == signatures.get(ident)).to_numpy(bool)
         stable = points.stable.to_numpy(bool)
         values, ys = points[over.param].to_numpy(float), points[coordinate].to_numpy(float)
-        top.plot(np.where(stable, values, np.nan), np.where(stable, ys, np.nan), color=_color(ident), lw=0.8, alpha=0.6)
-        top.plot(np.where(~stable, values, np.nan), np.where(~stable, ys, np.nan), color=_color(ident), lw=0.8, ls=":")
-    table = over.table()
+        for where, style in ((own & stable, "-"), (own & ~stable, ":")):  # solid where stable, dotted where not
+            xs, cut = np.where(where, values, np.nan), np.where(where, ys, np.nan)
+            top.plot(xs, cut, color=_color(ident), lw=0.8, ls=style)
     for ident, rows in table.groupby("id"):
         color = _color(int(ident))
         for value, points in zip(rows[over.param], rows.points, strict=True):
             cloud = np.asarray(json.loads(points), dtype=float).reshape(-1, 4)
             top.scatter(np.full(len(cloud), value), cloud[:, column], s=14, color=color, zorder=4)
         label = f"A{int(ident)}: {rows.name.iloc[0]}"
+        # a share is measured at each value, not between them: steps, with each value's interval
+        bottom.step(rows[over.param], rows.fraction, where="mid", color=color, lw=1.2, label=label)
         bottom.errorbar(
             rows[over.param],
             rows.fraction,
             yerr=[rows.fraction - rows.low, rows.high - rows.fraction],
             color=color,
+            ls="none",
             marker="o",
             ms=4,
             capsize=2,
-            label=label,
         )
+    start, stop = float(over.values[0]), float(over.values[-1])
     for end in over.ends:
         for ax in (top, bottom):
             ax.axvline(end.at, color=_color(end.id), ls="--", lw=0.8)
-        top.annotate(
-            f"{end.at:.7g}",
-            (end.at, 1.0),
-            xycoords=("data", "axes fraction"),
-            rotation=90,
-            fontsize=7,
-            ha="right",
-            va="top",
-            color="0.25",
-        )
-    top.set_ylabel(f"{coordinate} at the section")
-    bottom.set_ylabel("share of the starts")
+        label = f"A{end.id} {end.change(start, stop)} at {over.param} = {end.at:.7g}"
+        bottom.plot([], [], color=_color(end.id), ls="--", lw=0.8, label=label)
+    top.set_ylabel(f"{coordinate} at the section ({unit_of(coordinate)})")
+    bottom.set_ylabel("share of the fresh starts")
     bottom.set_xlabel(over.param)
     bottom.set_ylim(-0.05, 1.05)
-    bottom.legend(fontsize=8, loc="center left")
+    bottom.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2, frameon=False)
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
     top.set_title(f"{figure_title(over.case)}: attractors over {over.param}", parse_math=False, fontsize=9)
