@@ -935,3 +935,27 @@ def test_attractors_over_a_parameter_are_numbered_as_basins_numbers_them_and_dra
     assert any(text.startswith("A1 ends at Q2 = 71.1") for text in legend)  # 71.17025 within tol
     assert any(text.startswith("A0 appears at Q2 = 71.15") for text in legend)
     assert len(figure.axes[0].texts) == 0  # no label clipped at the top: the ends are in the legend
+
+
+def test_a_curve_drawn_beside_another_is_read_back_checked(tmp_path, monkeypatch):
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+    from oscillator.orbits.curves import Curve
+    from oscillator.report.attractors import curve_figure, read_curve, write_curve
+
+    monkeypatch.chdir(tmp_path)
+    points = pd.DataFrame({"Q2": [70.9, 71.0], "Omega": [1.6, 1.61]})
+    other = Curve("grazing", "Q2", "Omega", points, ("left the window", "left the window"), (), "m1: passable")
+    (tmp_path / "g").mkdir()
+    write_curve(other, tmp_path / "g", plots=False)
+    again = read_curve(tmp_path / "g")
+    assert again.points.equals(points) and again.ends == other.ends and again.kind == "grazing"
+    legend = [t.get_text() for t in curve_figure([other, again]).axes[0].get_legend().get_texts()]
+    assert legend == ["grazing curve (2 points)", "grazing curve (2 points)"]
+    done = CliRunner().invoke(app, [*CURVE, "--at", "Omega=1.6,Q2=71.16", "--also", "g"])
+    assert done.exit_code == 2 and "--also g: its curve is in Q2 and Omega, this one in Omega and Q2" in done.stderr
+    (tmp_path / "empty").mkdir()
+    done = CliRunner().invoke(app, [*CURVE, "--at", "Omega=1.6,Q2=71.16", "--also", "empty"])
+    assert done.exit_code == 2 and "--also empty holds no curve" in done.stderr

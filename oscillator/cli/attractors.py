@@ -603,6 +603,12 @@ def curve(
     over: Annotated[
         Path | None, typer.Option("--over", metavar="ATLAS_DIR", help="Draw the curve over this atlas's regimes.")
     ] = None,
+    also: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--also", metavar="CURVE_DIR", help="Draw this curve (a folder of `curve`) beside it; repeatable."
+        ),
+    ] = None,
     out_dir: Annotated[
         Path | None, typer.Option("--out", metavar="DIR", help="Output folder (default: runs/CASE-curve-...).")
     ] = None,
@@ -616,6 +622,8 @@ def curve(
     \b
     Examples:
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.1577416 --x Omega 1.59 1.62 --y Q2 70.9 71.3
+      oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --out c1
+      oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --also c1
     """
     from oscillator.io.files import check_new
 
@@ -625,6 +633,7 @@ def curve(
         folder = out_dir if out_dir is not None else _new_folder(resolved, "curve")
         check_new(folder, option="--out")
         atlas_found = _read_atlas(over, resolved, x[0], y[0]) if over is not None else None
+        others = [_read_other_curve(folder, x[0], y[0]) for folder in also or []]
         load("oscillator.orbits.curves", notice=True)
         from oscillator.orbits.curves import check_curve, trace_curve
 
@@ -649,7 +658,7 @@ def curve(
     found, interrupted = _trace(trace_curve, resolved, options, claim)
     for end in found.ends:
         out.print(Text(f"  one end: {end}"))
-    _write_curve(found, claim, atlas_found, no_plots)
+    _write_curve(found, claim, atlas_found, others, no_plots)
     if interrupted:
         raise fail(f"interrupted; the {len(found.points)} points traced so far are written to {claim.target}", 130)
 
@@ -723,10 +732,30 @@ def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderC
         raise
 
 
-def _write_curve(found: Curve, claim: FolderClaim, atlas_found: Any, no_plots: bool) -> None:
+def _read_other_curve(folder: Path, x: str, y: str) -> Curve:
+    """A curve to draw beside the new one (``--also``), in the same plane."""
+    from oscillator.report.attractors import read_curve
+
+    try:
+        other = read_curve(folder)
+    except InputError as error:
+        raise InputError(f"--also {error}", field="--also") from None
+    if (other.x, other.y) != (x, y):
+        raise InputError(
+            f"--also {printable(str(folder))}: its curve is in {other.x} and {other.y}, this one in {x} and {y}; give "
+            "a curve of the same plane",
+            field="--also",
+        )
+    return other
+
+
+def _write_curve(found: Curve, claim: FolderClaim, atlas_found: Any, others: list[Curve], no_plots: bool) -> None:
     from oscillator.report.attractors import write_curve
 
-    _write_claimed(claim, lambda folder: write_curve(found, folder, atlas=atlas_found, plots=not no_plots), "the curve")
+    def write(folder: Path) -> list[str]:
+        return write_curve(found, folder, atlas=atlas_found, plots=not no_plots, also=others)
+
+    _write_claimed(claim, write, "the curve")
 
 
 def _write_claimed(claim: FolderClaim, write: Any, what: str) -> None:

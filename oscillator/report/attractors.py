@@ -26,10 +26,12 @@ from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
+from oscillator.model.parameters import labelled
 from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
 from oscillator.report.orbits import modified_blocks
+from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -374,7 +376,8 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
         bottom.plot([], [], color=_color(end.id), ls="--", lw=0.8, label=label)
     top.set_ylabel(f"{coordinate} at the section ({unit_of(coordinate)})")
     bottom.set_ylabel("share of the fresh starts")
-    bottom.set_xlabel(over.param)
+    bottom.set_xlabel(labelled(over.param))
+    bottom.ticklabel_format(useOffset=False)
     bottom.set_ylim(-0.05, 1.05)
     bottom.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2, frameon=False)
     for ax in (top, bottom):
@@ -472,8 +475,9 @@ def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
         handles.append(Patch(color=FAILED, label="failed"))
     handles += _hatch_coexisting(ax, atlas, coexisting > 1)
     handles += _fig_14_marks(ax, atlas)
-    ax.set_xlabel(atlas.x.name)
-    ax.set_ylabel(atlas.y.name)
+    ax.set_xlabel(labelled(atlas.x.name))
+    ax.set_ylabel(labelled(atlas.y.name))
+    ax.ticklabel_format(useOffset=False)
     title = f"{figure_title(atlas.case)}: {ATLAS_MEASURES[by]} over {atlas.x.name} and {atlas.y.name}"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
     if handles:
@@ -585,37 +589,76 @@ def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
     return _write_folder(folder, {"atlas": atlas.table}, figure, _atlas_blocks(atlas), title)
 
 
-def curve_figure(curve: Curve, atlas: Atlas | None = None) -> Figure:
-    """The bifurcation curve in its plane, over the atlas's regimes when one is given."""
-    fig = atlas_figure(atlas) if atlas is not None else None
-    if fig is None:
-        from matplotlib.figure import Figure
+#: Line styles of the curves drawn over one plane, in turn.
+CURVE_STYLES = ("-", "--", "-.", ":")
 
+
+def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) -> Figure:
+    """Bifurcation curves in their plane (one or several, each in its own style, named in the
+    legend), over the atlas's regimes when one is given."""
+    from matplotlib.figure import Figure
+
+    several = [curves] if isinstance(curves, Curve) else list(curves)
+    first = several[0]
+    if atlas is not None:
+        fig = atlas_figure(atlas)
+        ax = fig.axes[0]
+        legend = ax.get_legend()
+        handles = list(legend.legend_handles) if legend is not None else []
+    else:
         fig = Figure(figsize=(7.0, 5.5), layout="constrained")
         ax = fig.add_subplot()
-        ax.set_xlabel(curve.x)
-        ax.set_ylabel(curve.y)
+        ax.set_xlabel(labelled(first.x))
+        ax.set_ylabel(labelled(first.y))
         ax.grid(alpha=0.3)
-    else:
-        ax = fig.axes[0]
-    ax.plot(
-        curve.points[curve.x],
-        curve.points[curve.y],
-        color="black",
-        lw=1.6,
-        marker=".",
-        ms=4,
-        label=f"{curve.kind} curve",
-    )
-    title = f"{curve.kind} curve of the orbit {curve.inside}"
-    ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=8)
-    if atlas is None:
-        ax.legend(fontsize=8)
+        handles = []
+    for k, curve in enumerate(several):
+        (line,) = ax.plot(
+            curve.points[curve.x],
+            curve.points[curve.y],
+            color="black",
+            lw=1.6,
+            ls=CURVE_STYLES[k % len(CURVE_STYLES)],
+            marker=".",
+            ms=4,
+            label=f"{curve.kind} curve ({len(curve.points)} points)",
+        )
+        handles.append(line)
+    ax.ticklabel_format(useOffset=False)
+    kinds = " and ".join(dict.fromkeys(curve.kind for curve in several))
+    title = f"{kinds} curve in {first.x} and {first.y}"
+    if atlas is not None:
+        title = f"{figure_title(atlas.case)}: {title}, over the regime of the first attractor"
+    ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
     return fig
 
 
-def write_curve(curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots: bool = True) -> list[str]:
-    """``curve.parquet``, ``curve.json`` (how it ended, its folds), the figure and the report."""
+def read_curve(folder: Path) -> Curve:
+    """The curve of a folder ``oscillator curve`` wrote (``curve.json``, ``curve.parquet``), every
+    file checked: a folder that holds none, or a damaged one, is refused naming it."""
+    from oscillator.io.files import read_untrusted
+
+    shown_folder = printable(str(folder))
+    try:
+        info = json.loads(read_untrusted(folder / "curve.json", what="curve file", field="folder", limit=1_000_000))
+        x, y, kind, inside = (str(info[key]) for key in ("x", "y", "kind", "inside"))
+        ends = tuple(str(end) for end in info["ends"])
+        points = pd.read_parquet(folder / "curve.parquet")[[x, y]].astype(float)
+    except InputError as error:
+        raise InputError(f"{shown_folder} holds no curve ({error})", field="folder") from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise InputError(f"{shown_folder} holds no curve, or a damaged one ({error})", field="folder") from None
+    if len(ends) != 2 or not len(points) or not np.isfinite(points.to_numpy()).all():
+        raise InputError(f"{shown_folder}: its curve is damaged (its ends or points)", field="folder")
+    return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside)
+
+
+def write_curve(
+    curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots: bool = True, also: Sequence[Curve] = ()
+) -> list[str]:
+    """``curve.parquet``, ``curve.json`` (how it ended, its folds), the figure (with the curves
+    ``also`` drawn beside it) and the report."""
     info = {
         "kind": curve.kind,
         "x": curve.x,
@@ -634,5 +677,5 @@ def write_curve(curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots
         mk.Table((curve.x, curve.y), rows),
         mk.Figure("curve", "the curve" + (" over the atlas's regimes" if atlas is not None else "")),
     ]
-    figure = [("curve", lambda: curve_figure(curve, atlas))] if plots else []
+    figure = [("curve", lambda: curve_figure([curve, *also], atlas))] if plots else []
     return _write_folder(folder, {"curve": curve.points}, figure, blocks, f"{curve.kind} curve")
