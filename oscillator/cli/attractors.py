@@ -625,7 +625,7 @@ def curve(
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --out c1
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --also c1
     """
-    from oscillator.io.files import check_new
+    from oscillator.io.files import check_new, claim_folder
 
     try:
         resolved = case_from(case, None, set_)
@@ -633,23 +633,13 @@ def curve(
         folder = out_dir if out_dir is not None else _new_folder(resolved, "curve")
         check_new(folder, option="--out")
         atlas_found = _read_atlas(over, resolved, x[0], y[0]) if over is not None else None
-        others = [_read_other_curve(folder, x[0], y[0]) for folder in also or []]
+        others = [_read_other_curve(other, x[0], y[0]) for other in also or []]
         load("oscillator.orbits.curves", notice=True)
         from oscillator.orbits.curves import check_curve, trace_curve
 
         window = ((x[1], x[2]), (y[1], y[2]))
-        options: dict[str, Any] = {
-            "kind": kind,
-            "x": x[0],
-            "y": y[0],
-            "at": point,
-            "window": window,
-            "period": period,
-            "step": step,
-        }
+        options: dict[str, Any] = dict(kind=kind, x=x[0], y=y[0], at=point, window=window, period=period, step=step)
         check_curve(resolved, **options)  # every argument refused here, before any work (exit 2)
-        from oscillator.io.files import claim_folder
-
         claim = claim_folder(folder, option="--out")  # an unwritable --out is refused before the work too
     except OscillatorError as error:
         raise fail(message(error)) from None
