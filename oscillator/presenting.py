@@ -52,6 +52,8 @@ class Presenter(Protocol):
 
     def branch_html(self, branch: Branch) -> str: ...
 
+    def plot_global(self, found: object, **options: object) -> Figure: ...
+
 
 _registered: list[Presenter] = []
 

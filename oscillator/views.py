@@ -7,6 +7,7 @@ from __future__ import annotations
 TYPE_CHECKING = False
 
 if TYPE_CHECKING:  # pragma: no cover
+    from collections.abc import Callable
     from pathlib import Path
 
     import pandas as pd
@@ -69,3 +70,22 @@ class Views:
         from oscillator.report.notebook import branch_html
 
         return branch_html(branch)
+
+    def plot_global(self, found: object, **options: object) -> Figure:
+        """The figure of a global analysis (basins, Lyapunov spectrum, attractors over a
+        parameter, atlas, curve), as its command draws it."""
+        from oscillator.attractors.atlas import Atlas
+        from oscillator.attractors.basins import Basins
+        from oscillator.attractors.following import AttractorsOver
+        from oscillator.attractors.lyapunov import LyapunovSpectrum
+        from oscillator.orbits.curves import Curve
+        from oscillator.report import attractors as drawn
+
+        draw: dict[type, Callable[..., Figure]] = {
+            Basins: drawn.basins_figure,
+            LyapunovSpectrum: drawn.lyapunov_figure,
+            AttractorsOver: drawn.following_figure,
+            Atlas: drawn.atlas_figure,
+            Curve: drawn.curve_figure,
+        }
+        return draw[type(found)](found, **options)

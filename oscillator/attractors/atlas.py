@@ -23,7 +23,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -35,7 +35,11 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
 from oscillator.orbits.shooting import check_count, period_map
+from oscillator.presenting import presenter
 from oscillator.text import printable, shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = [
     "Atlas",
@@ -303,6 +307,11 @@ class Atlas:
     x: AtlasAxis
     y: AtlasAxis
     table: pd.DataFrame
+
+    def plot(self, by: str = "regime") -> Figure:
+        """The plane coloured by ``by``: ``regime``, ``period``, ``coexisting``, ``lyapunov`` or
+        ``impact_velocity`` (as ``oscillator atlas`` draws it)."""
+        return presenter().plot_global(self, by=by)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(codes, coexisting, regimes)``: at each point the code of its regime (the regime of

@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -26,7 +26,11 @@ from oscillator.attractors.finding import MAX_STARTS, STATE, Attractors, Attract
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, case_to_toml
+from oscillator.presenting import presenter
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["Axis", "Basins", "basin_store", "grid_starts", "run_basins"]
 
@@ -115,6 +119,11 @@ class Basins:
         for column in ("attractor", "period", "status", "reason", "message"):
             frame[column] = labels[column]
         return frame
+
+    def plot(self) -> Figure:
+        """The slice coloured by attractor, each attractor's section points on top (as ``oscillator
+        basins`` draws it)."""
+        return presenter().plot_global(self)
 
 
 def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:

@@ -47,9 +47,12 @@ from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
+from oscillator.presenting import presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
     from oscillator.orbits.continuation import Branch
 
 __all__ = ["AttractorsOver", "End", "follow_attractors", "local_branches"]
@@ -119,6 +122,12 @@ class AttractorsOver:
                 interval = share_interval(k, len(fresh))
                 rows.append(_row(self.param, float(value), ids[attractor.id], attractor, k, len(fresh), interval))
         return pd.DataFrame(rows)
+
+    def plot(self, coordinate: str = "x2", *, branches: bool = True) -> Figure:
+        """Each attractor's section points (``coordinate``) and share against the parameter, where
+        each appears or ends, and with ``branches`` the periodic orbits' branches (continued here:
+        :func:`local_branches`), as ``oscillator attractors`` draws it."""
+        return presenter().plot_global(self, coordinate=coordinate, branches=local_branches(self) if branches else [])
 
     def ends_table(self) -> pd.DataFrame:
         """One row per end: ``id, name, change`` (``appears`` or ``ends`` along the values, from the

@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -30,6 +31,10 @@ from oscillator.analysis.execution import check_progress
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.orbits.shooting import check_count, check_guess, period_map
+from oscillator.presenting import presenter
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["LyapunovSpectrum", "lyapunov", "separation_exponent"]
 
@@ -84,6 +89,11 @@ class LyapunovSpectrum:
         if k == len(self.exponents) or not np.isfinite(self.exponents[k]):
             return float(k)
         return float(k + sums[k - 1] / abs(self.exponents[k]))
+
+    def plot(self) -> Figure:
+        """The running averages of the exponents against the averaging time (as ``oscillator
+        lyapunov`` draws them)."""
+        return presenter().plot_global(self)
 
 
 def _start(case: Case, guess: Sequence[float] | np.ndarray | None, transient: int) -> tuple[float, np.ndarray]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -40,13 +41,17 @@ from oscillator.orbits.shooting import (
     ORBIT_RTOL,
     check_count,
 )
+from oscillator.presenting import presenter
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["CURVE_KINDS", "DEFAULT_STEP", "Curve", "check_curve", "trace_curve"]
 
-#: The kinds a curve can be traced for (``continue_orbit``'s, ``sliding`` for either sliding kind).
 #: The predictor's step, as a fraction of the window (``oscillator curve --step`` has the same default).
 DEFAULT_STEP = 0.05
+#: The kinds a curve can be traced for (``continue_orbit``'s, ``sliding`` for either sliding kind).
 CURVE_KINDS = ("sliding", *(kind.value for kind in Bifurcation if kind is not Bifurcation.TORUS))
 
 
@@ -84,6 +89,11 @@ class Curve:
     ends: tuple[str, str]
     folds: tuple[tuple[float, float], ...]
     inside: str
+
+    def plot(self, atlas: Any = None) -> Figure:
+        """The curve in its plane, over ``atlas``'s regimes (an :class:`~oscillator.attractors.atlas.Atlas`)
+        if given (as ``oscillator curve`` draws it)."""
+        return presenter().plot_global(self, atlas=atlas)
 
 
 class _Tracer:
