@@ -959,3 +959,28 @@ def test_a_curve_drawn_beside_another_is_read_back_checked(tmp_path, monkeypatch
     (tmp_path / "empty").mkdir()
     done = CliRunner().invoke(app, [*CURVE, "--at", "Omega=1.6,Q2=71.16", "--also", "empty"])
     assert done.exit_code == 2 and "--also empty holds no curve" in done.stderr
+
+
+def test_report_rebuilds_a_basins_folder_from_its_parts_and_refuses_an_unfinished_one(tmp_path, monkeypatch):
+    import io
+
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    arguments = ["basins", "instance-1", "--x", "x2", "3", "6", "2", "--y", "v2", "-4", "4", "2", "--transient", "20"]
+    assert CliRunner().invoke(app, [*arguments, "--record", "4", "--workers", "1", "--out", "b", "-q"]).exit_code == 0
+    table = (tmp_path / "b" / "attractors.parquet").read_bytes()
+    for lost in ("report.md", "report.html", "attractors.parquet", "figures/basins.png"):
+        (tmp_path / "b" / lost).unlink()
+    done = CliRunner().invoke(app, ["report", "b"])
+    assert done.exit_code == 0 and "report rebuilt (the basins)" in done.stdout
+    assert (tmp_path / "b" / "figures" / "basins.png").read_bytes()[:4] == b"\x89PNG"
+    assert "A0: period-1" in (tmp_path / "b" / "report.md").read_text(encoding="utf-8")
+    assert pd.read_parquet(tmp_path / "b" / "attractors.parquet").equals(pd.read_parquet(io.BytesIO(table)))
+    (part,) = (tmp_path / "b" / "parts").iterdir()
+    part.unlink()
+    done = CliRunner().invoke(app, ["report", "b"])
+    assert done.exit_code == 2 and "b is not finished (0 of 4 starts)" in done.stderr

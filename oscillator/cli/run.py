@@ -312,9 +312,14 @@ def _run_summary(case: Case, result: Result) -> list[Text | Table | str]:
     return lines
 
 
+#: The marker files of the global analyses' folders, which ``report`` rebuilds too.
+GLOBAL_MARKERS = ("curve.json", "basins.json", "atlas.json", "attractors.json", "lyapunov.json")
+
+
 def report(
     folder: Annotated[
-        Path, typer.Argument(metavar="DIR", help="A folder written by oscillator run or oscillator continue.")
+        Path,
+        typer.Argument(metavar="DIR", help="A folder written by oscillator run, continue, basins, atlas or curve."),
     ],
     window: Annotated[
         tuple[float, float] | None,
@@ -324,7 +329,9 @@ def report(
     """Rebuild the report of a run or branch folder; draw its figures if they are missing.
 
     Finishes a run (or a continued branch) whose figures or report were interrupted. With
-    --window, redraws a run's figures for that time window.
+    --window, redraws a run's figures for that time window. A finished basins, atlas or curve
+    folder gets its tables, figures and report again, from what it keeps (nothing computed anew
+    but the basins' orbits refined).
 
     \b
     Examples:
@@ -337,6 +344,13 @@ def report(
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
+        if any((folder / marker).is_file() for marker in GLOBAL_MARKERS):
+            load("oscillator.report.attractors")
+            from oscillator.report.attractors import rebuild
+
+            what = rebuild(folder)
+            say(f"report rebuilt ({what}): {folder / 'report.md'}, {folder / 'report.html'}")
+            return
         if folder_kind(folder) == "branch":
             if window is not None:
                 raise InputError("--window chooses a run's time window; a branch folder has none", field="--window")

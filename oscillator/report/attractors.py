@@ -679,3 +679,89 @@ def write_curve(
     ]
     figure = [("curve", lambda: curve_figure([curve, *also], atlas))] if plots else []
     return _write_folder(folder, {"curve": curve.points}, figure, blocks, f"{curve.kind} curve")
+
+
+def rebuild(folder: Path) -> str | None:
+    """Rebuild the tables, figures and report of a finished basins, atlas or curve folder from
+    what it keeps (for ``oscillator report``); what was rebuilt, or None for a folder of another
+    kind.  The landings and rows are read back, never computed: an unfinished folder is refused
+    (the command that made it resumes it)."""
+    from oscillator.io.cases import load_case
+
+    if (folder / "curve.json").exists():
+        write_curve(read_curve(folder), folder)
+        return "the curve (drawn without an atlas)"
+    if (folder / "attractors.json").exists():
+        raise InputError(
+            f"{printable(str(folder))}: an attractors folder is rebuilt by running the command that made it again with "
+            "the same --out: it reads its landings back and computes none",
+            field="folder",
+        )
+    if (folder / "lyapunov.json").exists():
+        raise InputError(
+            f"{printable(str(folder))}: a Lyapunov folder keeps no state to redraw from; run the same lyapunov "
+            "command with a new --out (it takes seconds)",
+            field="folder",
+        )
+    if (folder / "basins.json").exists():
+        _rebuild_basins(folder, _identity(folder / "basins.json"), load_case(folder / "case.toml"))
+        return "the basins"
+    if (folder / "atlas.json").exists():
+        _rebuild_atlas(folder, _identity(folder / "atlas.json"), load_case(folder / "case.toml"))
+        return "the atlas"
+    return None
+
+
+def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
+    from oscillator.attractors.basins import Axis, basin_store, grid_starts, run_basins
+    from oscillator.attractors.finding import AttractorSettings
+
+    try:
+        x, y = (Axis(**identity[name]) for name in ("x", "y"))
+        settings = AttractorSettings(**identity["settings"])
+    except (KeyError, TypeError) as error:
+        raise InputError(f"{printable(str(folder))}/basins.json is damaged ({error})", field="folder") from None
+    store = basin_store(folder, case, x, y, settings)
+    store.check()  # this very computation, or refused
+    _finished(store, len(grid_starts(case, x, y)), "starts")
+    write_basins(run_basins(case, x, y, store, settings=settings), folder)
+
+
+def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> None:
+    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, atlas_identity, run_atlas
+    from oscillator.attractors.store import LandingStore
+
+    try:
+        x, y = (AtlasAxis(**identity[name]) for name in ("x", "y"))
+        settings = AtlasSettings(**identity["settings"])
+    except (KeyError, TypeError) as error:
+        raise InputError(f"{printable(str(folder))}/atlas.json is damaged ({error})", field="folder") from None
+    store = LandingStore(folder, "atlas.json", atlas_identity(case, x, y, settings))
+    store.check()  # this very computation, or refused
+    _finished(store, y.count, "rows", tables=True)
+    write_atlas(run_atlas(case, x, y, settings=settings, store=store), folder)
+
+
+def _identity(marker: Path) -> dict[str, Any]:
+    """The identity a folder's marker file holds (checked as untrusted text)."""
+    from oscillator.io.files import read_untrusted
+
+    try:
+        identity = json.loads(read_untrusted(marker, what="marker file", field="folder", limit=1_000_000))["identity"]
+        if not isinstance(identity, dict):
+            raise TypeError("not a table")
+    except (ValueError, KeyError, TypeError, RecursionError) as error:
+        raise InputError(f"{printable(str(marker))} is damaged ({error}); give a new folder", field="folder") from None
+    return identity
+
+
+def _finished(store: Any, total: int, what: str, *, tables: bool = False) -> None:
+    """Refuse a folder whose computation has not finished: ``report`` reads back, never computes."""
+    parts = sorted(store.parts.glob("row-*.parquet" if tables else "*.parquet"))
+    done = len(parts) if tables else sum(len(pd.read_parquet(part)) for part in parts)
+    if done < total:
+        raise InputError(
+            f"{printable(str(store.folder))} is not finished ({done} of {total} {what}); run the command that made it "
+            "again with the same --out to resume it",
+            field="folder",
+        )
