@@ -984,3 +984,19 @@ def test_report_rebuilds_a_basins_folder_from_its_parts_and_refuses_an_unfinishe
     part.unlink()
     done = CliRunner().invoke(app, ["report", "b"])
     assert done.exit_code == 2 and "b is not finished (0 of 4 starts)" in done.stderr
+
+
+def test_more_fresh_starts_per_point_find_the_coexisting_orbits_of_the_hysteresis_window():
+    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, fresh_starts, run_atlas
+
+    starts = fresh_starts(CASE, 8)
+    assert starts.shape == (8, 4) and np.array_equal(starts[0], CASE.initial.y)
+    assert np.all(np.abs(starts - CASE.initial.y) <= 4.0) and len(np.unique(starts, axis=0)) == 8  # box half-width 4
+    assert np.array_equal(starts, fresh_starts(CASE, 8))  # the same starts every time
+    x, y = AtlasAxis("Omega", 1.6, 1.6001, 2), AtlasAxis("Q2", 71.16, 71.165, 2)  # inside the window
+    one = run_atlas(CASE, x, y, settings=AtlasSettings(starts=1)).table
+    eight = run_atlas(CASE, x, y, settings=AtlasSettings(starts=8)).table
+    first_row = lambda table: table[table.row == 0].drop_duplicates("column").coexisting.tolist()  # noqa: E731
+    assert first_row(one) == [1, 1] and first_row(eight)[0] == 2  # the first row has no seeds to help
+    both = eight[(eight.row == 0) & (eight.column == 0)]
+    assert set(both.regime) == {"P1", "P1 m2 rests"}

@@ -48,6 +48,7 @@ __all__ = [
     "atlas_identity",
     "atlas_point",
     "atlas_row",
+    "fresh_starts",
     "regime_of",
     "run_atlas",
 ]
@@ -119,21 +120,41 @@ class AtlasSettings:
         Forcing periods recorded (the longest period found is ``record - 1``).
     lyapunov_periods : int
         Periods averaged for an aperiodic attractor's largest exponent.
+    starts : int
+        Fresh starts at every point (1 to 1000): the case's start, and ``starts - 1`` more
+        (:func:`fresh_starts`), so that coexisting attractors are found at a point without a
+        seed that reaches them.
     """
 
     fresh_transient: int = 40
     seed_transient: int = 16
     record: int = 10
     lyapunov_periods: int = 100
+    starts: int = 1
 
     def __post_init__(self) -> None:
         for name, least in (("fresh_transient", 1), ("seed_transient", 1), ("record", 2), ("lyapunov_periods", 1)):
             check_count(getattr(self, name), name, least, 1_000_000)
+        check_count(self.starts, "starts", 1, 1000)
 
     def landing(self, transient: int) -> AttractorSettings:
         return AttractorSettings(
             transient=transient, record=self.record, max_period=self.record - 1, lyapunov_periods=0
         )
+
+
+def fresh_starts(case: Case, count: int) -> np.ndarray:
+    """``count`` starts ``(x1, v1, x2, v2)``: the case's own start first, then the points of a
+    Halton sequence (unscrambled: the same starts every time) in the box centred on it whose
+    half-width in every component is ``max(1, max |start|)`` (in m and m/s)."""
+    from scipy.stats import qmc
+
+    start = np.array(case.initial.y, dtype=float)
+    if count == 1:
+        return start[None, :]
+    width = max(1.0, float(np.max(np.abs(start))))
+    unit = qmc.Halton(d=4, scramble=False).random(count)[1:]  # the first point is the box's corner
+    return np.vstack([start, start - width + 2.0 * width * unit])
 
 
 def regime_of(
@@ -209,9 +230,10 @@ def atlas_point(
         point = resolve_case(case, **{x.name: float(x.values[column]), y.name: float(y.values[row])})
     except OscillatorError as error:
         return _failed(row, column, str(error))
-    landings = [land(point, settings.landing(settings.fresh_transient), 0, point.initial.y)]
+    fresh = settings.landing(settings.fresh_transient)
+    landings = [land(point, fresh, k, tuple(start)) for k, start in enumerate(fresh_starts(point, settings.starts))]
     seed_settings = settings.landing(settings.seed_transient)
-    landings += [land(point, seed_settings, k + 1, tuple(seed)) for k, seed in enumerate(seeds)]
+    landings += [land(point, seed_settings, len(landings) + k, tuple(seed)) for k, seed in enumerate(seeds)]
     found, _ = group(landings, seed_settings)
     if not found:
         return _failed(row, column, next((item.message for item in landings if item.message), "every start failed"))

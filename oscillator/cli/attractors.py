@@ -487,6 +487,11 @@ def atlas(
     case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
     x: Annotated[PlaneAxis, typer.Option("--x", metavar="NAME LOW HIGH N", help="The first parameter's axis.")],
     y: Annotated[PlaneAxis, typer.Option("--y", metavar="NAME LOW HIGH N", help="The second parameter's axis.")],
+    starts: Annotated[
+        int, typer.Option("--starts", metavar="N", help="Fresh starts at every point: the case's, and N-1 around it.")
+    ] = 1,
+    transient: TransientOption = 40,
+    record: RecordOption = 10,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: Annotated[
@@ -511,6 +516,7 @@ def atlas(
     \b
     Examples:
       oscillator atlas instance-1 --x Omega 1.3 1.85 12 --y Q2 68.5 72 8 --out runs/atlas
+      oscillator atlas instance-1 --x Omega 1.59 1.61 3 --y Q2 71.1 71.2 3 --starts 4 --transient 60 --record 16
     """
     try:
         resolved = case_from(case, None, set_)
@@ -524,7 +530,7 @@ def atlas(
         for axis in (x_axis, y_axis):
             for value in (axis.low, axis.high):
                 case_from(case, None, [*(set_ or []), f"{axis.name}={value!r}"])
-        settings = AtlasSettings()
+        settings = AtlasSettings(fresh_transient=transient, record=record, starts=starts)
         folder = out_dir if out_dir is not None else _new_folder(resolved, "atlas")
         store = LandingStore(folder, "atlas.json", atlas_identity(resolved, x_axis, y_axis, settings))
         store.check()
