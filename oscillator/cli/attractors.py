@@ -5,6 +5,7 @@ or ends) and ``oscillator lyapunov`` (the Lyapunov spectrum of a motion)."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -83,6 +84,24 @@ def _computing(store: Any, what: str, lock: Any, client: Any) -> Iterator[None]:
         lock.release()
         if client is not None:
             client.close()
+
+
+def _outputs(folder: Path, kept: str, write: Any) -> list[str]:
+    """``write()``: a finished computation's tables, figures and report, a Ctrl-C held until they
+    are written (never a folder marked computed with its tables missing); what could not be
+    drawn (the tables stay)."""
+    from oscillator.io.signals import interrupts_deferred
+
+    try:
+        with interrupts_deferred():
+            problems: list[str] = write()
+    except OSError as error:
+        raise fail(f"cannot write into {printable(str(folder))} ({error}); the {kept} are kept there", 1) from None
+    except KeyboardInterrupt:  # held until the outputs were written: they are
+        raise fail(
+            f"interrupted; the tables, figures and report are written in {printable(str(folder))}", 130
+        ) from None
+    return problems
 
 
 def _unwritable(error: OSError, folder: Path, what: str) -> typer.Exit:
@@ -215,10 +234,7 @@ def _finish_basins(found: Basins, store: Any, no_plots: bool, quiet: bool) -> No
     from oscillator.attractors.finding import share_text
     from oscillator.report.attractors import attractor_table, write_basins
 
-    try:
-        problems = write_basins(found, folder, plots=not no_plots)
-    except OSError as error:
-        raise fail(f"cannot write into {printable(str(folder))} ({error}); the starts are kept there", 1) from None
+    problems = _outputs(folder, "starts", lambda: write_basins(found, folder, plots=not no_plots))
     if not quiet:
         table = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
         for column in ("attractor", "share of starts [95 %]", "orbit", "largest |multiplier|"):
@@ -458,10 +474,8 @@ def _finish_following(over: Any, store: Any, coordinate: str, branches: list[Any
     folder = store.folder
     from oscillator.report.attractors import write_following
 
-    try:
-        problems = write_following(over, folder, coordinate=coordinate, branches=branches, plots=not no_plots)
-    except OSError as error:
-        raise fail(f"cannot write into {printable(str(folder))} ({error}); the landings are kept there", 1) from None
+    write = functools.partial(write_following, over, folder, coordinate=coordinate, branches=branches)
+    problems = _outputs(folder, "landings", functools.partial(write, plots=not no_plots))
     if not quiet:
         for end in over.ends:
             verb = end.change(float(over.values[0]), float(over.values[-1]))
@@ -575,10 +589,7 @@ def _finish_atlas(found: Any, store: Any, no_plots: bool, quiet: bool) -> None:
     folder = store.folder
     from oscillator.report.attractors import write_atlas
 
-    try:
-        problems = write_atlas(found, folder, plots=not no_plots)
-    except OSError as error:
-        raise fail(f"cannot write into {printable(str(folder))} ({error}); the rows are kept there", 1) from None
+    problems = _outputs(folder, "rows", lambda: write_atlas(found, folder, plots=not no_plots))
     if not quiet:
         first = found.table[found.table.attractor <= 0]
         for regime, count in first.regime.value_counts().items():
