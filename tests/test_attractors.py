@@ -947,11 +947,15 @@ def test_a_curve_drawn_beside_another_is_read_back_checked(tmp_path, monkeypatch
 
     monkeypatch.chdir(tmp_path)
     points = pd.DataFrame({"Q2": [70.9, 71.0], "Omega": [1.6, 1.61]})
-    other = Curve("grazing", "Q2", "Omega", points, ("left the window", "left the window"), (), "m1: passable")
+    ends = ("left the window", "left the window")
+    other = Curve("grazing", "Q2", "Omega", points, ends, (), "m1: passable", inside_point=(70.9, 1.605))
     (tmp_path / "g").mkdir()
     write_curve(other, tmp_path / "g", plots=False)
     again = read_curve(tmp_path / "g")
     assert again.points.equals(points) and again.ends == other.ends and again.kind == "grazing"
+    assert again.inside_point == (70.9, 1.605)
+    sides = [t.get_text() for t in curve_figure(again).axes[0].texts]
+    assert sides == ["its orbit exists", "its orbit does not"]
     legend = [t.get_text() for t in curve_figure([other, again]).axes[0].get_legend().get_texts()]
     assert legend == ["grazing curve (2 points)", "grazing curve (2 points)"]
     done = CliRunner().invoke(app, [*CURVE, "--at", "Omega=1.6,Q2=71.16", "--also", "g"])

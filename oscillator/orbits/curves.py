@@ -80,6 +80,8 @@ class Curve:
         Where the curve turned back in one of the parameters (``(x, y)``).
     inside : str
         The inside orbit's cycle of switches.
+    inside_point : tuple of float, optional
+        A point on the inside of the curve (where that orbit exists), near its start.
     """
 
     kind: str
@@ -89,6 +91,7 @@ class Curve:
     ends: tuple[str, str]
     folds: tuple[tuple[float, float], ...]
     inside: str
+    inside_point: tuple[float, float] | None = None
 
     def plot(self, atlas: Any = None) -> Figure:
         """The curve in its plane, over ``atlas``'s regimes (an :class:`~oscillator.attractors.atlas.Atlas`)
@@ -271,7 +274,9 @@ def trace_curve(
     def curve() -> Curve:
         ordered = [*back[::-1], first, *ahead]
         table = pd.DataFrame([(p[0], p[1]) for p in ordered], columns=[x, y])
-        return Curve(kind, x, y, table, (ends[0], ends[1]), tuple(folds), inside_kind.signature)
+        inside_point = first + 1e-3 * tracer.inward(tangent) * tracer.spans  # just inside, at the start
+        side = (float(inside_point[0]), float(inside_point[1]))
+        return Curve(kind, x, y, table, (ends[0], ends[1]), tuple(folds), inside_kind.signature, side)
 
     try:
         for k, (direction, points) in enumerate(((-1.0, back), (1.0, ahead))):

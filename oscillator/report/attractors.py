@@ -624,6 +624,8 @@ def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) ->
             label=f"{curve.kind} curve ({len(curve.points)} points)",
         )
         handles.append(line)
+        if curve.inside_point is not None:
+            _side_labels(ax, curve)
     ax.ticklabel_format(useOffset=False)
     kinds = " and ".join(dict.fromkeys(curve.kind for curve in several))
     title = f"{kinds} curve in {first.x} and {first.y}"
@@ -632,6 +634,21 @@ def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) ->
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
     return fig
+
+
+def _side_labels(ax: Any, curve: Curve) -> None:
+    """The curve's two sides named beside its start: where its orbit exists, and where not (a
+    tenth of the axes' span off the curve, along the normal toward ``inside_point``)."""
+    assert curve.inside_point is not None
+    spans = np.array([np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim())])
+    start = curve.points[[curve.x, curve.y]].to_numpy()
+    inside = np.array(curve.inside_point)
+    near = start[np.argmin(np.sum(((start - inside) / spans) ** 2, axis=1))]
+    unit = (inside - near) / spans
+    offset = 0.1 * spans * unit / max(float(np.linalg.norm(unit)), 1e-300)
+    box = {"boxstyle": "round,pad=0.2", "facecolor": "white", "alpha": 0.85, "lw": 0}
+    for where, text in ((near + offset, "its orbit exists"), (near - offset, "its orbit does not")):
+        ax.annotate(text, tuple(where), fontsize=7, ha="center", va="center", bbox=box, zorder=7)
 
 
 def read_curve(folder: Path) -> Curve:
@@ -651,7 +668,10 @@ def read_curve(folder: Path) -> Curve:
         raise InputError(f"{shown_folder} holds no curve, or a damaged one ({error})", field="folder") from None
     if len(ends) != 2 or not len(points) or not np.isfinite(points.to_numpy()).all():
         raise InputError(f"{shown_folder}: its curve is damaged (its ends or points)", field="folder")
-    return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside)
+    side = info.get("inside_point")
+    ok = isinstance(side, list) and len(side) == 2 and all(isinstance(v, (int, float)) for v in side)
+    inside_point = (float(side[0]), float(side[1])) if ok and np.isfinite(side).all() else None
+    return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside, inside_point)
 
 
 def write_curve(
@@ -664,6 +684,7 @@ def write_curve(
         "x": curve.x,
         "y": curve.y,
         "inside": curve.inside,
+        "inside_point": None if curve.inside_point is None else list(curve.inside_point),
         "ends": list(curve.ends),
         "folds": [list(f) for f in curve.folds],
     }
