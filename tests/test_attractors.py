@@ -1004,3 +1004,10 @@ def test_more_fresh_starts_per_point_find_the_coexisting_orbits_of_the_hysteresi
     assert first_row(one) == [1, 1] and first_row(eight)[0] == 2  # the first row has no seeds to help
     both = eight[(eight.row == 0) & (eight.column == 0)]
     assert set(both.regime) == {"P1", "P1 m2 rests"}
+
+
+def test_a_title_counts_many_changed_values_instead_of_listing_them():
+    from oscillator.report.figures import figure_title
+
+    assert figure_title(resolve_case("instance-1", **UEDA)) == "instance-1 (14 values changed)"
+    assert figure_title(resolve_case("instance-1", Q2=71.165)) == "instance-1 (Q2 71 → 71.165)"

@@ -480,12 +480,14 @@ PANEL_NAMES = {
 
 
 def figure_title(case: Case) -> str:
-    """The case's name, and what overrides changed (``instance-1 (Omega 1.6 → 1.7)``; more than
-    three changes are named, not valued)."""
+    """The case's name, and what overrides changed (``instance-1 (Omega 1.6 → 1.7)``; four to six
+    changes are named, not valued; more are counted)."""
     if not case.modified:
         return case.name
     if len(case.modified) <= 3:
         return f"{case.name} ({', '.join(case.modified)})"
+    if len(case.modified) > 6:
+        return f"{case.name} ({len(case.modified)} values changed)"
     names = ", ".join(change.split(" ")[0] for change in case.modified)
     return f"{case.name} ({len(case.modified)} values changed: {names})"
 
