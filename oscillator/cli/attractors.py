@@ -474,8 +474,10 @@ def _finish_following(over: Any, store: Any, coordinate: str, branches: list[Any
     folder = store.folder
     from oscillator.report.attractors import write_following
 
-    write = functools.partial(write_following, over, folder, coordinate=coordinate, branches=branches)
-    problems = _outputs(folder, "landings", functools.partial(write, plots=not no_plots))
+    write = functools.partial(
+        write_following, over, folder, coordinate=coordinate, branches=branches, plots=not no_plots
+    )
+    problems = _outputs(folder, "landings", write)
     if not quiet:
         for end in over.ends:
             verb = end.change(float(over.values[0]), float(over.values[-1]))
