@@ -52,9 +52,17 @@ _EXPORTS = {
     "find_orbit": "oscillator.orbits.shooting",
     "Branch": "oscillator.orbits.continuation",
     "continue_orbit": "oscillator.orbits.continuation",
-    "Attractor": "oscillator.attractors.finding",
+    "Attractor": "oscillator.attractors.grouping",
     "Attractors": "oscillator.attractors.finding",
-    "AttractorSettings": "oscillator.attractors.finding",
+    "AttractorSettings": "oscillator.attractors.mapping",
+    "Axis": "oscillator.analysis.axes",
+    "Basins": "oscillator.attractors.basins",
+    "find_basins": "oscillator.attractors.basins",
+    "Atlas": "oscillator.attractors.atlas",
+    "AtlasSettings": "oscillator.attractors.atlas",
+    "regime_atlas": "oscillator.attractors.atlas",
+    "Curve": "oscillator.orbits.curves",
+    "trace_curve": "oscillator.orbits.curves",
     "find_attractors": "oscillator.attractors.finding",
     "LyapunovSpectrum": "oscillator.attractors.lyapunov",
     "lyapunov": "oscillator.attractors.lyapunov",
@@ -63,12 +71,17 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "Atlas",
+    "AtlasSettings",
     "Attractor",
     "AttractorSettings",
     "Attractors",
     "AttractorsOver",
+    "Axis",
+    "Basins",
     "Branch",
     "Case",
+    "Curve",
     "EnergyAudit",
     "Event",
     "EventKind",
@@ -93,17 +106,25 @@ __all__ = [
     "case_names",
     "continue_orbit",
     "find_attractors",
+    "find_basins",
     "find_orbit",
     "follow_attractors",
     "load_case",
     "lyapunov",
     "read_run",
+    "regime_atlas",
     "resolve_case",
     "simulate",
+    "trace_curve",
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
-    from oscillator.attractors.finding import Attractor, Attractors, AttractorSettings, find_attractors
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.atlas import Atlas, AtlasSettings, regime_atlas
+    from oscillator.attractors.basins import Basins, find_basins
+    from oscillator.attractors.finding import Attractors, find_attractors
+    from oscillator.attractors.grouping import Attractor
+    from oscillator.attractors.mapping import AttractorSettings
     from oscillator.attractors.following import AttractorsOver, follow_attractors
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
@@ -116,6 +137,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode
     from oscillator.orbits.continuation import Branch, continue_orbit
+    from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.shooting import Orbit, find_orbit
     from oscillator.saved import read_run
 

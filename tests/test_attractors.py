@@ -14,17 +14,12 @@ import numpy as np
 import pytest
 
 from oscillator import load_case, resolve_case, simulate
-from oscillator.attractors.basins import Axis, basin_store, grid_starts, run_basins
-from oscillator.attractors.finding import (
-    AttractorSettings,
-    Landing,
-    check_states,
-    find_attractors,
-    group,
-    interleaving,
-    share_text,
-    unsettled,
-)
+from oscillator.analysis.axes import Axis
+from oscillator.attractors.atlas import atlas_store, regime_atlas
+from oscillator.attractors.basins import basin_store, find_basins, grid_starts
+from oscillator.attractors.finding import find_attractors, share_text
+from oscillator.attractors.grouping import group, interleaving, unsettled
+from oscillator.attractors.mapping import AttractorSettings, Landing, check_states
 from oscillator.attractors.following import follow_attractors
 from oscillator.attractors.lyapunov import lyapunov, separation_exponent
 from oscillator.errors import InputError
@@ -137,13 +132,19 @@ def test_bad_settings_and_axes_are_refused_naming_the_field():
         AttractorSettings(record=1)
     with pytest.raises(InputError, match="match"):
         AttractorSettings(match=2.0)
-    with pytest.raises(InputError, match="not a state component"):
-        Axis("Q2", 0.0, 1.0, 3)
+    with pytest.raises(InputError, match="neither a state component"):
+        Axis("Q3", 0.0, 1.0, 3)
+    with pytest.raises(InputError, match="x: axis 'Q2' is not a state component"):
+        grid_starts(CASE, Axis("Q2", 0.0, 1.0, 3), Axis("x2", 0.0, 1.0, 3))
+    with pytest.raises(InputError, match="y: axis 'x2' is not a parameter"):
+        regime_atlas(CASE, Axis("Q2", 70.0, 71.0, 3), Axis("x2", 0.0, 1.0, 3))
+    with pytest.raises(InputError, match=r"y: the model refuses m1 = -1"):
+        regime_atlas(CASE, Axis("Omega", 1.0, 2.0, 3), Axis("m1", -1.0, 1.0, 3))
     with pytest.raises(InputError, match="empty"):
         Axis("x2", 1.0, 0.0, 3)
     with pytest.raises(InputError, match="count"):
         Axis("x2", 0.0, 1.0, 1)
-    with pytest.raises(InputError, match="both x2"):
+    with pytest.raises(InputError, match="both axes are x2"):
         grid_starts(CASE, Axis("x2", 0.0, 1.0, 2), Axis("x2", 0.0, 1.0, 2))
 
 
@@ -167,12 +168,12 @@ def test_basins_resume_after_an_interrupt_with_no_start_lost_or_run_twice(tmp_pa
     store = basin_store(folder, case, x, y, settings)
     store.check()
     with pytest.raises(KeyboardInterrupt):
-        run_basins(case, x, y, store, settings=settings, progress=stop_after_two)
+        find_basins(case, x, y, store, settings=settings, progress=stop_after_two)
     assert len(store.read(grid_starts(case, x, y))) == 2  # the two finished starts kept
     again = basin_store(folder, case, x, y, settings)
     again.check()
     seen = []
-    basins = run_basins(case, x, y, again, settings=settings, progress=lambda done, total: seen.append(done))
+    basins = find_basins(case, x, y, again, settings=settings, progress=lambda done, total: seen.append(done))
     assert seen[0] == 2 and seen[-1] == 6  # resumed at 2, four more computed
     assert sorted(item.index for item in again.read(grid_starts(case, x, y))) == list(range(6))
     fresh = find_attractors(case, states=grid_starts(case, x, y), settings=settings)
@@ -264,7 +265,7 @@ def test_the_same_attractors_come_out_for_any_number_of_workers():
     [
         (
             ["basins", "instance-1", "--x", "q1", "0", "1", "3", "--y", "v2", "0", "1", "3"],
-            "--x: axis 'q1' is not a state",
+            "--x: axis 'q1' is neither a state component",
         ),
         (["basins", "instance-1", "--x", "x2", "0", "1", "3", "--y", "v2", "1", "0", "3"], "--y: axis v2: from 1 to 0"),
         (["basins", "instance-1", "--x", "x2", "0", "1", "3", "--y", "v2", "0", "1", "3", "--record", "1"], "--record"),
@@ -343,7 +344,7 @@ def test_the_basins_report_escapes_the_case_s_text(tmp_path):
 
 
 def test_following_resumes_at_the_value_it_stopped_at(tmp_path, monkeypatch):
-    import oscillator.attractors.following as following
+    import oscillator.attractors.continuing as core
     from oscillator.attractors.store import LandingStore
 
     case = resolve_case("instance-1")
@@ -362,57 +363,67 @@ def test_following_resumes_at_the_value_it_stopped_at(tmp_path, monkeypatch):
 
     with pytest.raises(KeyboardInterrupt):
         follow_attractors(case, "Q2", values, store=store(), progress=stop_after_the_first, **options)
-    assert [p.name for p in sorted((tmp_path / "over" / "parts").iterdir())] == ["value-00000.parquet"]
+    assert [p.name for p in sorted((tmp_path / "over" / "parts").iterdir())] == ["batch-00000.parquet"]
     computed = []
-    real = following._landings_at
-    monkeypatch.setattr(following, "_landings_at", lambda *args: computed.append(1) or real(*args))
+    real = core._land
+    monkeypatch.setattr(
+        core, "_land", lambda case, settings, point, *a: computed.append(point) or real(case, settings, point, *a)
+    )
     resumed = follow_attractors(case, "Q2", values, store=store(), **options)
     monkeypatch.undo()
-    assert len(computed) == 1  # the second value only
+    assert set(computed) == {1}  # the second value only
     fresh = follow_attractors(case, "Q2", values, **options)
     assert resumed.table().drop(columns="points").equals(fresh.table().drop(columns="points"))
     assert [(e.id, e.inside, e.outside) for e in resumed.ends] == [(e.id, e.inside, e.outside) for e in fresh.ends]
 
 
 def test_regimes_are_named_by_period_rests_and_contacts():
-    from oscillator.attractors.atlas import regime_of
+    from oscillator.attractors.grouping import Attractor, regime_of
 
-    assert regime_of(1, (0.0, 2.0), 0.0, -0.3, 3.9) == "P1 m2 rests"
-    assert regime_of(2, (1.0, 0.0), 0.5, -0.1, 3.9) == "P2 m1 rests contact"
-    assert regime_of(0, (0.0, 0.0), 0.0, 0.1, 6.28) == "chaotic"
-    assert regime_of(0, (0.0, 0.0), 0.0, 0.0, 6.28) == "quasi-periodic"
-    assert regime_of(0, (0.0, 0.0), 0.0, float("nan"), 6.28) == "aperiodic"
+    def regime(period, rests, contacts, largest, forcing, rest_time=(0.0, 0.0)):
+        points = np.zeros((max(period, 1), 4))
+        attractor = Attractor(0, period, points, "", rests, contacts, 1, None, largest, "", forcing, rest_time)
+        return regime_of(attractor)
+
+    assert regime(1, (0.0, 2.0), 0.0, -0.3, 3.9) == "P1 m2 rests"
+    assert regime(2, (1.0, 0.0), 0.5, -0.1, 3.9) == "P2 m1 rests contact"
+    assert regime(0, (0.0, 0.0), 0.0, 0.1, 6.28) == "chaotic"
+    assert regime(0, (0.0, 0.0), 0.0, 0.0, 6.28) == "quasi-periodic"
+    assert regime(0, (0.0, 0.0), 0.0, float("nan"), 6.28) == "aperiodic"
+    assert regime(1, (0.0, 0.0), 0.0, -0.3, 3.9, (0.0, 1.0)) == "P1 m2 rests"  # at rest throughout
 
 
 def test_the_atlas_agrees_with_the_sweeps_sliding_along_fig_14s_line_and_resumes(tmp_path, monkeypatch):
     """Along Q2 = 71 the Omega sweep finds m2 sliding at 1.6 and not at 1.55 or 1.65: so does
     the atlas; the atlas killed after its first row computes only the second when run again."""
-    import oscillator.attractors.atlas as atlas_module
+    import oscillator.attractors.continuing as core
     from oscillator import SweepSettings
     from oscillator.analysis.sweeps import run_point
-    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, atlas_identity, run_atlas
-    from oscillator.attractors.store import LandingStore
+    from oscillator.attractors.atlas import AtlasSettings, regime_atlas
 
-    x, y = AtlasAxis("Omega", 1.55, 1.65, 3), AtlasAxis("Q2", 70.5, 71.0, 2)
+    x, y = Axis("Omega", 1.55, 1.65, 3), Axis("Q2", 70.5, 71.0, 2)
     settings = AtlasSettings()
 
     def store():
-        folder = LandingStore(tmp_path / "atlas", "atlas.json", atlas_identity(CASE, x, y, settings))
+        folder = atlas_store(tmp_path / "atlas", CASE, x, y, settings)
         folder.check()
         folder.open()
         return folder
 
     def stop_after_the_first_row(done, total):
-        if done == x.count + 1:  # the first point of the second row: the first is kept
+        if done == x.count:  # the first row is kept
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_atlas(CASE, x, y, settings=settings, store=store(), progress=stop_after_the_first_row)
-    rows = []
-    real = atlas_module.atlas_row
-    monkeypatch.setattr(atlas_module, "atlas_row", lambda *a, **k: rows.append(a[4]) or real(*a, **k))
-    atlas = run_atlas(CASE, x, y, settings=settings, store=store())
-    assert rows == [1]
+        regime_atlas(CASE, x, y, settings=settings, store=store(), progress=stop_after_the_first_row)
+    ran = []
+    real = core._land
+    monkeypatch.setattr(
+        core, "_land", lambda case, settings, point, *a: ran.append(point) or real(case, settings, point, *a)
+    )
+    again = store()
+    atlas = regime_atlas(CASE, x, y, settings=settings, store=again)
+    assert sorted(set(ran)) == [3, 4, 5] and again.reused["batches"] == 1  # the second row's points only
     line = atlas.table[atlas.table.Q2 == 71.0].sort_values("Omega")
     sweep = SweepSettings(param="Omega", start=1.55, stop=1.65, steps=3, transient=100, record=20)
     sliding = [bool(run_point(CASE, sweep, i, v).summary.sliding.iloc[0]) for i, v in enumerate(x.values)]
@@ -454,14 +465,14 @@ def test_the_sliding_curve_passes_through_the_bifurcations_located_in_one_parame
 @pytest.mark.slow
 def test_the_atlas_is_the_same_for_any_number_of_workers_and_on_dask():
     distributed = pytest.importorskip("distributed")
-    from oscillator.attractors.atlas import AtlasAxis, run_atlas
+    from oscillator.attractors.atlas import regime_atlas
 
-    x, y = AtlasAxis("Omega", 1.55, 1.65, 4), AtlasAxis("Q2", 70.9, 71.2, 3)
-    one = run_atlas(CASE, x, y, workers=1)
-    two = run_atlas(CASE, x, y, workers=2)
+    x, y = Axis("Omega", 1.55, 1.65, 4), Axis("Q2", 70.9, 71.2, 3)
+    one = regime_atlas(CASE, x, y, workers=1)
+    two = regime_atlas(CASE, x, y, workers=2)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as client:
-            dask = run_atlas(CASE, x, y, client=client)
+            dask = regime_atlas(CASE, x, y, client=client)
     assert one.table.equals(two.table) and one.table.equals(dask.table)
     assert len(one.table.drop_duplicates(["row", "column"])) == 12
 
@@ -596,14 +607,14 @@ def _finished_basins(folder):
     x, y = Axis("x2", 3.0, 6.0, 2), Axis("v2", -4.0, 4.0, 2)
     store = basin_store(folder, case, x, y, QUICK)
     store.check()
-    run_basins(case, x, y, store, settings=QUICK)
+    find_basins(case, x, y, store, settings=QUICK)
     return case, x, y
 
 
 def _resume(folder, case, x, y):
     store = basin_store(folder, case, x, y, QUICK)
     store.check()
-    return run_basins(case, x, y, store, settings=QUICK)
+    return find_basins(case, x, y, store, settings=QUICK)
 
 
 def test_a_resume_folder_whose_parts_folder_is_a_link_is_refused_and_nothing_is_written_through_it(tmp_path):
@@ -645,38 +656,37 @@ def test_damaged_or_foreign_parts_are_refused_naming_the_part(tmp_path, damage):
         _resume(tmp_path / "b", case, x, y)
 
 
-@pytest.mark.parametrize("damage", ["drop", "float", "text", "nan", "range"])
+@pytest.mark.parametrize("damage", ["drop", "point", "start", "nan", "missing"])
 def test_damaged_atlas_rows_are_refused_naming_the_part(tmp_path, damage):
     import pandas as pd
 
-    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, atlas_identity, run_atlas
-    from oscillator.attractors.store import LandingStore
+    from oscillator.attractors.atlas import AtlasSettings, regime_atlas
 
-    x, y = AtlasAxis("Omega", 1.55, 1.6, 2), AtlasAxis("Q2", 70.5, 71.0, 2)
+    x, y = Axis("Omega", 1.55, 1.6, 2), Axis("Q2", 70.5, 71.0, 2)
     settings = AtlasSettings(fresh_transient=20, seed_transient=10, record=4, lyapunov_periods=5)
 
     def store():
-        folder = LandingStore(tmp_path / "atlas", "atlas.json", atlas_identity(CASE, x, y, settings))
+        folder = atlas_store(tmp_path / "atlas", CASE, x, y, settings)
         folder.check()
         folder.open()
         return folder
 
-    run_atlas(CASE, x, y, settings=settings, store=store())
-    part = tmp_path / "atlas" / "parts" / "row-00001.parquet"
+    regime_atlas(CASE, x, y, settings=settings, store=store())
+    part = tmp_path / "atlas" / "parts" / "batch-00001.parquet"
     frame = pd.read_parquet(part)
     if damage == "drop":
         frame = frame.drop(columns="x1")
-    elif damage == "float":
-        frame["column"] = frame["column"] + 0.5
-    elif damage == "text":
-        frame["row"] = "one"
+    elif damage == "point":
+        frame["point"] = frame["point"] + x.count  # the points of another row
+    elif damage == "start":
+        frame["x2"] = frame["x2"] + 0.5  # not this batch's starts
     elif damage == "nan":
-        frame.loc[frame.status == "ok", "x2"] = np.nan
+        frame["points"] = [[np.nan] * len(points) for points in frame["points"]]
     else:
-        frame["column"] = frame["column"] + x.count
+        frame = frame.iloc[1:]
     frame.to_parquet(part, index=False)
-    with pytest.raises(InputError, match=r"row-00001.parquet is damaged"):
-        run_atlas(CASE, x, y, settings=settings, store=store())
+    with pytest.raises(InputError, match=r"batch-00001.parquet is damaged"):
+        regime_atlas(CASE, x, y, settings=settings, store=store())
 
 
 @pytest.mark.slow
@@ -895,10 +905,10 @@ def test_a_damaged_part_on_the_command_line_is_exit_2_and_says_nothing_is_kept(t
 def test_the_atlas_is_drawn_by_each_measure_with_fig_14_s_lines_off_the_data(by):
     import pandas as pd
 
-    from oscillator.attractors.atlas import Atlas, AtlasAxis
+    from oscillator.attractors.atlas import Atlas
     from oscillator.report.attractors import atlas_figure
 
-    x, y = AtlasAxis("Omega", 1.55, 1.65, 3), AtlasAxis("Q2", 70.5, 71.5, 3)
+    x, y = Axis("Omega", 1.55, 1.65, 3), Axis("Q2", 70.5, 71.5, 3)
     rows = [
         {"row": r, "column": c, "attractor": 0, "coexisting": 1 + (r == c == 1), "regime": "P1 m2 rests" if c == 1
          else "P1", "period": 1, "lyapunov": -0.1 * (1 + c), "impact_velocity": float(r), "status": "ok"}
@@ -991,15 +1001,15 @@ def test_report_rebuilds_a_basins_folder_from_its_parts_and_refuses_an_unfinishe
 
 
 def test_more_fresh_starts_per_point_find_the_coexisting_orbits_of_the_hysteresis_window():
-    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, fresh_starts, run_atlas
+    from oscillator.attractors.atlas import AtlasSettings, fresh_starts, regime_atlas
 
     starts = fresh_starts(CASE, 8)
     assert starts.shape == (8, 4) and np.array_equal(starts[0], CASE.initial.y)
     assert np.all(np.abs(starts - CASE.initial.y) <= 4.0) and len(np.unique(starts, axis=0)) == 8  # box half-width 4
     assert np.array_equal(starts, fresh_starts(CASE, 8))  # the same starts every time
-    x, y = AtlasAxis("Omega", 1.6, 1.6001, 2), AtlasAxis("Q2", 71.16, 71.165, 2)  # inside the window
-    one = run_atlas(CASE, x, y, settings=AtlasSettings(starts=1)).table
-    eight = run_atlas(CASE, x, y, settings=AtlasSettings(starts=8)).table
+    x, y = Axis("Omega", 1.6, 1.6001, 2), Axis("Q2", 71.16, 71.165, 2)  # inside the window
+    one = regime_atlas(CASE, x, y, settings=AtlasSettings(starts=1)).table
+    eight = regime_atlas(CASE, x, y, settings=AtlasSettings(starts=8)).table
     first_row = lambda table: table[table.row == 0].drop_duplicates("column").coexisting.tolist()  # noqa: E731
     assert first_row(one) == [1, 1] and first_row(eight)[0] == 2  # the first row has no seeds to help
     both = eight[(eight.row == 0) & (eight.column == 0)]

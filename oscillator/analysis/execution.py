@@ -1,8 +1,9 @@
 """Running many independent computations: in this process, on a local process pool, or on Dask.
 
-Sweeps (:mod:`oscillator.analysis.sweeps`) and the search for attractors
-(:mod:`oscillator.analysis.attractors`) each run a pure, top-level function on many tasks;
-:func:`run_tasks` runs it and yields the results as they finish, whatever runs them:
+Sweeps (:mod:`oscillator.analysis.sweeps`) and the global analyses (:mod:`oscillator.attractors`)
+each run a pure, top-level function on many tasks; an :class:`Executor`, made once at an
+analysis's entry and passed down, runs them (:func:`run_tasks` for one batch) and yields the
+results as they finish, whatever runs them:
 
 * ``workers == 1`` (or a single task): one after another, in this process;
 * a local pool of ``spawn``-ed processes, at most ``4 workers`` tasks in flight so that memory
@@ -30,7 +31,16 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.signals import interrupts_ignored, prepare_worker, quiet_resource_tracker
 from oscillator.text import shown
 
-__all__ = ["MAX_WORKERS_PER_CORE", "Pool", "check_progress", "check_runner", "check_workers", "connect", "run_tasks"]
+__all__ = [
+    "MAX_WORKERS_PER_CORE",
+    "Executor",
+    "Pool",
+    "check_progress",
+    "check_runner",
+    "check_workers",
+    "connect",
+    "run_tasks",
+]
 
 T = TypeVar("T")
 
@@ -79,6 +89,45 @@ def check_progress(progress: object) -> None:
     if progress is not None and not callable(progress):
         raise InputError(
             f"progress must be a function progress(done, total) or None, got {shown(progress)}", field="progress"
+        )
+
+
+class Executor:
+    """Where an analysis's tasks run, made once and passed down: this process (``workers == 1``),
+    a local :class:`Pool` started on entering the block and used for every batch, or a Dask
+    ``client``.  Checked as :func:`check_runner` checks them.
+
+    >>> with Executor(workers=1) as executor:
+    ...     list(executor.map(pow, [(2, 3), (3, 2)]))
+    [8, 9]
+    """
+
+    def __init__(self, workers: object = 1, client: object = None, progress: object = None) -> None:
+        self.workers = check_runner(workers, client, progress)
+        self.client = client
+        self._stack = contextlib.ExitStack()
+        self._pool: Pool | None = None
+
+    def __enter__(self) -> Executor:
+        if self.client is None and self.workers > 1:
+            self._pool = self._stack.enter_context(Pool(self.workers))
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._pool = None
+        self._stack.__exit__(*exc)
+
+    def map(
+        self,
+        function: Callable[..., T],
+        tasks: Iterable[tuple[Any, ...]],
+        shared: tuple[Any, ...] = (),
+        keywords: dict[str, Any] | None = None,
+    ) -> Iterator[T]:
+        """``function(*shared, *task, **keywords)`` for every task, yielded as each finishes (in
+        the tasks' order when run in this process)."""
+        return run_tasks(
+            function, tasks, shared=shared, keywords=keywords, workers=self.workers, client=self.client, pool=self._pool
         )
 
 

@@ -1,6 +1,6 @@
 """Basins of attraction over a plane of starting states, computed into a folder that resumes.
 
-A slice of the state space: two of ``x1 v1 x2 v2`` on a grid (:class:`Axis`), the other two
+A slice of the state space: two of ``x1 v1 x2 v2`` on a grid (:class:`~oscillator.analysis.axes.Axis`), the other two
 and the section ``t0`` from the case's start.  Every cell's start is run by
 :func:`~oscillator.attractors.finding.land`, and the landings are kept in the folder as they
 finish (``parts/``: one Parquet file per batch, written atomically), so that a run that was
@@ -11,8 +11,6 @@ does (in the starts' order, so the result does not depend on the number of worke
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,62 +19,27 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import check_runner, run_tasks
-from oscillator.attractors.finding import MAX_STARTS, STATE, Attractors, AttractorSettings, Landing, assemble, land
-from oscillator.attractors.store import LandingStore
+from oscillator.analysis.axes import STATE, Axis, state_plane
+from oscillator.analysis.execution import Executor
+from oscillator.attractors.finding import Attractors, assemble
+from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing, land
+from oscillator.attractors.store import LandingStore, identity
 from oscillator.errors import InputError
-from oscillator.io.cases import Case, case_to_toml
+from oscillator.io.cases import Case
 from oscillator.presenting import presenter
-from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["Axis", "Basins", "basin_store", "grid_starts", "run_basins"]
-
-#: The most cells along one axis.
-MAX_CELLS = 2000
+__all__ = ["Basins", "basin_store", "find_basins", "grid_starts"]
 #: Landings written per part file.
 BATCH = 64
-
-
-@dataclass(frozen=True)
-class Axis:
-    """One axis of the slice: a state component and ``count`` values from ``low`` to ``high``."""
-
-    name: str
-    low: float
-    high: float
-    count: int
-
-    def __post_init__(self) -> None:
-        if self.name not in STATE:
-            raise InputError(
-                f"axis {shown(self.name)} is not a state component; give one of {', '.join(STATE)}", field="axis"
-            )
-        for end in (self.low, self.high):
-            if not (isinstance(end, (int, float)) and not isinstance(end, bool) and math.isfinite(end)):
-                raise InputError(f"axis {self.name}: its ends must be finite numbers, got {shown(end)}", field="axis")
-        if not self.low < self.high:
-            raise InputError(
-                f"axis {self.name}: from {self.low:g} to {self.high:g} is empty; give the lower end first", field="axis"
-            )
-        if isinstance(self.count, bool) or not isinstance(self.count, int) or not 2 <= self.count <= MAX_CELLS:
-            raise InputError(
-                f"axis {self.name}: its count must be a whole number from 2 to {MAX_CELLS}, got {shown(self.count)}",
-                field="axis",
-            )
-
-    @property
-    def values(self) -> np.ndarray:
-        return np.linspace(self.low, self.high, self.count)
 
 
 def grid_starts(case: Case, x: Axis, y: Axis) -> np.ndarray:
     """The slice's starts, ``(x.count * y.count, 4)``, cell ``(i, j)`` (``i`` along x) at row
     ``j * x.count + i``; the two other components are the case's start."""
-    if x.name == y.name:
-        raise InputError(f"the two axes are both {x.name}; give two different state components", field="axis")
+    x, y = state_plane(x, y)
     if x.count * y.count > MAX_STARTS:
         raise InputError(
             f"the slice has {x.count} x {y.count} = {x.count * y.count:,} starts, more than {MAX_STARTS:,}; give "
@@ -128,16 +91,10 @@ class Basins:
 
 def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:
     """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`)."""
-    identity = {
-        "case": case_to_toml(case),
-        "x": dataclasses.asdict(x),
-        "y": dataclasses.asdict(y),
-        "settings": dataclasses.asdict(settings),
-    }
-    return LandingStore(folder, "basins.json", identity)
+    return LandingStore(folder, "basins.json", identity(case, x=x, y=y, settings=settings))
 
 
-def run_basins(
+def find_basins(
     case: Case,
     x: Axis,
     y: Axis,
@@ -152,9 +109,25 @@ def run_basins(
 
     ``progress(done, total)`` after every start.  On an interrupt or an error the landings
     finished so far are in the folder (the batch in hand is written first)."""
-    workers = check_runner(workers, client, progress)
+    executor = Executor(workers, client, progress)
     starts = grid_starts(case, x, y)
     store.open()
+    with executor:
+        landings = _landings(case, settings, starts, store, executor, progress)
+        store.write_status("computed", starts=len(starts), failed=sum(item.status != "ok" for item in landings))
+        return Basins(assemble(case, settings, landings, executor=executor), x, y)
+
+
+def _landings(
+    case: Case,
+    settings: AttractorSettings,
+    starts: np.ndarray,
+    store: LandingStore,
+    executor: Executor,
+    progress: Callable[[int, int], None] | None,
+) -> list[Landing]:
+    """Every start's landing: those in ``store`` read back, the others computed and kept in
+    batches as they finish (the batch in hand written first on an interrupt or an error)."""
     landings = store.read(starts)
     done = {item.index for item in landings}
     tasks = [(index, tuple(row)) for index, row in enumerate(starts) if index not in done]
@@ -163,7 +136,7 @@ def run_basins(
         progress(len(landings), total)
     pending: list[Landing] = []
     try:
-        for landing in run_tasks(land, tasks, shared=(case, settings), workers=workers, client=client):
+        for landing in executor.map(land, tasks, shared=(case, settings)):
             pending.append(landing)
             if len(pending) >= BATCH:
                 store.write(pending)
@@ -173,6 +146,4 @@ def run_basins(
                 progress(len(landings) + len(pending), total)
     finally:
         store.write(pending)
-    landings += pending
-    store.write_status("computed", starts=total, failed=sum(item.status != "ok" for item in landings))
-    return Basins(assemble(case, settings, landings), x, y)
+    return landings + pending

@@ -1,14 +1,14 @@
 """The attractors over a parameter: found at each value, matched from value to value, their basin
 fractions, and the parameter values where each one appears or ends, located by bisection.
 
-At each value the starts are the fresh ones (the same at every value: a slice of the state
-space, or the case's start) and one *seed* per attractor of the value before: its last section
-point.  The attractors are grouped as :func:`~oscillator.attractors.finding.find_attractors`
-groups them; an attractor continues one of the value before when that one's seed lands on it
-and it has the same period and cycle of switches, and keeps its number (``id``); any other is
-new.  Basin fractions count the fresh
-starts only.  (The approach of Attractors.jl's ``AttractorSeedContinueMatch``, here with the
-matching by where the seeds go.)
+The global continuation of :mod:`~oscillator.attractors.continuing` over a list of values: at
+each value the starts are the fresh ones (the same at every value: a slice of the state space,
+or the case's start) and one *seed* per attractor of the value before, its last section point
+(:class:`~oscillator.attractors.seeding.LastPoints`); the attractors are grouped and refined as
+:func:`~oscillator.attractors.finding.find_attractors` does; an attractor continues one of the
+value before when that one's seed lands on it and it has the same period and cycle of switches,
+and keeps its number (``id``); any other is new (:class:`~oscillator.attractors.matching.NearestSame`).
+Basin fractions count the fresh starts only.
 
 Where an attractor is present at one value and absent at the next, the parameter is bisected
 between them: at the midpoint a run from the attractor's last point (a ``transient``, then the
@@ -19,31 +19,25 @@ attractors coexist (hysteresis) is bounded at both ends to ``tol``.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import Pool, check_runner, run_tasks
-from oscillator.attractors.finding import (
-    Attractor,
-    Attractors,
-    AttractorSettings,
-    Landing,
-    assemble,
-    check_settings,
-    check_states,
-    land,
-    order_key,
-    share_interval,
-)
-from oscillator.attractors.store import LandingStore
+from oscillator.analysis.axes import Axis
+from oscillator.analysis.execution import Executor
+from oscillator.attractors.continuing import Mapper, continue_attractors, line_points
+from oscillator.attractors.finding import Attractors, Refined, share_interval
+from oscillator.attractors.grouping import Attractor
+from oscillator.attractors.mapping import AttractorSettings, Landing, check_settings, check_states, land
+from oscillator.attractors.seeding import LastPoints
+from oscillator.attractors.store import LandingStore, identity
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
@@ -55,7 +49,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.continuation import Branch
 
-__all__ = ["AttractorsOver", "End", "follow_attractors", "local_branches"]
+__all__ = ["AttractorsOver", "End", "check_values", "follow_attractors", "following_store", "local_branches"]
 
 #: The most parameter values, and the smallest bisection tolerance.
 MAX_VALUES = 10_000
@@ -160,11 +154,11 @@ def _row(
     }
 
 
-def _check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, tol: float) -> np.ndarray:
-    if param not in Parameters.names():
-        raise InputError(
-            f"param {shown(param)} is not a parameter; give one of {', '.join(Parameters.names())}", field="param"
-        )
+def check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, tol: float) -> np.ndarray:
+    """The values of ``param`` to follow the attractors over, checked: a parameter, 2 to
+    :data:`MAX_VALUES` finite numbers increasing or decreasing, both ends admitted by the model,
+    ``tol`` at least :data:`MIN_TOL`."""
+    Parameters.check_name(param)
     try:
         array: np.ndarray = np.asarray(values, dtype=float)
     except (TypeError, ValueError):  # text, a generator, a ragged list
@@ -180,46 +174,20 @@ def _check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, 
     return array
 
 
-def _landings_at(
-    case: Case, settings: AttractorSettings, starts: np.ndarray, client: Any, pool: Pool | None
-) -> list[Landing]:
-    tasks = [(index, tuple(row)) for index, row in enumerate(starts)]
-    return list(run_tasks(land, tasks, shared=(case, settings), client=client, pool=pool))
-
-
-def _match(
-    previous: Attractors | None, previous_ids: dict[int, int], found: Attractors, fresh: int, next_id: int
-) -> tuple[dict[int, int], int]:
-    """Local id -> kept id: an attractor that a seed of the value before reached, with the same
-    period and cycle of switches as the seed's, keeps the seed's id (the first such seed); any
-    other gets a new one (a seed that jumped to another kind of motion continues nothing)."""
-    ids: dict[int, int] = {}
-    if previous is not None:
-        labels = found.labels.set_index("index").attractor
-        for k, attractor in enumerate(previous.attractors):
-            local = int(labels.get(fresh + k, -1))
-            if local < 0 or local in ids or previous_ids[attractor.id] in ids.values():
-                continue
-            reached = found.attractors[local]
-            if (reached.period, reached.signature) == (attractor.period, attractor.signature):
-                ids[local] = previous_ids[attractor.id]
-    for attractor in found.attractors:
-        if attractor.id not in ids:
-            ids[attractor.id] = next_id
-            next_id += 1
-    return ids, next_id
-
-
-def _renumbered(found: list[Attractors], ids: list[dict[int, int]]) -> list[dict[int, int]]:
-    """The kept ids renumbered by :func:`~oscillator.attractors.finding.order_key` of each one's
-    first attractor, so that ``A0`` names the same orbit here as in ``basins`` wherever both meet
-    it, whichever value met it first."""
-    first: dict[int, Attractor] = {}
-    for here, local in zip(found, ids, strict=True):
-        for attractor in here.attractors:
-            first.setdefault(local[attractor.id], attractor)
-    order = {kept: new for new, kept in enumerate(sorted(first, key=lambda kept: order_key(first[kept])))}
-    return [{k: order[kept] for k, kept in local.items()} for local in ids]
+def following_store(
+    folder: Path,
+    case: Case,
+    param: str,
+    values: np.ndarray,
+    slice_: tuple[Axis, Axis] | None,
+    settings: AttractorSettings,
+) -> LandingStore:
+    """The resumable folder of the attractors over ``values`` of ``param``, from the case's start
+    or a slice's starts (its axes, not its starts, in the identity)."""
+    states = None if slice_ is None else list(slice_)
+    return LandingStore(
+        folder, "attractors.json", identity(case, param=param, values=values, states=states, settings=settings)
+    )
 
 
 def follow_attractors(
@@ -263,51 +231,27 @@ def follow_attractors(
         Parameters and solver options, as for :func:`oscillator.simulate`.
     """
     settings = check_settings(settings)
-    workers = check_runner(workers, client, progress)
+    executor = Executor(workers, client, progress)
     if store is not None and not isinstance(store, LandingStore):
         raise InputError(f"store must be a LandingStore or None, got {shown(store)}", field="store")
     case = resolve_case(case, **overrides)
-    array = _check_values(case, param, values, tol)
+    array = check_values(case, param, values, tol)
     fresh = check_states(case.initial.y if states is None else states)
-    with contextlib.ExitStack() as stack:  # one pool of workers for every value
-        pool = stack.enter_context(Pool(workers)) if client is None and workers > 1 else None
-        found, ids = _values(case, param, array, fresh, settings, client, pool, store, progress)
-    ids = _renumbered(found, ids)
-    over = AttractorsOver(case, param, array, tuple(found), tuple(ids), len(fresh))
+    mapper = Mapper(fresh, settings, settings)
+    describe = Refined(settings.lyapunov_periods)
+    with executor:
+        continued = continue_attractors(
+            case,
+            line_points(param, array),
+            mapper,
+            describe=describe,
+            seeding=LastPoints(),
+            executor=executor,
+            store=store,
+            progress=progress,
+        )
+    over = AttractorsOver(case, param, array, continued.found, continued.ids, len(fresh))
     return dataclasses.replace(over, ends=tuple(_ends(over, settings, tol)))
-
-
-def _values(
-    case: Case,
-    param: str,
-    array: np.ndarray,
-    fresh: np.ndarray,
-    settings: AttractorSettings,
-    client: Any,
-    pool: Pool | None,
-    store: LandingStore | None,
-    progress: Callable[[int, int], None] | None,
-) -> tuple[list[Attractors], list[dict[int, int]]]:
-    """Each value's attractors from the fresh starts and the seeds of the value before, matched."""
-    found: list[Attractors] = []
-    ids: list[dict[int, int]] = []
-    next_id = 0
-    for k, value in enumerate(array):
-        point = resolve_case(case, **{param: float(value)})
-        seeds = np.array([a.points[-1] for a in found[-1].attractors]) if found else np.empty((0, 4))
-        starts = np.vstack([fresh, seeds]) if len(seeds) else fresh
-        landings = store.read(starts, f"value-{k:05d}") if store is not None else []
-        if not landings:
-            landings = _landings_at(point, settings, starts, client, pool)
-            if store is not None:
-                store.write(landings, f"value-{k:05d}")
-        here = assemble(point, settings, landings)
-        local, next_id = _match(found[-1] if found else None, ids[-1] if ids else {}, here, len(fresh), next_id)
-        found.append(here)
-        ids.append(local)
-        if progress is not None:
-            progress(k + 1, len(array))
-    return found, ids
 
 
 def _ends(over: AttractorsOver, settings: AttractorSettings, tol: float) -> list[End]:

@@ -1,14 +1,18 @@
-"""A folder that keeps landings as they finish, so that a search for attractors resumes.
+"""A folder that keeps landings as they finish, so that a global analysis resumes.
 
-The folder holds a marker file (``basins.json``, ``attractors.json``) with the computation's
-identity (the case as TOML and the settings), ``case.toml``, and ``parts/``: each batch of
-landings one Parquet file written atomically (a temporary name, then a rename), so a killed run
-leaves only whole parts.  Running the same computation into the folder again reads the parts and
-computes only what is missing; another computation is refused before anything is written.
+The folder holds a marker file (``basins.json``, ``attractors.json``, ``atlas.json``) with the
+computation's identity (:func:`identity`: the case as TOML and the settings), ``case.toml``, and
+``parts/``: each batch of landings one Parquet file written atomically (a temporary name, then a
+rename), so a killed run leaves only whole parts.  Running the same computation into the folder
+again reads the parts and computes only what is missing; another computation is refused before
+anything is written.  The basins keep batches of starts of one grid; a global continuation
+(:mod:`~oscillator.attractors.continuing`) one part per batch of points, each landing with its
+point.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -18,17 +22,18 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from oscillator.attractors.finding import STATE, Landing
+from oscillator.attractors.mapping import STATE, Landing
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_folder, atomic_path, check_name, read_untrusted, replace_file
 from oscillator.text import printable
 
-__all__ = ["LandingStore"]
+__all__ = ["LandingStore", "identity"]
 
 _MAX_JSON = 1_000_000
 #: The layout and meaning of the parts; a folder of another format is refused (format 2: a contact
-#: between the masses is counted once, not once per mass; the rest time of each mass is kept).
-FORMAT = 2
+#: between the masses is counted once, not once per mass; the rest time of each mass is kept;
+#: format 3: an atlas keeps landings, not tables, and the parts of a continuation are batches).
+FORMAT = 3
 
 
 def landing_row(landing: Landing) -> dict[str, Any]:
@@ -69,6 +74,25 @@ def landing_of(row: Any) -> Landing:
     )
 
 
+def identity(case: Any, **pieces: Any) -> dict[str, Any]:
+    """A computation's identity, as its folder's marker keeps it: the case as TOML and each piece
+    (an axis, the settings: dataclasses, or plain values), so that two computations are the same
+    exactly when their identities are equal."""
+    from oscillator.io.cases import case_to_toml
+
+    return {"case": case_to_toml(case), **{name: _plain_value(value) for name, value in pieces.items()}}
+
+
+def _plain_value(value: Any) -> Any:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.asdict(value)
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, list):
+        return [_plain_value(item) for item in value]
+    return value
+
+
 def _foreign(landing: Landing, starts: np.ndarray, seen: set[int]) -> str:
     """Why a stored landing is not one of this computation's (empty if it is)."""
     if not 0 <= landing.index < len(starts) or landing.index in seen:
@@ -92,8 +116,8 @@ class LandingStore:
         self.what = marker.removesuffix(".json")
         self.identity = identity
         self.resuming = False
-        #: What was read back from earlier runs: landings (:meth:`read`) and tables (:meth:`read_table`).
-        self.reused = {"landings": 0, "tables": 0}
+        #: What was read back from earlier runs: landings, and the batches of points they came in.
+        self.reused = {"landings": 0, "batches": 0}
 
     def check(self) -> None:
         """Refuse, before anything is created, a folder that cannot hold this computation: a new
@@ -201,28 +225,40 @@ class LandingStore:
             field="folder",
         )
 
-    def write_table(self, frame: pd.DataFrame, name: str) -> None:
-        """A part holding ``frame``, named ``name``."""
+    def write_batch(self, landings: dict[int, list[Landing]], name: str) -> None:
+        """One part holding the landings of a batch of points (``point -> its landings``)."""
+        rows = [{"point": point, **landing_row(item)} for point, items in landings.items() for item in items]
         with atomic_path(self.parts / f"{name}.parquet") as temporary:
-            frame.to_parquet(temporary, index=False)
+            pd.DataFrame(rows).to_parquet(temporary, index=False)
 
-    def read_table(self, name: str) -> pd.DataFrame | None:
-        """The part ``name`` (None if there is none; a damaged one is refused with its name)."""
+    def read_batch(self, name: str, starts: dict[int, np.ndarray]) -> dict[int, list[Landing]] | None:
+        """The landings of the batch part ``name`` by point, each point's checked against its
+        ``starts`` (all there, each once); None if there is no such part."""
         part = self.parts / f"{name}.parquet"
         if not os.path.lexists(part):
             return None
         self._plain(part)
         try:
-            table = pq.read_table(part).to_pandas()
-            self.reused["tables"] += 1
-            return table
+            frame = pq.read_table(part).to_pandas()
+            landings = [(int(row.point), landing_of(row)) for row in frame.itertuples(index=False)]
         except Exception as exc:  # pyarrow raises many types for a damaged file
             if isinstance(exc, MemoryError):
                 raise
-            raise InputError(
-                f"{printable(str(part))} is damaged; delete it and run the same command to compute it again",
-                field="folder",
-            ) from exc
+            raise self._damaged(part, "it cannot be read") from exc
+        found: dict[int, list[Landing]] = {point: [] for point in starts}
+        seen: dict[int, set[int]] = {point: set() for point in starts}
+        for point, landing in landings:
+            why = f"point {point} is not one of its batch" if point not in starts else ""
+            why = why or _foreign(landing, starts[point], seen[point])
+            if why:
+                raise self._damaged(part, why)
+            seen[point].add(landing.index)
+            found[point].append(landing)
+        if any(len(seen[point]) != len(starts[point]) for point in starts):
+            raise self._damaged(part, "a start of its batch is missing")
+        self.reused["landings"] += len(landings)
+        self.reused["batches"] += 1
+        return found
 
     def write(self, landings: list[Landing], name: str | None = None) -> None:
         """A part of these landings, named ``name`` (by default after its first start's index)."""

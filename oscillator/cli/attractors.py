@@ -23,8 +23,9 @@ from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
-    from oscillator.attractors.basins import Axis, Basins
-    from oscillator.attractors.finding import AttractorSettings
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.basins import Basins
+    from oscillator.attractors.mapping import AttractorSettings
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
     from oscillator.orbits.curves import Curve
@@ -47,7 +48,7 @@ SchedulerOption = Annotated[
 
 
 def _axis(values: AxisOption, flag: str) -> Axis:
-    from oscillator.attractors.basins import Axis
+    from oscillator.analysis.axes import Axis
 
     name, low, high, count = values
     try:
@@ -57,7 +58,7 @@ def _axis(values: AxisOption, flag: str) -> Axis:
 
 
 def _settings(transient: int, record: int, max_period: int) -> AttractorSettings:
-    from oscillator.attractors.finding import AttractorSettings
+    from oscillator.attractors.mapping import AttractorSettings
 
     try:
         return AttractorSettings(transient=transient, record=record, max_period=max_period)
@@ -219,13 +220,13 @@ def _locked(folder: Path, scheduler: str | None) -> tuple[Any, Any]:
 def _run_basins(
     case: Case, x: Axis, y: Axis, store: Any, settings: AttractorSettings, workers: int, client: Any, quiet: bool
 ) -> Basins:
-    from oscillator.attractors.basins import run_basins
+    from oscillator.attractors.basins import find_basins
 
     if quiet or not err.is_terminal:
-        return run_basins(case, x, y, store, settings=settings, workers=workers, client=client)
+        return find_basins(case, x, y, store, settings=settings, workers=workers, client=client)
     bar, report = progress_bar(f"{case.name}: basins", "starts")
     with bar:
-        return run_basins(case, x, y, store, settings=settings, workers=workers, client=client, progress=report)
+        return find_basins(case, x, y, store, settings=settings, workers=workers, client=client, progress=report)
 
 
 def _finish_basins(found: Basins, store: Any, no_plots: bool, quiet: bool) -> None:
@@ -399,11 +400,10 @@ def _open_following(
     out_dir: Path | None,
 ) -> tuple[Any, Any, AttractorSettings, Any]:
     """Everything refused before work: the values, the slice, the settings, the folder."""
-    import dataclasses
 
     import numpy as np
 
-    from oscillator.attractors.finding import STATE
+    from oscillator.analysis.axes import STATE
 
     if coordinate not in STATE:
         raise InputError(f"--coordinate must be one of {', '.join(STATE)}, got {coordinate!r}", field="--coordinate")
@@ -414,25 +414,16 @@ def _open_following(
     settings = _settings(transient, record, 16)
     load("oscillator.attractors.following", notice=True)
     from oscillator.attractors.basins import grid_starts
-    from oscillator.attractors.following import _check_values
-    from oscillator.attractors.store import LandingStore
-    from oscillator.io.cases import case_to_toml
+    from oscillator.attractors.following import check_values, following_store
 
     if not (np.isfinite(start) and np.isfinite(stop)):
         raise InputError(f"--from and --to must be finite numbers, got {start!r} and {stop!r}", field="--to")
     values = np.linspace(start, stop, steps)
-    _check_values(case, param, values, tol)
+    check_values(case, param, values, tol)
     axes = (_axis(x, "--x"), _axis(y, "--y")) if x is not None and y is not None else None
     states = grid_starts(case, *axes) if axes is not None else None
-    identity = {
-        "case": case_to_toml(case),
-        "param": param,
-        "values": values.tolist(),
-        "states": None if axes is None else [dataclasses.asdict(axis) for axis in axes],  # the slice, not its starts
-        "settings": dataclasses.asdict(settings),
-    }
     folder = out_dir if out_dir is not None else _new_folder(case, "attractors")
-    store = LandingStore(folder, "attractors.json", identity)
+    store = following_store(folder, case, param, values, axes, settings)
     store.check()
     return values, states, settings, store
 
@@ -536,19 +527,15 @@ def atlas(
     """
     try:
         resolved = case_from(case, None, set_)
-        x_axis, y_axis = _plane_axis(x, "--x"), _plane_axis(y, "--y")
-        if x_axis.name == y_axis.name:
-            raise InputError(f"--y: both axes are {x_axis.name}; give two different parameters", field="--y")
-        from oscillator.attractors.atlas import AtlasSettings, atlas_identity
-        from oscillator.attractors.store import LandingStore
+        from oscillator.analysis.axes import parameter_plane
+
+        x_axis, y_axis = parameter_plane(resolved, _axis(x, "--x"), _axis(y, "--y"))
+        from oscillator.attractors.atlas import AtlasSettings, atlas_store
 
         count = check_workers(workers)
-        for axis in (x_axis, y_axis):
-            for value in (axis.low, axis.high):
-                case_from(case, None, [*(set_ or []), f"{axis.name}={value!r}"])
         settings = AtlasSettings(fresh_transient=transient, record=record, starts=starts)
         folder = out_dir if out_dir is not None else _new_folder(resolved, "atlas")
-        store = LandingStore(folder, "atlas.json", atlas_identity(resolved, x_axis, y_axis, settings))
+        store = atlas_store(folder, resolved, x_axis, y_axis, settings)
         store.check()
         load("oscillator.attractors.atlas", notice=True)
         lock, client = _locked(folder, scheduler)
@@ -561,33 +548,23 @@ def atlas(
     _finish_atlas(found, store, no_plots, quiet)
 
 
-def _plane_axis(values: PlaneAxis, flag: str) -> Any:
-    from oscillator.attractors.atlas import AtlasAxis
-
-    name, low, high, count = values
-    try:
-        return AtlasAxis(name, low, high, count)
-    except InputError as error:
-        raise InputError(f"{flag}: {error}", field=flag) from None
-
-
 def _run_atlas(case: Case, x: Any, y: Any, settings: Any, store: Any, workers: int, client: Any, quiet: bool) -> Any:
-    from oscillator.attractors.atlas import run_atlas
+    from oscillator.attractors.atlas import regime_atlas
 
     store.open()
     options = {"settings": settings, "store": store, "workers": workers, "client": client}
     if quiet or not err.is_terminal:
-        found = run_atlas(case, x, y, **options)
+        found = regime_atlas(case, x, y, **options)
     else:
         bar, report = progress_bar(f"{case.name}: atlas", "points")
         with bar:
-            found = run_atlas(case, x, y, progress=report, **options)
+            found = regime_atlas(case, x, y, progress=report, **options)
     store.write_status("computed", points=x.count * y.count)
     return found
 
 
 def _finish_atlas(found: Any, store: Any, no_plots: bool, quiet: bool) -> None:
-    _say_reused(store, store.reused["tables"], f"of the {found.y.count} rows", quiet)
+    _say_reused(store, store.reused["batches"], f"of the {found.y.count} rows", quiet)
     folder = store.folder
     from oscillator.report.attractors import write_atlas
 
@@ -651,7 +628,7 @@ def curve(
         point = _at(at, x[0], y[0])
         folder = out_dir if out_dir is not None else _new_folder(resolved, "curve")
         check_new(folder, option="--out")
-        atlas_found = _read_atlas(over, resolved, x[0], y[0]) if over is not None else None
+        atlas_found = _atlas_over(over, resolved, x[0], y[0]) if over is not None else None
         others = [_read_other_curve(other, x[0], y[0]) for other in also or []]
         load("oscillator.orbits.curves", notice=True)
         from oscillator.orbits.curves import check_curve, trace_curve
@@ -688,36 +665,20 @@ def _at(text: str, x: str, y: str) -> tuple[float, float]:
     return values[x], values[y]
 
 
-def _read_atlas(folder: Path, case: Case, x: str, y: str) -> Any:
-    """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json), checked before
-    any work: its axes must be the curve's ``x`` and ``y``, in that order, and its table whole."""
-    import json
-
-    import pandas as pd
-
-    from oscillator.attractors.atlas import Atlas, AtlasAxis
-    from oscillator.io.files import read_untrusted
+def _atlas_over(folder: Path, case: Case, x: str, y: str) -> Any:
+    """The atlas to draw the curve over (``--over``): finished, and in the curve's plane."""
+    from oscillator.report.attractors import read_atlas
 
     try:
-        info = json.loads(read_untrusted(folder / "atlas.json", what="atlas file", field="--over", limit=1_000_000))
-        identity = info["identity"]
-        axes = [AtlasAxis(**identity[name]) for name in ("x", "y")]
-        table = pd.read_parquet(folder / "atlas.parquet")
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise InputError(f"--over {printable(str(folder))} holds no finished atlas ({error})", field="--over") from None
-    if (axes[0].name, axes[1].name) != (x, y):
+        found = read_atlas(folder, case)
+    except InputError as error:
+        raise InputError(f"--over {error}", field="--over") from None
+    if (found.x.name, found.y.name) != (x, y):
         raise InputError(
-            f"--over {printable(str(folder))}: its atlas is over {axes[0].name} and {axes[1].name}, the curve in {x} "
+            f"--over {printable(str(folder))}: its atlas is over {found.x.name} and {found.y.name}, the curve in {x} "
             f"and {y}; give the atlas's axes as --x and --y, in its order",
             field="--over",
         )
-    found = Atlas(case, axes[0], axes[1], table)
-    try:
-        found.grid()  # every point in its cell, or the table is damaged
-    except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
-        raise InputError(
-            f"--over {printable(str(folder))}: its atlas.parquet is damaged ({error})", field="--over"
-        ) from None
     return found
 
 

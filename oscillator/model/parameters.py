@@ -257,6 +257,21 @@ class Parameters:
         """Every parameter name, in declaration order."""
         return tuple(f.name for f in fields(cls))
 
+    @classmethod
+    def check_name(cls, name: object, field: str = "param", *, label: str | None = None) -> str:
+        """``name`` if it names a parameter; else one :class:`~oscillator.errors.InputError`
+        for ``field`` (its message begins with ``label``, by default the field), with the closest
+        parameter name and every one: the only place that asks "is this a parameter?"."""
+        if isinstance(name, str) and name in cls.names():
+            return name
+        import difflib
+
+        close = difflib.get_close_matches(str(name), cls.names(), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise InputError(
+            f"{label or field} {shown(name)} is not a parameter{hint} (one of {', '.join(cls.names())})", field=field
+        )
+
 
 @dataclass(frozen=True, slots=True)
 class InitialState:
@@ -423,15 +438,7 @@ class SweepSettings:
         owner = "sweep"
         if not isinstance(self.both_ways, bool):
             raise InputError(f"{owner}.both_ways must be true or false, got {shown(self.both_ways)}", field="both_ways")
-        if self.param not in Parameters.names():
-            import difflib
-
-            close = difflib.get_close_matches(str(self.param), Parameters.names(), n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise InputError(
-                f"{owner}.param: {shown(self.param)} is not a parameter{hint} (one of {', '.join(Parameters.names())})",
-                field="param",
-            )
+        Parameters.check_name(self.param, "param", label=f"{owner}.param:")
         for name in ("start", "stop", "period_tolerance"):
             object.__setattr__(self, name, _require_finite(owner, name, getattr(self, name)))
         if self.period_tolerance <= 0:

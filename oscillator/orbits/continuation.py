@@ -373,10 +373,7 @@ def _check_range(
     case: Case | str, param: str, start: object, stop: object, overrides: dict[str, Any], locate_tol: float
 ) -> tuple[float, float]:
     """``start`` and ``stop`` as valid values of ``param``, far enough apart to continue."""
-    if param not in Parameters.names():
-        raise InputError(
-            f"param must be one of the parameters {', '.join(Parameters.names())}, got {shown(param)}", field="param"
-        )
+    Parameters.check_name(param)
     if param in overrides:
         raise InputError(f"{param} is the continued parameter; give its range with start and stop", field=param)
     values = real_argument(start, "start"), real_argument(stop, "stop")

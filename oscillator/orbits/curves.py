@@ -364,8 +364,7 @@ def check_curve(
     if kind not in CURVE_KINDS:
         raise InputError(f"kind must be one of {', '.join(CURVE_KINDS)}, got {shown(kind)}", field="kind")
     for name, value in (("x", x), ("y", y)):
-        if value not in Parameters.names():
-            raise InputError(f"{name} {shown(value)} is not a parameter", field=name)
+        Parameters.check_name(value, name)
     if x == y:
         raise InputError(f"x and y are both {x}; give two different parameters", field="y")
     (xlo, xhi), (ylo, yhi) = window

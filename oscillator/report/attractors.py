@@ -19,12 +19,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from oscillator.analysis.axes import STATE
 from oscillator.attractors.atlas import Atlas
 from oscillator.attractors.basins import Basins
-from oscillator.attractors.finding import STATE, Attractor, share_text
+from oscillator.attractors.finding import share_text
 from oscillator.attractors.following import AttractorsOver
+from oscillator.attractors.grouping import Attractor
 from oscillator.attractors.lyapunov import LyapunovSpectrum
-from oscillator.errors import InputError
+from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import atomic_path
 from oscillator.model.parameters import labelled
 from oscillator.orbits.curves import Curve
@@ -36,6 +38,7 @@ from oscillator.text import printable
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from oscillator.io.cases import Case
     from oscillator.orbits.continuation import Branch
 
 __all__ = [
@@ -651,6 +654,31 @@ def _side_labels(ax: Any, curve: Curve) -> None:
         ax.annotate(text, tuple(where), fontsize=7, ha="center", va="center", bbox=box, zorder=7)
 
 
+def read_atlas(folder: Path, case: Case | None = None) -> Atlas:
+    """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json, its table from
+    atlas.parquet; the folder's case.toml unless ``case`` is given), every file checked: a folder
+    that holds none, or a damaged one, is refused naming it."""
+    from oscillator.analysis.axes import Axis
+    from oscillator.io.cases import load_case
+    from oscillator.io.files import read_untrusted
+
+    shown_folder = printable(str(folder))
+    try:
+        info = json.loads(read_untrusted(folder / "atlas.json", what="atlas file", field="folder", limit=1_000_000))
+        identity = info["identity"]
+        x, y = (Axis(**identity[name]) for name in ("x", "y"))
+        table = pd.read_parquet(folder / "atlas.parquet")
+        case = case if case is not None else load_case(folder / "case.toml")
+    except (OSError, ValueError, KeyError, TypeError, OscillatorError) as error:
+        raise InputError(f"{shown_folder} holds no finished atlas ({error})", field="folder") from None
+    found = Atlas(case, x, y, table)
+    try:
+        found.grid()  # every point in its cell, or the table is damaged
+    except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
+        raise InputError(f"{shown_folder}: its atlas.parquet is damaged ({error})", field="folder") from None
+    return found
+
+
 def read_curve(folder: Path) -> Curve:
     """The curve of a folder ``oscillator curve`` wrote (``curve.json``, ``curve.parquet``), every
     file checked: a folder that holds none, or a damaged one, is refused naming it."""
@@ -734,8 +762,9 @@ def rebuild(folder: Path) -> str | None:
 
 
 def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
-    from oscillator.attractors.basins import Axis, basin_store, grid_starts, run_basins
-    from oscillator.attractors.finding import AttractorSettings
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.basins import basin_store, find_basins, grid_starts
+    from oscillator.attractors.mapping import AttractorSettings
 
     try:
         x, y = (Axis(**identity[name]) for name in ("x", "y"))
@@ -745,22 +774,22 @@ def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
     store = basin_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, len(grid_starts(case, x, y)), "starts")
-    write_basins(run_basins(case, x, y, store, settings=settings), folder)
+    write_basins(find_basins(case, x, y, store, settings=settings), folder)
 
 
 def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> None:
-    from oscillator.attractors.atlas import AtlasAxis, AtlasSettings, atlas_identity, run_atlas
-    from oscillator.attractors.store import LandingStore
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
 
     try:
-        x, y = (AtlasAxis(**identity[name]) for name in ("x", "y"))
+        x, y = (Axis(**identity[name]) for name in ("x", "y"))
         settings = AtlasSettings(**identity["settings"])
     except (KeyError, TypeError) as error:
         raise InputError(f"{printable(str(folder))}/atlas.json is damaged ({error})", field="folder") from None
-    store = LandingStore(folder, "atlas.json", atlas_identity(case, x, y, settings))
+    store = atlas_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
-    _finished(store, y.count, "rows", tables=True)
-    write_atlas(run_atlas(case, x, y, settings=settings, store=store), folder)
+    _finished(store, y.count, "rows", batches=True)
+    write_atlas(regime_atlas(case, x, y, settings=settings, store=store), folder)
 
 
 def _identity(marker: Path) -> dict[str, Any]:
@@ -776,10 +805,10 @@ def _identity(marker: Path) -> dict[str, Any]:
     return identity
 
 
-def _finished(store: Any, total: int, what: str, *, tables: bool = False) -> None:
+def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> None:
     """Refuse a folder whose computation has not finished: ``report`` reads back, never computes."""
-    parts = sorted(store.parts.glob("row-*.parquet" if tables else "*.parquet"))
-    done = len(parts) if tables else sum(len(pd.read_parquet(part)) for part in parts)
+    parts = sorted(store.parts.glob("batch-*.parquet" if batches else "*.parquet"))
+    done = len(parts) if batches else sum(len(pd.read_parquet(part)) for part in parts)
     if done < total:
         raise InputError(
             f"{printable(str(store.folder))} is not finished ({done} of {total} {what}); run the command that made it "

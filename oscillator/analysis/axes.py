@@ -1,0 +1,109 @@
+"""The axes of the global analyses' grids, checked once.
+
+One value type, :class:`Axis` (a name and ``count`` values from ``low`` to ``high``), serves the
+state planes of the basins (the name a state component) and the parameter planes of the atlas
+(the name a parameter).  :func:`state_plane` and :func:`parameter_plane` check a pair of axes for
+each use: for a parameter plane the model's own validation admits its four corners (the
+constraints on the parameters are intervals, so the whole rectangle is admitted), with no text
+round trip.  Each refusal is one :class:`~oscillator.errors.InputError` naming the axis (``x`` or
+``y``), which the command line shows as its flag.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from oscillator.errors import InputError, OscillatorError
+from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import InitialState, Parameters
+from oscillator.text import shown
+
+__all__ = ["MAX_COUNT", "STATE", "Axis", "parameter_plane", "state_plane"]
+
+#: The state components, in the order of a state vector.
+STATE: tuple[str, ...] = tuple(name for name in InitialState.names() if name != "t0")
+#: The most values along one axis.
+MAX_COUNT = 2000
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of a grid: a state component or a parameter, and ``count`` values from ``low``
+    to ``high`` (both included, evenly spaced)."""
+
+    name: str
+    low: float
+    high: float
+    count: int
+
+    def __post_init__(self) -> None:
+        if self.name not in STATE and self.name not in Parameters.names():
+            raise InputError(
+                f"axis {shown(self.name)} is neither a state component ({', '.join(STATE)}) nor a parameter",
+                field="axis",
+            )
+        for end in (self.low, self.high):
+            if not (isinstance(end, numbers.Real) and not isinstance(end, bool) and math.isfinite(end)):
+                raise InputError(f"axis {self.name}: its ends must be finite numbers, got {shown(end)}", field="axis")
+        if not self.low < self.high:
+            raise InputError(
+                f"axis {self.name}: from {self.low:g} to {self.high:g} is empty; give the lower end first", field="axis"
+            )
+        if isinstance(self.count, bool) or not isinstance(self.count, numbers.Integral):
+            raise InputError(
+                f"axis {self.name}: its count must be a whole number, got {shown(self.count)}", field="axis"
+            )
+        if not 2 <= self.count <= MAX_COUNT:
+            raise InputError(
+                f"axis {self.name}: its count must be from 2 to {MAX_COUNT}, got {shown(self.count)}", field="axis"
+            )
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.linspace(self.low, self.high, self.count)
+
+
+def _check_pair(x: object, y: object) -> tuple[Axis, Axis]:
+    for field, axis in (("x", x), ("y", y)):
+        if not isinstance(axis, Axis):
+            raise InputError(f"{field} must be an Axis(name, low, high, count), got {shown(axis)}", field=field)
+    assert isinstance(x, Axis) and isinstance(y, Axis)
+    if x.name == y.name:
+        raise InputError(f"y: both axes are {x.name}; give two different ones", field="y")
+    return x, y
+
+
+def state_plane(x: object, y: object) -> tuple[Axis, Axis]:
+    """Two axes of state components (a slice of the state space), checked."""
+    for field, axis in (("x", x), ("y", y)):
+        if isinstance(axis, Axis) and axis.name not in STATE:
+            raise InputError(
+                f"{field}: axis {shown(axis.name)} is not a state component; give one of {', '.join(STATE)}",
+                field=field,
+            )
+    return _check_pair(x, y)
+
+
+def parameter_plane(case: Case, x: object, y: object) -> tuple[Axis, Axis]:
+    """Two axes of parameters, checked: both parameters, different, and every corner of the
+    rectangle admitted by the model (``case`` with the two values)."""
+    for field, axis in (("x", x), ("y", y)):
+        if isinstance(axis, Axis):
+            Parameters.check_name(axis.name, field, label=f"{field}: axis")
+    x, y = _check_pair(x, y)
+    corners = [(("x", x.name, a), ("y", y.name, b)) for a in (x.low, x.high) for b in (y.low, y.high)]
+    for pair in [((f, n, v),) for f, n, v in sorted({c for corner in corners for c in corner})] + corners:
+        try:
+            resolve_case(case, **{name: float(value) for _, name, value in pair})
+        except OscillatorError as error:
+            where = ", ".join(f"{name} = {value:g}" for _, name, value in pair)
+            field = pair[-1][0]
+            raise InputError(
+                f"{field}: the model refuses {where} ({error}); give an axis inside the parameter's range",
+                field=field,
+            ) from None
+    return x, y

@@ -1,0 +1,80 @@
+"""The features of an attractor: what the atlas's describer measures at every point.
+
+:class:`Measured` gives each attractor its largest Lyapunov exponent without Newton's refinement
+(``log |mu_1| / (n T)`` from one return's monodromy at the attractor's cycle, the derivative
+through every switch, :func:`~oscillator.orbits.shooting.period_map`; for an aperiodic set the QR
+average of :func:`~oscillator.attractors.lyapunov.lyapunov`) and every measure of
+:data:`MEASURES` it names.  A new feature is one function ``measure(case, attractor) -> float``
+registered in :data:`MEASURES`: the atlas's table gains its column.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from oscillator.attractors.finding import largest_exponent
+from oscillator.attractors.grouping import Attractor
+from oscillator.attractors.lyapunov import lyapunov
+from oscillator.errors import OscillatorError
+from oscillator.io.cases import Case, resolve_case
+from oscillator.orbits.shooting import period_map
+
+__all__ = ["MEASURES", "Measured", "impact_velocity"]
+
+
+def impact_velocity(case: Case, attractor: Attractor) -> float:
+    """The largest relative velocity at a contact onset (m/s) over one return from the
+    attractor's last section point (``max(period, 1)`` forcing periods); 0 without contacts."""
+    from oscillator.hybrid.simulate import simulate
+    from oscillator.model.events import EventKind
+
+    if not attractor.contacts:
+        return 0.0
+    periods = max(attractor.period, 1)
+    begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
+    run = resolve_case(case, **begin)
+    result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, record_trajectory=False)
+    events = result.events
+    onsets = events[events.kind.isin(EventKind.values_where(lambda kind: kind.contact_starts))]
+    if onsets.empty:
+        return 0.0
+    left = onsets.kind.map(lambda kind: EventKind(kind).contact == "left")
+    speed = np.where(left, np.abs(onsets.v1 - onsets.v2), np.abs(onsets.v1))
+    return float(np.max(speed))
+
+
+#: The measures an attractor can carry, by name: ``measure(case, attractor) -> float``.
+MEASURES: dict[str, Callable[[Case, Attractor], float]] = {"impact_velocity": impact_velocity}
+
+
+@dataclass(frozen=True)
+class Measured:
+    """The atlas's describer: the largest exponent from one return's monodromy (periodic) or the
+    QR average over ``lyapunov_periods`` (aperiodic), NaN where it cannot be computed, and the
+    ``measures`` named (of :data:`MEASURES`)."""
+
+    lyapunov_periods: int = 100
+    measures: tuple[str, ...] = tuple(MEASURES)
+
+    def __call__(self, case: Case, attractor: Attractor) -> Attractor:
+        values = {name: MEASURES[name](case, attractor) for name in self.measures}
+        period = case.parameters.period
+        return dataclasses.replace(
+            attractor, lyapunov=self._largest(case, attractor), forcing_period=period, measures=values
+        )
+
+    def _largest(self, case: Case, attractor: Attractor) -> float:
+        try:
+            if attractor.period:
+                image = period_map(case, case.initial.t0, attractor.points[-1], attractor.period, derivative=True)
+                assert image.monodromy is not None
+                span = attractor.period * case.parameters.period
+                return largest_exponent(np.linalg.eigvals(image.monodromy), span)
+            return lyapunov(case, guess=attractor.points[-1], transient=0, periods=self.lyapunov_periods).largest
+        except OscillatorError:
+            return math.nan
