@@ -123,10 +123,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.atlas import Atlas, AtlasSettings, regime_atlas
     from oscillator.attractors.basins import Basins, find_basins
     from oscillator.attractors.finding import Attractors, find_attractors
-    from oscillator.attractors.grouping import Attractor
-    from oscillator.attractors.mapping import AttractorSettings
     from oscillator.attractors.following import AttractorsOver, follow_attractors
+    from oscillator.attractors.grouping import Attractor
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
+    from oscillator.attractors.mapping import AttractorSettings
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.hybrid.record import Segment
     from oscillator.hybrid.recording import SaveAt

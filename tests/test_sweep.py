@@ -83,7 +83,7 @@ def test_a_killed_sweep_resumes_to_the_same_result(case, tmp_path):
 
 def test_a_folder_of_another_sweep_is_refused(case, tmp_path):
     run_sweep(case, SweepSettings(**{**SMALL, "steps": 1}), tmp_path / "s", workers=1)
-    with pytest.raises(OscillatorError, match="holds a different sweep"):
+    with pytest.raises(OscillatorError, match="holds another sweep computation"):
         run_sweep(case, SweepSettings(**{**SMALL, "steps": 1, "record": 4}), tmp_path / "s", workers=1)
 
 

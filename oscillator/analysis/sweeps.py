@@ -24,7 +24,6 @@ one Parquet file per table (memory stays flat in the number of points).
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 import stat
@@ -40,9 +39,10 @@ import pyarrow.parquet as pq
 
 from oscillator.analysis.execution import check_workers, connect, run_tasks
 from oscillator.analysis.intervals import rest_intervals, runs
+from oscillator.analysis.store import ResumableFolder, identity
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
-from oscillator.io.cases import Case, case_to_toml, resolve_case, section_times
-from oscillator.io.files import atomic_folder, atomic_path, check_name, lock_name, read_untrusted, replace_file
+from oscillator.io.cases import Case, resolve_case, section_times
+from oscillator.io.files import atomic_path, lock_name
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import SweepSettings
 from oscillator.text import printable
@@ -314,56 +314,15 @@ def sliding_ranges(summary: pd.DataFrame, param: str, direction: str | None = No
 
 # --------------------------------------------------------------------------- storage
 
-#: The largest ``sweep.json`` read back (bytes).
-_MAX_SWEEP_JSON = 1 << 20
-
-
-def _damaged(path: Path, what: str, fix: str = "give a new folder") -> InputError:
-    return InputError(f"{printable(str(path))} is damaged: {what}; {fix}", field=path.name)
-
-
-class _Store:
+class _Store(ResumableFolder):
     """A sweep folder: its identity, the finished points, and the consolidated tables."""
 
     def __init__(self, folder: Path, case: Case, settings: SweepSettings) -> None:
-        self.folder = folder
-        self.parts = folder / "parts"
-        self.identity = {"case": case_to_toml(case), "settings": dataclasses.asdict(settings)}
+        super().__init__(folder, "sweep.json", identity(case, settings=settings))
         self.settings = settings
-        self.resuming = False
 
-    def check(self) -> None:
-        """Refuse, before anything is created, a folder that cannot hold this sweep.
-
-        A new name must be writable; an existing folder must be this very sweep (then it is
-        resumed), with its ``sweep.json``, ``parts/`` and finished parts intact.
-        """
-        shown = printable(str(self.folder))
-        check_name(self.folder, option="folder")
-        if not os.path.lexists(self.folder):
-            return
-        if not self.folder.is_dir():
-            raise InputError(f"folder {shown} exists and is not a folder; give a new folder", field="folder")
-        marker = self.folder / "sweep.json"
-        if not os.path.lexists(marker):
-            if any(self.folder.iterdir()):
-                raise InputError(f"folder {shown} exists and is not a sweep folder; give a new folder", field="folder")
-            return
-        text = read_untrusted(marker, what="sweep file", field="sweep.json", limit=_MAX_SWEEP_JSON)
-        try:
-            stored = json.loads(text)
-        except (ValueError, RecursionError) as exc:
-            raise _damaged(marker, "it is not JSON") from exc
-        if not isinstance(stored, dict) or "identity" not in stored:
-            raise _damaged(marker, "it holds no sweep identity")
-        if stored["identity"] != self.identity:
-            raise InputError(
-                f"folder {shown} holds a different sweep (another case or settings); give a new "
-                f"folder, or the same case and settings to resume it",
-                field="folder",
-            )
-        if not self.parts.is_dir():
-            raise _damaged(self.folder, "its parts/ folder is missing")
+    def check_parts(self) -> None:
+        """Every part named ``NNNNNN.TABLE.parquet``, a plain file whose footer reads."""
         for part in sorted(self.parts.glob("*.parquet")):
             try:
                 index, name, _ = part.name.split(".")
@@ -374,40 +333,14 @@ class _Store:
             except Exception as exc:  # pyarrow raises many types for a damaged file
                 if isinstance(exc, MemoryError):
                     raise
-                raise _damaged(
+                raise self.damaged(
                     part,
                     "it is not a part of this sweep",
                     "delete it, and run the same command to compute that point again",
                 ) from exc
-        self.resuming = True
 
-    def open(self) -> None:
-        """Create the folder (appearing whole: parts/, case.toml, sweep.json), unless resuming."""
-        if self.resuming:
-            return
-        try:
-            with atomic_folder(self.folder) as temporary:
-                (temporary / "parts").mkdir()
-                (temporary / "case.toml").write_text(str(self.identity["case"]), encoding="utf-8")
-                (temporary / "sweep.json").write_text(self._status("running", done=0), encoding="utf-8")
-        except OSError as exc:
-            raise InputError(
-                f"folder {printable(str(self.folder))}: cannot create it ({exc.strerror}); choose a writable folder",
-                field="folder",
-            ) from exc
-
-    def _status(self, status: str, **extra: Any) -> str:
-        info = {
-            "identity": self.identity,
-            "status": status,
-            "param": self.settings.param,
-            "points": len(self.settings.points),
-            **extra,
-        }
-        return json.dumps(info, indent=2, default=str)
-
-    def write_status(self, status: str, **extra: Any) -> None:
-        replace_file(self.folder / "sweep.json", self._status(status, **extra))
+    def described(self) -> dict[str, Any]:
+        return {"param": self.settings.param, "points": len(self.settings.points)}
 
     def done(self) -> set[int]:
         return {int(p.name.split(".")[0]) for p in self.parts.glob("*.summary.parquet")}
@@ -521,7 +454,7 @@ class Sweep:
         started = time.perf_counter()
         store, settings = self._store, self.settings
         try:
-            store.open()
+            store.open(done=0)
             values = [value for _, value in settings.points]
             done = store.done()
             tasks = [(i, v) for i, v in enumerate(values) if i not in done]

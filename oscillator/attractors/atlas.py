@@ -32,12 +32,13 @@ import pandas as pd
 
 from oscillator.analysis.axes import Axis, parameter_plane
 from oscillator.analysis.execution import Executor
+from oscillator.analysis.store import identity
 from oscillator.attractors.continuing import Continued, Mapper, continue_attractors, plane_points
 from oscillator.attractors.features import MEASURES, Measured
 from oscillator.attractors.grouping import regime_of
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.attractors.seeding import OnePerRegime
-from oscillator.attractors.store import LandingStore, identity
+from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
 from oscillator.orbits.shooting import check_count

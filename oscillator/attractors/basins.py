@@ -21,9 +21,10 @@ import pandas as pd
 
 from oscillator.analysis.axes import STATE, Axis, state_plane
 from oscillator.analysis.execution import Executor
+from oscillator.analysis.store import identity
 from oscillator.attractors.finding import Attractors, assemble
 from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing, land
-from oscillator.attractors.store import LandingStore, identity
+from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
 from oscillator.presenting import presenter

@@ -32,12 +32,13 @@ import pandas as pd
 
 from oscillator.analysis.axes import Axis
 from oscillator.analysis.execution import Executor
+from oscillator.analysis.store import identity
 from oscillator.attractors.continuing import Mapper, continue_attractors, line_points
 from oscillator.attractors.finding import Attractors, Refined, share_interval
 from oscillator.attractors.grouping import Attractor
 from oscillator.attractors.mapping import AttractorSettings, Landing, check_settings, check_states, land
 from oscillator.attractors.seeding import LastPoints
-from oscillator.attractors.store import LandingStore, identity
+from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters

@@ -19,7 +19,6 @@ contracts a direction to nothing in finite time.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -28,9 +27,8 @@ import numpy as np
 import pandas as pd
 
 from oscillator.analysis.execution import check_progress
-from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
-from oscillator.orbits.shooting import check_count, check_guess, period_map
+from oscillator.orbits.shooting import check_count, check_guess, period_map, settled
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -98,16 +96,8 @@ class LyapunovSpectrum:
 
 def _start(case: Case, guess: Sequence[float] | np.ndarray | None, transient: int) -> tuple[float, np.ndarray]:
     """The state after ``transient`` periods from ``guess`` (or the case's start) at ``t0``."""
-    t0 = case.initial.t0
-    y = np.array(case.initial.y if guess is None else check_guess(guess), dtype=float)
-    if transient == 0:
-        return t0, y
-    initial = dataclasses.replace(case.initial, **dict(zip(("x1", "v1", "x2", "v2"), y, strict=True)))
-    end = t0 + transient * case.parameters.period
-    warm = simulate(
-        dataclasses.replace(case, initial=initial), t_end=end, record_trajectory=False, keep_events_from=end
-    )
-    return end, np.asarray(warm.final_state[1:], dtype=float)
+    y = case.initial.y if guess is None else check_guess(guess)
+    return case.initial.t0 + transient * case.parameters.period, settled(case, y, transient)
 
 
 def _qr_step(monodromy: np.ndarray, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -11,9 +11,8 @@ sets of the same kind, between their centres.  Any other attractor is new.  Attr
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
@@ -22,19 +21,13 @@ from oscillator.attractors.grouping import Attractor, cycle_distance, order_key
 __all__ = ["Matcher", "NearestSame", "renumbered"]
 
 
-class Matcher(Protocol):
-    def __call__(
-        self,
-        previous: Sequence[tuple[Attractor, int]],
-        here: Sequence[Attractor],
-        landed: dict[int, int],
-        next_id: int,
-    ) -> tuple[dict[int, int], int]:
-        """``(ids, next_id)``: each attractor of ``here`` (by its id) -> its kept id.
-
-        ``previous``: the attractors of the point matched to, each with its kept id; ``landed``:
-        kept id -> the attractor of ``here`` its seed reached (or -1), for those seeded here."""
-        ...
+#: A matcher: ``matcher(previous, here, landed, next_id) -> (ids, next_id)``: each attractor of
+#: ``here`` (by its id) -> its kept id.  ``previous``: the attractors of the points matched to, each
+#: with its kept id; ``landed``: kept id -> the attractor of ``here`` its seed reached (or -1), for
+#: those seeded here.
+Matcher = Callable[
+    [Sequence[tuple[Attractor, int]], Sequence[Attractor], dict[int, int], int], tuple[dict[int, int], int]
+]
 
 
 def _distance(a: Attractor, b: Attractor) -> float:

@@ -12,8 +12,6 @@ point.
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import os
 from pathlib import Path
 from typing import Any
@@ -22,12 +20,13 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
+from oscillator.analysis.store import ResumableFolder
 from oscillator.attractors.mapping import STATE, Landing
 from oscillator.errors import InputError
-from oscillator.io.files import atomic_folder, atomic_path, check_name, read_untrusted, replace_file
-from oscillator.text import printable
+from oscillator.io.files import atomic_path
 
-__all__ = ["LandingStore", "identity"]
+__all__ = ["LandingStore"]
+
 
 _MAX_JSON = 1_000_000
 #: The layout and meaning of the parts; a folder of another format is refused (format 2: a contact
@@ -74,25 +73,6 @@ def landing_of(row: Any) -> Landing:
     )
 
 
-def identity(case: Any, **pieces: Any) -> dict[str, Any]:
-    """A computation's identity, as its folder's marker keeps it: the case as TOML and each piece
-    (an axis, the settings: dataclasses, or plain values), so that two computations are the same
-    exactly when their identities are equal."""
-    from oscillator.io.cases import case_to_toml
-
-    return {"case": case_to_toml(case), **{name: _plain_value(value) for name, value in pieces.items()}}
-
-
-def _plain_value(value: Any) -> Any:
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return dataclasses.asdict(value)
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, list):
-        return [_plain_value(item) for item in value]
-    return value
-
-
 def _foreign(landing: Landing, starts: np.ndarray, seen: set[int]) -> str:
     """Why a stored landing is not one of this computation's (empty if it is)."""
     if not 0 <= landing.index < len(starts) or landing.index in seen:
@@ -106,82 +86,18 @@ def _foreign(landing: Landing, starts: np.ndarray, seen: set[int]) -> str:
     return ""
 
 
-class LandingStore:
+class LandingStore(ResumableFolder):
     """A resumable folder of landings; ``marker`` names its identity file (``basins.json``)."""
 
+    FORMAT = FORMAT
+
     def __init__(self, folder: Path, marker: str, identity: dict[str, Any]) -> None:
-        self.folder = Path(folder)
-        self.parts = self.folder / "parts"
-        self.marker = marker
-        self.what = marker.removesuffix(".json")
-        self.identity = identity
-        self.resuming = False
+        super().__init__(folder, marker, identity)
         #: What was read back from earlier runs: landings, and the batches of points they came in.
         self.reused = {"landings": 0, "batches": 0}
 
-    def check(self) -> None:
-        """Refuse, before anything is created, a folder that cannot hold this computation: a new
-        name must be writable; an existing folder must hold this very computation (it resumes)."""
-        text = printable(str(self.folder))
-        check_name(self.folder, option="folder")
-        if not os.path.lexists(self.folder):
-            return
-        if not self.folder.is_dir():
-            raise InputError(f"folder {text} exists and is not a folder; give a new folder", field="folder")
-        marker = self.folder / self.marker
-        if not os.path.lexists(marker):
-            if any(self.folder.iterdir()):
-                raise InputError(
-                    f"folder {text} exists and is not a {self.what} folder; give a new folder", field="folder"
-                )
-            return
-        raw = read_untrusted(marker, what=f"{self.what} file", field=self.marker, limit=_MAX_JSON)
-        try:
-            stored = json.loads(raw)
-        except (ValueError, RecursionError) as exc:
-            raise InputError(
-                f"{text}/{self.marker} is damaged: it is not JSON; give a new folder", field="folder"
-            ) from exc
-        if not isinstance(stored, dict) or stored.get("identity") != self.identity:
-            raise InputError(
-                f"folder {text} holds another {self.what} computation (another case or settings); give a new "
-                "folder, or the same case and settings to resume it",
-                field="folder",
-            )
-        if stored.get("format") != FORMAT:
-            raise InputError(
-                f"folder {text} was written by another version of oscillator (its parts count contacts "
-                "differently); give a new folder",
-                field="folder",
-            )
-        if self.parts.is_symlink() or not self.parts.is_dir():
-            raise InputError(
-                f"{text} is damaged: its parts/ is missing or is a link; give a new folder", field="folder"
-            )
-        self.resuming = True
-
-    def open(self) -> None:
-        """Create the folder (appearing whole), unless resuming."""
-        if self.resuming:
-            return
-        try:
-            with atomic_folder(self.folder) as temporary:
-                (temporary / "parts").mkdir()
-                (temporary / "case.toml").write_text(str(self.identity["case"]), encoding="utf-8")
-                (temporary / self.marker).write_text(self._status("running"), encoding="utf-8")
-        except OSError as exc:
-            raise InputError(
-                f"folder {printable(str(self.folder))}: cannot create it ({exc.strerror}); choose a writable folder",
-                field="folder",
-            ) from exc
-        self.resuming = True
-
-    def _status(self, status: str, **extra: Any) -> str:
-        marker = {"identity": self.identity, "format": FORMAT, "status": status, **extra}
-        return json.dumps(marker, indent=2, default=str)
-
-    def write_status(self, status: str, **extra: Any) -> None:
-        replace_file(self.folder / self.marker, self._status(status, **extra))
+    def _damaged(self, part: Path, why: str) -> InputError:
+        return self.damaged(part, why, "delete it and run the same command to compute its starts again")
 
     def read(self, starts: np.ndarray, prefix: str = "") -> list[Landing]:
         """The landings of the parts whose names start with ``prefix``, each checked against
@@ -190,7 +106,7 @@ class LandingStore:
         found: list[Landing] = []
         seen: set[int] = set()
         for part in sorted(self.parts.glob(f"{prefix}*.parquet")):
-            self._plain(part)
+            self.plain(part)
             try:
                 frame = pq.read_table(part).to_pandas()
                 landings = [landing_of(row) for row in frame.itertuples(index=False)]
@@ -207,24 +123,6 @@ class LandingStore:
         self.reused["landings"] += len(found)
         return found
 
-    def _plain(self, part: Path) -> None:
-        """Refuse a part that is a link or not a file: a resume folder is untrusted, and nothing
-        is read or written through a link in it."""
-        if part.is_symlink() or not part.is_file():
-            raise InputError(
-                f"{printable(str(part))} is a link or not a file; a {self.what} folder holds plain files only: give "
-                "a new folder",
-                field="folder",
-            )
-
-    @staticmethod
-    def _damaged(part: Path, why: str) -> InputError:
-        return InputError(
-            f"{printable(str(part))} is damaged ({why}); delete it and run the same command to compute its starts "
-            "again",
-            field="folder",
-        )
-
     def write_batch(self, landings: dict[int, list[Landing]], name: str) -> None:
         """One part holding the landings of a batch of points (``point -> its landings``)."""
         rows = [{"point": point, **landing_row(item)} for point, items in landings.items() for item in items]
@@ -237,7 +135,7 @@ class LandingStore:
         part = self.parts / f"{name}.parquet"
         if not os.path.lexists(part):
             return None
-        self._plain(part)
+        self.plain(part)
         try:
             frame = pq.read_table(part).to_pandas()
             landings = [(int(row.point), landing_of(row)) for row in frame.itertuples(index=False)]

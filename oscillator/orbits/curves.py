@@ -37,10 +37,7 @@ from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
 from oscillator.orbits.continuation import Bifurcation, Branch, continue_orbit
-from oscillator.orbits.shooting import (
-    ORBIT_RTOL,
-    check_count,
-)
+from oscillator.orbits.shooting import check_count, tightened
 from oscillator.presenting import presenter
 from oscillator.text import shown
 
@@ -385,7 +382,4 @@ def check_curve(
     resolved = resolve_case(case, **overrides)
     for point in ((xlo, ylo), (xhi, yhi)):
         resolve_case(resolved, **{x: point[0], y: point[1]})
-    tight = {
-        name: min(getattr(resolved.options, name), ORBIT_RTOL) for name in ("rtol", "atol") if name not in overrides
-    }
-    return resolve_case(resolved, **tight)
+    return tightened(resolved, overrides)

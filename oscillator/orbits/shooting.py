@@ -20,7 +20,7 @@ import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -443,11 +443,25 @@ def newton(
 def orbit_case(case: Case | str, overrides: dict[str, float]) -> Case:
     """The case with the overrides, and CVODE's tolerances at most :data:`ORBIT_RTOL` unless the
     overrides set them (Newton needs the map accurate well below its own tolerance)."""
-    resolved = resolve_case(case, **overrides)
-    tight = {
-        name: min(getattr(resolved.options, name), ORBIT_RTOL) for name in ("rtol", "atol") if name not in overrides
-    }
-    return resolve_case(resolved, **tight) if tight else resolved
+    return tightened(resolve_case(case, **overrides), overrides)
+
+
+def tightened(case: Case, overrides: dict[str, Any]) -> Case:
+    """``case`` with CVODE's tolerances at most :data:`ORBIT_RTOL`, but those ``overrides`` set."""
+    tight = {name: min(getattr(case.options, name), ORBIT_RTOL) for name in ("rtol", "atol") if name not in overrides}
+    return resolve_case(case, **tight) if tight else case
+
+
+def settled(case: Case, state: np.ndarray | Sequence[float], periods: int) -> np.ndarray:
+    """The state ``(x1, v1, x2, v2)`` that ``periods`` forcing periods from ``state`` at the case's
+    ``t0`` reach (the same section: the forcing has period ``T``); ``state`` itself for 0."""
+    y = np.array(state, dtype=float)
+    if periods == 0:
+        return y
+    start = dataclasses.replace(case.initial, **dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in y), strict=True)))
+    end = case.initial.t0 + periods * case.parameters.period
+    warm = simulate(dataclasses.replace(case, initial=start), t_end=end, record_trajectory=False, keep_events_from=end)
+    return np.asarray(warm.final_state[1:], dtype=float)
 
 
 def check_count(value: object, name: str, least: int, most: int | None = None) -> int:
@@ -488,11 +502,7 @@ def start_of(case: Case, section: object, guess: object, transient: object) -> t
             "`guess` (x1, v1, x2, v2 there), or move the case's start with t0",
             field="guess",
         )
-    if transient == 0:
-        return section, np.array(case.initial.y, dtype=float)
-    end = section + transient * case.parameters.period
-    warm = simulate(case, t_end=end, record_trajectory=False, keep_events_from=end)
-    return section, np.asarray(warm.final_state[1:], dtype=float)
+    return section, settled(case, case.initial.y, transient)
 
 
 def check_orbit_settings(period: object, tol: object, max_iterations: object) -> tuple[int, float, int]:
