@@ -704,7 +704,7 @@ def test_ueda_s_basins_with_the_default_settings_give_one_chaotic_attractor():
 def test_the_curve_command_and_trace_curve_take_the_same_step_by_default():
     import inspect
 
-    from oscillator.cli.attractors import curve
+    from oscillator.cli.plane import curve
     from oscillator.orbits.curves import DEFAULT_STEP, trace_curve
 
     cli_default = inspect.signature(curve).parameters["step"].default

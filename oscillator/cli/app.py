@@ -24,7 +24,7 @@ from typing import Annotated
 import typer
 from rich.text import Text
 
-from oscillator.cli import attractors, cases, check, console, orbit, run, sweep
+from oscillator.cli import attractors, cases, check, console, orbit, plane, run, sweep
 from oscillator.cli.console import err, out
 from oscillator.text import printable
 from oscillator.version import __version__
@@ -121,6 +121,6 @@ app.command(short_help="The attractors over a parameter: shares, and where each 
     attractors.attractors
 )
 app.command(short_help="The Lyapunov spectrum of a motion.")(attractors.lyapunov)
-app.command(short_help="The regime atlas over two parameters.")(attractors.atlas)
-app.command(short_help="Trace a bifurcation curve in a plane of two parameters.")(attractors.curve)
+app.command(short_help="The regime atlas over two parameters.")(plane.atlas)
+app.command(short_help="Trace a bifurcation curve in a plane of two parameters.")(plane.curve)
 app.callback(invoke_without_command=True)(_version)

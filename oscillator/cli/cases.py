@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import tomllib
-from typing import Annotated
 
-import typer
 from rich.table import Table
 
 from oscillator.cli.console import fail, message, out, say
+from oscillator.cli.options import CaseArgument
 from oscillator.errors import OscillatorError
 from oscillator.io.cases import MAX_CASE_BYTES, Case, case_names, load_case
 from oscillator.io.files import read_untrusted
@@ -52,7 +51,7 @@ def _written(case: Case) -> dict[str, str]:
     }
 
 
-def show(case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")]) -> None:
+def show(case: CaseArgument) -> None:
     """Show a case: its parameters, start, run settings and expected events.
 
     \b

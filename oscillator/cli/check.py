@@ -10,7 +10,8 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import EngineOption, case_from, check_engine
+from oscillator.cli.inputs import case_from, check_engine
+from oscillator.cli.options import EngineOption
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
 from oscillator.io.cases import Case, is_shipped
 from oscillator.text import printable, shown

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Annotated, Any
-
-import typer
+from typing import TYPE_CHECKING, Any
 
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, check_setting, load_case, resolve_case
@@ -17,18 +15,7 @@ from oscillator.text import printable, shown
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
-__all__ = ["EngineOption", "case_from", "check_engine", "overrides", "sample_grid", "sweep_settings"]
-
-#: ``--engine``: which integrator runs the case (:mod:`oscillator.engines`).
-EngineOption = Annotated[
-    str | None,
-    typer.Option(
-        "--engine",
-        metavar="NAME",
-        help="The integrator: cvode (CVODE through its C API, the default), sksundae (CVODE through "
-        "scikit-sundae's Python API) or scipy (SciPy's solve_ivp).",
-    ),
-]
+__all__ = ["case_from", "check_engine", "overrides", "sample_grid", "sweep_settings"]
 
 
 def check_engine(engine: str | None) -> None:

@@ -22,6 +22,7 @@ from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, overrides
+from oscillator.cli.options import CaseArgument, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
 from oscillator.io.signals import interrupts_deferred
@@ -34,10 +35,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["continue_", "orbit"]
 
-SetOption = Annotated[
-    list[str] | None,
-    typer.Option("--set", metavar="NAME=VALUE", help="Override a parameter, initial value or solver option."),
-]
 PeriodOption = Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return (1 to 1000).")]
 GuessOption = Annotated[
     str | None,
@@ -72,7 +69,7 @@ def _code(error: OscillatorError) -> int:
 
 
 def orbit(
-    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    case: CaseArgument,
     set_: SetOption = None,
     period: PeriodOption = 1,
     guess: GuessOption = None,
@@ -157,7 +154,7 @@ def _continue_with_progress(
 
 
 def continue_(
-    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case or a case file (.toml).")],
+    case: CaseArgument,
     param: Annotated[str, typer.Option("--param", metavar="NAME", help="The parameter to continue in.")],
     start: Annotated[float, typer.Option("--from", metavar="VALUE", help="Start of the parameter's range.")],
     stop: Annotated[float, typer.Option("--to", metavar="VALUE", help="End of the parameter's range.")],
@@ -181,7 +178,7 @@ def continue_(
         Path | None, typer.Option("--over", metavar="SWEEP_DIR", help="Draw the branch over this sweep's points.")
     ] = None,
     out_dir: Annotated[Path | None, typer.Option("--out", metavar="DIR", help="Output folder.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Continue a periodic orbit in a parameter (pseudo-arclength, through unstable parts and
     folds); locate its sliding, grazing, fold, period-doubling and torus bifurcations.

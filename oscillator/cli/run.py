@@ -18,7 +18,8 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import EngineOption, case_from, check_engine, sample_grid
+from oscillator.cli.inputs import case_from, check_engine, sample_grid
+from oscillator.cli.options import CaseArgument, EngineOption, NoPlotsOption, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.io.files import check_new
@@ -152,19 +153,11 @@ def _prepare_run(
 
 
 def run(
-    case: Annotated[str, typer.Argument(metavar="CASE", help="A named case (oscillator list) or a case file (.toml).")],
+    case: CaseArgument,
     t_end: Annotated[
         float | None, typer.Option("--t-end", metavar="T", help="End time in s (default: the case's).")
     ] = None,
-    set_: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--set",
-            metavar="NAME=VALUE",
-            help="Override a parameter, initial value or solver option (repeatable). A changed parameter or start "
-            "is another case: the article's expected times are then not compared.",
-        ),
-    ] = None,
+    set_: SetOption = None,
     out_dir: Annotated[
         Path | None,
         typer.Option("--out", metavar="DIR", help="Output folder, new (default: runs/CASE-YYYYmmdd-HHMMSS)."),
@@ -172,7 +165,7 @@ def run(
     fmt: Annotated[
         str, typer.Option("--format", metavar="FORMAT", help="Event table format: csv, parquet or both.")
     ] = "both",
-    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the figures.")] = False,
+    no_plots: NoPlotsOption = False,
     no_report: Annotated[bool, typer.Option("--no-report", help="Skip the Markdown/HTML report.")] = False,
     sample: Annotated[
         float | None,
@@ -192,9 +185,12 @@ def run(
         float | None,
         typer.Option("--keep-events-from", metavar="T", help="Keep only the events at or after T s (a long run)."),
     ] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")] = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Run a case, print its switching events, and write tables, figures and a report.
+
+    A case changed by --set in a parameter or its start is another case: the article's expected
+    times are then not compared.
 
     \b
     Examples:

@@ -12,6 +12,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from, sweep_settings
+from oscillator.cli.options import NoPlotsOption, QuietOption, SchedulerOption, SetOption, WorkersOption
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, is_shipped
 from oscillator.model.parameters import SweepSettings
@@ -52,13 +53,8 @@ def sweep(
     record: Annotated[
         int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded (default 50).")
     ] = None,
-    workers: Annotated[
-        int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
-    ] = None,
-    scheduler: Annotated[
-        str | None,
-        typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
-    ] = None,
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
     out_dir: Annotated[
         Path | None,
         typer.Option(
@@ -67,12 +63,10 @@ def sweep(
             help="Output folder (default: runs/CASE-sweep-YYYYmmdd-HHMMSS); the same folder again resumes the sweep.",
         ),
     ] = None,
-    set_: Annotated[
-        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
-    ] = None,
+    set_: SetOption = None,
     both_ways: BothWaysOption = False,
-    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip the diagrams.")] = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder.")] = False,
+    no_plots: NoPlotsOption = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Sweep a parameter: switching points, Poincaré points and a summary per value.
 
@@ -272,9 +266,7 @@ def locate(
     tolerance: Annotated[
         float, typer.Option("--tolerance", metavar="WIDTH", help="Width of the final bracket.")
     ] = 1e-8,
-    set_: Annotated[
-        list[str] | None, typer.Option("--set", metavar="NAME=VALUE", help="Override (repeatable).")
-    ] = None,
+    set_: SetOption = None,
 ) -> None:
     """Find where the sweep's summary changes between two values (bisection, to 1e-8).
 

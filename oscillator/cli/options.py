@@ -1,0 +1,62 @@
+"""The command line's shared options, declared once: every command that takes one takes it with
+the same flag, metavar and help (and its default from the library's settings where it has one)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+__all__ = [
+    "AxisOption",
+    "CaseArgument",
+    "EngineOption",
+    "NoPlotsOption",
+    "QuietOption",
+    "RecordOption",
+    "SchedulerOption",
+    "SetOption",
+    "TransientOption",
+    "WorkersOption",
+]
+
+#: ``CASE``: a named case or a case file.
+CaseArgument = Annotated[
+    str, typer.Argument(metavar="CASE", help="A named case (oscillator list) or a case file (.toml).")
+]
+#: ``--set NAME=VALUE``: an override of the case.
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set", metavar="NAME=VALUE", help="Override a parameter, initial value or solver option (repeatable)."
+    ),
+]
+#: ``--quiet``: only the output folder printed.
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="Print only the output folder (for scripts).")]
+#: ``--no-plots``: the tables and report without figures.
+NoPlotsOption = Annotated[bool, typer.Option("--no-plots", help="Skip the figures.")]
+#: ``--transient`` and ``--record`` of the global analyses (their defaults: the command's settings).
+TransientOption = Annotated[
+    int | None, typer.Option("--transient", metavar="N", help="Forcing periods run before recording.")
+]
+RecordOption = Annotated[int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded after it.")]
+#: ``--workers`` and ``--scheduler``: where the many runs run.
+WorkersOption = Annotated[
+    int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option("--scheduler", metavar="ADDRESS", help="Run on a Dask cluster: tcp://HOST:PORT of its scheduler."),
+]
+#: ``--engine``: which integrator runs the case (:mod:`oscillator.engines`).
+EngineOption = Annotated[
+    str | None,
+    typer.Option(
+        "--engine",
+        metavar="NAME",
+        help="The integrator: cvode (CVODE through its C API, the default), sksundae (CVODE through "
+        "scikit-sundae's Python API) or scipy (SciPy's solve_ivp).",
+    ),
+]
+#: ``--x NAME LOW HIGH N``: an axis of a grid.
+AxisOption = tuple[str, float, float, int]
