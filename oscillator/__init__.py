@@ -50,7 +50,7 @@ _EXPORTS = {
     "read_run": "oscillator.saved",
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
-    "Branch": "oscillator.orbits.continuation",
+    "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
     "Attractor": "oscillator.attractors.grouping",
     "Attractors": "oscillator.attractors.finding",
@@ -136,7 +136,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.events import Event, EventKind
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode
-    from oscillator.orbits.continuation import Branch, continue_orbit
+    from oscillator.orbits.branch import Branch
+    from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.shooting import Orbit, find_orbit
     from oscillator.saved import read_run

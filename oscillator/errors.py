@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
     from oscillator.orbits.curves import Curve
 
 __all__ = ["InputError", "Interrupted", "OscillatorError", "Reason", "SimulationFailed"]

@@ -22,7 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     from matplotlib.figure import Figure
 
     from oscillator.hybrid.result import Result
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 else:
     Protocol = object

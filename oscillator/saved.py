@@ -9,7 +9,7 @@ from oscillator.io.files import as_folder
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 
 __all__ = ["read_run"]

@@ -18,10 +18,10 @@ from oscillator.analysis.axes import Axis
 from oscillator.attractors.atlas import atlas_store, regime_atlas
 from oscillator.attractors.basins import basin_store, find_basins, grid_starts
 from oscillator.attractors.finding import find_attractors, share_text
-from oscillator.attractors.grouping import group, interleaving, unsettled
-from oscillator.attractors.mapping import AttractorSettings, Landing, check_states
 from oscillator.attractors.following import follow_attractors
+from oscillator.attractors.grouping import group, interleaving, unsettled
 from oscillator.attractors.lyapunov import lyapunov, separation_exponent
+from oscillator.attractors.mapping import AttractorSettings, Landing, check_states
 from oscillator.errors import InputError
 from oscillator.orbits.shooting import find_orbit
 

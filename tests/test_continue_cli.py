@@ -64,7 +64,7 @@ def interrupted_at(function: str, args: list[str], cwd) -> tuple[int, str]:
 def test_ctrl_c_during_the_continuation_keeps_the_branch_so_far(work):
     """Interrupted while it steps along the branch: the points traced so far are written,
     marked interrupted (the Python API raises Interrupted carrying the partial Branch)."""
-    code, stderr = interrupted_at("oscillator.orbits.continuation._between", [*CONTINUE, "--out", "x"], work)
+    code, stderr = interrupted_at("oscillator.orbits.locating.between", [*CONTINUE, "--out", "x"], work)
     assert code == 130 and "Traceback" not in stderr, stderr
     assert stderr.strip().startswith("error: interrupted at Q2 = 71.3; the branch so far is in x"), stderr
     info = run_json(work / "x")

@@ -11,7 +11,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import oscillator as osc
-from oscillator.orbits.continuation import Branch
+from oscillator.orbits.branch import Branch
 from oscillator.report.figures import rest_spans
 
 PERIOD = 2 * np.pi / 1.6  # instance-1's forcing period

@@ -10,14 +10,14 @@ import pytest
 
 import oscillator
 from oscillator.model.events import EventKind
-from oscillator.orbits.continuation import Bifurcation
+from oscillator.orbits.branch import Bifurcation
 from oscillator.report.figures import KIND_STYLE
 from oscillator.report.orbits import BIFURCATION_MARKERS
 from oscillator.report.transitions import BOTH_MASSES_SENTENCES, SENTENCES, transition_log
 
 PACKAGE = Path(oscillator.__file__).parent
 #: Where the kinds are defined, the only places their text may be written.
-DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "continuation.py"}
+DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "branch.py"}
 #: The same words meaning something else.
 OTHER_MEANINGS = {
     ("analysis/locate.py", "grazing"): "the word `oscillator locate --what` takes",

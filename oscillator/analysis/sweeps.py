@@ -314,6 +314,7 @@ def sliding_ranges(summary: pd.DataFrame, param: str, direction: str | None = No
 
 # --------------------------------------------------------------------------- storage
 
+
 class _Store(ResumableFolder):
     """A sweep folder: its identity, the finished points, and the consolidated tables."""
 

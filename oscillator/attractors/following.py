@@ -48,7 +48,7 @@ from oscillator.text import shown
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
 
 __all__ = ["AttractorsOver", "End", "check_values", "follow_attractors", "following_store", "local_branches"]
 

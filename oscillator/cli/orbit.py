@@ -31,7 +31,7 @@ from oscillator.text import printable, shown
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
 
 __all__ = ["continue_", "orbit"]
 
@@ -263,7 +263,8 @@ def _prepare_continue(
 
 def _compute(case: Case, settings: dict[str, Any], claim: FolderClaim, quiet: bool) -> Branch:
     """The branch; on Ctrl-C the branch traced so far (nothing, if the first orbit was not found)."""
-    from oscillator.orbits.continuation import Branch, continue_orbit
+    from oscillator.orbits.branch import Branch
+    from oscillator.orbits.continuation import continue_orbit
 
     try:
         return _continue_with_progress(continue_orbit, case, settings, quiet)

@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.io.cases import Case
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
 
 __all__ = [
     "atlas_figure",

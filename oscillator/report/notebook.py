@@ -14,7 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
     from oscillator.hybrid.result import Result
-    from oscillator.orbits.continuation import Branch
+    from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 
 __all__ = ["branch_html", "orbit_html", "result_html"]

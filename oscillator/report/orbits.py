@@ -28,7 +28,7 @@ from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, atomic_path, read_untrusted, replace_file
 from oscillator.model.parameters import UNITS, labelled
-from oscillator.orbits.continuation import BIFURCATION_KINDS, Bifurcation, Branch
+from oscillator.orbits.branch import BIFURCATION_KINDS, Bifurcation, Branch
 from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
 from oscillator.text import printable, shown
