@@ -79,13 +79,13 @@ class Views:
         from oscillator.attractors.following import AttractorsOver
         from oscillator.attractors.lyapunov import LyapunovSpectrum
         from oscillator.orbits.curves import Curve
-        from oscillator.report import attractors as drawn
+        from oscillator.report import attractors, plane
 
         draw: dict[type, Callable[..., Figure]] = {
-            Basins: drawn.basins_figure,
-            LyapunovSpectrum: drawn.lyapunov_figure,
-            AttractorsOver: drawn.following_figure,
-            Atlas: drawn.atlas_figure,
-            Curve: drawn.curve_figure,
+            Basins: attractors.basins_figure,
+            LyapunovSpectrum: attractors.lyapunov_figure,
+            AttractorsOver: attractors.following_figure,
+            Atlas: plane.atlas_figure,
+            Curve: plane.curve_figure,
         }
         return draw[type(found)](found, **options)

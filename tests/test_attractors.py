@@ -906,7 +906,7 @@ def test_the_atlas_is_drawn_by_each_measure_with_fig_14_s_lines_off_the_data(by)
     import pandas as pd
 
     from oscillator.attractors.atlas import Atlas
-    from oscillator.report.attractors import atlas_figure
+    from oscillator.report.plane import atlas_figure
 
     x, y = Axis("Omega", 1.55, 1.65, 3), Axis("Q2", 70.5, 71.5, 3)
     rows = [
@@ -953,7 +953,7 @@ def test_a_curve_drawn_beside_another_is_read_back_checked(tmp_path, monkeypatch
 
     from oscillator.cli.app import app
     from oscillator.orbits.curves import Curve
-    from oscillator.report.attractors import curve_figure, read_curve, write_curve
+    from oscillator.report.plane import curve_figure, read_curve, write_curve
 
     monkeypatch.chdir(tmp_path)
     points = pd.DataFrame({"Q2": [70.9, 71.0], "Omega": [1.6, 1.61]})

@@ -116,7 +116,7 @@ def atlas(
 def _finish_atlas(found: Any, store: Any, no_plots: bool, quiet: bool) -> None:
     say_reused(store, store.reused["batches"], f"of the {found.y.count} rows", quiet)
     folder = store.folder
-    from oscillator.report.attractors import write_atlas
+    from oscillator.report.plane import write_atlas
 
     problems = outputs(folder, "rows", lambda: write_atlas(found, folder, plots=not no_plots))
     if not quiet:
@@ -210,7 +210,7 @@ def _at(text: str, x: str, y: str) -> tuple[float, float]:
 
 def _atlas_over(folder: Path, case: Case, x: str, y: str) -> Any:
     """The atlas to draw the curve over (``--over``): finished, and in the curve's plane."""
-    from oscillator.report.attractors import read_atlas
+    from oscillator.report.plane import read_atlas
 
     try:
         found = read_atlas(folder, case)
@@ -247,7 +247,7 @@ def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderC
 
 def _read_other_curve(folder: Path, x: str, y: str) -> Curve:
     """A curve to draw beside the new one (``--also``), in the same plane."""
-    from oscillator.report.attractors import read_curve
+    from oscillator.report.plane import read_curve
 
     try:
         other = read_curve(folder)
@@ -263,7 +263,7 @@ def _read_other_curve(folder: Path, x: str, y: str) -> Curve:
 
 
 def _write_curve(found: Curve, claim: FolderClaim, atlas_found: Any, others: list[Curve], no_plots: bool) -> None:
-    from oscillator.report.attractors import write_curve
+    from oscillator.report.plane import write_curve
 
     def write(folder: Path) -> list[str]:
         return write_curve(found, folder, atlas=atlas_found, plots=not no_plots, also=others)

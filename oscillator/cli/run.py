@@ -342,7 +342,7 @@ def report(
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
         if any((folder / marker).is_file() for marker in GLOBAL_MARKERS):
             load("oscillator.report.attractors")
-            from oscillator.report.attractors import rebuild
+            from oscillator.report.rebuilding import rebuild
 
             what = rebuild(folder)
             say(f"report rebuilt ({what}): {folder / 'report.md'}, {folder / 'report.html'}")

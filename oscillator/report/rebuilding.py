@@ -1,0 +1,105 @@
+"""``oscillator report`` on a global analysis's folder: its tables, figures and report written
+again from what the folder keeps (the landings; nothing is computed that a finished folder does
+not hold), the folder checked as untrusted."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from oscillator.errors import InputError
+from oscillator.report.attractors import write_basins
+from oscillator.report.plane import read_curve, write_atlas, write_curve
+from oscillator.text import printable
+
+__all__ = ["rebuild"]
+
+
+def rebuild(folder: Path) -> str | None:
+    """Rebuild the tables, figures and report of a finished basins, atlas or curve folder from
+    what it keeps (for ``oscillator report``); what was rebuilt, or None for a folder of another
+    kind.  The landings and rows are read back, never computed: an unfinished folder is refused
+    (the command that made it resumes it)."""
+    from oscillator.io.cases import load_case
+
+    if (folder / "curve.json").exists():
+        write_curve(read_curve(folder), folder)
+        return "the curve (drawn without an atlas)"
+    if (folder / "attractors.json").exists():
+        raise InputError(
+            f"{printable(str(folder))}: an attractors folder is rebuilt by running the command that made it again with "
+            "the same --out: it reads its landings back and computes none",
+            field="folder",
+        )
+    if (folder / "lyapunov.json").exists():
+        raise InputError(
+            f"{printable(str(folder))}: a Lyapunov folder keeps no state to redraw from; run the same lyapunov "
+            "command with a new --out (it takes seconds)",
+            field="folder",
+        )
+    if (folder / "basins.json").exists():
+        _rebuild_basins(folder, _identity(folder / "basins.json"), load_case(folder / "case.toml"))
+        return "the basins"
+    if (folder / "atlas.json").exists():
+        _rebuild_atlas(folder, _identity(folder / "atlas.json"), load_case(folder / "case.toml"))
+        return "the atlas"
+    return None
+
+
+def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.basins import basin_store, find_basins, grid_starts
+    from oscillator.attractors.mapping import AttractorSettings
+
+    try:
+        x, y = (Axis(**identity[name]) for name in ("x", "y"))
+        settings = AttractorSettings(**identity["settings"])
+    except (KeyError, TypeError) as error:
+        raise InputError(f"{printable(str(folder))}/basins.json is damaged ({error})", field="folder") from None
+    store = basin_store(folder, case, x, y, settings)
+    store.check()  # this very computation, or refused
+    _finished(store, len(grid_starts(case, x, y)), "starts")
+    write_basins(find_basins(case, x, y, store, settings=settings), folder)
+
+
+def _identity(marker: Path) -> dict[str, Any]:
+    """The identity a folder's marker file holds (checked as untrusted text)."""
+    from oscillator.io.files import read_untrusted
+
+    try:
+        identity = json.loads(read_untrusted(marker, what="marker file", field="folder", limit=1_000_000))["identity"]
+        if not isinstance(identity, dict):
+            raise TypeError("not a table")
+    except (ValueError, KeyError, TypeError, RecursionError) as error:
+        raise InputError(f"{printable(str(marker))} is damaged ({error}); give a new folder", field="folder") from None
+    return identity
+
+
+def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> None:
+    """Refuse a folder whose computation has not finished: ``report`` reads back, never computes."""
+    parts = sorted(store.parts.glob("batch-*.parquet" if batches else "*.parquet"))
+    done = len(parts) if batches else sum(len(pd.read_parquet(part)) for part in parts)
+    if done < total:
+        raise InputError(
+            f"{printable(str(store.folder))} is not finished ({done} of {total} {what}); run the command that made it "
+            "again with the same --out to resume it",
+            field="folder",
+        )
+
+
+def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> None:
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
+
+    try:
+        x, y = (Axis(**identity[name]) for name in ("x", "y"))
+        settings = AtlasSettings(**identity["settings"])
+    except (KeyError, TypeError) as error:
+        raise InputError(f"{printable(str(folder))}/atlas.json is damaged ({error})", field="folder") from None
+    store = atlas_store(folder, case, x, y, settings)
+    store.check()  # this very computation, or refused
+    _finished(store, y.count, "rows", batches=True)
+    write_atlas(regime_atlas(case, x, y, settings=settings, store=store), folder)
