@@ -32,12 +32,12 @@ def read_run(folder: str | Path) -> Result | Orbit | Branch:
 
     folder = as_folder(folder)
     if folder_kind(folder) == "branch":
-        from oscillator.report.orbits import read_branch
+        from oscillator.report.orbit_folders import read_branch
 
         return read_branch(folder).branch
     run = read_run_folder(folder)
     if run.run.get("kind") == "orbit":
-        from oscillator.report.orbits import orbit_of_folder
+        from oscillator.report.orbit_folders import orbit_of_folder
 
         return orbit_of_folder(folder, run.case, run.events, run.run)
     return result_of(run)

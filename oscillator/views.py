@@ -42,7 +42,7 @@ class Views:
         return result_html(result)
 
     def save_orbit(self, orbit: Orbit, folder: str | Path) -> Path:
-        from oscillator.report.orbits import save_orbit
+        from oscillator.report.orbit_folders import save_orbit
 
         return save_orbit(orbit, folder)
 
@@ -62,7 +62,7 @@ class Views:
         return multipliers_figure(branch)
 
     def save_branch(self, branch: Branch, folder: str | Path, *, coordinate: str) -> Path:
-        from oscillator.report.orbits import save_branch
+        from oscillator.report.orbit_folders import save_branch
 
         return save_branch(branch, folder, coordinate=coordinate)
 

@@ -251,9 +251,9 @@ def _prepare_continue(
 
     if out_dir is not None:
         check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
-    load("oscillator.orbits.continuation", "oscillator.report.orbits", "oscillator.report.runs", notice=True)
+    load("oscillator.orbits.continuation", "oscillator.report.orbit_folders", "oscillator.report.runs", notice=True)
     from oscillator.orbits.continuation import check_settings
-    from oscillator.report.orbits import read_sweep_points
+    from oscillator.report.orbit_folders import read_sweep_points
     from oscillator.report.runs import claim_output
 
     check_settings(resolved, **settings)
@@ -299,7 +299,7 @@ def _summary(branch: Branch, quiet: bool) -> None:
 
 def _write(branch: Branch, case: Case, claim: FolderClaim, coordinate: str, sweep_points: Any) -> Path:
     """The branch's tables, case and run.json written whole into the claimed folder."""
-    from oscillator.report.orbits import write_branch
+    from oscillator.report.orbit_folders import write_branch
 
     try:
         with interrupts_deferred():  # Ctrl-C waits until the tables are written whole
@@ -328,11 +328,11 @@ def _write(branch: Branch, case: Case, claim: FolderClaim, coordinate: str, swee
 
 def _finish(folder: Path) -> str:
     """The figures and the report; what went wrong, if anything (the tables stay either way)."""
-    from oscillator.report.orbits import finish_branch
+    from oscillator.report.orbit_folders import finish_branch
 
     kept = f"the branch's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
     try:
-        load("oscillator.report.orbits")
+        load("oscillator.report.orbit_folders")
         finish_branch(folder)
     except KeyboardInterrupt:
         raise fail(f"interrupted; {kept}", 130) from None

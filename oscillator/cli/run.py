@@ -350,8 +350,8 @@ def report(
         if folder_kind(folder) == "branch":
             if window is not None:
                 raise InputError("--window chooses a run's time window; a branch folder has none", field="--window")
-            load("oscillator.report.orbits")
-            from oscillator.report.orbits import finish_branch
+            load("oscillator.report.orbit_folders")
+            from oscillator.report.orbit_folders import finish_branch
 
             finish_branch(folder)
         else:
