@@ -413,7 +413,7 @@ def print_engines(rows: list[dict]) -> None:
 def print_per_root(row: dict) -> None:
     print(f"Instance 1 at Omega = 1.6, {row['periods']} periods, {row['root_returns']} root returns "
           f"({row['wall_ms_per_period']:.2f} ms/period): {row['us_per_root_outside_engine']:.1f} us per root return "
-          f"outside the engine ({row['us_per_root_in_resolve']:.1f} us in switching.resolve_rows); event table "
+          f"outside the engine ({row['us_per_root_in_resolve']:.1f} us in resolving.resolve_rows); event table "
           f"{row['us_per_event_table_row']:.2f} us per row")  # fmt: skip
 
 

@@ -26,7 +26,7 @@ from oscillator.model.events import WIDTH, EventKind, event_of_row
 from oscillator.model.fields import kinetic_threshold
 from oscillator.model.phase_space import Mode
 from oscillator.model.roots import Root
-from oscillator.model.switching import resolve
+from oscillator.model.resolving import resolve
 
 BOUNDARY = re.compile(r"^(∂Ω(12|34|56|78|13|24|15|26|37|48|57|68|17|28|35|46)\((1|2)\)|x1 = d1|z1 = -d)$")
 NAME = re.compile(r"^(F[12]\^\(([1-8]|0>0_[1-8])\)|v1|zdot1|)$")

@@ -10,7 +10,8 @@ from matplotlib.figure import Figure
 
 from oscillator import SweepSettings, load_case, simulate
 from oscillator.analysis.sweeps import run_point
-from oscillator.report.figures import KIND_STYLE, draw_figures, draw_sweep_figures, figure_window
+from oscillator.report.figures import KIND_STYLE, draw_figures, figure_window
+from oscillator.report.sweep_figures import draw_sweep_figures
 
 #: Runs that show, between them, every kind of event.
 RUNS = {

@@ -155,7 +155,7 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome: An
     if not no_plots:
         try:
             load("oscillator.report.figures")
-            from oscillator.report.figures import write_sweep_figures
+            from oscillator.report.sweep_figures import write_sweep_figures
 
             write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=case.name)
         except KeyboardInterrupt:

@@ -21,8 +21,8 @@ from oscillator.model.fields import coefficients
 from oscillator.model.kernels import derivative
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
+from oscillator.model.resolving import initial_mode
 from oscillator.model.roots import NUM_ROOTS, mode_violation, root_kernel
-from oscillator.model.switching import initial_mode
 
 __all__ = [
     "ARITHMETIC_ERRORS",

@@ -3,7 +3,7 @@
 This is the only stateful part of the package.  The engine (:mod:`oscillator.engines`)
 integrates the current mode's field and returns at the roots of its switching functions
 (:mod:`oscillator.model.roots`); at each root the supervisor hands the instant to
-:func:`oscillator.model.switching.resolve`, records the events it returns, and restarts the
+:func:`oscillator.model.resolving.resolve`, records the events it returns, and restarts the
 engine with the next mode's field.  What is kept of the trajectory is the recording policy's
 business (:mod:`oscillator.hybrid.recording`); what stops a run that would not end is the
 guards' (:mod:`oscillator.hybrid.guards`).
@@ -40,8 +40,9 @@ from oscillator.hybrid.recording import Recording
 from oscillator.model.events import WIDTH
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
+from oscillator.model.resolving import initial_mode, resolve_rows
 from oscillator.model.saltation import carried_through, rest_projection
-from oscillator.model.switching import MAX_ROWS, initial_mode, resolve_rows
+from oscillator.model.switching import MAX_ROWS
 from oscillator.model.types import VARIATIONAL
 
 __all__ = ["STEPS_PER_RETURN", "CallbackRaised", "Supervisor"]
@@ -279,7 +280,7 @@ class Supervisor:
                 raise CallbackRaised(exc) from exc
 
     def _resolve_root(self, record: RunRecord, step: Step, mode: Mode) -> tuple[Mode, np.ndarray, int]:
-        """Hand the roots that fired to :func:`~oscillator.model.switching.resolve_rows`, which
+        """Hand the roots that fired to :func:`~oscillator.model.resolving.resolve_rows`, which
         writes the events into the run's log; keep them.  The next mode, the projected state and the
         number of events."""
         t, y = step.t, step.y

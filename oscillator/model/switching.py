@@ -1,7 +1,7 @@
 """Switching decisions: from the roots that fired to the next mode (docs/model.md, Sec. 6).
 
-:func:`resolve` is a pure function of ``(t, y, params, mode, fired roots)``.  It resolves one
-instant in a fixed order, re-checking until the domains are consistent:
+:func:`resolve_compiled` is a pure function of ``(t, y, params, mode, fired roots)``.  It
+resolves one instant in a fixed order, re-checking until the domains are consistent:
 
 1. contact changes (right stop, then left stop): Theorems 5.6-5.9;
 2. moving masses reaching ``v_i = 0``: passable (Thm 5.1) or coming to rest (Thm 5.2/5.3);
@@ -11,7 +11,7 @@ instant in a fixed order, re-checking until the domains are consistent:
 5. grazing reports (Thm 5.5 and rule 6), which switch nothing.
 
 The rules are compiled (numba), as the fields and theorems they call are: the supervisor calls
-them at every root through :func:`resolve_rows`, which writes the events as rows of numbers
+them at every root through :func:`~oscillator.model.resolving.resolve_rows`, which writes the events as rows of numbers
 (:data:`oscillator.model.events.COLUMN`) into the run's event log and builds no Python object
 per event.  Inside, a mode is the tuple ``(s1, s2, left, right)`` of the velocity signs
 (0 = at rest) and the contact flags (0 or 1).
@@ -20,14 +20,11 @@ per event.  Inside, a mode is the tuple ``(s1, s2, left, right)`` of the velocit
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass
 
 import numpy as np
 from numba import types
 
 from oscillator.compiled import njit
-from oscillator.errors import Reason, SimulationFailed
 from oscillator.model.events import (
     BARRIER,
     COLUMN,
@@ -35,13 +32,10 @@ from oscillator.model.events import (
     KINDS,
     NO_NAME,
     V1_NAME,
-    WIDTH,
     ZDOT1_NAME,
-    Event,
     EventKind,
-    event_of_row,
 )
-from oscillator.model.fields import D1, D, coefficients, scale_of
+from oscillator.model.fields import D1, D, scale_of
 from oscillator.model.g_functions import barrier_index, displacement_values, g_values, velocity_index
 from oscillator.model.numbering import LEFT_STOP_LABEL, RIGHT_STOP_LABEL
 from oscillator.model.numbering_kernels import (
@@ -50,8 +44,6 @@ from oscillator.model.numbering_kernels import (
     state_code,
     velocity_boundary_code,
 )
-from oscillator.model.parameters import Parameters, SolverOptions
-from oscillator.model.phase_space import Mode
 from oscillator.model.roots import Root
 from oscillator.model.theorems import (
     DECISION,
@@ -69,9 +61,9 @@ from oscillator.model.theorems import (
     sliding_exists,
     sliding_vanishes,
 )
-from oscillator.model.types import StateLike, Vector
+from oscillator.model.types import Vector
 
-__all__ = ["MAX_ROWS", "Resolution", "initial_mode", "resolve", "resolve_rows"]
+__all__ = ["MAX_ROWS", "resolve_compiled"]
 
 #: Rounds of re-checking at one instant before the instant is declared an event storm.
 MAX_ROUNDS = 8
@@ -510,7 +502,7 @@ def _grazing_reports(
 
 
 @njit(_SETTLED(_f, _VECTOR, _PARAMS, _f, _MODE, _i, _f, _f, _ROWS, _i), cache=True)
-def _resolve(
+def resolve_compiled(
     t: float,
     y: Vector,
     c: Vector,
@@ -547,129 +539,3 @@ def _resolve(
 
 
 # --------------------------------------------------------------------------- entry points
-
-
-def _numbers(mode: Mode) -> tuple[int, int, int, int]:
-    return (mode.sign(1), mode.sign(2), int(mode.left), int(mode.right))
-
-
-def _storm(t: float, mode: Mode) -> SimulationFailed:
-    return SimulationFailed(
-        f"event storm at t = {t:.10g} s: the masses keep switching at one instant "
-        f"(mode {mode}); the flow barrier and the fields contradict each other here — check "
-        f"mu_s >= mu_k and the contact parameters",
-        reason=Reason.STORM,
-        field="mu_s",
-    )
-
-
-def resolve_rows(
-    t: float,
-    y: np.ndarray,
-    p: Parameters,
-    mode: Mode,
-    fired: int,
-    options: SolverOptions,
-    out: np.ndarray,
-    start: int,
-) -> tuple[Mode, int]:
-    """Resolve the roots that fired at ``t`` (the bits ``1 << root``) into the next mode.
-
-    The events are written as rows ``out[start:]`` (:data:`oscillator.model.events.COLUMN`;
-    ``out`` must have :data:`MAX_ROWS` rows free); returns the next mode and how many events.
-    ``y[:4]`` is projected in place: the velocity of a mass that reached its velocity boundary
-    is set to exactly zero (it is zero to the solver's accuracy), so that a resting mass has
-    ``v_i = 0`` identically.
-
-    Raises
-    ------
-    SimulationFailed
-        The masses keep switching at the instant (an event storm).
-    """
-    (s1, s2, left, right), end, settled = _resolve(
-        float(t),
-        y,
-        coefficients(p),
-        p.period,
-        _numbers(mode),
-        fired,
-        options.grazing_velocity_tolerance,
-        options.grazing_displacement_tolerance,
-        out,
-        start,
-    )
-    after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
-    if not settled:
-        raise _storm(t, after)
-    return after, end - start
-
-
-@dataclass(frozen=True, slots=True)
-class Resolution:
-    """What one instant resolved to: the next mode, the events (as rows), and the (projected) state."""
-
-    mode: Mode
-    rows: np.ndarray
-    y: tuple[float, float, float, float]
-
-    @property
-    def events(self) -> tuple[Event, ...]:
-        """The events as :class:`~oscillator.model.events.Event` records."""
-        return tuple(event_of_row(row) for row in self.rows)
-
-
-def resolve(
-    t: float,
-    y: StateLike,
-    p: Parameters,
-    mode: Mode,
-    fired: Iterable[int],
-    options: SolverOptions,
-) -> Resolution:
-    """Resolve the roots that fired at ``t`` into the next mode and the event records
-    (:func:`resolve_rows` on a copy of the state)."""
-    state = np.array([float(v) for v in y[:4]])
-    out = np.empty((MAX_ROWS, WIDTH))
-    bits = sum(1 << int(root) for root in set(fired))
-    after, count = resolve_rows(t, state, p, mode, bits, options, out, 0)
-    return Resolution(after, out[:count].copy(), (float(state[0]), float(state[1]), float(state[2]), float(state[3])))
-
-
-def initial_mode(t0: float, y: StateLike, p: Parameters) -> Resolution:
-    """The mode at the start, and the masses that leave rest at once (docs/model.md, rule 8).
-
-    A mass given ``v_i = 0`` is at rest; it leaves at ``t0`` only if Theorem 5.4 holds.
-    Contacts follow ``z1 <= -d`` and ``x1 >= d1``.  Exactly on a stop, the contact counts if the
-    velocity points into it; with zero velocity there the contact force vanishes, so both
-    choices give the same field at ``t0`` and the acceleration decides (the integrator never
-    reports a crossing that starts exactly at its initial time).
-    """
-    x1, v1, x2, v2 = (float(v) for v in y[:4])
-    state = np.array([x1, v1, x2, v2])
-    z1, zdot1 = x1 - x2, v1 - v2
-    left = z1 < -p.d or (z1 == -p.d and zdot1 < 0)
-    right = x1 > p.d1 or (x1 == p.d1 and v1 > 0)
-    signs = [int(math.copysign(1, v)) if v != 0 else 0 for v in (v1, v2)]
-    mode = Mode.from_signs(signs[0], signs[1], left=left, right=right)
-    c, out = coefficients(p), np.empty((2 * MAX_ROWS, WIDTH))
-    mode, count = _settle_from(t0, state, p, mode, out, 0)
-    on_left, on_right = z1 == -p.d and zdot1 == 0, x1 == p.d1 and v1 == 0
-    if on_left or on_right:
-        numbers = _numbers(mode)
-        rel = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, False)[1]
-        a1 = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, True)[1]
-        contacts = {"left": (rel < 0) if on_left else mode.left, "right": (a1 > 0) if on_right else mode.right}
-        if (contacts["left"], contacts["right"]) != (mode.left, mode.right):
-            mode, count = _settle_from(t0, state, p, mode.with_contacts(**contacts), out, count)
-    return Resolution(mode, out[:count].copy(), (x1, v1, x2, v2))
-
-
-def _settle_from(t: float, y: np.ndarray, p: Parameters, mode: Mode, out: np.ndarray, start: int) -> tuple[Mode, int]:
-    # no root fired: the instant is only settled (one compiled entry point, compiled once)
-    (s1, s2, left, right), end, settled = _resolve(
-        float(t), y, coefficients(p), p.period, _numbers(mode), 0, 0.0, 0.0, out, start
-    )
-    after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
-    if not settled:
-        raise _storm(t, after)
-    return after, end

@@ -33,7 +33,7 @@ from oscillator.report.outputs import (
     FAILED,
     MARKERS,
     color_of,
-    save_figure,
+    save_into,
     state_label,
     unit_of,
     wrapped_title,
@@ -262,7 +262,7 @@ def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = Tr
         temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
     if plots:
         try:
-            save_figure(lyapunov_figure(spectrum), folder / "figures", "lyapunov")
+            save_into(lyapunov_figure(spectrum), folder / "figures", "lyapunov")
         except Exception as exc:  # a figure's failure keeps the computed tables
             problems.append(f"figure lyapunov: {exc}")
     return problems

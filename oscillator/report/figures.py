@@ -24,14 +24,13 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
 
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.errors import InputError
 from oscillator.io.files import atomic_path
 from oscillator.model.events import EventKind
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
-from oscillator.model.parameters import Parameters, labelled
+from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import contacts_of_state, velocity_sign
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -42,16 +41,18 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "FIGURES",
     "KIND_STYLE",
+    "MASS_COLOR",
     "Window",
     "draw_figures",
     "draw_panel",
-    "draw_sweep_figures",
+    "event_marker",
     "figure_title",
     "figure_window",
     "force_histories",
     "missing_figures",
+    "outside_legend",
+    "save_figure",
     "write_figures",
-    "write_sweep_figures",
 ]
 
 #: Figure files (without suffix) and what each shows.
@@ -61,7 +62,7 @@ FIGURES = {
     "fig-c-phase": "(c) phase portraits with domains and boundaries",
     "fig-d-forces": "(d) G-function (force) histories",
 }
-_MASS_COLOR = {1: "tab:blue", 2: "black"}
+MASS_COLOR = {1: "tab:blue", 2: "black"}
 #: Marker, face colour and size (points², in the time panels) of each kind of event, in every
 #: figure; the start is a green star.  Kinds whose events can fall on one point are drawn
 #: largest first, each on top of the larger ones, so that every marker shows: a rest begins and
@@ -218,7 +219,7 @@ def _far_boundaries(ax: Axes, motion: np.ndarray, boundaries: list[tuple[Any, np
     (ax.set_ylim if axis == "y" else ax.set_xlim)(shown_low - margin, shown_high + margin)
 
 
-def _marker(kind: str, scale: float = 1.0) -> dict[str, Any]:
+def event_marker(kind: str, scale: float = 1.0) -> dict[str, Any]:
     """The scatter options of a kind's markers (sizes times ``scale``), in the kind's layer."""
     marker, face, size = KIND_STYLE[EventKind(kind)]
     return {
@@ -235,14 +236,14 @@ def _mark_events(ax: Axes, events: pd.DataFrame, mass: int, column: str, label_k
         label = kind.replace("_", " ") if kind not in label_kinds else None
         label_kinds.add(kind)
         x, y = (rows[f"x{mass}"], rows[f"v{mass}"]) if column == "phase" else (rows.t, rows[column])
-        ax.scatter(x, y, label=label, **_marker(kind))
+        ax.scatter(x, y, label=label, **event_marker(kind))
 
 
 def _start(ax: Axes, x: float, y: float, label: str | None = None) -> None:
     ax.scatter([x], [y], s=_START_SIZE, marker="*", color="limegreen", edgecolor="black", zorder=5, label=label)
 
 
-def _outside_legend(ax: Axes, **options: Any) -> None:
+def outside_legend(ax: Axes, **options: Any) -> None:
     """The legend to the right of the axes, where it hides no data."""
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8, **options)
 
@@ -270,7 +271,7 @@ def _finish_time_panel(
         _mark_events(ax, events, mass, f"{quantity}{mass}", seen)
     ax.set(xlabel="time t (s)", ylabel=ylabel)
     ax.set_title(title, parse_math=False)  # the case's name is text, never mathtext
-    _outside_legend(ax)
+    outside_legend(ax)
 
 
 def _displacements(panel: Panel) -> Figure:
@@ -278,8 +279,8 @@ def _displacements(panel: Panel) -> Figure:
     fig = Figure(figsize=(10, 4.5), layout="constrained")
     ax = fig.subplots()
     t = trajectory.t
-    ax.plot(t, trajectory.x1, color=_MASS_COLOR[1], label="$x_1$ (m1)")
-    ax.plot(t, trajectory.x2, color=_MASS_COLOR[2], label="$x_2$ (m2)")
+    ax.plot(t, trajectory.x1, color=MASS_COLOR[1], label="$x_1$ (m1)")
+    ax.plot(t, trajectory.x2, color=MASS_COLOR[2], label="$x_2$ (m2)")
     right = ax.axhline(p.d1, color="tab:red", ls="--", lw=1, label=r"$x_1 = d_1$ (right stop, $\partial\Omega_{13}$)")
     (left,) = ax.plot(
         t,
@@ -305,11 +306,9 @@ def _velocities(panel: Panel) -> Figure:
     ax = fig.subplots()
     t = trajectory.t
     for mass in (1, 2):
-        ax.plot(t, trajectory[f"v{mass}"], color=_MASS_COLOR[mass], label=f"$v_{mass}$ (m{mass})")
+        ax.plot(t, trajectory[f"v{mass}"], color=MASS_COLOR[mass], label=f"$v_{mass}$ (m{mass})")
         for i, (a, b) in enumerate(rest_spans(trajectory, events, mass)):
-            ax.axvspan(
-                a, b, color=_MASS_COLOR[mass], alpha=0.12, label=f"m{mass} at rest (sliding)" if i == 0 else None
-            )
+            ax.axvspan(a, b, color=MASS_COLOR[mass], alpha=0.12, label=f"m{mass} at rest (sliding)" if i == 0 else None)
     ax.axhline(0.0, color="black", ls="--", lw=1, label=r"velocity boundary $v = 0$ ($\partial\Omega_{12}$)")
     _finish_time_panel(ax, events, t0, y0, "v", "velocity (m/s)", _titled(title, "(b) velocities", window), window)
     return fig
@@ -329,9 +328,9 @@ def _phase(panel: Panel) -> Figure:
     for ax, mass in zip(axes, (1, 2), strict=True):
         x, v = trajectory[f"x{mass}"], trajectory[f"v{mass}"]
         still = len(x) > 0 and np.ptp(x.to_numpy(float)) == 0 and np.ptp(v.to_numpy(float)) == 0
-        ax.plot(x, v, color=_MASS_COLOR[mass], lw=1.2, label=f"m{mass}")
+        ax.plot(x, v, color=MASS_COLOR[mass], lw=1.2, label=f"m{mass}")
         if still:  # a curve of one point draws nothing: mark the point and say so
-            ax.plot(x.iloc[:1], v.iloc[:1], "o", color=_MASS_COLOR[mass], ms=5, zorder=4)
+            ax.plot(x.iloc[:1], v.iloc[:1], "o", color=MASS_COLOR[mass], ms=5, zorder=4)
             ax.text(
                 0.5,
                 0.6,
@@ -374,7 +373,7 @@ def _forces(panel: Panel) -> Figure:
         _force_lines(ax, histories, mass)
         ax.axhline(0.0, color="grey", lw=0.8)
         for a, b in rest_spans(trajectory, events, mass):
-            ax.axvspan(a, b, color=_MASS_COLOR[mass], alpha=0.1)
+            ax.axvspan(a, b, color=MASS_COLOR[mass], alpha=0.1)
         times = events.t[events.mass == mass].to_numpy()
         ax.vlines(
             times,
@@ -387,7 +386,7 @@ def _forces(panel: Panel) -> Figure:
             label=f"switching times of m{mass}",
         )
         ax.set(ylabel=f"force per unit mass on m{mass} (N/kg)")
-        _outside_legend(ax)
+        outside_legend(ax)
     axes[-1].set(xlabel="time t (s)")
     fig.suptitle(_titled(title, "(d) G-functions (forces)", window), parse_math=False)
     return fig
@@ -406,7 +405,7 @@ _FORCE_LINES = (
 def _force_lines(ax: Axes, histories: pd.DataFrame, mass: int) -> None:
     """The real force on ``mass`` and the G-functions on either side of its velocity boundary."""
     t = histories.t
-    ax.plot(t, histories[f"F{mass}_real"], color=_MASS_COLOR[mass], label=f"real $F_{mass}$ (current domain)")
+    ax.plot(t, histories[f"F{mass}_real"], color=MASS_COLOR[mass], label=f"real $F_{mass}$ (current domain)")
     plus, minus = (1, 2) if mass == 1 else (2, 1)
     for suffix, color, style, width, label in _FORCE_LINES:
         side = plus if suffix.endswith("plus") else minus
@@ -415,12 +414,13 @@ def _force_lines(ax: Axes, histories: pd.DataFrame, mass: int) -> None:
         )
 
 
-def _save(fig: Figure, directory: Path, name: str) -> list[Path]:
-    """Save a figure as PNG and SVG, each atomically (temporary name, then rename)."""
+def save_figure(fig: Figure, directory: Path, name: str, *, tight: bool = True) -> list[Path]:
+    """Save a figure as PNG and SVG, each atomically (temporary name, then rename); ``tight``:
+    cropped to what is drawn."""
     paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
     for path in paths:
         with atomic_path(path) as temporary:
-            fig.savefig(temporary, format=path.suffix[1:], dpi=110, bbox_inches="tight")
+            fig.savefig(temporary, format=path.suffix[1:], dpi=110, bbox_inches="tight" if tight else None)
     return paths
 
 
@@ -550,116 +550,5 @@ def write_figures(
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for name, fig in draw_figures(trajectory, events, p, start, title=title, window=window).items():
-        written += _save(fig, directory, name)
-    return written
-
-
-#: The sweep diagrams' switching points: a mass reaching its velocity boundary (passing or coming
-#: to rest) or leaving rest; every other kind is drawn grey.
-_SWEEP_COLORS = {
-    EventKind.PASSABLE: "tab:blue",
-    EventKind.SLIDING_ONSET: "tab:red",
-    EventKind.SLIDING_VANISH: "tab:green",
-}
-
-
-#: How a both-ways sweep draws each way: shading of the rests, and the Poincaré points (the way
-#: up in larger open circles, the way down in small dots inside them, so both show where equal).
-_WAYS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
-    "up": (
-        {"color": "tab:blue", "alpha": 0.15},
-        {"s": 22, "facecolor": "none", "edgecolor": "tab:blue", "linewidths": 0.8},
-    ),
-    "down": (
-        {"facecolor": "none", "edgecolor": "tab:orange", "hatch": "//", "linewidth": 0.0},
-        {"s": 5, "color": "tab:orange"},
-    ),
-}
-
-
-def _shade_rests(ax: Axes, summary: pd.DataFrame, param: str, mass: int, ways: list[str], half: float) -> None:
-    """The swept values at which the mass rests, shaded: one style per way of a both-ways sweep."""
-    from oscillator.analysis.sweeps import sliding_ranges
-
-    for way in ways:
-        style = _WAYS[way][0] if len(ways) > 1 else {"color": "tab:orange", "alpha": 0.15}
-        label = f"m{mass} rests (sliding)" + (f", going {way}" if len(ways) > 1 else "")
-        for i, (a, b) in enumerate(sliding_ranges(summary, param, way if len(ways) > 1 else None)):
-            ax.axvspan(a - half, b + half, label=None if i else label, **style)
-
-
-def draw_sweep_figures(tables: dict[str, Any], param: str, mass: int, *, title: str = "") -> dict[str, Figure]:
-    """Fig. 14-style diagrams of a sweep: ``fig-14-bifurcation`` (the switching displacement and
-    phase of the mass against the parameter, sliding ranges shaded) and ``fig-14-poincare``.
-
-    A both-ways sweep (``direction`` "up" and "down") shades each way's rests in its own style
-    and draws each way's Poincaré points in its own colour: where they differ, two motions
-    coexist (hysteresis)."""
-    switches, summary, poincare = tables["switches"], tables["summary"], tables["poincare"]
-    ways = list(dict.fromkeys(summary.direction)) if "direction" in summary.columns else ["up"]
-    values = np.unique(summary[param].to_numpy())
-    half = 0.5 * np.min(np.diff(values)) if len(values) > 1 else 0.0
-    both = len(ways) > 1
-    going = dict(zip(summary["index"], summary.direction, strict=True)) if both else {}
-
-    fig = Figure(figsize=(10, 7), layout="constrained")
-    axes = fig.subplots(2, 1, sharex=True)
-    for ax, column, label in (
-        (axes[0], "x", f"switching displacement $x_{mass}$ (m)"),
-        (axes[1], "phase", r"switching phase $\Omega t$ mod $2\pi$ (rad)"),
-    ):
-        _shade_rests(ax, summary, param, mass, ways, half)
-        for way in ways:  # a both-ways sweep: the way down in smaller markers edged in orange, inside the way up's
-            down = both and way == ways[-1]
-            shown = switches[switches["index"].map(going) == way] if both else switches
-            for kind, rows in shown.groupby("kind"):
-                scale = 0.1 if down else 0.45 if both else 0.3
-                style = _marker(kind, scale) | {
-                    "facecolor": _SWEEP_COLORS.get(kind, "grey"),
-                    "linewidths": 0.6 if down else 0.4,
-                    "edgecolor": "tab:orange" if down else "black",
-                }
-                if down:
-                    style["zorder"] += len(KIND_STYLE)
-                name = kind.replace("_", " ") + (f", going {way}" if both else "")
-                ax.scatter(rows[param], rows[column], label=name, **style)
-        ax.set(ylabel=label)
-        _outside_legend(ax, markerscale=2)
-    axes[-1].set(xlabel=labelled(param))
-    axes[-1].xaxis.set_major_locator(MaxNLocator(8))
-    both_words = " (both ways)" if both else ""
-    fig.suptitle(
-        f"{title} — switching points of m{mass} after the transient{both_words} (Fig. 14 style)", parse_math=False
-    )
-    bifurcation = fig
-
-    fig = Figure(figsize=(11, 4.5), layout="constrained")
-    axes = fig.subplots(1, 2)
-    units = {"x": "m", "v": "m/s"}
-    for ax, quantity in zip(axes, ("x", "v"), strict=True):
-        _shade_rests(ax, summary, param, mass, ways, half)
-        for way in ways:
-            rows = poincare[poincare["index"].map(going) == way] if both else poincare
-            style = _WAYS[way][1] if both else {"s": 4, "color": _MASS_COLOR[mass]}
-            ax.scatter(
-                rows[param],
-                rows[f"{quantity}{mass}"],
-                label=f"Poincaré points, going {way}" if both else "Poincaré points",
-                **style,
-            )
-        ax.set(xlabel=labelled(param), ylabel=f"${quantity}_{mass}$ at $t_0 + nT$ ({units[quantity]})")
-        ax.xaxis.set_major_locator(MaxNLocator(5))
-    axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)
-    fig.suptitle(f"{title} — Poincaré bifurcation diagram{both_words} (sliding ranges shaded)", parse_math=False)
-    return {"fig-14-bifurcation": bifurcation, "fig-14-poincare": fig}
-
-
-def write_sweep_figures(
-    tables: dict[str, Any], param: str, mass: int, directory: Path, *, title: str = ""
-) -> list[Path]:
-    """Write the Fig. 14-style diagrams of a sweep as PNG and SVG (see :func:`draw_sweep_figures`)."""
-    directory.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, fig in draw_sweep_figures(tables, param, mass, title=title).items():
-        written += _save(fig, directory, name)
+        written += save_figure(fig, directory, name)
     return written

@@ -13,7 +13,7 @@ import pandas as pd
 
 from oscillator.io.files import atomic_path
 from oscillator.report import markup as mk
-from oscillator.report.figures import figure_title
+from oscillator.report.figures import figure_title, save_figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -23,7 +23,7 @@ __all__ = [
     "FAILED",
     "MARKERS",
     "color_of",
-    "save_figure",
+    "save_into",
     "state_label",
     "unit_of",
     "wrapped_title",
@@ -63,11 +63,10 @@ def wrapped_title(case: Any, what: str) -> str:
     return textwrap.fill(f"{figure_title(case)}: {what}", width=100)
 
 
-def save_figure(fig: Figure, folder: Path, name: str) -> None:
+def save_into(fig: Figure, folder: Path, name: str) -> None:
+    """Save a figure as PNG and SVG into ``folder`` (created), uncropped."""
     folder.mkdir(exist_ok=True)
-    for suffix in (".png", ".svg"):
-        with atomic_path(folder / f"{name}{suffix}") as temporary:
-            fig.savefig(temporary, format=suffix[1:], dpi=110)
+    save_figure(fig, folder, name, tight=False)
 
 
 def write_folder(
@@ -86,7 +85,7 @@ def write_folder(
     drawn = set()
     for name, draw in figures:
         try:
-            save_figure(draw(), folder / "figures", name)
+            save_into(draw(), folder / "figures", name)
             drawn.add(name)
         except Exception as exc:  # a figure's failure keeps the computed tables
             problems.append(f"figure {name}: {exc}")
