@@ -28,8 +28,8 @@ from pathlib import Path
 from oscillator import load_case
 from oscillator.analysis.locate import locate
 from oscillator.analysis.sweeps import read_sweep, run_sweep
-from oscillator.report.sweep_figures import write_sweep_figures
 from oscillator.report.markup import Table, to_markdown
+from oscillator.report.sweep_figures import write_sweep_figures
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "bifurcation.md"

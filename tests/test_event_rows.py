@@ -25,8 +25,8 @@ from oscillator.io.tables import events_frame
 from oscillator.model.events import WIDTH, EventKind, event_of_row
 from oscillator.model.fields import kinetic_threshold
 from oscillator.model.phase_space import Mode
-from oscillator.model.roots import Root
 from oscillator.model.resolving import resolve
+from oscillator.model.roots import Root
 
 BOUNDARY = re.compile(r"^(∂Ω(12|34|56|78|13|24|15|26|37|48|57|68|17|28|35|46)\((1|2)\)|x1 = d1|z1 = -d)$")
 NAME = re.compile(r"^(F[12]\^\(([1-8]|0>0_[1-8])\)|v1|zdot1|)$")

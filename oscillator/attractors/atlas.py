@@ -41,7 +41,7 @@ from oscillator.attractors.seeding import OnePerRegime
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
-from oscillator.orbits.shooting import check_count
+from oscillator.model.parameters import check_count
 from oscillator.presenting import presenter
 from oscillator.text import shown
 

@@ -28,7 +28,8 @@ import pandas as pd
 
 from oscillator.analysis.execution import check_progress
 from oscillator.io.cases import Case, resolve_case, section_times
-from oscillator.orbits.shooting import check_count, check_guess, period_map, settled
+from oscillator.model.parameters import check_count
+from oscillator.orbits.shooting import check_guess, period_map, settled
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover

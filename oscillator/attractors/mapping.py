@@ -26,7 +26,8 @@ from oscillator.errors import InputError, OscillatorError, Reason, SimulationFai
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.events import EventKind
-from oscillator.orbits.shooting import check_count, signature_of
+from oscillator.model.parameters import check_count
+from oscillator.orbits.shooting import signature_of
 from oscillator.text import shown
 
 __all__ = ["MAX_STARTS", "STATE", "AttractorSettings", "Landing", "check_settings", "check_states", "land"]

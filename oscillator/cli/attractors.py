@@ -206,7 +206,7 @@ def lyapunov(
             check_new(out_dir, option="--out")
         load("oscillator.attractors.lyapunov", notice=True)
         from oscillator.attractors.lyapunov import lyapunov as spectrum_of
-        from oscillator.orbits.shooting import check_count
+        from oscillator.model.parameters import check_count
 
         check_count(periods, "--periods", 1, 10_000_000)
         check_count(transient, "--transient", 0, 10_000_000)

@@ -480,3 +480,12 @@ class SweepSettings:
     @classmethod
     def names(cls) -> tuple[str, ...]:
         return tuple(f.name for f in fields(cls))
+
+
+def check_count(value: object, name: str, least: int, most: int | None = None) -> int:
+    """A whole number ``>= least`` (and ``<= most``); a bool is not one."""
+    number = int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else None
+    if number is None or number < least or (most is not None and number > most):
+        bounds = f">= {least}" if most is None else f"from {least} to {most}"
+        raise InputError(f"{name} must be a whole number {bounds}, got {shown(value)}", field=name)
+    return number

@@ -30,19 +30,11 @@ import pandas as pd
 
 from oscillator.errors import InputError, Interrupted, Reason
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import Parameters, real_argument
+from oscillator.model.parameters import Parameters, check_count, real_argument
 from oscillator.orbits.branch import Branch, Skipped
 from oscillator.orbits.corrector import Continuer, Located, OrbitPoint
 from oscillator.orbits.locating import between, end_point, own_kind
-from oscillator.orbits.shooting import (
-    MAX_TRANSIENT,
-    STATE,
-    check_count,
-    check_guess,
-    check_orbit_settings,
-    orbit_case,
-    start_of,
-)
+from oscillator.orbits.shooting import MAX_TRANSIENT, STATE, check_guess, check_orbit_settings, orbit_case, start_of
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover

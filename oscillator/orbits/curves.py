@@ -35,10 +35,10 @@ import pandas as pd
 
 from oscillator.errors import InputError, Interrupted, OscillatorError
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import Parameters
+from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch
 from oscillator.orbits.continuation import continue_orbit
-from oscillator.orbits.shooting import check_count, tightened
+from oscillator.orbits.shooting import tightened
 from oscillator.presenting import presenter
 from oscillator.text import shown
 

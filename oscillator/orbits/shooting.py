@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +33,7 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.io.files import as_folder
 from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
-from oscillator.model.parameters import InitialState, real_argument
+from oscillator.model.parameters import InitialState, check_count, real_argument
 from oscillator.model.phase_space import Mode
 from oscillator.presenting import presenter
 from oscillator.text import shown
@@ -464,26 +463,6 @@ def settled(case: Case, state: np.ndarray | Sequence[float], periods: int) -> np
     return np.asarray(warm.final_state[1:], dtype=float)
 
 
-def check_count(value: object, name: str, least: int, most: int | None = None) -> int:
-    """A whole number ``>= least`` (and ``<= most``); a bool is not one."""
-    number = int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else None
-    if number is None or number < least or (most is not None and number > most):
-        bounds = f">= {least}" if most is None else f"from {least} to {most}"
-        raise InputError(f"{name} must be a whole number {bounds}, got {shown(value)}", field=name)
-    return number
-
-
-def check_guess(guess: object) -> np.ndarray:
-    """``guess`` as four finite floats ``(x1, v1, x2, v2)``."""
-    try:
-        values = [real_argument(v, "guess") for v in guess]  # type: ignore[attr-defined]
-    except (TypeError, InputError):
-        values = []
-    if len(values) != 4:
-        raise InputError(f"guess must be four finite numbers (x1, v1, x2, v2), got {shown(guess)}", field="guess")
-    return np.array(values)
-
-
 def start_of(case: Case, section: object, guess: object, transient: object) -> tuple[float, np.ndarray]:
     """The section's time and Newton's first state: ``guess``, or the state a transient reaches.
 
@@ -606,3 +585,14 @@ def _orbit(case: Case, section: float, start: np.ndarray, period: int, *, tol: f
         )
         orbit = dataclasses.replace(orbit, note=note)
     return orbit
+
+
+def check_guess(guess: object) -> np.ndarray:
+    """``guess`` as four finite floats ``(x1, v1, x2, v2)``."""
+    try:
+        values = [real_argument(v, "guess") for v in guess]  # type: ignore[attr-defined]
+    except (TypeError, InputError):
+        values = []
+    if len(values) != 4:
+        raise InputError(f"guess must be four finite numbers (x1, v1, x2, v2), got {shown(guess)}", field="guess")
+    return np.array(values)
