@@ -54,6 +54,10 @@ class Presenter(Protocol):
 
     def plot_global(self, found: object, **options: object) -> Figure: ...
 
+    def save_global(self, found: object, folder: str | Path) -> Path: ...
+
+    def global_html(self, found: object) -> str: ...
+
 
 _registered: list[Presenter] = []
 

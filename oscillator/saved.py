@@ -8,20 +8,31 @@ from typing import TYPE_CHECKING
 from oscillator.io.files import as_folder
 
 if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.attractors.atlas import Atlas
+    from oscillator.attractors.basins import Basins
+    from oscillator.attractors.following import AttractorsOver
+    from oscillator.attractors.lyapunov import LyapunovSpectrum
     from oscillator.hybrid.result import Result
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.curves import Curve
     from oscillator.orbits.shooting import Orbit
 
 __all__ = ["read_run"]
 
 
-def read_run(folder: str | Path) -> Result | Orbit | Branch:
+def read_run(
+    folder: str | Path,
+) -> Result | Orbit | Branch | Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum:
     """What a folder holds, as the object that was saved.
 
     A folder of ``oscillator run`` or :meth:`Result.save` gives a :class:`~oscillator.Result`
     (its case, tables, status, energy audit and counts); one of :meth:`Orbit.save` an
     :class:`~oscillator.Orbit`; one of ``oscillator continue`` or :meth:`Branch.save` a
-    :class:`~oscillator.Branch` (with its case).  Every file read is checked.
+    :class:`~oscillator.Branch` (with its case); one of ``oscillator basins``, ``attractors``,
+    ``atlas``, ``curve`` or ``lyapunov`` (or of the ``save`` of their results) the
+    :class:`~oscillator.Basins`, :class:`~oscillator.AttractorsOver`, :class:`~oscillator.Atlas`,
+    :class:`~oscillator.Curve` or :class:`~oscillator.LyapunovSpectrum`, as computed (nothing is
+    computed again).  Every file read is checked.
 
     Raises
     ------
@@ -31,6 +42,10 @@ def read_run(folder: str | Path) -> Result | Orbit | Branch:
     from oscillator.report.runs import folder_kind, read_run_folder, result_of
 
     folder = as_folder(folder)
+    from oscillator.report.global_results import global_kind, read_global
+
+    if global_kind(folder) is not None:
+        return read_global(folder)
     if folder_kind(folder) == "branch":
         from oscillator.report.orbit_folders import read_branch
 

@@ -89,3 +89,15 @@ class Views:
             Curve: plane.curve_figure,
         }
         return draw[type(found)](found, **options)
+
+    def save_global(self, found: object, folder: str | Path) -> Path:
+        """A global analysis's result written as its command writes its folder."""
+        from oscillator.io.files import as_folder
+        from oscillator.report.global_results import save_global
+
+        return save_global(found, as_folder(folder))  # type: ignore[arg-type]
+
+    def global_html(self, found: object) -> str:
+        from oscillator.report.notebook import global_html
+
+        return global_html(found)

@@ -76,6 +76,19 @@ def test_no_function_is_longer_than_60_lines():
     assert long == []
 
 
+#: The longest module allowed, in lines: a module holds one concept.
+LONGEST_MODULE = 600
+
+
+def test_no_module_is_longer_than_600_lines():
+    long = [
+        f"{path.relative_to(PACKAGE)}: {n} lines"
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if (n := len(path.read_text(encoding="utf-8").splitlines())) > LONGEST_MODULE
+    ]
+    assert long == []
+
+
 #: The layers, lowest first (docs/architecture.md): a module imports only from its own unit (a
 #: subpackage, or a top-level module) or from a lower layer; the units of the first layer (the
 #: base: plain modules) and of the last (the public API) also from each other.

@@ -1021,3 +1021,57 @@ def test_a_title_counts_many_changed_values_instead_of_listing_them():
 
     assert figure_title(resolve_case("instance-1", **UEDA)) == "instance-1 (14 values changed)"
     assert figure_title(resolve_case("instance-1", Q2=71.165)) == "instance-1 (Q2 71 → 71.165)"
+
+
+def test_every_global_result_saves_and_reads_back_as_it_was(tmp_path):
+    """Basins, the attractors over a parameter, an atlas and a Lyapunov spectrum: ``save`` writes
+    the command's folder, ``read_run`` gives back the same object (orbits and their multipliers
+    included), and each shows itself in Jupyter with its text escaped."""
+    import oscillator as osc
+
+    case = resolve_case("instance-1", Q2=71.165)
+    quick = AttractorSettings(transient=30, record=8, lyapunov_periods=20)
+    x, y = Axis("x2", 3.0, 6.0, 3), Axis("v2", -4.0, 4.0, 2)
+    store = basin_store(tmp_path / "b", case, x, y, quick)
+    store.check()
+    basins = find_basins(case, x, y, store, settings=quick)
+    back = osc.read_run(basins.save(tmp_path / "saved-basins"))
+    assert back.found.labels.equals(basins.found.labels) and back.table().equals(basins.table())
+    for a, b in zip(back.found.attractors, basins.found.attractors, strict=True):
+        assert a.name == b.name and np.array_equal(a.points, b.points)
+        assert np.array_equal(a.orbit.multipliers, b.orbit.multipliers) and a.orbit.events.shape == b.orbit.events.shape
+    from oscillator.report.attractors import write_basins
+
+    write_basins(basins, tmp_path / "b", plots=False)  # as the command finishes its folder
+    assert osc.read_run(tmp_path / "b").table().equals(basins.table())
+    over = follow_attractors(case, "Q2", [71.10, 71.165], states=[NO_REST_START, REST_START], settings=quick, tol=0.01)
+    again = osc.read_run(over.save(tmp_path / "over"))
+    assert again.ids == over.ids and again.ends == over.ends
+    assert again.table().drop(columns="points").equals(over.table().drop(columns="points"))
+    atlas = regime_atlas(case, Axis("Omega", 1.59, 1.61, 2), Axis("Q2", 71.1, 71.2, 2), settings=None)
+    assert osc.read_run(atlas.save(tmp_path / "atlas")).table.equals(atlas.table)
+    spectrum = lyapunov(dataclasses.replace(case, name="<b>x</b>"), periods=10, transient=2)
+    read = osc.read_run(spectrum.save(tmp_path / "lyapunov"))
+    assert np.array_equal(read.exponents, spectrum.exponents) and read.convergence.equals(spectrum.convergence)
+    shown = dataclasses.replace(
+        basins, found=dataclasses.replace(basins.found, case=dataclasses.replace(case, name="<script>"))
+    )
+    assert "<script>" not in shown._repr_html_() and "&lt;script&gt;" in shown._repr_html_()
+
+
+def test_a_damaged_found_json_is_refused_naming_it(tmp_path):
+    import json
+
+    import oscillator as osc
+
+    case = resolve_case("instance-1", Omega=1.85)
+    quick = AttractorSettings(transient=20, record=4, lyapunov_periods=0)
+    x, y = Axis("x2", 3.0, 6.0, 2), Axis("v2", -4.0, 4.0, 2)
+    store = basin_store(tmp_path / "b", case, x, y, quick)
+    store.check()
+    folder = find_basins(case, x, y, store, settings=quick).save(tmp_path / "saved")
+    found = json.loads((folder / "found.json").read_text())
+    found["sets"][0]["attractors"][0]["points"] = [[1.0, "two", 3.0, 4.0]]
+    (folder / "found.json").write_text(json.dumps(found))
+    with pytest.raises(InputError, match=r"found.json is damaged: set 0: attractor 0's points"):
+        osc.read_run(folder)

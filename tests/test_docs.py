@@ -104,3 +104,19 @@ def test_the_solver_settings_listed_in_the_case_guide_are_every_option_with_its_
     assert set(defaults) == set(SolverOptions.names())
     for name, value in defaults.items():
         assert getattr(SolverOptions(), name) == value, name
+
+
+def test_the_python_examples_of_the_docs_pages_run(tmp_path, monkeypatch):
+    """Every ```python block of docs/attractors.md runs as shown (in a fresh folder; a block under
+    a ``__main__`` guard runs as a script would)."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "attractors.md").read_text(encoding="utf-8")
+    blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        if "__main__" in block:
+            block = block.replace("workers=2", "workers=1")  # the guard's example, in this process
+        exec(compile(block, "docs/attractors.md", "exec"), {"__name__": "__main__"})
+    assert (tmp_path / "runs" / "q2-saved" / "found.json").is_file()

@@ -139,6 +139,14 @@ class Atlas:
         ``impact_velocity`` (as ``oscillator atlas`` draws it)."""
         return presenter().plot_global(self, by=by)
 
+    def save(self, folder: str | Path) -> Path:
+        """Write it into ``folder`` (new) as ``oscillator atlas`` writes its folder: tables, figures,
+        report; :func:`oscillator.read_run` reads it back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)
+
     def grid(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(codes, coexisting, regimes)``: at each point the code of its regime (the regime of
         its first attractor; an index into ``regimes``, sorted) and how many attractors coexist,

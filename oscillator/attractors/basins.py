@@ -89,6 +89,14 @@ class Basins:
         basins`` draws it)."""
         return presenter().plot_global(self)
 
+    def save(self, folder: str | Path) -> Path:
+        """Write it into ``folder`` (new) as ``oscillator basins`` writes its folder: tables, figures,
+        report; :func:`oscillator.read_run` reads it back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)
+
 
 def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:
     """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`)."""

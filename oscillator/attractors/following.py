@@ -124,6 +124,14 @@ class AttractorsOver:
         :func:`local_branches`), as ``oscillator attractors`` draws it."""
         return presenter().plot_global(self, coordinate=coordinate, branches=local_branches(self) if branches else [])
 
+    def save(self, folder: str | Path) -> Path:
+        """Write it into ``folder`` (new) as ``oscillator attractors`` writes its folder: tables, figures,
+        report; :func:`oscillator.read_run` reads it back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)
+
     def ends_table(self) -> pd.DataFrame:
         """One row per end: ``id, name, change`` (``appears`` or ``ends`` along the values, from the
         first to the last), ``inside, outside, at, becomes``."""

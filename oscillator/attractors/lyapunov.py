@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -93,6 +94,14 @@ class LyapunovSpectrum:
         """The running averages of the exponents against the averaging time (as ``oscillator
         lyapunov`` draws them)."""
         return presenter().plot_global(self)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write it into ``folder`` (new) as ``oscillator lyapunov`` writes its folder: tables, figures,
+        report; :func:`oscillator.read_run` reads it back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)
 
 
 def _start(case: Case, guess: Sequence[float] | np.ndarray | None, transient: int) -> tuple[float, np.ndarray]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -95,6 +96,14 @@ class Curve:
         """The curve in its plane, over ``atlas``'s regimes (an :class:`~oscillator.attractors.atlas.Atlas`)
         if given (as ``oscillator curve`` draws it)."""
         return presenter().plot_global(self, atlas=atlas)
+
+    def save(self, folder: str | Path) -> Path:
+        """Write it into ``folder`` (new) as ``oscillator curve`` writes its folder: tables, figures,
+        report; :func:`oscillator.read_run` reads it back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)
 
 
 class _Tracer:

@@ -24,10 +24,12 @@ from oscillator.attractors.finding import share_text
 from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.grouping import Attractor
 from oscillator.attractors.lyapunov import LyapunovSpectrum
+from oscillator.io.cases import case_to_toml
 from oscillator.io.files import atomic_path
 from oscillator.model.parameters import labelled
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
+from oscillator.report.global_folders import write_found
 from oscillator.report.orbits import modified_blocks
 from oscillator.report.outputs import (
     FAILED,
@@ -47,7 +49,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "attractor_table",
+    "basins_blocks",
     "basins_figure",
+    "following_blocks",
     "following_figure",
     "lyapunov_figure",
     "write_basins",
@@ -198,7 +202,7 @@ def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
     return fig
 
 
-def _basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
+def basins_blocks(basins: Basins, table: pd.DataFrame) -> list[mk.Block]:
     case, x, y = basins.found.case, basins.x, basins.y
     settings = basins.found.settings
     rows = tuple(
@@ -242,7 +246,8 @@ def write_basins(basins: Basins, folder: Path, *, plots: bool = True) -> list[st
     figure = [("basins", lambda: basins_figure(basins))] if plots else []
     title = f"{basins.found.case.name}: basins of attraction"
     tables = {"basins": basins.table(), "attractors": table}
-    return write_folder(folder, tables, figure, _basins_blocks(basins, table), title)
+    write_found(folder, [basins.found])
+    return write_folder(folder, tables, figure, basins_blocks(basins, table), title)
 
 
 def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = True) -> list[str]:
@@ -260,6 +265,9 @@ def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = Tr
     }
     with atomic_path(folder / "lyapunov.json") as temporary:
         temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
+    if not (folder / "case.toml").exists():
+        with atomic_path(folder / "case.toml") as temporary:
+            temporary.write_text(case_to_toml(spectrum.case), encoding="utf-8")
     if plots:
         try:
             save_into(lyapunov_figure(spectrum), folder / "figures", "lyapunov")
@@ -324,7 +332,7 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
     return fig
 
 
-def _following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block]:
+def following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block]:
     case, param = over.case, over.param
     values = over.values
     blocks: list[mk.Block] = [
@@ -372,4 +380,5 @@ def write_following(
     figure = [("attractors", lambda: following_figure(over, coordinate, branches))] if plots else []
     title = f"{over.case.name}: attractors over {over.param}"
     tables = {"attractors": table, "ends": over.ends_table()}
-    return write_folder(folder, tables, figure, _following_blocks(over, table), title)
+    write_found(folder, over.found, [{"ids": sorted(ids.items()), "fresh": over.fresh} for ids in over.ids])
+    return write_folder(folder, tables, figure, following_blocks(over, table), title)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +40,7 @@ __all__ = [
     "BranchFolder",
     "finish_branch",
     "orbit_info",
+    "orbit_of",
     "orbit_of_folder",
     "read_branch",
     "read_sweep_points",
@@ -359,32 +361,37 @@ def save_orbit(orbit: Orbit, folder: Path | str) -> Path:
 def orbit_of_folder(path: Path, case: Case, events: pd.DataFrame, info: dict[str, Any]) -> Orbit:
     """The :class:`Orbit` a folder of :func:`save_orbit` holds (``info``: its ``run.json``),
     every field checked."""
-    data = info.get("orbit")
     where = path / "run.json"
+    return orbit_of(info.get("orbit"), case, events, lambda what: _damaged(where, what))
+
+
+def orbit_of(data: object, case: Case, events: pd.DataFrame, damaged: Callable[[str], InputError]) -> Orbit:
+    """The :class:`Orbit` that :func:`orbit_info` wrote as ``data`` (untrusted: every field
+    checked, a bad one refused by ``damaged(what)``), with its one period's ``events``."""
     if not isinstance(data, dict):
-        raise _damaged(where, "orbit is not a JSON object")
+        raise damaged("orbit is not a JSON object")
 
     def numbers(key: str, shape: tuple[int, ...]) -> np.ndarray:
         try:
             values = np.array(data.get(key), dtype=float)
         except (TypeError, ValueError):
-            raise _damaged(where, f"orbit.{key} is not numbers") from None
+            raise damaged(f"orbit.{key} is not numbers") from None
         if values.shape != shape or not np.all(np.isfinite(values)):
-            raise _damaged(where, f"orbit.{key} must be {' x '.join(map(str, shape))} finite numbers")
+            raise damaged(f"orbit.{key} must be {' x '.join(map(str, shape))} finite numbers")
         return values
 
     period = data.get("period")
     if isinstance(period, bool) or not isinstance(period, int) or period < 1:
-        raise _damaged(where, "orbit.period is not a whole number >= 1")
+        raise damaged("orbit.period is not a whole number >= 1")
     resting, discontinuous, history = data.get("resting", []), data.get("discontinuous", []), data.get("history", [])
     if not (isinstance(resting, list) and all(m in (1, 2) and not isinstance(m, bool) for m in resting)):
-        raise _damaged(where, "orbit.resting must be a list of masses, 1 or 2")
+        raise damaged("orbit.resting must be a list of masses, 1 or 2")
     if not (isinstance(discontinuous, list) and all(v in ("v1", "v2") for v in discontinuous)):
-        raise _damaged(where, "orbit.discontinuous must be a list of v1, v2")
+        raise damaged("orbit.discontinuous must be a list of v1, v2")
     if not isinstance(data.get("note", ""), str) or not isinstance(data.get("stable"), bool):
-        raise _damaged(where, "orbit.note must be text and orbit.stable true or false")
+        raise damaged("orbit.note must be text and orbit.stable true or false")
     if not isinstance(history, list):
-        raise _damaged(where, "orbit.history must be a list of numbers")
+        raise damaged("orbit.history must be a list of numbers")
     pairs = numbers("multipliers", (4, 2))
     return Orbit(
         case=case,

@@ -30,7 +30,17 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.io.cases import Case
 
-__all__ = ["ATLAS_MEASURES", "atlas_figure", "curve_figure", "read_atlas", "read_curve", "write_atlas", "write_curve"]
+__all__ = [
+    "ATLAS_MEASURES",
+    "atlas_blocks",
+    "atlas_figure",
+    "curve_blocks",
+    "curve_figure",
+    "read_atlas",
+    "read_curve",
+    "write_atlas",
+    "write_curve",
+]
 
 
 #: What an atlas figure can be coloured by: the column of the atlas's table, and how it is named.
@@ -140,7 +150,7 @@ def _fig_14_marks(ax: Any, atlas: Atlas) -> list[Any]:
     return handles
 
 
-def _atlas_blocks(atlas: Atlas) -> list[mk.Block]:
+def atlas_blocks(atlas: Atlas) -> list[mk.Block]:
     case, x, y, table = atlas.case, atlas.x, atlas.y, atlas.table
     first = table[table.attractor <= 0]
     counts = first.regime.value_counts()
@@ -176,7 +186,7 @@ def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
     measures = ATLAS_MEASURES if plots else {}
     figure = [(atlas_figure_name(by), functools.partial(atlas_figure, atlas, by)) for by in measures]
     title = f"{atlas.case.name}: regime atlas"
-    return write_folder(folder, {"atlas": atlas.table}, figure, _atlas_blocks(atlas), title)
+    return write_folder(folder, {"atlas": atlas.table}, figure, atlas_blocks(atlas), title)
 
 
 #: Line styles of the curves drawn over one plane, in turn.
@@ -289,6 +299,17 @@ def read_curve(folder: Path) -> Curve:
     return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside, inside_point)
 
 
+def curve_blocks(curve: Curve) -> list[mk.Block]:
+    """The curve told: its kind and plane, its sides, its ends and its points."""
+    rows = tuple((f"{row[0]:.10g}", f"{row[1]:.10g}") for row in curve.points[[curve.x, curve.y]].to_numpy())
+    return [
+        mk.Heading(1, (f"{curve.kind} curve in {curve.x} and {curve.y}",)),
+        mk.Paragraph((f"The border of the orbit {curve.inside}; {len(curve.points)} points.",)),
+        mk.Bullets(tuple((f"one end: {end}",) for end in curve.ends)),
+        mk.Table((curve.x, curve.y), rows),
+    ]
+
+
 def write_curve(
     curve: Curve, folder: Path, *, atlas: Atlas | None = None, plots: bool = True, also: Sequence[Curve] = ()
 ) -> list[str]:
@@ -305,14 +326,8 @@ def write_curve(
     }
     with atomic_path(folder / "curve.json") as temporary:
         temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
-    rows = tuple((f"{row[0]:.10g}", f"{row[1]:.10g}") for row in curve.points[[curve.x, curve.y]].to_numpy())
-    blocks: list[mk.Block] = [
-        mk.Heading(1, (f"{curve.kind} curve in {curve.x} and {curve.y}",)),
-        mk.Paragraph((f"The border of the orbit {curve.inside}; {len(curve.points)} points.",)),
-        mk.Bullets(tuple((f"one end: {end}",) for end in curve.ends)),
-        mk.Table((curve.x, curve.y), rows),
-        mk.Figure("curve", "the curve" + (" over the atlas's regimes" if atlas is not None else "")),
-    ]
+    caption = "the curve" + (" over the atlas's regimes" if atlas is not None else "")
+    blocks = [*curve_blocks(curve), mk.Figure("curve", caption)]
     figure = [("curve", lambda: curve_figure([curve, *also], atlas))] if plots else []
     return write_folder(folder, {"curve": curve.points}, figure, blocks, f"{curve.kind} curve")
 
