@@ -3,6 +3,7 @@ the same flag, metavar and help (and its default from the library's settings whe
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -14,6 +15,7 @@ __all__ = [
     "NoPlotsOption",
     "QuietOption",
     "RecordOption",
+    "ResumableOutOption",
     "SchedulerOption",
     "SetOption",
     "TransientOption",
@@ -56,6 +58,15 @@ EngineOption = Annotated[
         metavar="NAME",
         help="The integrator: cvode (CVODE through its C API, the default), sksundae (CVODE through "
         "scikit-sundae's Python API) or scipy (SciPy's solve_ivp).",
+    ),
+]
+#: ``--out DIR`` of a resumable command: the folder, new or the same computation's to resume.
+ResumableOutOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--out",
+        metavar="DIR",
+        help="Output folder (default: runs/CASE-COMMAND-YYYYmmdd-HHMMSS); the same folder again resumes.",
     ),
 ]
 #: ``--x NAME LOW HIGH N``: an axis of a grid.

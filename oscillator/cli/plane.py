@@ -20,6 +20,7 @@ from oscillator.cli.options import (
     NoPlotsOption,
     QuietOption,
     RecordOption,
+    ResumableOutOption,
     SchedulerOption,
     SetOption,
     TransientOption,
@@ -61,14 +62,7 @@ def atlas(
     record: RecordOption = None,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
-    out_dir: Annotated[
-        Path | None,
-        typer.Option(
-            "--out",
-            metavar="DIR",
-            help="Output folder (default: runs/CASE-atlas-YYYYmmdd-HHMMSS); the same folder again resumes.",
-        ),
-    ] = None,
+    out_dir: ResumableOutOption = None,
     set_: SetOption = None,
     no_plots: NoPlotsOption = False,
     quiet: QuietOption = False,

@@ -12,7 +12,14 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from, sweep_settings
-from oscillator.cli.options import NoPlotsOption, QuietOption, SchedulerOption, SetOption, WorkersOption
+from oscillator.cli.options import (
+    NoPlotsOption,
+    QuietOption,
+    ResumableOutOption,
+    SchedulerOption,
+    SetOption,
+    WorkersOption,
+)
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, is_shipped
 from oscillator.model.parameters import SweepSettings
@@ -55,14 +62,7 @@ def sweep(
     ] = None,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
-    out_dir: Annotated[
-        Path | None,
-        typer.Option(
-            "--out",
-            metavar="DIR",
-            help="Output folder (default: runs/CASE-sweep-YYYYmmdd-HHMMSS); the same folder again resumes the sweep.",
-        ),
-    ] = None,
+    out_dir: ResumableOutOption = None,
     set_: SetOption = None,
     both_ways: BothWaysOption = False,
     no_plots: NoPlotsOption = False,

@@ -4,7 +4,6 @@ not hold), the folder checked as untrusted."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +11,7 @@ import pandas as pd
 
 from oscillator.errors import InputError
 from oscillator.report.attractors import write_basins
+from oscillator.report.global_results import marker_identity
 from oscillator.report.plane import read_curve, write_atlas, write_curve
 from oscillator.text import printable
 
@@ -41,10 +41,10 @@ def rebuild(folder: Path) -> str | None:
             field="folder",
         )
     if (folder / "basins.json").exists():
-        _rebuild_basins(folder, _identity(folder / "basins.json"), load_case(folder / "case.toml"))
+        _rebuild_basins(folder, marker_identity(folder / "basins.json"), load_case(folder / "case.toml"))
         return "the basins"
     if (folder / "atlas.json").exists():
-        _rebuild_atlas(folder, _identity(folder / "atlas.json"), load_case(folder / "case.toml"))
+        _rebuild_atlas(folder, marker_identity(folder / "atlas.json"), load_case(folder / "case.toml"))
         return "the atlas"
     return None
 
@@ -63,19 +63,6 @@ def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
     store.check()  # this very computation, or refused
     _finished(store, len(grid_starts(case, x, y)), "starts")
     write_basins(find_basins(case, x, y, store, settings=settings), folder)
-
-
-def _identity(marker: Path) -> dict[str, Any]:
-    """The identity a folder's marker file holds (checked as untrusted text)."""
-    from oscillator.io.files import read_untrusted
-
-    try:
-        identity = json.loads(read_untrusted(marker, what="marker file", field="folder", limit=1_000_000))["identity"]
-        if not isinstance(identity, dict):
-            raise TypeError("not a table")
-    except (ValueError, KeyError, TypeError, RecursionError) as error:
-        raise InputError(f"{printable(str(marker))} is damaged ({error}); give a new folder", field="folder") from None
-    return identity
 
 
 def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> None:
