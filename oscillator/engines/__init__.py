@@ -44,10 +44,12 @@ __all__ = [
     "Engine",
     "EngineChoice",
     "EngineFailure",
+    "EngineInfo",
     "Step",
     "StepKind",
     "build_engine",
     "default_engine",
+    "describe",
     "engine_factory",
 ]
 
@@ -122,12 +124,45 @@ class Engine(Protocol):
         ...
 
 
-#: Engine name -> ``module:class``; the module is imported only when the engine is chosen.
+@dataclass(frozen=True)
+class EngineInfo:
+    """What an engine says of itself: its ``name`` (``simulate(engine=...)``, ``--engine``), where
+    its class is (``module:Class``, imported only when the engine is chosen), its ``method`` as a
+    run's ``run.json`` records it, and the ``solver`` its failures name."""
+
+    name: str
+    entry: str
+    method: str
+    solver: str
+
+
+#: The engines, by name: a new engine is its module and one entry here.
 ENGINES = {
-    "cvode": "oscillator.engines.cvode_c:CCvodeEngine",
-    "sksundae": "oscillator.engines.sksundae:SksundaeEngine",
-    "scipy": "oscillator.engines.scipy:ScipyEngine",
+    info.name: info
+    for info in (
+        EngineInfo(
+            "cvode",
+            "oscillator.engines.cvode_c:CCvodeEngine",
+            "CVODE (SUNDIALS, C API with compiled callbacks), Adams, root finding",
+            "CVODE",
+        ),
+        EngineInfo(
+            "sksundae",
+            "oscillator.engines.sksundae:SksundaeEngine",
+            "CVODE (SUNDIALS, through scikit-sundae's Python API), Adams, root finding",
+            "CVODE",
+        ),
+        EngineInfo(
+            "scipy", "oscillator.engines.scipy:ScipyEngine", "SciPy solve_ivp (DOP853), events", "SciPy solve_ivp"
+        ),
+    )
 }
+
+
+def describe(name: str) -> EngineInfo:
+    """What the engine called ``name`` says of itself; an engine built by a user's callable
+    (not registered) is described by its name alone."""
+    return ENGINES.get(name, EngineInfo(name, "", name, f"the engine {name!r}"))
 
 
 def engine_factory(name: str) -> type:
@@ -135,7 +170,7 @@ def engine_factory(name: str) -> type:
     ``(params: Parameters, options: SolverOptions)``."""
     if not isinstance(name, str) or name not in ENGINES:
         raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(name)}", field="engine")
-    module, _, cls = ENGINES[name].partition(":")
+    module, _, cls = ENGINES[name].entry.partition(":")
     engine: type = getattr(importlib.import_module(module), cls)
     return engine
 

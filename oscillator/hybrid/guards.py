@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from oscillator.engines import describe
 from oscillator.errors import OscillatorError, Reason, SimulationFailed
 from oscillator.model.energy import mechanical_energy
 from oscillator.model.events import COLUMN, decode, event_of_row
@@ -90,7 +91,7 @@ def _where(mode: Mode, y: np.ndarray) -> str:
 
 def solver_failure(engine: str, detail: str, flag: int | str, t: float, y: np.ndarray, mode: Mode) -> SimulationFailed:
     """The integrator's failure, told with the last point it reached (its output is undefined then)."""
-    name = "SciPy solve_ivp" if engine == "scipy" else "CVODE"
+    name = describe(engine).solver
     return SimulationFailed(
         f"{name} failed after t = {t:.10g} s with flag {flag} ({detail}) in {_where(mode, y)}; "
         f"loosen rtol/atol or raise max_num_steps",
@@ -115,9 +116,10 @@ class StepGuard:
     """Steps taken one at a time (each one an output) without a switch: CVODE counts only between
     outputs, so ``max_num_steps`` is enforced here."""
 
-    def __init__(self, options: SolverOptions) -> None:
+    def __init__(self, options: SolverOptions, engine: str = "cvode") -> None:
         self.limit = options.max_num_steps
         self.steps = 0
+        self.solver = describe(engine).solver
 
     @property
     def room(self) -> int:
@@ -133,7 +135,7 @@ class StepGuard:
         self.steps = 0 if at_root else self.steps + 1
         if self.steps > self.limit:
             raise SimulationFailed(
-                f"CVODE took more than max_num_steps = {self.limit} steps without a switch up to "
+                f"{self.solver} took more than max_num_steps = {self.limit} steps without a switch up to "
                 f"t = {t:.10g} s in {_where(mode, y)}; loosen rtol/atol or raise max_num_steps",
                 reason=Reason.STEP_LIMIT,
                 field="max_num_steps",

@@ -168,7 +168,7 @@ class Supervisor:
 
     def _through_mode(self, record: RunRecord, mode: Mode, t: float, t_end: float) -> tuple[float, np.ndarray, Mode]:
         """Advance in ``mode`` until it switches or the run ends; the point and mode reached."""
-        stalls, steps = StallGuard(), StepGuard(self.options)
+        stalls, steps = StallGuard(), StepGuard(self.options, self.engine.name)
         while True:
             step = self._returned(record, mode, t, t_end, steps)
             t, y = step.t, step.y

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from oscillator.engines import describe
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, FolderTaken, claim_folder, default_name, read_untrusted, replace_file
@@ -114,14 +115,6 @@ def _versions() -> dict[str, Any]:
     return versions
 
 
-#: What run.json says of each engine.
-_INTEGRATORS = {
-    "cvode": "CVODE (SUNDIALS, C API with compiled callbacks), Adams, root finding",
-    "sksundae": "CVODE (SUNDIALS, through scikit-sundae's Python API), Adams, root finding",
-    "scipy": "SciPy solve_ivp (DOP853), events",
-}
-
-
 def run_metadata(command: list[str] | None = None) -> dict[str, Any]:
     """When, how and with what a folder was made: ``created``, ``command``, ``versions``, ``platform``."""
     return {
@@ -147,7 +140,7 @@ def run_info(result: Result, *, command: list[str] | None = None, pending: tuple
         "pending": list(pending),
         **run_metadata(command),
         "solver": {
-            "integrator": _INTEGRATORS.get(result.stats.engine, result.stats.engine),
+            "integrator": describe(result.stats.engine).method,
             "engine": result.stats.engine,
             **dataclasses.asdict(case.options),
             "max_step": case.options.max_step_fraction * case.parameters.period,
