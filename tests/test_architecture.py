@@ -170,3 +170,18 @@ def test_the_formatter_is_never_switched_off():
               for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
               if "fmt: skip" in line or "fmt: off" in line]  # fmt: skip
     assert packed == []
+
+
+def test_the_package_says_what_a_run_keeps_with_save_at_only():
+    """``t_eval``, ``record_trajectory`` and ``keep_events_from`` stay for users; inside the
+    package every run says what it keeps with ``save=SaveAt(...)``."""
+    old = {"t_eval", "record_trajectory", "keep_events_from"}
+    found = [
+        f"{name}:{node.lineno}"
+        for name, tree in modules().items()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and getattr(node.func, "id", getattr(node.func, "attr", "")) == "simulate"
+        and old & {keyword.arg for keyword in node.keywords}
+    ]
+    assert found == []

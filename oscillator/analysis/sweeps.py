@@ -208,6 +208,7 @@ def run_point(
     a both-ways sweep's previous end).  A value the model refuses (``Omega <= 0``) or a solver
     failure gives a summary row with ``status = "failed"`` and the message, and no other rows.
     """
+    from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.simulate import simulate  # here: a sweep's settings are checked before it loads
 
     param, mass = settings.param, settings.mass
@@ -215,7 +216,7 @@ def run_point(
     started = time.perf_counter()
     try:
         point, marks = _point_case(case, settings, value, from_state)
-        result = simulate(point, t_end=float(marks[-1]), t_eval=marks[:-1], keep_events_from=float(marks[0]))
+        result = simulate(point, t_end=float(marks[-1]), save=SaveAt(ts=marks[:-1], events_from=float(marks[0])))
     except OscillatorError as error:
         reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
         failed = PointSummary(

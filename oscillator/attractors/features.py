@@ -30,6 +30,7 @@ __all__ = ["MEASURES", "Measured", "impact_velocity"]
 def impact_velocity(case: Case, attractor: Attractor) -> float:
     """The largest relative velocity at a contact onset (m/s) over one return from the
     attractor's last section point (``max(period, 1)`` forcing periods); 0 without contacts."""
+    from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.simulate import simulate
     from oscillator.model.events import EventKind
 
@@ -38,7 +39,7 @@ def impact_velocity(case: Case, attractor: Attractor) -> float:
     periods = max(attractor.period, 1)
     begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
     run = resolve_case(case, **begin)
-    result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, record_trajectory=False)
+    result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, save=SaveAt(steps=False))
     events = result.events
     onsets = events[events.kind.isin(EventKind.values_where(lambda kind: kind.contact_starts))]
     if onsets.empty:

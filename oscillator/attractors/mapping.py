@@ -23,6 +23,7 @@ from oscillator.analysis.axes import STATE
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.analysis.sweeps import detect_period
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
+from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.events import EventKind
@@ -110,7 +111,7 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
     begin = (x1, v1, x2, v2)
     try:
         point, marks = _section_case(case, begin, settings)
-        result = simulate(point, t_end=float(marks[-1]), t_eval=marks, keep_events_from=float(marks[0]))
+        result = simulate(point, t_end=float(marks[-1]), save=SaveAt(ts=marks, events_from=float(marks[0])))
     except OscillatorError as error:
         reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
         return Landing(index, begin, "failed", reason.value, str(error), wall_time=time.perf_counter() - started)

@@ -51,9 +51,10 @@ def check(
             raise InputError(f"case {shown(resolved.name)} has no [[expected]] events to check against", field="case")
         load("oscillator.analysis.reproduction", "oscillator.hybrid.simulate", notice=True)
         from oscillator.analysis.reproduction import compare
+        from oscillator.hybrid.recording import SaveAt
         from oscillator.hybrid.simulate import simulate
 
-        table = compare(resolved, simulate(resolved, record_trajectory=False, engine=engine).events)
+        table = compare(resolved, simulate(resolved, save=SaveAt(steps=False), engine=engine).events)
     except OscillatorError as error:
         raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
     except KeyboardInterrupt:

@@ -70,10 +70,11 @@ def _events_table(events: pd.DataFrame, limit: int = 40) -> Table:
 
 
 def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine: str | None = None) -> Result:
+    from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.simulate import simulate
 
     if quiet or not err.is_terminal:  # a progress bar only where a person watches
-        return simulate(case, t_eval=t_eval, engine=engine)
+        return simulate(case, save=SaveAt(ts=t_eval), engine=engine)
     span = case.t_end - case.initial.t0
     columns = (
         TextColumn("{task.description}"),
@@ -92,7 +93,7 @@ def _simulate_with_progress(case: Case, quiet: bool, t_eval: Any = None, engine:
                 last[0] = now
                 progress.update(task, completed=t - case.initial.t0, t=t)
 
-        return simulate(case, t_eval=t_eval, progress=report, engine=engine)
+        return simulate(case, save=SaveAt(ts=t_eval), progress=report, engine=engine)
 
 
 def _write_partial(error: BaseException, claim: FolderClaim, fmt: str, pending: tuple[str, ...]) -> str:

@@ -459,7 +459,7 @@ def settled(case: Case, state: np.ndarray | Sequence[float], periods: int) -> np
         return y
     start = dataclasses.replace(case.initial, **dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in y), strict=True)))
     end = case.initial.t0 + periods * case.parameters.period
-    warm = simulate(dataclasses.replace(case, initial=start), t_end=end, record_trajectory=False, keep_events_from=end)
+    warm = simulate(dataclasses.replace(case, initial=start), t_end=end, save=SaveAt(steps=False, events_from=end))
     return np.asarray(warm.final_state[1:], dtype=float)
 
 

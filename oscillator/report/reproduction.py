@@ -9,6 +9,7 @@ from typing import Any
 import pandas as pd
 
 from oscillator.analysis.reproduction import compare
+from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import load_case
 from oscillator.model.parameters import SolverOptions
@@ -53,7 +54,7 @@ def render_markdown(names: list[str]) -> str:
     tables = {}
     for name in names:
         case = load_case(name)
-        result = simulate(case, record_trajectory=False)
+        result = simulate(case, save=SaveAt(steps=False))
         table = compare(case, result.events)
         tables[name] = table
         rows = []
