@@ -123,7 +123,7 @@ def find_basins(
     store.open()
     with executor:
         landings = _landings(case, settings, starts, store, executor, progress)
-        store.write_status("computed", starts=len(starts), failed=sum(item.status != "ok" for item in landings))
+        store.write_status("computed", starts=len(starts), failed=sum(not item.ok for item in landings))
         return Basins(assemble(case, settings, landings, executor=executor), x, y)
 
 

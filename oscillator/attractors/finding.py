@@ -201,7 +201,7 @@ def labelled(landings: Sequence[Landing], labels: dict[int, int]) -> pd.DataFram
     """One row per start (in the starts' order): ``index``, the start, its ``attractor`` (-1 for
     a failed start), ``status``, ``reason``, ``message``, ``period``."""
     rows = [
-        (item.index, *item.start, labels.get(item.index, -1), item.status, item.reason, item.message, item.period)
+        (item.index, *item.start, labels.get(item.index, -1), item.status, item.reason or "", item.message, item.period)
         for item in sorted(landings, key=lambda item: item.index)
     ]
     return pd.DataFrame(rows, columns=["index", *STATE, "attractor", "status", "reason", "message", "period"])

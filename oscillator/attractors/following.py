@@ -293,7 +293,7 @@ def _bisect(
         middle = 0.5 * (inside + outside)
         point = resolve_case(over.case, **{over.param: float(middle)})
         landing = land(point, settings, 0, tuple(seed))
-        if landing.status == "ok" and landing.period == attractor.period and landing.signature == attractor.signature:
+        if landing.ok and landing.period == attractor.period and landing.signature == attractor.signature:
             inside, seed = middle, landing.points[-1]
         else:
             outside = middle
@@ -305,7 +305,7 @@ def _bisect(
 
 
 def _described(landing: Landing) -> str:
-    if landing.status != "ok":
+    if not landing.ok:
         return f"failed: {landing.message}"
     return Attractor.of_landing(0, landing).name.split(": ", 1)[-1]
 

@@ -206,7 +206,7 @@ def group(landings: Iterable[Landing], settings: AttractorSettings) -> tuple[lis
     found: list[Attractor] = []
     members: list[list[int]] = []
     for landing in sorted(landings, key=lambda item: item.index):
-        if landing.status != "ok":
+        if not landing.ok:
             continue
         k = _joined(landing, found, settings)
         if k is None:

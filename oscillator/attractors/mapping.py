@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -83,8 +84,9 @@ class Landing:
 
     index: int
     start: tuple[float, float, float, float]
-    status: str = "ok"  #: ``ok`` or ``failed``
-    reason: str = ""  #: why it failed, for a program (:class:`~oscillator.errors.Reason`)
+    status: Literal["ok", "failed"] = "ok"
+    reason: Reason | None = None  #: why it failed, for a program
+
     message: str = ""  #: why it failed, in words
     period: int = 0  #: period-n of its section points, 0 if none up to ``max_period``
     points: np.ndarray = field(default_factory=lambda: np.empty((0, 4)), repr=False)  #: recorded section points
@@ -93,6 +95,11 @@ class Landing:
     contacts: float = 0.0  #: contact onsets (either stop; a contact between the masses once) per forcing period
     wall_time: float = 0.0
     rest_time: tuple[float, float] = (0.0, 0.0)  #: the fraction of the time m1 and m2 rest (1: throughout)
+
+    @property
+    def ok(self) -> bool:
+        """Whether the start ran and was read (else ``reason`` and ``message`` say why not)."""
+        return self.status == "ok"
 
 
 def _section_case(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[Case, np.ndarray]:
@@ -114,7 +121,7 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
         result = simulate(point, t_end=float(marks[-1]), save=SaveAt(ts=marks, events_from=float(marks[0])))
     except OscillatorError as error:
         reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
-        return Landing(index, begin, "failed", reason.value, str(error), wall_time=time.perf_counter() - started)
+        return Landing(index, begin, "failed", reason, str(error), wall_time=time.perf_counter() - started)
     points = result.trajectory[list(STATE)].to_numpy()
     n = detect_period(points, settings.tolerance, settings.max_period)
     period = point.parameters.period

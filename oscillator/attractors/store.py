@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -22,7 +22,7 @@ import pyarrow.parquet as pq
 
 from oscillator.analysis.store import ResumableFolder
 from oscillator.attractors.mapping import STATE, Landing
-from oscillator.errors import InputError
+from oscillator.errors import InputError, Reason
 from oscillator.io.files import atomic_path
 
 __all__ = ["LandingStore"]
@@ -41,7 +41,7 @@ def landing_row(landing: Landing) -> dict[str, Any]:
         "index": landing.index,
         **dict(zip(STATE, landing.start, strict=True)),
         "status": landing.status,
-        "reason": landing.reason,
+        "reason": "" if landing.reason is None else landing.reason.value,
         "message": landing.message,
         "period": landing.period,
         "signature": landing.signature,
@@ -60,8 +60,8 @@ def landing_of(row: Any) -> Landing:
     return Landing(
         int(row.index),
         (float(row.x1), float(row.v1), float(row.x2), float(row.v2)),
-        str(row.status),
-        str(row.reason),
+        _status(str(row.status)),
+        _reason(str(row.reason)),
         str(row.message),
         int(row.period),
         np.asarray(row.points, dtype=float).reshape(-1, 4),
@@ -73,15 +73,28 @@ def landing_of(row: Any) -> Landing:
     )
 
 
+def _status(text: str) -> Literal["ok", "failed"]:
+    """A stored status; another text is a damaged part (``ValueError``)."""
+    if text not in ("ok", "failed"):
+        raise ValueError(f"status {text!r}")
+    return "ok" if text == "ok" else "failed"
+
+
+def _reason(text: str) -> Reason | None:
+    """A stored reason (empty: none); one that is no :class:`~oscillator.errors.Reason` is a
+    damaged part (``ValueError``)."""
+    return Reason(text) if text else None
+
+
 def _foreign(landing: Landing, starts: np.ndarray, seen: set[int]) -> str:
     """Why a stored landing is not one of this computation's (empty if it is)."""
     if not 0 <= landing.index < len(starts) or landing.index in seen:
         return f"start {landing.index} is not one of its starts or is there twice"
     if not np.array_equal(np.asarray(landing.start), starts[landing.index]):
         return f"start {landing.index} is not the start of that number"
-    if landing.status not in ("ok", "failed") or (landing.status == "ok" and not np.isfinite(landing.points).all()):
-        return f"start {landing.index} has no status or section points that are not numbers"
-    if landing.status == "ok" and (landing.period < 0 or len(landing.points) < max(landing.period, 1)):
+    if landing.ok and not np.isfinite(landing.points).all():
+        return f"start {landing.index} has section points that are not numbers"
+    if landing.ok and (landing.period < 0 or len(landing.points) < max(landing.period, 1)):
         return f"start {landing.index} has fewer section points than its period"
     return ""
 
