@@ -1075,3 +1075,29 @@ def test_a_damaged_found_json_is_refused_naming_it(tmp_path):
     (folder / "found.json").write_text(json.dumps(found))
     with pytest.raises(InputError, match=r"found.json is damaged: set 0: attractor 0's points"):
         osc.read_run(folder)
+
+
+def test_the_core_composes_an_analysis_along_any_path_of_parameters():
+    """A new analysis is a list of points and a choice of pieces: along a path on which Omega and
+    Q2 change together, the loop finds at every point the attractor that find_attractors finds
+    there from the same start, and keeps its identity from point to point."""
+    from oscillator.analysis.execution import Executor
+    from oscillator.attractors.continuing import Mapper, continue_attractors, path_points
+    from oscillator.attractors.finding import Refined
+    from oscillator.attractors.seeding import LastPoints
+
+    path = [{"Omega": 1.80 + 0.02 * k, "Q2": 70.0 + 0.2 * k} for k in range(3)]
+    start = np.array([CASE.initial.y])
+    mapper = Mapper(start, QUICK, QUICK)
+    with Executor() as executor:
+        continued = continue_attractors(
+            CASE, path_points(path), mapper, describe=Refined(0), seeding=LastPoints(), executor=executor
+        )
+    for here, ids, values in zip(continued.found, continued.ids, path, strict=True):
+        alone = find_attractors(CASE, states=start, settings=QUICK, **values)
+        (mine,), (theirs,) = here.attractors, alone.attractors
+        assert (mine.period, mine.signature) == (theirs.period, theirs.signature)
+        assert np.allclose(mine.orbit.state, theirs.orbit.state, atol=1e-8)
+        assert ids == {0: 0}  # one attractor, continued along the whole path
+    with pytest.raises(InputError, match="path 'Omegaa' is not a parameter"):
+        path_points([{"Omegaa": 1.0}])

@@ -27,7 +27,7 @@ that resumes from its store gives what an uninterrupted run gives.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,8 +41,9 @@ from oscillator.attractors.matching import Matcher, NearestSame, renumbered
 from oscillator.attractors.seeding import Seeding
 from oscillator.attractors.store import LandingStore
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import Parameters
 
-__all__ = ["Continued", "Mapper", "Point", "continue_attractors", "line_points", "plane_points"]
+__all__ = ["Continued", "Mapper", "Point", "continue_attractors", "line_points", "path_points", "plane_points"]
 
 Describer = Callable[[Case, Attractor], Attractor]
 
@@ -61,6 +62,17 @@ class Point:
 def line_points(param: str, values: Sequence[float] | np.ndarray) -> list[Point]:
     """The points of a list of values: each seeded by and matched to the one before, one batch each."""
     return [Point(((param, float(v)),), k - 1 if k else None, (k - 1,) if k else (), k) for k, v in enumerate(values)]
+
+
+def path_points(path: Sequence[Mapping[str, float]]) -> list[Point]:
+    """The points of a path through the parameters (each point a mapping ``name -> value``, e.g.
+    a design's operating band, or a line across a plane): each seeded by and matched to the one
+    before, one batch each.  Every name must be a parameter."""
+    points = []
+    for k, values in enumerate(path):
+        named = tuple((Parameters.check_name(name, "path"), float(value)) for name, value in values.items())
+        points.append(Point(named, k - 1 if k else None, (k - 1,) if k else (), k))
+    return points
 
 
 def plane_points(x: Axis, y: Axis) -> list[Point]:
