@@ -246,7 +246,7 @@ def test_going_up_in_q2_the_resting_orbit_ends_where_simulation_says():
 def test_the_cyclic_signature_is_each_mass_s_own_cycle_of_switches():
     """Neither where the section cuts the orbit nor how the masses' events interleave changes
     the signature; a mass's own cycle of switches does."""
-    from oscillator.orbits.shooting import signature_of
+    from oscillator.orbits.signature import signature_of
 
     def signature(events):
         return str(signature_of([(t, mass, EventKind(kind)) for t, mass, kind in events], 2.0))

@@ -5,7 +5,7 @@ for ``transient`` forcing periods and then ``record`` more, keeping the section 
 y(t0 + k T)`` of the recorded window (:func:`land`: a pure function, so the same landings come
 out in this process, on a process pool or on a Dask cluster).  A start whose points repeat
 with period ``n <= max_period`` has reached a period-``n`` orbit: its cycle is the last ``n``
-points, with each mass's cycle of switches (:class:`~oscillator.orbits.shooting.Signature`),
+points, with each mass's cycle of switches (:class:`~oscillator.orbits.signature.Signature`),
 its rests and contacts per period; one whose points do not repeat has reached an aperiodic set
 (or not yet settled).  Attractors.jl calls this piece the mapper (``AttractorsViaRecurrences``
 and ``AttractorsViaFeaturizing`` are its others).
@@ -29,7 +29,7 @@ from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import check_count
-from oscillator.orbits.shooting import signature_of
+from oscillator.orbits.signature import signature_of
 from oscillator.text import shown
 
 __all__ = ["MAX_STARTS", "STATE", "AttractorSettings", "Landing", "check_settings", "check_states", "land"]

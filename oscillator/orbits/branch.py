@@ -93,7 +93,7 @@ class Branch:
         ``mu1..mu4`` (the multipliers, complex, largest modulus first: a real one near -1
         is a period doubling, a complex pair leaving the unit circle a torus), ``stable``, ``signature`` (the
         event kinds over one period as a cycle:
-        :func:`~oscillator.orbits.shooting.cyclic_signature`), ``piece`` (the branch's
+        :func:`~oscillator.orbits.signature.cyclic_signature`), ``piece`` (the branch's
         continuous pieces, numbered from 0: a new one begins after a jump or a gap) and
         ``iterations`` (the corrector's Newton steps; 0 for an orbit found at a bifurcation's
         side).

@@ -8,7 +8,7 @@ central difference of the map.  The branch follows unstable parts and turns at f
 
 Between two points, the branch has a bifurcation where
 
-* the orbit's event signature changes (:func:`~oscillator.orbits.shooting.cyclic_signature`): a
+* the orbit's event signature changes (:func:`~oscillator.orbits.signature.cyclic_signature`): a
   rest interval appears or disappears (``sliding_onset`` / ``sliding_vanish``, named as the
   parameter increases) or a pair of other switches does (``grazing``): the map is continuous
   but not differentiable there, and its multipliers may jump;

@@ -16,8 +16,6 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Bifurcation, Skipped, skipped
 from oscillator.orbits.shooting import (
     PeriodMap,
-    Signature,
-    cyclic_signature,
     fixed_point_system,
     moving_multipliers,
     multipliers_of,
@@ -26,6 +24,7 @@ from oscillator.orbits.shooting import (
     pinned_rows,
     verdict_of,
 )
+from oscillator.orbits.signature import Signature, cyclic_signature
 
 __all__ = ["Continuer", "Located", "OrbitPoint", "critical_multiplier", "kind_of_change", "natural", "slope"]
 

@@ -19,7 +19,8 @@ from oscillator.orbits.corrector import (
     natural,
     slope,
 )
-from oscillator.orbits.shooting import STATE, Signature
+from oscillator.orbits.shooting import STATE
+from oscillator.orbits.signature import Signature
 
 __all__ = ["between", "end_point", "own_kind", "record_bifurcation"]
 

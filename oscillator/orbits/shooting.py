@@ -35,6 +35,7 @@ from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
 from oscillator.model.phase_space import Mode
+from oscillator.orbits.signature import Signature, cyclic_signature, event_signature
 from oscillator.presenting import presenter
 from oscillator.text import shown
 
@@ -44,14 +45,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "Orbit",
     "PeriodMap",
-    "Signature",
-    "cyclic_signature",
-    "event_signature",
     "find_orbit",
     "multipliers_of",
     "period_map",
-    "signature_of",
-    "signature_text",
 ]
 
 #: Forcing periods simulated before Newton starts, when the case has no sweep settings.
@@ -192,64 +188,6 @@ def period_map(case: Case, t0: float, y: np.ndarray, periods: int = 1, *, deriva
     return PeriodMap(t0, t1, start, end, result.segments, result, result.derivative)
 
 
-def event_signature(events: pd.DataFrame) -> tuple[tuple[int, EventKind], ...]:
-    """The orbit's switches over one period, in order: ``((2, SLIDING_ONSET), (2, SLIDING_VANISH), ...)``
-    (grazing contacts are not switches and are left out)."""
-    switches = events[events.kind.isin(EventKind.values_where(lambda kind: kind.switches))]
-    return tuple((int(mass), EventKind(kind)) for mass, kind in zip(switches["mass"], switches["kind"], strict=True))
-
-
-def signature_text(signature: tuple[tuple[int, EventKind], ...]) -> str:
-    """An :func:`event_signature` for display: ``"m2 sliding_onset, m2 sliding_vanish, ..."``."""
-    return ", ".join(f"m{mass} {kind.value}" for mass, kind in signature)
-
-
-@dataclass(frozen=True)
-class Signature:
-    """Each mass's own cycle of switches over one period, the orbit's identity along a branch.
-
-    ``cycles[mass - 1]`` is mass ``mass``'s switches as a cycle, written from the rotation whose
-    text sorts first: where the section cuts the orbit, and how the two masses' events
-    interleave, do not change it; only a change of a mass's own cycle does (a rest interval or a
-    pair of switches appearing or vanishing).  ``str()`` gives the text form shown to people and
-    stored in tables: ``"m1: passable, passable; m2: passable, sliding_onset, ..."``.
-    """
-
-    cycles: tuple[tuple[EventKind, ...], tuple[EventKind, ...]]
-
-    @property
-    def rests(self) -> int:
-        """Rest intervals per period, both masses together."""
-        return sum(kind.starts_rest for cycle in self.cycles for kind in cycle)
-
-    def __str__(self) -> str:
-        return "; ".join(
-            f"m{mass}: {', '.join(cycle) if cycle else 'none'}" for mass, cycle in enumerate(self.cycles, start=1)
-        )
-
-
-def cyclic_signature(image: PeriodMap) -> Signature:
-    """The :class:`Signature` of an orbit through ``image`` (:func:`signature_of` its events)."""
-    return signature_of(image.kinds, image.t1 - image.t0)
-
-
-def signature_of(events: Sequence[tuple[float, int, EventKind]], span: float) -> Signature:
-    """The :class:`Signature` of the events ``(t, mass, kind)`` of one return of length ``span``.
-
-    Each mass's switches are read as a cycle (a switch at both ends of the return, there because
-    the orbit is on a boundary at the section, counted once).
-    """
-    cycles = []
-    for mass in (1, 2):
-        own = [(t, kind) for t, m, kind in events if m == mass and kind.switches]
-        kinds = [kind for _, kind in own]
-        if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((own[-1][0] - own[0][0]) - span) <= 1e-6 * span:
-            kinds.pop()
-        rotations = [tuple(kinds[k:] + kinds[:k]) for k in range(len(kinds))]
-        cycles.append(min(rotations, key=lambda cycle: [kind.value for kind in cycle], default=()))
-    return Signature((cycles[0], cycles[1]))
-
-
 @dataclass(frozen=True)
 class Orbit:
     """A periodic orbit of the stroboscopic map.
@@ -311,8 +249,8 @@ class Orbit:
 
     @property
     def signature(self) -> tuple[tuple[int, EventKind], ...]:
-        """The switches over one period, in order, as ``(mass, kind)`` (:func:`event_signature`;
-        :func:`signature_text` for display)."""
+        """The switches over one period, in order, as ``(mass, kind)`` (:func:`~oscillator.orbits.signature.event_signature`;
+        :func:`~oscillator.orbits.signature.signature_text` for display)."""
         return event_signature(self.events)
 
     def one_period(self) -> Case:
