@@ -60,7 +60,7 @@ def assert_same_tables(a, b):
     """Two sweeps' tables (``read_sweep``) are equal, but for wall times."""
     import pandas as pd
 
-    from oscillator.analysis.sweeps import TABLES
+    from oscillator.analysis.sweep_points import TABLES
 
     for name in TABLES:
         left = a[name].drop(columns=["wall_time"], errors="ignore").reset_index(drop=True)

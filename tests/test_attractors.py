@@ -398,7 +398,7 @@ def test_the_atlas_agrees_with_the_sweeps_sliding_along_fig_14s_line_and_resumes
     the atlas; the atlas killed after its first row computes only the second when run again."""
     import oscillator.attractors.continuing as core
     from oscillator import SweepSettings
-    from oscillator.analysis.sweeps import run_point
+    from oscillator.analysis.sweep_points import run_point
     from oscillator.attractors.atlas import AtlasSettings, regime_atlas
 
     x, y = Axis("Omega", 1.55, 1.65, 3), Axis("Q2", 70.5, 71.0, 2)

@@ -9,7 +9,7 @@ from matplotlib.collections import PathCollection
 from matplotlib.figure import Figure
 
 from oscillator import SweepSettings, load_case, simulate
-from oscillator.analysis.sweeps import run_point
+from oscillator.analysis.sweep_points import run_point
 from oscillator.report.figures import KIND_STYLE, draw_figures, figure_window
 from oscillator.report.sweep_figures import draw_sweep_figures
 

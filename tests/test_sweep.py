@@ -10,7 +10,9 @@ import pytest
 from conftest import assert_same_tables, make_case, start_reaching
 from oscillator import OscillatorError, SweepSettings, load_case
 from oscillator.analysis.locate import locate
-from oscillator.analysis.sweeps import TABLES, detect_period, read_sweep, run_point, run_sweep, sliding_ranges
+from oscillator.analysis.periods import detect_period
+from oscillator.analysis.sweep_points import TABLES, run_point, sliding_ranges
+from oscillator.analysis.sweeps import read_sweep, run_sweep
 
 SMALL = dict(param="Omega", start=1.55, stop=1.7, steps=4, transient=4, record=3)
 

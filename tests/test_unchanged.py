@@ -17,7 +17,7 @@ import pytest
 
 from conftest import random_case
 from oscillator import SweepSettings, case_names, load_case, simulate
-from oscillator.analysis.sweeps import run_point
+from oscillator.analysis.sweep_points import run_point
 
 DATA = Path(__file__).parent / "data" / "unchanged"
 AUDIT = json.loads((DATA / "audit.json").read_text())

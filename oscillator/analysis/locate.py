@@ -2,7 +2,7 @@
 
 Both ends of the bracket are simulated first to see that they differ (sliding, period, or the
 number of switches per period, which changes at a grazing); each bisection step simulates the
-middle, exactly as a sweep would (:func:`oscillator.analysis.sweeps.run_point`).
+middle, exactly as a sweep would (:func:`oscillator.analysis.sweep_points.run_point`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.sweeps import PointTables, run_point
+from oscillator.analysis.sweep_points import PointTables, run_point
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.model.parameters import SweepSettings, is_finite_number

@@ -22,7 +22,7 @@ import numpy as np
 
 from oscillator.analysis.axes import STATE
 from oscillator.analysis.intervals import rest_intervals
-from oscillator.analysis.sweeps import detect_period
+from oscillator.analysis.periods import detect_period
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate

@@ -149,7 +149,8 @@ def shown_case(case: Case) -> str:
 
 
 def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome: Any, no_plots: bool, quiet: bool) -> None:
-    from oscillator.analysis.sweeps import read_sweep, sliding_ranges
+    from oscillator.analysis.sweep_points import sliding_ranges
+    from oscillator.analysis.sweeps import read_sweep
 
     tables = read_sweep(folder)
     if not no_plots:
@@ -210,7 +211,7 @@ def _say_ranges(case: Case, summary: pd.DataFrame, settings: SweepSettings, rang
 
 def _say_both_ways(summary: pd.DataFrame, settings: SweepSettings) -> None:
     """Where the mass slides going each way; the values where the two ways differ (hysteresis)."""
-    from oscillator.analysis.sweeps import sliding_ranges
+    from oscillator.analysis.sweep_points import sliding_ranges
 
     ways = list(dict.fromkeys(direction for direction, _ in settings.points))
     for way in ways:

@@ -249,7 +249,8 @@ class Orbit:
 
     @property
     def signature(self) -> tuple[tuple[int, EventKind], ...]:
-        """The switches over one period, in order, as ``(mass, kind)`` (:func:`~oscillator.orbits.signature.event_signature`;
+        """The switches over one period, in order, as ``(mass, kind)``
+        (:func:`~oscillator.orbits.signature.event_signature`;
         :func:`~oscillator.orbits.signature.signature_text` for display)."""
         return event_signature(self.events)
 

@@ -46,7 +46,7 @@ _WAYS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
 
 def _shade_rests(ax: Axes, summary: pd.DataFrame, param: str, mass: int, ways: list[str], half: float) -> None:
     """The swept values at which the mass rests, shaded: one style per way of a both-ways sweep."""
-    from oscillator.analysis.sweeps import sliding_ranges
+    from oscillator.analysis.sweep_points import sliding_ranges
 
     for way in ways:
         style = _WAYS[way][0] if len(ways) > 1 else {"color": "tab:orange", "alpha": 0.15}
