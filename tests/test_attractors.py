@@ -1101,3 +1101,21 @@ def test_the_core_composes_an_analysis_along_any_path_of_parameters():
         assert ids == {0: 0}  # one attractor, continued along the whole path
     with pytest.raises(InputError, match="path 'Omegaa' is not a parameter"):
         path_points([{"Omegaa": 1.0}])
+
+
+def test_the_atlas_keeps_each_attractors_identity_across_the_plane():
+    """In the hysteresis window at Omega = 1.6 the orbit without rest (lower Omega) and the one in
+    which m2 rests twice (higher Omega) keep one id each across the plane, and both ids meet at
+    the point where they coexist."""
+    from oscillator.attractors.atlas import AtlasSettings
+
+    x, y = Axis("Omega", 1.599, 1.601, 3), Axis("Q2", 71.155, 71.175, 3)
+    settings = AtlasSettings(fresh_transient=60, seed_transient=16, record=16, lyapunov_periods=30, starts=4)
+    atlas = regime_atlas(CASE, x, y, settings=settings, workers=2)
+    ids = atlas.identities().set_index("attractor_id")
+    assert len(ids) == 2 and set(ids.regimes) == {"P1", "P1 m2 rests"}
+    rest = ids[ids.regimes == "P1 m2 rests"].iloc[0]
+    free = ids[ids.regimes == "P1"].iloc[0]
+    assert free.Omega_high == pytest.approx(1.6) and rest.Omega_low == pytest.approx(1.6)
+    both = atlas.table[atlas.table.coexisting == 2]
+    assert len(both) == 2 and set(both.attractor_id) == set(ids.index)

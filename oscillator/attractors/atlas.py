@@ -159,6 +159,21 @@ class Atlas:
         coexisting[first.row, first.column] = first.coexisting
         return codes, coexisting, regimes
 
+    def identities(self) -> pd.DataFrame:
+        """One row per attractor kept across the plane (``attractor_id``): at how many points it
+        was found, the range of each parameter over them (where it was born and where it dies
+        within the plane), its periods and its regimes there (``; ``-joined, in order met)."""
+        found = self.table[self.table.status == "ok"]
+        rows = []
+        for ident, points in found.groupby("attractor_id", sort=True):
+            row: dict[str, Any] = {"attractor_id": int(ident), "points": len(points)}
+            for axis in (self.x, self.y):
+                row[f"{axis.name}_low"], row[f"{axis.name}_high"] = points[axis.name].min(), points[axis.name].max()
+            row["periods"] = "; ".join(str(p) for p in dict.fromkeys(points.period))
+            row["regimes"] = "; ".join(dict.fromkeys(points.regime))
+            rows.append(row)
+        return pd.DataFrame(rows)
+
 
 def atlas_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AtlasSettings) -> LandingStore:
     """The resumable folder of this atlas (:class:`~oscillator.attractors.store.LandingStore`)."""
