@@ -15,6 +15,8 @@ carries the partial result the same way (a ``Result``, or the ``Branch`` or ``Cu
 from __future__ import annotations
 
 import enum
+import re
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -81,7 +83,9 @@ class OscillatorError(ValueError):
     Parameters
     ----------
     message : str
-        The complete, human-readable explanation.
+        The complete, human-readable explanation.  It names the library's arguments as
+        :meth:`said_as` reads them: it begins with ``field`` where it is about that argument,
+        and quotes any other argument in backticks (```guess```).
     field : str or None
         The library's name of the parameter, case-file key or argument concerned (``"Omega"``,
         ``"folder"``, ``"t_eval"``), when there is one; the command line maps it to its flag.
@@ -90,6 +94,16 @@ class OscillatorError(ValueError):
     def __init__(self, message: str, *, field: str | None = None) -> None:
         super().__init__(message)
         self.field = field
+
+    def said_as(self, names: Mapping[str, str]) -> str:
+        """The message with the arguments it names said as ``names`` calls them (the command
+        line's flags: ``{"start": "--from"}``): the field it begins with, and every argument it
+        quotes in backticks; a name ``names`` lacks stays as the library says it."""
+        text = str(self)
+        field = self.field or ""
+        if field in names and text.startswith(field):
+            text = names[field] + text[len(field) :]
+        return re.sub(r"`(\w+)`", lambda m: names.get(m.group(1), m.group(1)), text)
 
 
 class InputError(OscillatorError):

@@ -480,3 +480,14 @@ def test_a_both_ways_sweep_says_where_the_two_ways_differ(tmp_path):
     assert {p.name for p in (tmp_path / "both" / "figures").iterdir()} >= {"fig-14-poincare.png"}
     refused = invoke("sweep", "bifurcation-q2", "--both-ways", "--workers", "2", "--out", tmp_path / "no")
     assert_refused(refused, "--workers", "one after another", folder=tmp_path / "no")
+
+
+def test_an_error_says_its_arguments_as_the_command_lines_flags():
+    """The library names its arguments; the command line says them as its flags, from one table."""
+    from oscillator.cli.console import FLAGS, message
+    from oscillator.errors import InputError
+
+    error = InputError("start must be below stop; give a `guess` or a longer `transient`", field="start")
+    assert message(error) == "--from must be below stop; give a --guess or a longer --transient"
+    assert error.said_as({}) == "start must be below stop; give a guess or a longer transient"  # the names unquoted
+    assert FLAGS["stop"] == "--to" and "`" not in message(InputError("`nothing` here", field="x"))

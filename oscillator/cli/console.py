@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib
 import os
-import re
 import subprocess
 import sys
 import time
@@ -198,14 +197,9 @@ def _wait(helper: subprocess.Popen[bytes]) -> None:
 
 
 def message(error: OscillatorError) -> str:
-    """The error's message, with the library's names of arguments replaced by their flags: the
-    field's name where the message begins with it, and every name the message quotes in
-    backticks (```guess```)."""
-    text = str(error)
-    flag = FLAGS.get(error.field or "")
-    if flag is not None and text.startswith(error.field or ""):
-        text = flag + text[len(error.field or "") :]
-    return re.sub(r"`(\w+)`", lambda m: FLAGS.get(m.group(1), m.group(1)), text)
+    """The error's message with the library's argument names said as the command line's flags
+    (:meth:`~oscillator.errors.OscillatorError.said_as` with :data:`FLAGS`)."""
+    return error.said_as(FLAGS)
 
 
 def progress_bar(label: str, unit: str) -> tuple[Progress, Callable[[int, int], None]]:
