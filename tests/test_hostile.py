@@ -509,7 +509,7 @@ def finished_sweep(tmp_path_factory):
 SWEEP_DAMAGE = {
     "sweep.json not JSON": (lambda d: (d / "sweep.json").write_text("{"), ["sweep.json is damaged", "not JSON"]),
     "sweep.json a list": (lambda d: (d / "sweep.json").write_text("[]"), ["sweep.json is damaged"]),
-    "parts missing": (lambda d: __import__("shutil").rmtree(d / "parts"), ["parts/ folder is missing"]),
+    "parts missing": (lambda d: __import__("shutil").rmtree(d / "parts"), ["parts/ is missing"]),
     "a garbage part": (
         lambda d: (d / "parts" / "000001.switches.parquet").write_text("x"),
         ["000001.switches.parquet is damaged", "delete it"],

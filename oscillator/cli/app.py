@@ -17,14 +17,18 @@ refusals are quick.
 
 from __future__ import annotations
 
+import importlib
 import os
+import pkgutil
 import sys
 from typing import Annotated
 
 import typer
 from rich.text import Text
 
-from oscillator.cli import attractors, cases, check, console, orbit, plane, run, sweep
+import oscillator.cli as cli
+from oscillator.cli import console
+from oscillator.cli.commands import COMMANDS
 from oscillator.cli.console import err, out
 from oscillator.text import printable
 from oscillator.version import __version__
@@ -105,22 +109,14 @@ def main(args: list[str] | None = None) -> None:
     sys.exit(code if isinstance(code, int) else 0)
 
 
-app.command("list", short_help="List the named cases.")(cases.list_cases)
-app.command(short_help="Show a case: parameters, start, settings, expected events.")(cases.show)
-app.command(short_help="Run a case; write its tables, figures and report.")(run.run)
-app.command(short_help="Compare a case's switching times with the article's.")(check.check)
-app.command(short_help="Rebuild a run folder's report (and missing figures).")(run.report)
-app.command(short_help="Sweep a parameter: Fig. 14-style switching and Poincaré points.")(sweep.sweep)
-app.command(short_help="Find where a sweep's summary changes, to 1e-8.")(sweep.locate)
-app.command(short_help="Find a periodic orbit and its Floquet multipliers.")(orbit.orbit)
-app.command("continue", short_help="Continue a periodic orbit in a parameter; locate its bifurcations.")(
-    orbit.continue_
-)
-app.command(short_help="Basins of attraction over a slice of starting states.")(attractors.basins)
-app.command(short_help="The attractors over a parameter: shares, and where each appears or ends.")(
-    attractors.attractors
-)
-app.command(short_help="The Lyapunov spectrum of a motion.")(attractors.lyapunov)
-app.command(short_help="The regime atlas over two parameters.")(plane.atlas)
-app.command(short_help="Trace a bifurcation curve in a plane of two parameters.")(plane.curve)
+def _register() -> None:
+    """Every command the package's modules declare (:mod:`oscillator.cli.commands`), in rank order."""
+    for module in pkgutil.iter_modules(cli.__path__):
+        if module.name != "app":
+            importlib.import_module(f"oscillator.cli.{module.name}")
+    for declared in sorted(COMMANDS, key=lambda c: c.rank):
+        app.command(declared.name, short_help=declared.short_help)(declared.function)
+
+
+_register()
 app.callback(invoke_without_command=True)(_version)

@@ -14,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.analysis.execution import check_workers
+from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say, warn
 from oscillator.cli.inputs import case_from
 from oscillator.cli.options import (
@@ -72,6 +73,7 @@ def _settings(**given: int | None) -> AttractorSettings:
         raise InputError(f"{flag}: {error}", field=flag) from None
 
 
+@command(100, "Basins of attraction over a slice of starting states.")
 def basins(
     case: CaseArgument,
     x: Annotated[
@@ -171,6 +173,7 @@ def _finish_basins(found: Basins, store: Any, no_plots: bool, quiet: bool) -> No
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 
 
+@command(120, "The Lyapunov spectrum of a motion.")
 def lyapunov(
     case: CaseArgument,
     periods: Annotated[int, typer.Option("--periods", metavar="N", help="Forcing periods averaged over.")] = 500,
@@ -232,6 +235,7 @@ def _write_lyapunov(spectrum: Any, claim: FolderClaim, no_plots: bool) -> None:
     write_claimed(claim, lambda folder: write_lyapunov(spectrum, folder, plots=not no_plots), "the exponents")
 
 
+@command(110, "The attractors over a parameter: shares, and where each appears or ends.")
 def attractors(
     case: CaseArgument,
     param: Annotated[str, typer.Option("--param", metavar="NAME", help="The parameter varied.")],

@@ -6,6 +6,7 @@ import tomllib
 
 from rich.table import Table
 
+from oscillator.cli.commands import command
 from oscillator.cli.console import fail, message, out, say
 from oscillator.cli.options import CaseArgument
 from oscillator.errors import OscillatorError
@@ -17,6 +18,7 @@ from oscillator.text import printable
 __all__ = ["list_cases", "show"]
 
 
+@command(10, "List the named cases.", name="list")
 def list_cases() -> None:
     """List the named cases with their titles.
 
@@ -51,6 +53,7 @@ def _written(case: Case) -> dict[str, str]:
     }
 
 
+@command(20, "Show a case: parameters, start, settings, expected events.")
 def show(case: CaseArgument) -> None:
     """Show a case: its parameters, start, run settings and expected events.
 

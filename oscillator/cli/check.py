@@ -9,6 +9,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
+from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, check_engine
 from oscillator.cli.options import EngineOption
@@ -22,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["check"]
 
 
+@command(40, "Compare a case's switching times with the article's.")
 def check(
     case: Annotated[str, typer.Argument(metavar="CASE", help="A case with [[expected]] events.")],
     set_: Annotated[

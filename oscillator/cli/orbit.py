@@ -20,6 +20,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
+from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, overrides
 from oscillator.cli.options import CaseArgument, QuietOption, SetOption
@@ -68,6 +69,7 @@ def _code(error: OscillatorError) -> int:
     return 1 if isinstance(error, SimulationFailed) else 2
 
 
+@command(80, "Find a periodic orbit and its Floquet multipliers.")
 def orbit(
     case: CaseArgument,
     set_: SetOption = None,
@@ -153,6 +155,7 @@ def _continue_with_progress(
         return continue_orbit(case, **settings, progress=report)
 
 
+@command(90, "Continue a periodic orbit in a parameter; locate its bifurcations.", name="continue")
 def continue_(
     case: CaseArgument,
     param: Annotated[str, typer.Option("--param", metavar="NAME", help="The parameter to continue in.")],

@@ -12,6 +12,7 @@ from rich.text import Text
 
 from oscillator.analysis.execution import check_workers
 from oscillator.cli.attractors import axis_of
+from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from
 from oscillator.cli.options import (
@@ -50,6 +51,7 @@ __all__ = ["atlas", "curve"]
 RangeOption = tuple[str, float, float]
 
 
+@command(130, "The regime atlas over two parameters.")
 def atlas(
     case: CaseArgument,
     x: Annotated[AxisOption, typer.Option("--x", metavar="NAME LOW HIGH N", help="The first parameter's axis.")],
@@ -125,6 +127,7 @@ def _finish_atlas(found: Any, store: Any, no_plots: bool, quiet: bool) -> None:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 
 
+@command(140, "Trace a bifurcation curve in a plane of two parameters.")
 def curve(
     case: CaseArgument,
     kind: Annotated[

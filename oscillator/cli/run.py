@@ -17,6 +17,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from rich.table import Table
 from rich.text import Text
 
+from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
 from oscillator.cli.inputs import case_from, check_engine, sample_grid
 from oscillator.cli.options import CaseArgument, EngineOption, NoPlotsOption, QuietOption, SetOption
@@ -153,6 +154,7 @@ def _prepare_run(
     return resolved, grid, claim_output(out_dir, resolved.name)
 
 
+@command(30, "Run a case; write its tables, figures and report.")
 def run(
     case: CaseArgument,
     t_end: Annotated[
@@ -313,6 +315,7 @@ def _run_summary(case: Case, result: Result) -> list[Text | Table | str]:
 GLOBAL_MARKERS = ("curve.json", "basins.json", "atlas.json", "attractors.json", "lyapunov.json")
 
 
+@command(50, "Rebuild a run folder's report (and missing figures).")
 def report(
     folder: Annotated[
         Path,

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from, sweep_settings
 from oscillator.cli.options import (
@@ -44,6 +45,7 @@ BothWaysOption = Annotated[
 ]
 
 
+@command(60, "Sweep a parameter: Fig. 14-style switching and Poincaré points.")
 def sweep(
     case: Annotated[
         str, typer.Argument(metavar="CASE", help="A scene with a [sweep] table (bifurcation-omega, ...) or any case.")
@@ -246,6 +248,7 @@ def _fail_if_every_point_failed(summary: pd.DataFrame, folder: Path) -> None:
         )
 
 
+@command(70, "Find where a sweep's summary changes, to 1e-8.")
 def locate(
     case: Annotated[
         str, typer.Argument(metavar="CASE", help="A scene or case (its [sweep] table gives the defaults).")
