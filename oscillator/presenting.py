@@ -27,7 +27,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
 else:
     Protocol = object
 
-__all__ = ["Presenter", "presenter", "register"]
+__all__ = ["Presented", "Presenter", "presenter", "register"]
 
 
 class Presenter(Protocol):
@@ -72,3 +72,19 @@ def presenter() -> Presenter:
     if not _registered:  # only if oscillator/__init__.py was bypassed
         raise RuntimeError("no presenter is registered: import the oscillator package")
     return _registered[0]
+
+
+class Presented:
+    """What every global analysis's result does through the presenter: save itself as its command
+    writes its folder (:func:`oscillator.read_run` reads it back) and show itself in Jupyter."""
+
+    __slots__ = ()
+
+    def save(self, folder: str | Path) -> Path:
+        """Write this result into ``folder`` (new) as its command writes its folder: tables,
+        figures, report, and what makes the result again; :func:`oscillator.read_run` reads it
+        back."""
+        return presenter().save_global(self, folder)
+
+    def _repr_html_(self) -> str:
+        return presenter().global_html(self)

@@ -42,7 +42,7 @@ from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -125,7 +125,7 @@ def fresh_starts(case: Case, count: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class Atlas:
+class Atlas(Presented):
     """The atlas of a plane: ``table`` has one row per attractor of each point (``row``,
     ``column`` and the two parameters' values first)."""
 
@@ -138,14 +138,6 @@ class Atlas:
         """The plane coloured by ``by``: ``regime``, ``period``, ``coexisting``, ``lyapunov`` or
         ``impact_velocity`` (as ``oscillator atlas`` draws it)."""
         return presenter().plot_global(self, by=by)
-
-    def save(self, folder: str | Path) -> Path:
-        """Write it into ``folder`` (new) as ``oscillator atlas`` writes its folder: tables, figures,
-        report; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_global(self, folder)
-
-    def _repr_html_(self) -> str:
-        return presenter().global_html(self)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(codes, coexisting, regimes)``: at each point the code of its regime (the regime of

@@ -27,7 +27,7 @@ from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -55,7 +55,7 @@ def grid_starts(case: Case, x: Axis, y: Axis) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class Basins:
+class Basins(Presented):
     """The basins of a slice: the attractors, and each cell's attractor.
 
     Attributes
@@ -88,14 +88,6 @@ class Basins:
         """The slice coloured by attractor, each attractor's section points on top (as ``oscillator
         basins`` draws it)."""
         return presenter().plot_global(self)
-
-    def save(self, folder: str | Path) -> Path:
-        """Write it into ``folder`` (new) as ``oscillator basins`` writes its folder: tables, figures,
-        report; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_global(self, folder)
-
-    def _repr_html_(self) -> str:
-        return presenter().global_html(self)
 
 
 def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:

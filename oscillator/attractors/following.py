@@ -42,7 +42,7 @@ from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -81,7 +81,7 @@ class End:
 
 
 @dataclass(frozen=True)
-class AttractorsOver:
+class AttractorsOver(Presented):
     """The attractors over a parameter (:func:`follow_attractors`).
 
     Attributes
@@ -123,14 +123,6 @@ class AttractorsOver:
         each appears or ends, and with ``branches`` the periodic orbits' branches (continued here:
         :func:`local_branches`), as ``oscillator attractors`` draws it."""
         return presenter().plot_global(self, coordinate=coordinate, branches=local_branches(self) if branches else [])
-
-    def save(self, folder: str | Path) -> Path:
-        """Write it into ``folder`` (new) as ``oscillator attractors`` writes its folder: tables, figures,
-        report; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_global(self, folder)
-
-    def _repr_html_(self) -> str:
-        return presenter().global_html(self)
 
     def ends_table(self) -> pd.DataFrame:
         """One row per end: ``id, name, change`` (``appears`` or ``ends`` along the values, from the

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,7 +30,7 @@ from oscillator.analysis.execution import check_progress
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.parameters import check_count
 from oscillator.orbits.shooting import check_guess, period_map, settled
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -47,7 +46,7 @@ TINY = 1e-80
 
 
 @dataclass(frozen=True)
-class LyapunovSpectrum:
+class LyapunovSpectrum(Presented):
     """The Lyapunov exponents of a motion.
 
     Attributes
@@ -94,14 +93,6 @@ class LyapunovSpectrum:
         """The running averages of the exponents against the averaging time (as ``oscillator
         lyapunov`` draws them)."""
         return presenter().plot_global(self)
-
-    def save(self, folder: str | Path) -> Path:
-        """Write it into ``folder`` (new) as ``oscillator lyapunov`` writes its folder: tables, figures,
-        report; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_global(self, folder)
-
-    def _repr_html_(self) -> str:
-        return presenter().global_html(self)
 
 
 def _start(case: Case, guess: Sequence[float] | np.ndarray | None, transient: int) -> tuple[float, np.ndarray]:

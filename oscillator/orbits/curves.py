@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -40,7 +39,7 @@ from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch
 from oscillator.orbits.continuation import continue_orbit
 from oscillator.orbits.shooting import tightened
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -62,7 +61,7 @@ class _Kind:
 
 
 @dataclass(frozen=True)
-class Curve:
+class Curve(Presented):
     """A bifurcation curve in the plane of ``x`` and ``y``.
 
     Attributes
@@ -96,14 +95,6 @@ class Curve:
         """The curve in its plane, over ``atlas``'s regimes (an :class:`~oscillator.attractors.atlas.Atlas`)
         if given (as ``oscillator curve`` draws it)."""
         return presenter().plot_global(self, atlas=atlas)
-
-    def save(self, folder: str | Path) -> Path:
-        """Write it into ``folder`` (new) as ``oscillator curve`` writes its folder: tables, figures,
-        report; :func:`oscillator.read_run` reads it back."""
-        return presenter().save_global(self, folder)
-
-    def _repr_html_(self) -> str:
-        return presenter().global_html(self)
 
 
 class _Tracer:
