@@ -1,6 +1,7 @@
 """Small outputs of every global analysis, saved into a folder, and two such folders compared.
 
     python scripts/reference_outputs.py save FOLDER       # compute and save
+    python scripts/reference_outputs.py save FOLDER full  # every transient run whole (issue 37)
     python scripts/reference_outputs.py compare A B       # equal by value (1e-12)?
 
 Used to show that a refactoring leaves results unchanged: save at the commit before, save at the
@@ -43,7 +44,7 @@ def _api() -> dict:
     }
 
 
-def save(folder: Path) -> None:
+def save(folder: Path, full: bool = False) -> None:
     from oscillator import AttractorSettings, SweepSettings, follow_attractors, resolve_case
     from oscillator.analysis.sweeps import read_sweep, run_sweep
     from oscillator.orbits.curves import trace_curve
@@ -51,16 +52,23 @@ def save(folder: Path) -> None:
     api = _api()
     folder.mkdir(parents=True, exist_ok=False)
     case = resolve_case(CASE)
-    quick = AttractorSettings(**QUICK)
+    whole = {"settle": False} if full else {}
+    quick = AttractorSettings(**QUICK, **whole)
     x, y = api["AtlasAxis"]("Omega", 1.55, 1.65, 4), api["AtlasAxis"]("Q2", 70.9, 71.2, 3)
-    settings = api["AtlasSettings"](fresh_transient=20, seed_transient=8, record=8, lyapunov_periods=30, starts=3)
+    settings = api["AtlasSettings"](
+        fresh_transient=20, seed_transient=8, record=8, lyapunov_periods=30, starts=3, **whole
+    )
     atlas = api["run_atlas"](case, x, y, settings=settings, workers=2)
     atlas.table.to_parquet(folder / "atlas.parquet")
     x, y = api["AtlasAxis"]("Omega", 1.599, 1.601, 3), api["AtlasAxis"]("Q2", 71.155, 71.175, 3)
-    settings = api["AtlasSettings"](fresh_transient=60, seed_transient=16, record=16, lyapunov_periods=30, starts=4)
+    settings = api["AtlasSettings"](
+        fresh_transient=60, seed_transient=16, record=16, lyapunov_periods=30, starts=4, **whole
+    )
     api["run_atlas"](case, x, y, settings=settings, workers=2).table.to_parquet(folder / "atlas-window.parquet")
     x, y = api["AtlasAxis"]("Omega", 1.45, 1.52, 3), api["AtlasAxis"]("d", 1.5, 1.7, 2)
-    settings = api["AtlasSettings"](fresh_transient=40, seed_transient=16, record=10, lyapunov_periods=30, starts=2)
+    settings = api["AtlasSettings"](
+        fresh_transient=40, seed_transient=16, record=10, lyapunov_periods=30, starts=2, **whole
+    )
     api["run_atlas"](case, x, y, settings=settings, workers=2).table.to_parquet(folder / "atlas-contact.parquet")
     bx, by = api["Axis"]("x2", 2.0, 6.0, 5), api["Axis"]("v2", -3.0, 3.0, 4)
     with tempfile.TemporaryDirectory() as scratch:
@@ -105,6 +113,6 @@ def compare(a: Path, b: Path) -> int:
 
 if __name__ == "__main__":
     if sys.argv[1] == "save":
-        save(Path(sys.argv[2]))
+        save(Path(sys.argv[2]), full=sys.argv[3:] == ["full"])
     else:
         sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])))

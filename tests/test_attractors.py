@@ -1119,3 +1119,37 @@ def test_the_atlas_keeps_each_attractors_identity_across_the_plane():
     assert free.Omega_high == pytest.approx(1.6) and rest.Omega_low == pytest.approx(1.6)
     both = atlas.table[atlas.table.coexisting == 2]
     assert len(both) == 2 and set(both.attractor_id) == set(ids.index)
+
+
+def test_section_points_are_settled_only_when_close_to_where_they_converge():
+    from oscillator.attractors.mapping import settled
+
+    cycle = np.array([[1.0, 2.0, 3.0, 4.0], [1.5, 2.0, 3.0, 4.0]])
+    assert settled(np.tile(cycle, (3, 1)), 1e-6, 16)  # a period-2 cycle, repeated exactly
+    assert not settled(np.tile(cycle, (3, 1)), 1e-6, 1)  # ... not of period 1
+    fast = np.array([[1.0 + 0.3**k, 2.0, 3.0, 4.0] for k in range(20, 26)])  # steps 1e-11, rho 0.3
+    assert settled(fast, 1e-6, 16)
+    slow = np.array([[1.0 + 1e-3 * 0.999**k, 2.0, 3.0, 4.0] for k in range(6)])  # steps 1e-6 (1+|P|) apart,
+    assert not settled(slow, 1e-6, 16)  # but 1e-3 from where they converge
+    assert not settled(np.random.default_rng(1).normal(size=(40, 4)), 1e-6, 16)  # no repeat at all
+
+
+def test_a_transient_that_ends_where_the_motion_settled_labels_every_start_alike():
+    """The starts of a slice at Q2 = 71.165 reach the same attractors, with the same shares, with
+    the transient ended where each settled as with the whole transient; each stops well before
+    it.  Ueda's chaotic motion never settles: it runs the whole transient."""
+    case = resolve_case("instance-1", Q2=71.165)
+    starts = grid_starts(case, Axis("x2", 3.0, 6.0, 4), Axis("v2", -4.0, 4.0, 3))
+    settings = AttractorSettings(transient=100, record=16, lyapunov_periods=0)
+    quick = find_attractors(case, states=starts, settings=settings)
+    whole = find_attractors(case, states=starts, settings=dataclasses.replace(settings, settle=False))
+    assert quick.labels.attractor.tolist() == whole.labels.attractor.tolist()
+    assert [a.signature for a in quick.attractors] == [a.signature for a in whole.attractors]
+    for a, b in zip(quick.attractors, whole.attractors, strict=True):
+        assert np.allclose(a.points, b.points, atol=1e-6)
+    from oscillator.attractors.mapping import land
+
+    ran = [land(case, settings, k, start).transient for k, start in enumerate(starts[:4])]
+    assert all(16 <= n <= 40 for n in ran), ran
+    chaos = resolve_case("instance-1", **UEDA)
+    assert land(chaos, AttractorSettings(transient=40, record=8), 0, chaos.initial.y).transient == 40

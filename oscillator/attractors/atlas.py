@@ -91,6 +91,8 @@ class AtlasSettings:
         Fresh starts at every point (1 to 1000): the case's start, and ``starts - 1`` more
         (:func:`fresh_starts`), so that coexisting attractors are found at a point without a
         seed that reaches them.
+    settle : bool
+        End each transient once the motion has settled (:class:`~oscillator.attractors.mapping.AttractorSettings`).
     """
 
     fresh_transient: int = 40
@@ -98,15 +100,22 @@ class AtlasSettings:
     record: int = 10
     lyapunov_periods: int = 100
     starts: int = 1
+    settle: bool = True
 
     def __post_init__(self) -> None:
         for name, least in (("fresh_transient", 1), ("seed_transient", 1), ("record", 2), ("lyapunov_periods", 1)):
             check_count(getattr(self, name), name, least, 1_000_000)
         check_count(self.starts, "starts", 1, 1000)
+        if not isinstance(self.settle, bool):
+            raise InputError(f"settle must be True or False, got {shown(self.settle)}", field="settle")
 
     def landing(self, transient: int) -> AttractorSettings:
         return AttractorSettings(
-            transient=transient, record=self.record, max_period=self.record - 1, lyapunov_periods=0
+            transient=transient,
+            record=self.record,
+            max_period=self.record - 1,
+            lyapunov_periods=0,
+            settle=self.settle,
         )
 
 

@@ -165,7 +165,9 @@ def find_attractors(
     """
     settings = check_settings(settings)
     executor = Executor(workers, client, progress)
-    chosen = {name: value for name, value in (("transient", transient), ("record", record)) if value is not None}
+    chosen: dict[str, Any] = {
+        name: value for name, value in (("transient", transient), ("record", record)) if value is not None
+    }
     settings = dataclasses.replace(settings, **chosen) if chosen else settings
     case = resolve_case(case, **overrides)
     starts = check_states(case.initial.y if states is None else states)

@@ -31,8 +31,9 @@ __all__ = ["LandingStore"]
 _MAX_JSON = 1_000_000
 #: The layout and meaning of the parts; a folder of another format is refused (format 2: a contact
 #: between the masses is counted once, not once per mass; the rest time of each mass is kept;
-#: format 3: an atlas keeps landings, not tables, and the parts of a continuation are batches).
-FORMAT = 3
+#: format 3: an atlas keeps landings, not tables, and the parts of a continuation are batches;
+#: format 4: a landing keeps the periods its transient ran, ended where the motion settled).
+FORMAT = 4
 
 
 def landing_row(landing: Landing) -> dict[str, Any]:
@@ -51,6 +52,7 @@ def landing_row(landing: Landing) -> dict[str, Any]:
         "wall_time": landing.wall_time,
         "rest_time1": landing.rest_time[0],
         "rest_time2": landing.rest_time[1],
+        "transient": landing.transient,
         "points": landing.points.ravel().tolist(),
     }
 
@@ -70,6 +72,7 @@ def landing_of(row: Any) -> Landing:
         float(row.contacts),
         float(row.wall_time),
         (float(row.rest_time1), float(row.rest_time2)),
+        int(row.transient),
     )
 
 

@@ -20,6 +20,7 @@ from oscillator.cli.inputs import case_from
 from oscillator.cli.options import (
     AxisOption,
     CaseArgument,
+    FullTransientOption,
     NoPlotsOption,
     QuietOption,
     RecordOption,
@@ -62,12 +63,13 @@ def axis_of(values: AxisOption, flag: str) -> Axis:
         raise InputError(f"{flag}: {error}", field=flag) from None
 
 
-def _settings(**given: int | None) -> AttractorSettings:
+def _settings(**given: int | bool | None) -> AttractorSettings:
     """The settings the options give, the others :class:`AttractorSettings`' defaults."""
     from oscillator.attractors.mapping import AttractorSettings
 
     try:
-        return AttractorSettings(**{name: value for name, value in given.items() if value is not None})
+        chosen: dict[str, Any] = {name: value for name, value in given.items() if value is not None}
+        return AttractorSettings(**chosen)
     except InputError as error:
         flag = f"--{(error.field or '').replace('_', '-')}"
         raise InputError(f"{flag}: {error}", field=flag) from None
@@ -82,6 +84,7 @@ def basins(
     y: Annotated[AxisOption, typer.Option("--y", metavar="NAME LOW HIGH N", help="The slice's second axis.")],
     transient: TransientOption = None,
     record: RecordOption = None,
+    full_transient: FullTransientOption = False,
     max_period: Annotated[
         int | None, typer.Option("--max-period", metavar="N", help="The longest period looked for (default 16).")
     ] = None,
@@ -109,7 +112,7 @@ def basins(
     with refusing():
         resolved = case_from(case, None, set_)
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
-        settings = _settings(transient=transient, record=record, max_period=max_period)
+        settings = _settings(transient=transient, record=record, max_period=max_period, settle=not full_transient)
         store, lock, client, count = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
     with computing(store, "starts", lock, client):
         from oscillator.attractors.basins import find_basins
@@ -252,6 +255,7 @@ def attractors(
     tol: Annotated[float, typer.Option("--tol", metavar="TOL", help="Where each attractor ends, to this.")] = 1e-5,
     transient: TransientOption = None,
     record: RecordOption = None,
+    full_transient: FullTransientOption = False,
     coordinate: Annotated[
         str, typer.Option("--coordinate", metavar="NAME", help="The section coordinate drawn: x1, v1, x2 or v2.")
     ] = "x2",
@@ -280,7 +284,8 @@ def attractors(
     """
     with refusing():
         resolved = case_from(case, None, set_)
-        plan = _open_following(resolved, param, start, stop, steps, x, y, tol, transient, record, coordinate, out_dir)
+        given = {"transient": transient, "record": record, "settle": not full_transient}
+        plan = _open_following(resolved, param, start, stop, steps, x, y, tol, given, coordinate, out_dir)
         values, states, settings, store = plan
         count = check_workers(workers)
         lock, client = locked(store.folder, scheduler)
@@ -305,8 +310,7 @@ def _open_following(
     x: AxisOption | None,
     y: AxisOption | None,
     tol: float,
-    transient: int | None,
-    record: int | None,
+    given: dict[str, Any],
     coordinate: str,
     out_dir: Path | None,
 ) -> tuple[Any, Any, AttractorSettings, Any]:
@@ -322,7 +326,7 @@ def _open_following(
         raise InputError(f"--steps must be a whole number from 2 to 10000, got {steps!r}", field="--steps")
     if (x is None) != (y is None):
         raise InputError("give both --x and --y for a slice of fresh starts, or neither", field="--x")
-    settings = _settings(transient=transient, record=record)
+    settings = _settings(**given)
     load("oscillator.attractors.following", notice=True)
     from oscillator.attractors.basins import grid_starts
     from oscillator.attractors.following import check_values, following_store

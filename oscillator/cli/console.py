@@ -50,6 +50,7 @@ FLAGS = {
     "kind": "--kind",
     "starts": "--starts",
     "record": "--record",
+    "settle": "--full-transient",
     "fresh_transient": "--transient",
     "at": "--at",
     "x": "--x",

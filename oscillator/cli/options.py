@@ -12,6 +12,7 @@ __all__ = [
     "AxisOption",
     "CaseArgument",
     "EngineOption",
+    "FullTransientOption",
     "NoPlotsOption",
     "QuietOption",
     "RecordOption",
@@ -42,6 +43,14 @@ TransientOption = Annotated[
     int | None, typer.Option("--transient", metavar="N", help="Forcing periods run before recording.")
 ]
 RecordOption = Annotated[int | None, typer.Option("--record", metavar="N", help="Forcing periods recorded after it.")]
+#: ``--full-transient``: every start runs the whole transient, settled or not.
+FullTransientOption = Annotated[
+    bool,
+    typer.Option(
+        "--full-transient",
+        help="Run the whole --transient before recording, even where the motion has settled sooner.",
+    ),
+]
 #: ``--workers`` and ``--scheduler``: where the many runs run.
 WorkersOption = Annotated[
     int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")

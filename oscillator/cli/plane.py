@@ -18,6 +18,7 @@ from oscillator.cli.inputs import case_from
 from oscillator.cli.options import (
     AxisOption,
     CaseArgument,
+    FullTransientOption,
     NoPlotsOption,
     QuietOption,
     RecordOption,
@@ -62,6 +63,7 @@ def atlas(
     ] = None,
     transient: TransientOption = None,
     record: RecordOption = None,
+    full_transient: FullTransientOption = False,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
@@ -90,8 +92,9 @@ def atlas(
         from oscillator.attractors.atlas import AtlasSettings, atlas_store
 
         count = check_workers(workers)
-        given = {"fresh_transient": transient, "record": record, "starts": starts}
-        settings = AtlasSettings(**{name: value for name, value in given.items() if value is not None})
+        given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
+        chosen = {name: value for name, value in given.items() if value is not None}
+        settings = AtlasSettings(**chosen, settle=not full_transient)
         folder = out_dir if out_dir is not None else new_folder(resolved, "atlas")
         store = atlas_store(folder, resolved, x_axis, y_axis, settings)
         store.check()
