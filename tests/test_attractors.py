@@ -1153,3 +1153,27 @@ def test_a_transient_that_ends_where_the_motion_settled_labels_every_start_alike
     assert all(16 <= n <= 40 for n in ran), ran
     chaos = resolve_case("instance-1", **UEDA)
     assert land(chaos, AttractorSettings(transient=40, record=8), 0, chaos.initial.y).transient == 40
+
+
+def test_full_transient_runs_every_start_the_whole_transient(tmp_path, monkeypatch):
+    """``--full-transient``: the folder's settings say so and every landing ran all 30 periods;
+    without it the same starts stop where they settled, reaching the same attractors."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    base = ["basins", "instance-1", "--set", "Omega=1.85", "--x", "x1", "2", "5", "2", "--y", "v1", "-3", "3", "2"]
+    base += ["--transient", "30", "--record", "6", "--workers", "1", "--no-plots", "-q"]
+    for out, flag in (("whole", ["--full-transient"]), ("settled", [])):
+        done = CliRunner().invoke(app, [*base, *flag, "--out", out])
+        assert done.exit_code == 0, done.stderr
+    parts = {
+        out: pd.concat(pd.read_parquet(p) for p in (tmp_path / out / "parts").glob("*.parquet"))
+        for out in ("whole", "settled")
+    }
+    assert (parts["whole"].transient == 30).all() and (parts["settled"].transient < 30).all()
+    assert '"settle": false' in (tmp_path / "whole" / "basins.json").read_text()
+    tables = [pd.read_parquet(tmp_path / out / "basins.parquet") for out in ("whole", "settled")]
+    assert tables[0].attractor.tolist() == tables[1].attractor.tolist()
