@@ -1044,6 +1044,7 @@ def test_every_global_result_saves_and_reads_back_as_it_was(tmp_path):
 
     write_basins(basins, tmp_path / "b", plots=False)  # as the command finishes its folder
     assert osc.read_run(tmp_path / "b").table().equals(basins.table())
+    assert back.found.case.name == osc.read_run(tmp_path / "b").found.case.name == "instance-1"  # not case.toml's stem
     over = follow_attractors(case, "Q2", [71.10, 71.165], states=[NO_REST_START, REST_START], settings=quick, tol=0.01)
     again = osc.read_run(over.save(tmp_path / "over"))
     assert again.ids == over.ids and again.ends == over.ends
@@ -1053,6 +1054,7 @@ def test_every_global_result_saves_and_reads_back_as_it_was(tmp_path):
     spectrum = lyapunov(dataclasses.replace(case, name="<b>x</b>"), periods=10, transient=2)
     read = osc.read_run(spectrum.save(tmp_path / "lyapunov"))
     assert np.array_equal(read.exponents, spectrum.exponents) and read.convergence.equals(spectrum.convergence)
+    assert read.case.name == "<b>x</b>" and again.case.name == "instance-1"
     shown = dataclasses.replace(
         basins, found=dataclasses.replace(basins.found, case=dataclasses.replace(case, name="<script>"))
     )

@@ -54,8 +54,10 @@ class ResumableFolder:
     #: The layout and meaning of the parts, kept in the marker; a folder of another is refused.
     FORMAT: ClassVar[int | None] = None
 
-    def __init__(self, folder: Path, marker: str, identity: dict[str, Any]) -> None:
+    def __init__(self, folder: Path, marker: str, identity: dict[str, Any], *, name: str = "") -> None:
         self.folder = Path(folder)
+        #: The case's name, kept in the marker beside the identity (a case file holds no name).
+        self.name = name
         self.parts = self.folder / "parts"
         self.marker = marker
         self.what = marker.removesuffix(".json")
@@ -129,7 +131,9 @@ class ResumableFolder:
         return {}
 
     def _status(self, status: str, **extra: Any) -> str:
-        kept = {"format": self.FORMAT} if self.FORMAT is not None else {}
+        kept: dict[str, Any] = {"format": self.FORMAT} if self.FORMAT is not None else {}
+        if self.name:
+            kept["case_name"] = self.name
         marker = {"identity": self.identity, **kept, "status": status, **self.described(), **extra}
         return json.dumps(marker, indent=2, default=str)
 

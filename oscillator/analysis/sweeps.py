@@ -48,7 +48,7 @@ class _Store(ResumableFolder):
     """A sweep folder: its identity, the finished points, and the consolidated tables."""
 
     def __init__(self, folder: Path, case: Case, settings: SweepSettings) -> None:
-        super().__init__(folder, "sweep.json", identity(case, settings=settings))
+        super().__init__(folder, "sweep.json", identity(case, settings=settings), name=case.name)
         self.settings = settings
 
     def check_parts(self) -> None:

@@ -178,7 +178,7 @@ class Atlas(Presented):
 
 def atlas_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AtlasSettings) -> LandingStore:
     """The resumable folder of this atlas (:class:`~oscillator.attractors.store.LandingStore`)."""
-    return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings))
+    return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings), name=case.name)
 
 
 def regime_atlas(

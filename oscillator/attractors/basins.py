@@ -92,7 +92,7 @@ class Basins(Presented):
 
 def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:
     """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`)."""
-    return LandingStore(folder, "basins.json", identity(case, x=x, y=y, settings=settings))
+    return LandingStore(folder, "basins.json", identity(case, x=x, y=y, settings=settings), name=case.name)
 
 
 def find_basins(

@@ -186,9 +186,8 @@ def following_store(
     """The resumable folder of the attractors over ``values`` of ``param``, from the case's start
     or a slice's starts (its axes, not its starts, in the identity)."""
     states = None if slice_ is None else list(slice_)
-    return LandingStore(
-        folder, "attractors.json", identity(case, param=param, values=values, states=states, settings=settings)
-    )
+    known = identity(case, param=param, values=values, states=states, settings=settings)
+    return LandingStore(folder, "attractors.json", known, name=case.name)
 
 
 def follow_attractors(

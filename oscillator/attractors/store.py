@@ -107,8 +107,8 @@ class LandingStore(ResumableFolder):
 
     FORMAT = FORMAT
 
-    def __init__(self, folder: Path, marker: str, identity: dict[str, Any]) -> None:
-        super().__init__(folder, marker, identity)
+    def __init__(self, folder: Path, marker: str, identity: dict[str, Any], *, name: str = "") -> None:
+        super().__init__(folder, marker, identity, name=name)
         #: What was read back from earlier runs: landings, and the batches of points they came in.
         self.reused = {"landings": 0, "batches": 0}
 

@@ -24,12 +24,13 @@ from oscillator.attractors.following import AttractorsOver, End
 from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.attractors.store import FORMAT
 from oscillator.errors import InputError, OscillatorError
-from oscillator.io.cases import Case, load_case, resolve_case
+from oscillator.io.cases import resolve_case
 from oscillator.io.files import atomic_path, claim_folder, read_untrusted
 from oscillator.model.parameters import Parameters
 from oscillator.orbits.curves import Curve
 from oscillator.report.attractors import write_basins, write_following, write_lyapunov
 from oscillator.report.global_folders import read_found
+from oscillator.report.outputs import folder_case
 from oscillator.report.plane import read_atlas, read_curve, write_atlas, write_curve
 from oscillator.text import printable
 
@@ -62,13 +63,6 @@ def marker_identity(marker: Path) -> dict[str, Any]:
     return identity
 
 
-def _case(folder: Path) -> Case:
-    try:
-        return load_case(folder / "case.toml")
-    except OscillatorError as error:
-        raise InputError(f"{printable(str(folder))}: its case.toml cannot be read ({error})", field="folder") from None
-
-
 def read_global(folder: Path) -> Global:
     """The result a global analysis's folder holds (its command's, or its ``save``'s)."""
     kind = global_kind(folder)
@@ -88,7 +82,7 @@ def read_global(folder: Path) -> Global:
 def read_basins(folder: Path) -> Basins:
     """The basins a folder holds (``basins.json``'s axes, ``found.json``'s attractors)."""
     known = marker_identity(folder / "basins.json")
-    case = _case(folder)
+    case = folder_case(folder, "basins.json")
     try:
         x, y = (Axis(**known[name]) for name in ("x", "y"))
     except (KeyError, TypeError, InputError) as error:
@@ -103,7 +97,7 @@ def read_following(folder: Path) -> AttractorsOver:
     """The attractors over a parameter a folder holds (``attractors.json``'s values,
     ``found.json``'s attractors and kept ids, ``ends.parquet``'s ends)."""
     known = marker_identity(folder / "attractors.json")
-    case = _case(folder)
+    case = folder_case(folder, "attractors.json")
     try:
         param = Parameters.check_name(known["param"], "folder")
         values = np.array(known["values"], dtype=float)
@@ -145,13 +139,13 @@ def read_lyapunov(folder: Path) -> LyapunovSpectrum:
         ) from None
     if exponents.shape != (4,) or start.shape != (4,) or np.isnan(exponents).any() or not np.isfinite(start).all():
         raise InputError(f"{printable(str(where))} is damaged: its exponents or start", field="folder")
-    return LyapunovSpectrum(_case(folder), exponents, periods, start, convergence)
+    return LyapunovSpectrum(folder_case(folder, "lyapunov.json", key="case"), exponents, periods, start, convergence)
 
 
-def _marker(folder: Path, name: str, known: dict[str, Any]) -> None:
+def _marker(folder: Path, marker_name: str, known: dict[str, Any], name: str) -> None:
     """The marker file (the identity, status ``saved``) and ``case.toml``."""
-    marker = json.dumps({"identity": known, "format": FORMAT, "status": "saved"}, indent=2)
-    for file, text in ((name, marker), ("case.toml", str(known["case"]))):
+    marker = json.dumps({"identity": known, "format": FORMAT, "case_name": name, "status": "saved"}, indent=2)
+    for file, text in ((marker_name, marker), ("case.toml", str(known["case"]))):
         with atomic_path(folder / file) as temporary:
             temporary.write_text(text, encoding="utf-8")
 
@@ -159,16 +153,17 @@ def _marker(folder: Path, name: str, known: dict[str, Any]) -> None:
 def _write(found: Global, folder: Path) -> list[str]:
     """The result's folder written into ``folder`` (empty): its marker, case and outputs."""
     if isinstance(found, Basins):
-        _marker(folder, "basins.json", identity(found.found.case, x=found.x, y=found.y, settings=found.found.settings))
+        known = identity(found.found.case, x=found.x, y=found.y, settings=found.found.settings)
+        _marker(folder, "basins.json", known, found.found.case.name)
         return write_basins(found, folder)
     if isinstance(found, AttractorsOver):
         fresh = found.found[0].labels[list(STATE)].to_numpy()[: found.fresh]
         settings = found.found[0].settings
         known = identity(found.case, param=found.param, values=found.values, states=fresh, settings=settings)
-        _marker(folder, "attractors.json", known)
+        _marker(folder, "attractors.json", known, found.case.name)
         return write_following(found, folder, coordinate="x2", branches=[])
     if isinstance(found, Atlas):
-        _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y))
+        _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y), found.case.name)
         return write_atlas(found, folder)
     if isinstance(found, Curve):
         return write_curve(found, folder)

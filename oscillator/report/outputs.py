@@ -11,18 +11,23 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import atomic_path
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title, save_figure
+from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
+
+    from oscillator.io.cases import Case
 
 __all__ = [
     "COLORS",
     "FAILED",
     "MARKERS",
     "color_of",
+    "folder_case",
     "save_into",
     "state_label",
     "unit_of",
@@ -97,3 +102,24 @@ def write_folder(
         with atomic_path(folder / name) as temporary:
             temporary.write_text(text, encoding="utf-8")
     return problems
+
+
+def folder_case(folder: Path, marker: str, *, key: str = "case_name") -> Case:
+    """The case a global analysis's folder keeps (``case.toml``), under the name its marker keeps
+    at ``key`` (a case file holds no name); refused naming the folder where it cannot be read."""
+    import dataclasses
+    import json
+
+    from oscillator.io.cases import load_case
+    from oscillator.io.files import read_untrusted
+
+    try:
+        case = load_case(folder / "case.toml")
+    except OscillatorError as error:
+        raise InputError(f"{printable(str(folder))}: its case.toml cannot be read ({error})", field="folder") from None
+    try:
+        info = json.loads(read_untrusted(folder / marker, what="marker file", field="folder", limit=1 << 20))
+    except (OscillatorError, ValueError, RecursionError):
+        return case
+    name = info.get(key) if isinstance(info, dict) else None
+    return dataclasses.replace(case, name=name) if isinstance(name, str) and name else case

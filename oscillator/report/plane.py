@@ -22,7 +22,7 @@ from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
 from oscillator.report.orbits import modified_blocks
-from oscillator.report.outputs import COLORS, FAILED, write_folder
+from oscillator.report.outputs import COLORS, FAILED, folder_case, write_folder
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -256,7 +256,6 @@ def read_atlas(folder: Path, case: Case | None = None) -> Atlas:
     atlas.parquet; the folder's case.toml unless ``case`` is given), every file checked: a folder
     that holds none, or a damaged one, is refused naming it."""
     from oscillator.analysis.axes import Axis
-    from oscillator.io.cases import load_case
     from oscillator.io.files import read_untrusted
 
     shown_folder = printable(str(folder))
@@ -265,7 +264,7 @@ def read_atlas(folder: Path, case: Case | None = None) -> Atlas:
         identity = info["identity"]
         x, y = (Axis(**identity[name]) for name in ("x", "y"))
         table = pd.read_parquet(folder / "atlas.parquet")
-        case = case if case is not None else load_case(folder / "case.toml")
+        case = case if case is not None else folder_case(folder, "atlas.json")
     except (OSError, ValueError, KeyError, TypeError, OscillatorError) as error:
         raise InputError(f"{shown_folder} holds no finished atlas ({error})", field="folder") from None
     found = Atlas(case, x, y, table)

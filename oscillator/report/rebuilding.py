@@ -12,6 +12,7 @@ import pandas as pd
 from oscillator.errors import InputError
 from oscillator.report.attractors import write_basins
 from oscillator.report.global_results import marker_identity
+from oscillator.report.outputs import folder_case
 from oscillator.report.plane import read_curve, write_atlas, write_curve
 from oscillator.text import printable
 
@@ -23,8 +24,6 @@ def rebuild(folder: Path) -> str | None:
     what it keeps (for ``oscillator report``); what was rebuilt, or None for a folder of another
     kind.  The landings and rows are read back, never computed: an unfinished folder is refused
     (the command that made it resumes it)."""
-    from oscillator.io.cases import load_case
-
     if (folder / "curve.json").exists():
         write_curve(read_curve(folder), folder)
         return "the curve (drawn without an atlas)"
@@ -41,10 +40,10 @@ def rebuild(folder: Path) -> str | None:
             field="folder",
         )
     if (folder / "basins.json").exists():
-        _rebuild_basins(folder, marker_identity(folder / "basins.json"), load_case(folder / "case.toml"))
+        _rebuild_basins(folder, marker_identity(folder / "basins.json"), folder_case(folder, "basins.json"))
         return "the basins"
     if (folder / "atlas.json").exists():
-        _rebuild_atlas(folder, marker_identity(folder / "atlas.json"), load_case(folder / "case.toml"))
+        _rebuild_atlas(folder, marker_identity(folder / "atlas.json"), folder_case(folder, "atlas.json"))
         return "the atlas"
     return None
 
