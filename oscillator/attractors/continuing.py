@@ -154,7 +154,7 @@ class _Loop:
 
     def batch(self, batch: list[int], executor: Executor, store: LandingStore | None) -> list[int]:
         """Run one batch: its landings (read back from ``store`` when there), grouped, described
-        and matched.  Returns each point as it is finished, for progress."""
+        and matched.  Returns the batch's points, for progress."""
         cases = {k: resolve_case(self.case, **dict(self.points[k].values)) for k in batch}
         starts = {k: self.starts(k) for k in batch}
         name = f"batch-{self.points[batch[0]].batch:05d}"
@@ -171,9 +171,9 @@ class _Loop:
             if store is not None:
                 store.write_batch(landings, name)
         grouped = {k: group(landings[k], self.mapper.seed_settings) for k in batch}
-        tasks2 = [(self.describe, cases[k], k, a) for k in batch for a in grouped[k][0]]
+        describing = [(self.describe, cases[k], k, a) for k in batch for a in grouped[k][0]]
         described: dict[int, list[Attractor]] = {k: [] for k in batch}
-        for k, attractor in executor.map(_describe, tasks2):
+        for k, attractor in executor.map(_describe, describing):
             described[k].append(attractor)
         for k in batch:
             found, labels = grouped[k]

@@ -48,16 +48,22 @@ def rebuild(folder: Path) -> str | None:
     return None
 
 
-def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
+def _plane(folder: Path, identity: dict[str, Any], settings_type: Any, marker: str) -> tuple[Any, Any, Any]:
+    """The two axes and the settings a folder's identity holds (``marker`` names it if damaged)."""
     from oscillator.analysis.axes import Axis
-    from oscillator.attractors.basins import basin_store, find_basins, grid_starts
-    from oscillator.attractors.mapping import AttractorSettings
 
     try:
         x, y = (Axis(**identity[name]) for name in ("x", "y"))
-        settings = AttractorSettings(**identity["settings"])
+        return x, y, settings_type(**identity["settings"])
     except (KeyError, TypeError) as error:
-        raise InputError(f"{printable(str(folder))}/basins.json is damaged ({error})", field="folder") from None
+        raise InputError(f"{printable(str(folder))}/{marker} is damaged ({error})", field="folder") from None
+
+
+def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
+    from oscillator.attractors.basins import basin_store, find_basins, grid_starts
+    from oscillator.attractors.mapping import AttractorSettings
+
+    x, y, settings = _plane(folder, identity, AttractorSettings, "basins.json")
     store = basin_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, len(grid_starts(case, x, y)), "starts")
@@ -77,14 +83,9 @@ def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> No
 
 
 def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> None:
-    from oscillator.analysis.axes import Axis
     from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
 
-    try:
-        x, y = (Axis(**identity[name]) for name in ("x", "y"))
-        settings = AtlasSettings(**identity["settings"])
-    except (KeyError, TypeError) as error:
-        raise InputError(f"{printable(str(folder))}/atlas.json is damaged ({error})", field="folder") from None
+    x, y, settings = _plane(folder, identity, AtlasSettings, "atlas.json")
     store = atlas_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, y.count, "rows", batches=True)
