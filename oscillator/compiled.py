@@ -20,14 +20,14 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar, overload
 
 import numba
 from numba.core import caching
 
 from oscillator.folders import private_scratch, writable
 
-__all__ = ["CACHE", "cfunc", "kernels_cached", "njit"]
+__all__ = ["CACHE", "cfunc", "hot", "kernels_cached", "njit"]
 
 
 def _cache_location() -> str | None:
@@ -124,3 +124,29 @@ else:
     #: ``numba.njit`` and ``numba.cfunc``, with ``cache=True`` dropped when no cache can be written.
     njit = _cached(numba.njit)
     cfunc = _cached(numba.cfunc)
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+@overload
+def hot(function: _F) -> _F: ...
+
+
+@overload
+def hot(*, inline: bool = False) -> Callable[[_F], _F]: ...
+
+
+def hot(function: Callable[..., Any] | None = None, *, inline: bool = False) -> Any:
+    """:func:`njit` for the integrators' inner loops: cached, without numba's reference counting
+    (``_nrt=False``: an array passed to a function costs two atomic operations a call, most of a
+    step's time; such a function allocates no array), and with IEEE arithmetic (a division by
+    zero gives ``inf``, not an exception: the loops test for numbers that are not finite
+    themselves).  ``inline`` inlines the function into its callers.  ``@hot`` or ``@hot(inline=True)``."""
+    options: dict[str, Any] = {"cache": True, "error_model": "numpy"}
+    if inline:
+        options["inline"] = "always"
+    else:
+        options["_nrt"] = False
+    decorate = njit(**options)
+    return decorate if function is None else decorate(function)

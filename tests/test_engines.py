@@ -50,10 +50,10 @@ def test_an_engine_can_be_given_as_a_factory():
 
 
 def test_an_unknown_engine_is_refused_by_name():
-    with pytest.raises(InputError, match="engine must be one of cvode, sksundae, scipy") as caught:
+    with pytest.raises(InputError, match="engine must be one of cvode, sksundae, dop853, scipy") as caught:
         simulate("instance-1", engine="rk4")
     assert caught.value.field == "engine"
-    assert set(ENGINES) == {"cvode", "sksundae", "scipy"}
+    assert set(ENGINES) == {"cvode", "sksundae", "dop853", "scipy"}
 
 
 @pytest.mark.parametrize("name", sorted(ENGINES))

@@ -6,8 +6,10 @@ domain) and the figures (rest shading) each ask of a sequence of states.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Mapping, Sequence
 from typing import TYPE_CHECKING, TypeVar
+
+import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -43,14 +45,17 @@ def spans(times: Sequence[float], states: Sequence[S], end: float) -> list[tuple
 
 
 def rest_intervals(
-    events: pd.DataFrame, mass: int, resting_at_start: bool, start: float, stop: float
+    events: pd.DataFrame | Mapping[str, np.ndarray], mass: int, resting_at_start: bool, start: float, stop: float
 ) -> list[tuple[float, float]]:
-    """The intervals of ``[start, stop]`` in which ``mass`` rests, from its events (a table with
-    ``t, mass, from_domain, to_domain``): a rest begins at an event into domain 0 and ends at
-    one out of it; ``resting_at_start`` says whether it rests at ``start``.  Exact where a
-    sampled trajectory is not: a rest shorter than the sampling step is found all the same."""
-    switches = events[(events.mass == mass) & (events.from_domain != events.to_domain)]
-    switches = switches[(switches.t >= start) & (switches.t <= stop)]
-    times = [start, *switches.t]
-    resting = [resting_at_start, *(switches.to_domain == 0)]
+    """The intervals of ``[start, stop]`` in which ``mass`` rests, from its events (a table, or
+    arrays by name, with ``t, mass, from_domain, to_domain``): a rest begins at an event into
+    domain 0 and ends at one out of it; ``resting_at_start`` says whether it rests at ``start``.
+    Exact where a sampled trajectory is not: a rest shorter than the sampling step is found all
+    the same."""
+    t = np.asarray(events["t"], dtype=float)
+    into = np.asarray(events["to_domain"])
+    switches = (np.asarray(events["mass"]) == mass) & (np.asarray(events["from_domain"]) != into)
+    switches &= (t >= start) & (t <= stop)
+    times = [start, *t[switches].tolist()]
+    resting = [resting_at_start, *(into[switches] == 0).tolist()]
     return [(a, b) for rests, a, b in spans(times, resting, stop) if rests and b > a]

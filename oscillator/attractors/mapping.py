@@ -13,6 +13,7 @@ and ``AttractorsViaFeaturizing`` are its others).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -23,12 +24,17 @@ import numpy as np
 from oscillator.analysis.axes import STATE
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.analysis.periods import detect_period
+from oscillator.engines import ENGINES
+from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
+from oscillator.hybrid.batch import OK, land_compiled, options_vector
+from oscillator.hybrid.guards import ARITHMETIC_ERRORS
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
-from oscillator.model.events import EventKind
+from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
+from oscillator.model.fields import coefficients
 from oscillator.model.parameters import check_count
 from oscillator.orbits.signature import signature_of
 from oscillator.text import shown
@@ -65,6 +71,11 @@ class AttractorSettings:
         repeat with a period up to ``max_period`` and the estimated distance to where they
         converge is within ``tolerance``; the whole ``transient`` without (and for a motion that
         does not settle: an aperiodic one, or one converging too slowly).
+    engine : str
+        The integrator of the runs: ``"dop853"`` (the default) runs each start whole in compiled
+        code (:mod:`oscillator.hybrid.batch`); another engine's name
+        (:data:`oscillator.engines.ENGINES`: ``"cvode"``, the reference) runs it through
+        :func:`~oscillator.hybrid.simulate.simulate`.
     """
 
     transient: int = 200
@@ -74,9 +85,12 @@ class AttractorSettings:
     match: float = 1e-4
     lyapunov_periods: int = 300
     settle: bool = True
+    engine: str = "dop853"
 
     def __post_init__(self) -> None:
         check_count(self.transient, "transient", 1, 1_000_000)
+        if not isinstance(self.engine, str) or self.engine not in ENGINES:
+            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(self.engine)}", field="engine")
         check_count(self.record, "record", 2, 100_000)
         check_count(self.max_period, "max_period", 1, 1000)
         check_count(self.lyapunov_periods, "lyapunov_periods", 0, 10_000_000)
@@ -115,10 +129,13 @@ class Landing:
 
 #: Forcing periods in the first two runs of a settling transient; the runs after double.
 SETTLE_CHUNK = 8
+#: Event rows the compiled run keeps room for per recorded forcing period (a start with more runs
+#: through ``simulate``).
+WINDOW_ROWS = 64
 
 
 def _run_from(
-    case: Case, state: Sequence[float] | np.ndarray, first: int, last: int, *, events: bool
+    case: Case, state: Sequence[float] | np.ndarray, first: int, last: int, *, events: bool, engine: str
 ) -> tuple[Case, Result]:
     """``case`` from ``state`` at its ``t0`` (the section: the forcing is T-periodic), run to the
     ``last`` section, its section points ``first .. last`` kept (the events of that window, or
@@ -126,7 +143,8 @@ def _run_from(
     point = resolve_case(case, **dict(zip(STATE, (float(v) for v in state), strict=True)))
     marks = section_times(point, first, last)
     keep = float(marks[0]) if events else float(marks[-1])
-    return point, simulate(point, t_end=float(marks[-1]), save=SaveAt(ts=marks, steps=False, events_from=keep))
+    save = SaveAt(ts=marks, steps=False, events_from=keep)
+    return point, simulate(point, t_end=float(marks[-1]), save=save, engine=engine)
 
 
 def settled(points: np.ndarray, tolerance: float, max_period: int) -> bool:
@@ -134,7 +152,8 @@ def settled(points: np.ndarray, tolerance: float, max_period: int) -> bool:
     the ``n`` before within ``d <= tolerance (1 + |P|)``, and, the repeats converging
     geometrically (``d`` over the ``d0`` of the ``n`` before that, ``rho = d / d0 < 1``), the
     distance still to go, ``d / (1 - rho)``, is within it too (a motion converging slowly is not
-    settled while its steps are small)."""
+    settled while its steps are small).  (:func:`oscillator.hybrid.batch.settled_compiled` is
+    the same test, compiled.)"""
     scale = tolerance * (1.0 + float(np.max(np.abs(points[-8:])))) if len(points) else tolerance
     for n in range(1, min(max_period, len(points) // 3) + 1):
         d = float(np.max(np.linalg.norm(points[-n:] - points[-2 * n : -n], axis=1)))
@@ -151,7 +170,7 @@ def _settle(case: Case, start: Sequence[float], settings: AttractorSettings) -> 
     points, chunk = [state], SETTLE_CHUNK
     while ran < settings.transient:
         n = min(chunk, settings.transient - ran)
-        _, result = _run_from(case, state, 1, n, events=False)
+        _, result = _run_from(case, state, 1, n, events=False, engine=settings.engine)
         points += list(result.trajectory[list(STATE)].to_numpy())
         state, ran = points[-1], ran + n
         chunk = chunk if ran < 2 * SETTLE_CHUNK else 2 * chunk
@@ -160,55 +179,124 @@ def _settle(case: Case, start: Sequence[float], settings: AttractorSettings) -> 
     return state, ran
 
 
+@dataclass(frozen=True)
+class _Window:
+    """The recorded window of one start: its section points, which masses rest at each, and its
+    events (arrays by column: ``t, mass, from_domain, to_domain``, and the kinds)."""
+
+    points: np.ndarray
+    resting: np.ndarray
+    events: dict[str, np.ndarray]
+    kinds: list[EventKind]
+    ran: int  #: forcing periods run before the window
+    first: int  #: the window's first section, counted from the run's start
+
+
 def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[float]) -> Landing:
     """Run one start and read where it went (section points, period, switches per period).
 
     The transient ends where the motion has settled (``settings.settle``, :func:`settled`) or
-    after ``settings.transient`` periods; then ``settings.record`` periods are recorded.  A start
-    the model refuses or a failed run gives a landing with ``status = "failed"`` and the reason."""
+    after ``settings.transient`` periods; then ``settings.record`` periods are recorded.  With
+    ``settings.engine = "dop853"`` (the default) the whole run is compiled
+    (:func:`oscillator.hybrid.batch.land_compiled`); a start that fails there, or any start with
+    another engine, runs through :func:`~oscillator.hybrid.simulate.simulate`.  A start the model
+    refuses or a failed run gives a landing with ``status = "failed"`` and the reason."""
     started = time.perf_counter()
-    x1, v1, x2, v2 = (float(v) for v in start)
-    begin = (x1, v1, x2, v2)
+    begin = (float(start[0]), float(start[1]), float(start[2]), float(start[3]))
     try:
-        if settings.settle:
-            state, ran = _settle(case, begin, settings)
-            point, result = _run_from(case, state, 0, settings.record, events=True)
-        else:  # one run: the whole transient, then the recorded window
-            ran = settings.transient
-            point, result = _run_from(case, begin, ran, ran + settings.record, events=True)
+        window = _compiled_window(case, settings, begin) if settings.engine == "dop853" else None
+        if window is None:
+            window = _simulated_window(case, settings, begin)
     except OscillatorError as error:
         reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED
         return Landing(index, begin, "failed", reason, str(error), wall_time=time.perf_counter() - started)
-    first_mark = 0 if settings.settle else ran  # the recorded window's first section, from the run's start
-    marks = section_times(point, first_mark, first_mark + settings.record)
-    points = result.trajectory[list(STATE)].to_numpy()
-    n = detect_period(points, settings.tolerance, settings.max_period)
-    period = point.parameters.period
-    window = n if n else settings.record
-    last = float(marks[-1]) - window * period
+    return _read(window, case, settings, index, begin, started)
+
+
+def _simulated_window(case: Case, settings: AttractorSettings, begin: tuple[float, ...]) -> _Window:
+    """The window through :func:`~oscillator.hybrid.simulate.simulate` (the settings' engine;
+    CVODE where the compiled run failed)."""
+    engine = "cvode" if settings.engine == "dop853" else settings.engine
+    if settings.settle:
+        state, ran = _settle(case, begin, dataclasses.replace(settings, engine=engine))
+        _, result = _run_from(case, state, 0, settings.record, events=True, engine=engine)
+    else:  # one run: the whole transient, then the recorded window
+        ran = settings.transient
+        _, result = _run_from(case, begin, ran, ran + settings.record, events=True, engine=engine)
+    rows = result.trajectory
     events = result.events
-    kinds = [(float(t), int(m), EventKind(k)) for t, m, k in zip(events.t, events["mass"], events.kind, strict=True)]
-    mine = [(t, m, kind) for t, m, kind in kinds if t >= last - 1e-9 * period]
-    rests = tuple(sum(kind.starts_rest for _, m, kind in mine if m == mass) / window for mass in (1, 2))
-    first = result.trajectory.iloc[len(marks) - 1 - window]  # the state where the window starts
-    rest_time = tuple(
-        sum(b - a for a, b in rest_intervals(events, mass, int(first[f"domain{mass}"]) == 0, last, float(marks[-1])))
-        / (window * period)
-        for mass in (1, 2)
+    return _Window(
+        rows[list(STATE)].to_numpy(),
+        rows[["domain1", "domain2"]].to_numpy() == 0,
+        {name: events[name].to_numpy() for name in ("t", "mass", "from_domain", "to_domain")},
+        [EventKind(kind) for kind in events.kind],
+        ran,
+        0 if settings.settle else ran,  # a settled start's window is a run of its own
     )
-    contacts = sum(kind.contact_starts and kind.stands_for_event(m) for _, m, kind in mine) / window
-    signature = str(signature_of(mine, n * period)) if n else ""
+
+
+def _compiled_window(case: Case, settings: AttractorSettings, begin: tuple[float, ...]) -> _Window | None:
+    """The window of :func:`oscillator.hybrid.batch.land_compiled`, or None where it failed."""
+    p, o = case.parameters, case.options
+    section_times(case, 0, 1)  # refuses an Omega whose period is lost beside t0
+    points = np.empty((settings.record + 1, 6))
+    rows = np.empty((WINDOW_ROWS * (settings.record + 1), WIDTH))
+    try:
+        status, ran, kept = land_compiled(
+            coefficients(p),
+            case.initial.t0,
+            p.period,
+            np.array(begin),
+            new_work(p, o),
+            options_vector(o),
+            (settings.settle, settings.transient, settings.record, settings.tolerance, settings.max_period),
+            points,
+            rows,
+        )
+    except ARITHMETIC_ERRORS:  # the switching rules' arithmetic left floating point
+        return None
+    if status != OK:
+        return None
+    rows = rows[:kept]
+    events = {name: rows[:, COLUMN[name]] for name in ("t", "mass", "from_domain", "to_domain")}
+    return _Window(
+        points[:, :4], points[:, 4:] == 0, events, [KINDS[int(k)] for k in rows[:, COLUMN["kind"]]], ran, ran
+    )
+
+
+def _read(
+    window: _Window, case: Case, settings: AttractorSettings, index: int, begin: tuple[float, ...], started: float
+) -> Landing:
+    """The landing of a recorded window: period, cycle of switches, rests and contacts per period."""
+    points, events, period = window.points, window.events, case.parameters.period
+    n = detect_period(points, settings.tolerance, settings.max_period)
+    span = n if n else settings.record
+    end = case.initial.t0 + period * (window.first + settings.record)
+    last = end - span * period
+    masses = events["mass"].astype(int).tolist()
+    mine = [
+        (t, m, kind)
+        for t, m, kind in zip(events["t"].tolist(), masses, window.kinds, strict=True)
+        if t >= last - 1e-9 * period
+    ]
+    rests = [sum(kind.starts_rest for _, m, kind in mine if m == mass) / span for mass in (1, 2)]
+    resting = window.resting[len(points) - 1 - span]  # where the last ``span`` periods begin
+    rest_time = [
+        sum(b - a for a, b in rest_intervals(events, mass, bool(resting[mass - 1]), last, end)) / (span * period)
+        for mass in (1, 2)
+    ]
+    contacts = sum(kind.contact_starts and kind.stands_for_event(m) for _, m, kind in mine) / span
     return Landing(
         index,
-        begin,
+        (begin[0], begin[1], begin[2], begin[3]),
         period=n,
         points=points,
-        signature=signature,
+        signature=str(signature_of(mine, n * period)) if n else "",
         rests=(float(rests[0]), float(rests[1])),
         contacts=float(contacts),
         wall_time=time.perf_counter() - started,
         rest_time=(float(rest_time[0]), float(rest_time[1])),
-        transient=ran,
+        transient=window.ran,
     )
 
 

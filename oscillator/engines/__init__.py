@@ -17,6 +17,9 @@ The engines:
   its rootfinding, called through its C API with compiled callbacks: the default;
 * ``"sksundae"`` - :class:`~oscillator.engines.sksundae.SksundaeEngine`, the same through
   scikit-sundae's Python API: the fallback where SUNDIALS' libraries cannot be loaded;
+* ``"dop853"`` - :class:`~oscillator.engines.dop853.Dop853Engine`, the explicit Runge-Kutta pair
+  DOP853 with CVODE's root search on its dense output, compiled whole: the engine of the
+  many-start analyses (:mod:`oscillator.hybrid.batch`), checked against CVODE's events;
 * ``"scipy"`` - :class:`~oscillator.engines.scipy.ScipyEngine`, SciPy's ``solve_ivp`` (DOP853)
   with its events: the baseline of the benchmarks.
 """
@@ -151,6 +154,12 @@ ENGINES = {
             "oscillator.engines.sksundae:SksundaeEngine",
             "CVODE (SUNDIALS, through scikit-sundae's Python API), Adams, root finding",
             "CVODE",
+        ),
+        EngineInfo(
+            "dop853",
+            "oscillator.engines.dop853:Dop853Engine",
+            "DOP853 (SciPy's coefficients) with CVODE's root search on its dense output, compiled",
+            "DOP853",
         ),
         EngineInfo(
             "scipy", "oscillator.engines.scipy:ScipyEngine", "SciPy solve_ivp (DOP853), events", "SciPy solve_ivp"

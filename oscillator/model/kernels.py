@@ -10,41 +10,88 @@ with ``J = df/dy`` (:func:`jacobian`).  The root functions' kernel is
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from oscillator.compiled import njit
-from oscillator.model.energy import power_terms
-from oscillator.model.fields import C1, C2, C3, C4, C5, K1, K2, K3, K4, K5, K6, M1, M2, coefficients, forces, kinetic
+from oscillator.model.fields import (
+    C1,
+    C2,
+    C3,
+    C4,
+    C5,
+    D1,
+    K1,
+    K2,
+    K3,
+    K4,
+    K5,
+    K6,
+    M1,
+    M2,
+    MU_K,
+    OMEGA,
+    P1,
+    P2,
+    PHI1,
+    PHI2,
+    Q1,
+    Q2,
+    D,
+    G,
+    coefficients,
+)
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import VARIATIONAL, Vector
 
-__all__ = ["derivative", "field_jacobian", "jacobian", "state_field", "variational_derivative"]
+__all__ = ["derivative", "field_jacobian", "jacobian", "rates", "variational_derivative"]
 
 
-@njit(cache=True)
-def state_field(  # pragma: no cover - compiled
-    t: float, y: Vector, yp: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool
-) -> None:
-    """Fill ``yp[:4]`` with the mode's field (4.9)-(4.14) at ``y[:4]``."""
-    f1, f2 = forces(t, y[0], y[1], y[2], y[3], left, right, c)
-    yp[0] = y[1]
-    yp[1] = kinetic(c, 1, s1, f1)
-    yp[2] = y[3]
-    yp[3] = kinetic(c, 2, s2, f2)
+@njit(inline="always", cache=True)
+def rates(
+    t: float, x1: float, v1: float, x2: float, v2: float, c: Vector, s1: int, s2: int, left: bool, right: bool
+) -> tuple[float, float, float, float, float, float, float, float]:  # pragma: no cover - compiled
+    """The mode's field (4.9)-(4.14) and the powers of the energy audit, as one scalar function:
+    ``(v1, a1, v2, a2, forcing, feedback, damping loss, friction loss)``.
+
+    The formulas of :func:`~oscillator.model.fields.forces`, :func:`~oscillator.model.fields.kinetic`
+    and :func:`~oscillator.model.energy.power_terms`, written as the compiler likes them (inlined
+    into its caller, cubes as products, one sine where the forcings are in phase): the integrators call it at
+    every stage, where calls and powers cost more than the arithmetic."""
+    phase = c[OMEGA] * t
+    wave = math.sin(phase + c[PHI1])
+    drive1 = c[Q1] * wave
+    drive2 = c[Q2] * (wave if c[PHI2] == c[PHI1] else math.sin(phase + c[PHI2]))
+    # the terms in the order, and so to the bit, of forces() and power_terms()
+    square1, square2 = v1 * v1, v2 * v2
+    f1 = drive1 - c[K1] * x1 - c[K2] * (x1 * x1 * x1) - c[C1] * v1 - c[C2] * (square1 * v1)
+    f2 = drive2 - c[K4] * x2 - c[K5] * (x2 * x2 * x2) - c[C4] * v2 - c[C5] * (square2 * v2)
+    damping = c[C1] * square1 + c[C2] * (square1 * square1) + c[C4] * square2 + c[C5] * (square2 * square2)
+    if left:
+        contact = c[K3] * (x1 - x2 + c[D]) + c[C3] * (v1 - v2)
+        f1 -= contact
+        f2 += contact
+        damping += c[C3] * ((v1 - v2) * (v1 - v2))
+    if right:
+        f1 -= c[K6] * (x1 - c[D1])
+    a1 = 0.0 if s1 == 0 else f1 / c[M1] - s1 * (c[MU_K] * c[G] + c[P1] / c[M1])
+    a2 = 0.0 if s2 == 0 else f2 / c[M2] - s2 * (c[MU_K] * c[G] + c[P2] / c[M2])
+    forcing = drive1 * v1 + drive2 * v2
+    feedback = -(c[P1] * s1 * v1 + c[P2] * s2 * v2)
+    friction = c[MU_K] * c[G] * (c[M1] * s1 * v1 + c[M2] * s2 * v2)
+    return v1, a1, v2, a2, forcing, feedback, damping, friction
 
 
 @njit(cache=True)
 def derivative(  # pragma: no cover - compiled
     t: float, y: Vector, yp: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool
 ) -> None:
-    """Fill ``yp`` with the mode's field (4.9)-(4.14) and the powers of the energy audit."""
-    state_field(t, y, yp, c, s1, s2, left, right)
-    forcing, feedback, damping, friction = power_terms(t, y[1], y[3], s1, s2, left, c)
-    yp[4] = forcing
-    yp[5] = feedback
-    yp[6] = damping
-    yp[7] = friction
+    """Fill ``yp`` with the mode's field (4.9)-(4.14) and the powers of the energy audit (:func:`rates`)."""
+    r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
+    yp[0], yp[1], yp[2], yp[3] = r[0], r[1], r[2], r[3]
+    yp[4], yp[5], yp[6], yp[7] = r[4], r[5], r[6], r[7]
 
 
 @njit(cache=True)

@@ -60,7 +60,7 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import StateLike, Vector
 
-__all__ = ["NUM_ROOTS", "Root", "mode_violation", "root_directions", "root_kernel", "root_values"]
+__all__ = ["NUM_ROOTS", "Root", "mode_violation", "root_directions", "root_kernel", "root_values", "root_values_at"]
 
 
 class Root(enum.IntEnum):
@@ -105,17 +105,30 @@ def root_directions(mode: Mode) -> list[int]:
     return directions
 
 
-@njit(cache=True)
-def root_kernel(
-    t: float, y: Vector, g: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool, step: float, near: float
+@njit(inline="always", cache=True)
+def root_values_at(
+    t: float,
+    x1: float,
+    v1: float,
+    x2: float,
+    v2: float,
+    c: Vector,
+    s1: int,
+    s2: int,
+    left: bool,
+    right: bool,
+    step: float,
+    near: float,
+    g: Vector,
+    at: int,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``g`` with the root functions of the layout; see :func:`root_values`."""
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    """``g[at:at + 11]`` = the root functions of the layout at ``(t, x1, v1, x2, v2)`` (inlined into
+    its caller: the integrators evaluate them at every step); see :func:`root_values`."""
     f1, f2 = forces(t, x1, v1, x2, v2, left, right, c)
     a1 = kinetic(c, 1, s1, f1)
     a2 = kinetic(c, 2, s2, f2)
     for mass in (1, 2):
-        base = 0 if mass == 1 else 4
+        base = at + (0 if mass == 1 else 4)
         s = s1 if mass == 1 else s2
         force = f1 if mass == 1 else f2
         if s != 0:
@@ -138,14 +151,22 @@ def root_kernel(
                 g[base + 1] = 1.0
             g[base + 2] = barrier(c, mass, 1, force)
             g[base + 3] = barrier(c, mass, -1, force)
-    g[8] = x1 - c[D1]
+    g[at + 8] = x1 - c[D1]
     gap = (x1 - x2) + c[D]
-    g[9] = gap
+    g[at + 9] = gap
     zdot1 = v1 - v2
     watched = not (s1 == 0 and s2 == 0)  # zdot1 = 0 identically while both rest
     if watched and abs(gap) > near:
         watched = abs(gap) <= near + 4.0 * (abs(zdot1) * step + abs(a1 - a2) * step * step)
-    g[10] = zdot1 if watched else 1.0
+    g[at + 10] = zdot1 if watched else 1.0
+
+
+@njit(cache=True)
+def root_kernel(
+    t: float, y: Vector, g: Vector, c: Vector, s1: int, s2: int, left: bool, right: bool, step: float, near: float
+) -> None:  # pragma: no cover - compiled
+    """Fill ``g`` with the root functions of the layout; see :func:`root_values`."""
+    root_values_at(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right, step, near, g, 0)
 
 
 def root_values(

@@ -1,0 +1,474 @@
+"""DOP853 with its dense output and CVODE's root finding on it, all compiled: the ``"dop853"`` engine.
+
+The method is SciPy's ``DOP853`` (Hairer, Norsett & Wanner's explicit Runge-Kutta pair of order
+8(5,3) with a 7th-order dense output), its coefficients taken from
+``scipy.integrate._ivp.dop853_coefficients`` and its step control as SciPy's (error norm,
+safety 0.9, step factors 0.2-10, the first step by Hairer's rule), the steps capped at
+``max_step_fraction`` of a forcing period as CVODE's are.  The root functions of
+:mod:`oscillator.model.roots` are evaluated at each step's end; where one changes sign (in its
+mode's direction) the root is located on the dense output by CVODE's own search (``cvRootfind``:
+the secant method with the Illinois modification, to ``100 eps (|t| + |h|)``), so that both
+engines put an event at the same time to the accuracy of their solutions.  A root function that
+is exactly zero where a search starts takes its sign a rounding step later, as CVODE's does.
+
+Everything from one return to the next runs in compiled code (:func:`advance`), on one float
+vector that holds the integrator's state (:data:`LAYOUT`): the supervisor's loop in Python
+(``simulate(case, engine="dop853")``) and the compiled one of the many-start analyses
+(:mod:`oscillator.hybrid.batch`) drive the same functions.  A root that switches nothing leaves the
+step it was found in to be searched on; a switch restarts the method from the root with the new
+mode's field and the step size reached so far.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _coefficients
+
+from oscillator.compiled import hot
+from oscillator.engines import EngineFailure, Step, StepKind
+from oscillator.model.fields import coefficients
+from oscillator.model.kernels import rates
+from oscillator.model.parameters import Parameters, SolverOptions
+from oscillator.model.phase_space import Mode
+from oscillator.model.roots import NUM_ROOTS, root_directions, root_values_at
+from oscillator.model.types import Vector
+
+__all__ = ["FAILURES", "LAYOUT", "Dop853Engine", "advance", "new_work", "restart"]
+
+_STAGES = int(_coefficients.N_STAGES)  # 12
+_A = np.ascontiguousarray(_coefficients.A[:_STAGES, :_STAGES])
+_B = np.ascontiguousarray(_coefficients.B)
+_C = np.ascontiguousarray(_coefficients.C[:_STAGES])
+_E3 = np.ascontiguousarray(_coefficients.E3)
+_E5 = np.ascontiguousarray(_coefficients.E5)
+_D = np.ascontiguousarray(_coefficients.D)
+_A_EXTRA = np.ascontiguousarray(_coefficients.A[_STAGES + 1 :])
+_C_EXTRA = np.ascontiguousarray(_coefficients.C[_STAGES + 1 :])
+_POWER = int(_coefficients.INTERPOLATOR_POWER)  # 7
+_EXTENDED = int(_coefficients.N_STAGES_EXTENDED)  # 16
+
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
+#: SciPy's error exponent: the error estimator is of order 7.
+_EXPONENT = -1.0 / 8.0
+#: CVODE's root tolerance: ``100 eps (|t| + |h|)``.
+_ROOT_TOLERANCE = 100.0 * float(np.finfo(float).eps)
+#: SciPy's smallest step is ten spacings of the time; ``eps |t|`` bounds one spacing.
+_ULP, _TINY = float(np.finfo(float).eps), float(np.finfo(float).tiny)
+
+N = 8  # x1, v1, x2, v2 and the four works
+R = NUM_ROOTS
+
+# The work vector: scalars, then the arrays (offsets).
+(T_OLD, T_NEW, H_NEXT, T_CUR, DENSE, STEPPED, EVALS, H_MAX, RTOL, ATOL, CAP, NEAR, MAX_STEPS, STARTED) = range(14)
+Y_OLD = 16
+Y_NEW = Y_OLD + N
+F_NEW = Y_NEW + N
+Y_TMP = F_NEW + N
+Y_OUT = Y_TMP + N
+G_CUR = Y_OUT + N
+G_NEW = G_CUR + R
+G_LO = G_NEW + R
+G_HI = G_LO + R
+G_MID = G_HI + R
+K_AT = G_MID + R
+F_AT = K_AT + _EXTENDED * N
+SIZE = F_AT + _POWER * N
+#: Where each part of the integrator's state sits in the work vector.
+LAYOUT = {"y_out": Y_OUT, "evaluations": EVALS, "t": T_CUR, "size": SIZE}
+
+#: What :func:`advance` returns: a root, the target (or the stop time), one step, or a failure.
+ROOT, TARGET, STEPPED_ONE, TOO_MUCH_WORK, TOO_SMALL = 0, 1, 2, -1, -3
+#: The failures' codes and what they say.
+FAILURES = {
+    TOO_MUCH_WORK: "more than max_num_steps steps before the next output",
+    TOO_SMALL: "the step size fell below the time's resolution (the field is not finite or not smooth there)",
+}
+
+# The modes vector: the signs and contact flags, then the root directions.
+_DIRECTIONS = 4
+
+
+@hot(inline=True)
+def _field(w: Vector, modes: np.ndarray, c: Vector, t: float, at: int, out: int) -> None:  # pragma: no cover - compiled
+    """``w[out:out + 8]`` = the mode's field and powers (:func:`~oscillator.model.kernels.rates`)
+    at ``(t, w[at:at + 8])``: offsets into the one work vector, no array made or counted."""
+    r = rates(t, w[at], w[at + 1], w[at + 2], w[at + 3], c, modes[0], modes[1], modes[2] != 0, modes[3] != 0)
+    w[out], w[out + 1], w[out + 2], w[out + 3] = r[0], r[1], r[2], r[3]
+    w[out + 4], w[out + 5], w[out + 6], w[out + 7] = r[4], r[5], r[6], r[7]
+    w[EVALS] += 1.0
+
+
+@hot
+def _roots(w: Vector, modes: np.ndarray, c: Vector, t: float, y: int, g: int) -> None:  # pragma: no cover
+    """``w[g:g + 11]`` = the root functions (:func:`~oscillator.model.roots.root_values_at`) at ``(t, w[y:])``."""
+    root_values_at(
+        t,
+        w[y],
+        w[y + 1],
+        w[y + 2],
+        w[y + 3],
+        c,
+        modes[0],
+        modes[1],
+        modes[2] != 0,
+        modes[3] != 0,
+        w[CAP],
+        w[NEAR],
+        w,
+        g,
+    )
+
+
+def new_work(params: Parameters, options: SolverOptions) -> np.ndarray:
+    """A work vector for :func:`advance` with the options' tolerances and step cap."""
+    w = np.zeros(SIZE)
+    w[RTOL], w[ATOL] = options.rtol, options.atol
+    w[H_MAX] = w[CAP] = options.max_step_fraction * params.period
+    w[NEAR] = options.grazing_displacement_tolerance
+    w[MAX_STEPS] = options.max_num_steps
+    return w
+
+
+def mode_vector(mode: Mode) -> np.ndarray:
+    """The signs, contact flags and root directions of ``mode`` as :func:`advance` takes them."""
+    return np.array([mode.sign(1), mode.sign(2), int(mode.left), int(mode.right), *root_directions(mode)], np.int64)
+
+
+@hot
+def _first_step(w: Vector, modes: np.ndarray, c: Vector, t: float) -> float:  # pragma: no cover - compiled
+    """Hairer's rule for the first step (SciPy's ``select_initial_step``, order 7)."""
+    d0, d1 = 0.0, 0.0
+    for i in range(N):
+        scale = w[ATOL] + abs(w[Y_NEW + i]) * w[RTOL]
+        d0 += (w[Y_NEW + i] / scale) ** 2
+        d1 += (w[F_NEW + i] / scale) ** 2
+    d0, d1 = math.sqrt(d0 / N), math.sqrt(d1 / N)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, w[H_MAX])
+    for i in range(N):
+        w[Y_TMP + i] = w[Y_NEW + i] + h0 * w[F_NEW + i]
+    _field(w, modes, c, t + h0, Y_TMP, Y_OUT)
+    d2 = 0.0
+    for i in range(N):
+        d2 += ((w[Y_OUT + i] - w[F_NEW + i]) / (w[ATOL] + abs(w[Y_NEW + i]) * w[RTOL])) ** 2
+    d2 = math.sqrt(d2 / N) / h0
+    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return float(min(100.0 * h0, h1, w[H_MAX]))
+
+
+@hot
+def restart(w: Vector, modes: np.ndarray, c: Vector, t: float, y: Vector) -> None:  # pragma: no cover - compiled
+    """Integrate ``modes``' field from ``(t, y)`` on: the step size reached so far is kept."""
+    for i in range(N):
+        w[Y_NEW + i] = y[i]
+    w[T_NEW] = w[T_CUR] = t
+    w[STEPPED] = 0.0
+    w[DENSE] = 0.0
+    _field(w, modes, c, t, Y_NEW, F_NEW)
+    _roots(w, modes, c, t, Y_NEW, G_CUR)
+    if w[STARTED] == 0.0:
+        w[H_NEXT] = _first_step(w, modes, c, t)
+        w[STARTED] = 1.0
+    w[H_NEXT] = min(w[H_NEXT], w[H_MAX])
+
+
+@hot
+def _stages(w: Vector, modes: np.ndarray, c: Vector, t: float, h: float) -> None:  # pragma: no cover - compiled
+    """One attempt of the Runge-Kutta step from ``(t, y_new)`` by ``h``: the stages in ``K`` and
+    the new state in ``Y_OUT`` (SciPy's ``rk_step``)."""
+    for i in range(N):
+        w[K_AT + i] = w[F_NEW + i]
+    for s in range(1, _STAGES):
+        for i in range(N):
+            total = 0.0
+            for j in range(s):
+                total += _A[s, j] * w[K_AT + N * j + i]
+            w[Y_TMP + i] = w[Y_NEW + i] + h * total
+        _field(w, modes, c, t + _C[s] * h, Y_TMP, K_AT + N * s)
+    for i in range(N):
+        total = 0.0
+        for j in range(_STAGES):
+            total += _B[j] * w[K_AT + N * j + i]
+        w[Y_OUT + i] = w[Y_NEW + i] + h * total
+    _field(w, modes, c, t + h, Y_OUT, K_AT + N * _STAGES)
+
+
+@hot
+def _error_norm(w: Vector, h: float) -> float:  # pragma: no cover - compiled
+    """SciPy's DOP853 error norm of the attempt in ``K`` (``Y_NEW`` to ``Y_OUT``)."""
+    err5, err3 = 0.0, 0.0
+    for i in range(N):
+        scale = w[ATOL] + max(abs(w[Y_NEW + i]), abs(w[Y_OUT + i])) * w[RTOL]
+        e5, e3 = 0.0, 0.0
+        for j in range(_STAGES + 1):
+            e5 += _E5[j] * w[K_AT + N * j + i]
+            e3 += _E3[j] * w[K_AT + N * j + i]
+        err5 += (e5 / scale) ** 2
+        err3 += (e3 / scale) ** 2
+    if err5 == 0.0 and err3 == 0.0:
+        return 0.0
+    return abs(h) * err5 / math.sqrt((err5 + 0.01 * err3) * N)
+
+
+@hot
+def _step(w: Vector, modes: np.ndarray, c: Vector, t_stop: float) -> bool:  # pragma: no cover - compiled
+    """One accepted step from ``T_NEW`` (never past ``t_stop``): the old end becomes ``T_OLD``.
+    False if the step size fell below the time's resolution."""
+    t = w[T_NEW]
+    h_abs = min(w[H_NEXT], w[H_MAX])
+    rejected = False
+    while True:
+        min_step = 10.0 * _ULP * max(abs(t), _TINY)
+        if h_abs < min_step or not math.isfinite(h_abs):
+            return False
+        t_new = min(t + h_abs, t_stop)
+        h = t_new - t
+        _stages(w, modes, c, t, h)
+        error = _error_norm(w, h)
+        if error < 1.0:
+            factor = MAX_FACTOR if error == 0.0 else min(MAX_FACTOR, SAFETY * error**_EXPONENT)
+            if rejected:
+                factor = min(1.0, factor)
+            w[H_NEXT] = h * factor
+            break
+        h_abs = h * (max(MIN_FACTOR, SAFETY * error**_EXPONENT) if math.isfinite(error) else MIN_FACTOR)
+        rejected = True
+    w[T_OLD], w[T_NEW] = t, t_new
+    for i in range(N):
+        w[Y_OLD + i] = w[Y_NEW + i]
+        w[Y_NEW + i] = w[Y_OUT + i]
+        w[F_NEW + i] = w[K_AT + N * _STAGES + i]
+    w[STEPPED] = 1.0
+    w[DENSE] = 0.0
+    _roots(w, modes, c, t_new, Y_NEW, G_NEW)
+    return True
+
+
+@hot
+def _dense(w: Vector, modes: np.ndarray, c: Vector) -> None:  # pragma: no cover - compiled
+    """The step's dense output (SciPy's ``_dense_output_impl``): three more stages and ``F``."""
+    if w[DENSE] != 0.0:
+        return
+    t_old, h = w[T_OLD], w[T_NEW] - w[T_OLD]
+    for e in range(_A_EXTRA.shape[0]):
+        s = _STAGES + 1 + e
+        for i in range(N):
+            total = 0.0
+            for j in range(s):
+                total += _A_EXTRA[e, j] * w[K_AT + N * j + i]
+            w[Y_TMP + i] = w[Y_OLD + i] + h * total
+        _field(w, modes, c, t_old + _C_EXTRA[e] * h, Y_TMP, K_AT + N * s)
+    for i in range(N):
+        delta = w[Y_NEW + i] - w[Y_OLD + i]
+        w[F_AT + i] = delta
+        w[F_AT + N + i] = h * w[K_AT + i] - delta
+        w[F_AT + 2 * N + i] = 2.0 * delta - h * (w[F_NEW + i] + w[K_AT + i])
+        for r in range(_POWER - 3):
+            total = 0.0
+            for j in range(_EXTENDED):
+                total += _D[r, j] * w[K_AT + N * j + i]
+            w[F_AT + N * (3 + r) + i] = h * total
+    w[DENSE] = 1.0
+
+
+@hot
+def interpolate(w: Vector, t: float, out: int) -> None:  # pragma: no cover - compiled
+    """``w[out:out + 8]`` = the state at ``t`` inside the last step, from its dense output
+    (computed before)."""
+    if t == w[T_NEW]:
+        for i in range(N):
+            w[out + i] = w[Y_NEW + i]
+        return
+    x = (t - w[T_OLD]) / (w[T_NEW] - w[T_OLD])
+    for i in range(N):
+        total = 0.0
+        for r in range(_POWER - 1, -1, -1):
+            total += w[F_AT + N * r + i]
+            total *= x if (_POWER - 1 - r) % 2 == 0 else 1.0 - x
+        w[out + i] = total + w[Y_OLD + i]
+
+
+@hot
+def _roots_at(w: Vector, modes: np.ndarray, c: Vector, t: float, g: int) -> None:  # pragma: no cover - compiled
+    """``w[g:g + 11]`` = the root functions at ``t`` inside the last step."""
+    interpolate(w, t, Y_TMP)
+    _roots(w, modes, c, t, Y_TMP, g)
+
+
+@hot
+def _crossing(w: Vector, modes: np.ndarray, lo: int, hi: int) -> tuple[int, bool]:  # pragma: no cover - compiled
+    """CVODE's test of a bracket (root values at ``w[lo:]`` and ``w[hi:]``): the root function
+    whose sign change comes first (its linear estimate), or -1, and whether one is exactly zero
+    at the upper end."""
+    best, largest, zero = -1, 0.0, False
+    for i in range(R):
+        low, high = w[lo + i], w[hi + i]
+        if modes[_DIRECTIONS + i] * low > 0.0:
+            continue
+        if high == 0.0:
+            zero = True
+        elif low * high < 0.0:
+            fraction = abs(high / (high - low))
+            if fraction > largest:
+                best, largest = i, fraction
+    return best, zero
+
+
+@hot
+def _copy(w: Vector, source: int, target: int, n: int) -> None:  # pragma: no cover - compiled
+    for i in range(n):
+        w[target + i] = w[source + i]
+
+
+@hot
+def _locate(
+    w: Vector, modes: np.ndarray, c: Vector, t_lo: float, t_hi: float, first: int
+) -> tuple[float, int]:  # pragma: no cover - compiled
+    """CVODE's ``cvRootfind`` between ``t_lo`` (values in ``G_LO``) and ``t_hi`` (``G_HI``): the
+    first root's time and the roots there as bits (their values at it left in ``G_HI``)."""
+    tolerance = _ROOT_TOLERANCE * (abs(w[T_NEW]) + abs(w[T_NEW] - w[T_OLD]))
+    imax, side, previous, alpha = first, 0, -1, 1.0
+    while imax >= 0 and abs(t_hi - t_lo) > tolerance:
+        alpha = (alpha * 2.0 if side == 2 else alpha * 0.5) if previous == side else 1.0
+        t_mid = t_hi - (t_hi - t_lo) * w[G_HI + imax] / (w[G_HI + imax] - alpha * w[G_LO + imax])
+        span = abs(t_hi - t_lo)
+        if abs(t_mid - t_lo) < 0.5 * tolerance:
+            t_mid = t_lo + (0.1 if span / tolerance > 5.0 else 0.5 * tolerance / span) * (t_hi - t_lo)
+        if abs(t_hi - t_mid) < 0.5 * tolerance:
+            t_mid = t_hi - (0.1 if span / tolerance > 5.0 else 0.5 * tolerance / span) * (t_hi - t_lo)
+        _roots_at(w, modes, c, t_mid, G_MID)
+        previous = side
+        found, zero = _crossing(w, modes, G_LO, G_MID)
+        if found >= 0 or zero:
+            t_hi = t_mid
+            _copy(w, G_MID, G_HI, R)
+            side = 1
+            if found < 0:
+                break
+            imax = found
+        else:
+            t_lo = t_mid
+            _copy(w, G_MID, G_LO, R)
+            side = 2
+    fired = 0
+    for i in range(R):
+        low, high = w[G_LO + i], w[G_HI + i]
+        if modes[_DIRECTIONS + i] * low > 0.0:
+            continue
+        if high == 0.0 or low * high < 0.0:
+            fired |= 1 << i
+    return t_hi, fired
+
+
+@hot
+def _lower_end(w: Vector, modes: np.ndarray, c: Vector) -> None:  # pragma: no cover - compiled
+    """``G_LO`` from the values at the cursor; one exactly zero there takes its value a rounding
+    step later (CVODE's ``cvRcheck2``), or is left out of this search."""
+    zero = False
+    for i in range(R):
+        w[G_LO + i] = w[G_CUR + i]
+        zero = zero or w[G_CUR + i] == 0.0
+    if not zero:
+        return
+    t = w[T_CUR]
+    later = t + _ROOT_TOLERANCE * (abs(t) + abs(w[T_NEW] - w[T_OLD]))
+    if later >= w[T_NEW]:
+        return
+    _dense(w, modes, c)
+    _roots_at(w, modes, c, later, G_MID)
+    for i in range(R):
+        if w[G_LO + i] == 0.0:
+            # left out where it stays zero: the direction's own sign cannot cross
+            w[G_LO + i] = w[G_MID + i] if w[G_MID + i] != 0.0 else float(modes[_DIRECTIONS + i])
+
+
+@hot
+def advance(
+    w: Vector, modes: np.ndarray, c: Vector, target: float, t_stop: float, one_step: bool
+) -> tuple[int, int]:  # pragma: no cover - compiled
+    """Go on to the first root, ``target`` (``t_stop``) or, with ``one_step``, the end of one step.
+
+    Returns what was reached (:data:`ROOT`, :data:`TARGET`, :data:`STEPPED_ONE`, or a failure's
+    code) and the roots that fired as bits; the time is ``w[T_CUR]``, the state ``w[Y_OUT:]``."""
+    steps = 0
+    while True:
+        if w[STEPPED] == 0.0 or w[T_CUR] >= w[T_NEW]:
+            if w[T_CUR] >= t_stop:
+                _copy(w, Y_NEW, Y_OUT, N)
+                return TARGET, 0
+            steps += 1
+            if steps > w[MAX_STEPS]:
+                return TOO_MUCH_WORK, 0
+            if not _step(w, modes, c, t_stop):
+                return TOO_SMALL, 0
+        t_hi = min(w[T_NEW], target)
+        _lower_end(w, modes, c)
+        if t_hi == w[T_NEW]:
+            _copy(w, G_NEW, G_HI, R)
+        else:
+            _dense(w, modes, c)
+            _roots_at(w, modes, c, t_hi, G_HI)
+        first, zero = _crossing(w, modes, G_LO, G_HI)
+        if first >= 0 or zero:
+            _dense(w, modes, c)
+            t_root, fired = _locate(w, modes, c, w[T_CUR], t_hi, first)
+            interpolate(w, t_root, Y_OUT)
+            w[T_CUR] = t_root
+            _copy(w, G_HI, G_CUR, R)
+            return ROOT, fired
+        w[T_CUR] = t_hi
+        _copy(w, G_HI, G_CUR, R)
+        if t_hi == target or t_hi >= t_stop:
+            if t_hi < w[T_NEW]:
+                _dense(w, modes, c)
+            interpolate(w, t_hi, Y_OUT)
+            return TARGET, 0
+        if one_step:
+            _copy(w, Y_NEW, Y_OUT, N)
+            return STEPPED_ONE, 0
+
+
+_KINDS = {ROOT: StepKind.ROOT, TARGET: StepKind.TARGET, STEPPED_ONE: StepKind.STEP}
+
+
+class Dop853Engine:
+    """The compiled DOP853 of this module behind the :class:`~oscillator.engines.Engine` interface."""
+
+    name = "dop853"
+    size = N
+
+    def __init__(self, params: Parameters, options: SolverOptions) -> None:
+        self._c = coefficients(params)
+        self._w = new_work(params, options)
+        self._modes: dict[Mode, np.ndarray] = {}
+        self._mode = np.zeros(_DIRECTIONS + R, np.int64)
+        self._restarts = 0
+
+    def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
+        vector = self._modes.get(mode)
+        if vector is None:
+            vector = self._modes[mode] = mode_vector(mode)
+        self._mode = vector
+        restart(self._w, vector, self._c, float(t), np.ascontiguousarray(y[:N], dtype=np.float64))
+        self._restarts += 1
+
+    def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
+        w = self._w
+        kind, fired = advance(w, self._mode, self._c, float(target), float(t_stop), one_step)
+        if kind < 0:
+            raise EngineFailure(FAILURES[kind], kind)
+        roots = tuple(i for i in range(R) if fired >> i & 1)
+        return Step(float(w[T_CUR]), w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots)
+
+    @property
+    def rhs_evaluations(self) -> int:
+        return int(self._w[EVALS])
+
+    @property
+    def restarts(self) -> int:
+        return self._restarts
+
+    def close(self) -> None:
+        """Nothing to free: the engine's state is one array."""

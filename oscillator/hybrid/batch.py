@@ -1,0 +1,311 @@
+"""The supervisor compiled, for the many-start analyses: starts landed with nothing in Python per root.
+
+:func:`land_compiled` runs one start from the stroboscopic section through its transient and a
+recorded window of forcing periods as :class:`~oscillator.hybrid.supervisor.Supervisor` would
+with the ``"dop853"`` engine (:mod:`oscillator.engines.dop853`), but in one compiled function: the
+mode at the start (:func:`~oscillator.model.resolving.initial_mode`'s rules), the engine's
+returns, at every root the check that the state stands in its mode, the switching rules
+(:func:`~oscillator.model.switching.resolve_compiled`, all of them) and the guards (an event storm
+at one instant or within ``storm_window``, a stall, more than ``max_events`` events), with the
+step size carried across switches.  What comes out are arrays: the section points
+``P_k = y(t0 + k T)`` of the window with the velocity signs there, the event rows of the window,
+and a status.  The transient ends where the section points have settled, checked after 8, 16,
+32, ... periods as :func:`oscillator.attractors.mapping.settled` does (:func:`settled_compiled`
+is the same test).
+
+A start that fails here is told by a code only (:data:`FAILED`); the caller runs it again with
+the reference engine for the words (:func:`oscillator.attractors.mapping.land`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from oscillator.compiled import njit
+from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, Y_OUT, N, R, advance, restart
+from oscillator.hybrid.guards import CONSISTENCY
+from oscillator.model.fields import D1, D
+from oscillator.model.g_functions import displacement_values
+from oscillator.model.parameters import SolverOptions
+from oscillator.model.roots import violation_code
+from oscillator.model.switching import MAX_ROWS, resolve_compiled
+from oscillator.model.types import Vector
+
+__all__ = ["FAILED", "OK", "OPTIONS", "WINDOW_FULL", "land_compiled", "options_vector", "settled_compiled"]
+
+#: What :func:`land_compiled` returns as its status: landed; a failure (an engine's failure, a
+#: guard, a crossing unseen, numbers that left floating point); more events in the window than
+#: its buffer holds.
+OK, FAILED, WINDOW_FULL = 0, 1, 2
+#: The options vector's entries.
+OPTIONS = ("consistency", "velocity_tolerance", "displacement_tolerance", "storm_events", "storm_window", "max_events")
+_CONSISTENCY, _VELOCITY, _DISPLACEMENT, _STORM_EVENTS, _STORM_WINDOW, _MAX_EVENTS = range(len(OPTIONS))
+
+
+def options_vector(options: SolverOptions) -> np.ndarray:
+    """The :data:`OPTIONS` of a case's solver options (and the supervisor's consistency tolerance)."""
+    values = {"consistency": CONSISTENCY, "velocity_tolerance": options.grazing_velocity_tolerance}
+    values["displacement_tolerance"] = options.grazing_displacement_tolerance
+    values.update({name: getattr(options, name) for name in ("storm_events", "storm_window", "max_events")})
+    return np.array([values[name] for name in OPTIONS], dtype=float)
+
+
+#: Root returns at one instant without an event before the run is declared stalled, and what is
+#: one instant (:mod:`oscillator.hybrid.guards`' values).
+_MAX_STALLS, _SAME_INSTANT = 100, 1e-12
+#: Forcing periods in the first two runs of a settling transient; the runs after double
+#: (:data:`oscillator.attractors.mapping.SETTLE_CHUNK`).
+_CHUNK = 8
+
+
+@njit(cache=True, error_model="numpy")
+def _set_mode(modes: np.ndarray, s1: int, s2: int, left: int, right: int) -> None:  # pragma: no cover - compiled
+    """The engine's mode vector: signs, contact flags and root directions
+    (:func:`oscillator.model.roots.root_directions`)."""
+    modes[0], modes[1], modes[2], modes[3] = s1, s2, left, right
+    for i in range(R):
+        modes[4 + i] = 0
+    for base, s in ((0, s1), (4, s2)):
+        if s != 0:
+            modes[4 + base] = -s
+            modes[4 + base + 1] = s
+        else:
+            modes[4 + base + 2] = 1
+            modes[4 + base + 3] = -1
+    modes[4 + 8] = -1 if right else 1
+    modes[4 + 9] = 1 if left else -1
+
+
+@njit(cache=True, error_model="numpy")
+def _initial(
+    t0: float, y: Vector, c: Vector, period: float, rows: np.ndarray
+) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
+    """:func:`oscillator.model.resolving.initial_mode` compiled: the mode at the start (``y``
+    projected in place), the events written and whether the instant settled."""
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    z1, zdot1 = x1 - x2, v1 - v2
+    left = z1 < -c[D] or (z1 == -c[D] and zdot1 < 0.0)
+    right = x1 > c[D1] or (x1 == c[D1] and v1 > 0.0)
+    s1 = 0 if v1 == 0.0 else (1 if v1 > 0.0 else -1)
+    s2 = 0 if v2 == 0.0 else (1 if v2 > 0.0 else -1)
+    mode, n, ok = resolve_compiled(t0, y, c, period, (s1, s2, int(left), int(right)), 0, 0.0, 0.0, rows, 0)
+    if not ok:
+        return mode, n, False
+    on_left, on_right = z1 == -c[D] and zdot1 == 0.0, x1 == c[D1] and v1 == 0.0
+    if on_left or on_right:
+        flags = (mode[2] != 0, mode[3] != 0)
+        relative = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, False)[1]
+        a1 = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, True)[1]
+        new_left = (relative < 0.0) if on_left else flags[0]
+        new_right = (a1 > 0.0) if on_right else flags[1]
+        if (new_left, new_right) != flags:
+            start = (mode[0], mode[1], int(new_left), int(new_right))
+            mode, n, ok = resolve_compiled(t0, y, c, period, start, 0, 0.0, 0.0, rows, n)
+    return mode, n, ok
+
+
+@njit(cache=True, error_model="numpy")
+def settled_compiled(points: np.ndarray, count: int, tolerance: float, max_period: int) -> bool:  # pragma: no cover
+    """:func:`oscillator.attractors.mapping.settled` on the first ``count`` rows of ``points``."""
+    largest = 0.0
+    for k in range(max(0, count - 8), count):
+        for i in range(4):
+            largest = max(largest, abs(points[k, i]))
+    scale = tolerance * (1.0 + largest) if count else tolerance
+    for n in range(1, min(max_period, count // 3) + 1):
+        d, d0 = 0.0, 0.0
+        for j in range(n):
+            a, b, e = count - n + j, count - 2 * n + j, count - 3 * n + j
+            near, before = 0.0, 0.0
+            for i in range(4):
+                near += (points[a, i] - points[b, i]) ** 2
+                before += (points[b, i] - points[e, i]) ** 2
+            d, d0 = max(d, math.sqrt(near)), max(d0, math.sqrt(before))
+        if d <= scale and (d == 0.0 or (d < d0 and d / (1.0 - d / d0) <= scale)):
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _storm(recent: Vector, filled: int, t: float, count: int, limit: int, window: float) -> tuple[int, bool]:
+    """The times of the latest ``limit + 1`` events (a ring) with ``count`` more at ``t``: how many
+    are kept, and whether they all fall within ``window`` (the storm guard)."""  # pragma: no cover
+    size = limit + 1
+    stormy = False
+    for _ in range(count):
+        recent[filled % size] = t
+        filled += 1
+        if filled >= size and t - recent[filled % size] <= window:
+            stormy = True
+    return filled, stormy
+
+
+@njit(cache=True, error_model="numpy")
+def _finite(y: Vector) -> bool:  # pragma: no cover - compiled
+    for v in y:
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _ordered(ring: np.ndarray, count: int, out: np.ndarray) -> int:  # pragma: no cover - compiled
+    """The last points of the ring, oldest first, into ``out``; how many."""
+    size = int(ring.shape[0])
+    kept = min(count, size)
+    for j in range(kept):
+        out[j, :] = ring[(count - kept + j) % size, :]
+    return kept
+
+
+@njit(cache=True, error_model="numpy")
+def _root(
+    w: Vector, modes: np.ndarray, c: Vector, period: float, options: Vector, fired: int, rows: np.ndarray
+) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
+    """At a root: the state checked against its mode and the instant resolved (the state projected in
+    ``w[Y_OUT:]``); the next mode, the events written, and whether all went well."""
+    t, y = w[T_CUR], w[Y_OUT : Y_OUT + N]
+    mode = (modes[0], modes[1], modes[2], modes[3])
+    if not _finite(y):
+        return mode, 0, False
+    if violation_code(t, y, c, mode[0], mode[1], mode[2] != 0, mode[3] != 0, options[_CONSISTENCY]) != 0:
+        return mode, 0, False
+    state = y[:4].copy()
+    after, n, ok = resolve_compiled(
+        t, state, c, period, mode, fired, options[_VELOCITY], options[_DISPLACEMENT], rows, 0
+    )
+    if ok and after != mode:
+        y[:4] = state
+    return after, n, ok
+
+
+#: The running counts of one landing (a float vector): the events kept by the storm guard's
+#: ring, all events, the window's event rows, root returns without a switch at one instant, the
+#: last root's time, and the time the window begins.
+_FILLED, _TOTAL, _KEPT, _STALLS, _LAST_ROOT, _WINDOW_FROM = range(6)
+
+
+@njit(cache=True, error_model="numpy")
+def _through_root(
+    w: Vector,
+    modes: np.ndarray,
+    c: Vector,
+    period: float,
+    options: Vector,
+    fired: int,
+    buffers: tuple[np.ndarray, Vector, np.ndarray],
+    tally: Vector,
+) -> int:  # pragma: no cover - compiled
+    """A root return: resolved, counted by the guards, its events kept where the window has begun,
+    and the engine restarted where the mode switched (the supervisor's ``_through_mode``).  The
+    status (:data:`OK` to go on)."""
+    rows, recent, window_rows = buffers
+    t = w[T_CUR]
+    mode = (modes[0], modes[1], modes[2], modes[3])
+    after, n, ok = _root(w, modes, c, period, options, fired, rows)
+    tally[_TOTAL] += n
+    filled, stormy = _storm(recent, int(tally[_FILLED]), t, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
+    tally[_FILLED] = filled
+    if not ok or stormy or tally[_TOTAL] > options[_MAX_EVENTS]:
+        return FAILED
+    if t >= tally[_WINDOW_FROM] and n:
+        kept = int(tally[_KEPT])
+        if kept + n > window_rows.shape[0]:
+            return WINDOW_FULL
+        window_rows[kept : kept + n, :] = rows[:n, :]
+        tally[_KEPT] = kept + n
+    if after != mode:
+        _set_mode(modes, after[0], after[1], after[2], after[3])
+        restart(w, modes, c, t, w[Y_OUT : Y_OUT + N])
+        tally[_STALLS], tally[_LAST_ROOT] = 0.0, -math.inf
+        return OK
+    same = t - tally[_LAST_ROOT] <= _SAME_INSTANT * (1.0 + abs(t))
+    tally[_STALLS] = tally[_STALLS] + 1.0 if same and n == 0 else 0.0
+    tally[_LAST_ROOT] = t
+    return FAILED if tally[_STALLS] > _MAX_STALLS else OK
+
+
+@njit(cache=True, error_model="numpy")
+def _start(
+    w: Vector,
+    modes: np.ndarray,
+    c: Vector,
+    t0: float,
+    period: float,
+    start: Vector,
+    options: Vector,
+    buffers: tuple[np.ndarray, Vector, np.ndarray],
+) -> float:  # pragma: no cover - compiled
+    """The mode at the start and the engine started in it; the storm guard's count (-1: failed)."""
+    rows, recent, _ = buffers
+    y = np.zeros(N)
+    y[:4] = start
+    w[STARTED] = 0.0  # the first step chosen afresh: a landing does not depend on the one before
+    mode, n, ok = _initial(t0, y, c, period, rows)
+    filled, stormy = _storm(recent, 0, t0, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
+    if not ok or stormy:
+        return -1.0
+    _set_mode(modes, mode[0], mode[1], mode[2], mode[3])
+    restart(w, modes, c, t0, y)
+    return float(filled)
+
+
+@njit(cache=True, error_model="numpy")
+def land_compiled(
+    c: Vector,
+    t0: float,
+    period: float,
+    start: Vector,
+    w: Vector,
+    options: Vector,
+    settings: tuple[bool, int, int, float, int],
+    points: np.ndarray,
+    window_rows: np.ndarray,
+) -> tuple[int, int, int]:  # pragma: no cover - compiled
+    """Land one start (see the module's docstring); ``settings`` is ``(settle, transient, record,
+    tolerance, max_period)``.  Writes the window's section points with the velocity signs there
+    (``points``: ``record + 1`` rows ``x1, v1, x2, v2, s1, s2``) and its event rows
+    (``window_rows``); returns the status, the forcing periods run before the window, and how
+    many event rows."""
+    settle, transient, record, tolerance, max_period = settings
+    modes = np.zeros(4 + R, np.int64)
+    buffers = (np.empty((MAX_ROWS, window_rows.shape[1])), np.empty(int(options[_STORM_EVENTS]) + 1), window_rows)
+    ring = np.empty((max(8, 3 * max_period), 4))
+    ordered = np.empty_like(ring)
+    tally = np.zeros(6)
+    tally[_FILLED] = _start(w, modes, c, t0, period, start, options, buffers)
+    if tally[_FILLED] < 0.0:
+        return FAILED, 0, 0
+    ring[0, :] = start
+    count, k, ran = 1, 0, -1 if settle else transient
+    tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, math.inf if settle else t0 + period * transient
+    checkpoint, chunk = min(_CHUNK, transient), _CHUNK
+    while True:
+        kind, fired = advance(w, modes, c, t0 + period * (k + 1), t0 + period * (transient + record), False)
+        if kind < 0:
+            return FAILED, 0, 0
+        if kind == ROOT:
+            status = _through_root(w, modes, c, period, options, fired, buffers, tally)
+            if status != OK:
+                return status, 0, 0
+            continue
+        k += 1
+        y = w[Y_OUT : Y_OUT + N]
+        if not _finite(y):
+            return FAILED, 0, 0
+        if ran < 0:  # settling: the points so far, checked at the chunks' ends
+            ring[count % ring.shape[0], :] = y[:4]
+            count += 1
+            if k == checkpoint:
+                if k >= transient or settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period):
+                    ran, tally[_WINDOW_FROM] = k, w[T_CUR]
+                else:
+                    chunk = chunk if k < 2 * _CHUNK else 2 * chunk
+                    checkpoint = min(k + chunk, transient)
+        if ran >= 0 and k >= ran:
+            points[k - ran, :4] = y[:4]
+            points[k - ran, 4], points[k - ran, 5] = modes[0], modes[1]
+            if k == ran + record:
+                return OK, ran, int(tally[_KEPT])
