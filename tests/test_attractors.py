@@ -1179,3 +1179,33 @@ def test_full_transient_runs_every_start_the_whole_transient(tmp_path, monkeypat
     assert '"settle": false' in (tmp_path / "whole" / "basins.json").read_text()
     tables = [pd.read_parquet(tmp_path / out / "basins.parquet") for out in ("whole", "settled")]
     assert tables[0].attractor.tolist() == tables[1].attractor.tolist()
+
+
+def test_the_engine_option_lands_the_starts_with_the_reference_engine(tmp_path, monkeypatch):
+    """``--engine cvode``: the folder's settings name it, and its landings are the compiled engine's
+    (the default): the same attractor at every cell, the same periods run; an unknown engine is
+    refused naming the option, before anything is written."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    base = ["basins", "instance-1", "--set", "Q2=71.165", "--x", "x2", "3", "6", "3", "--y", "v2", "-4", "4", "2"]
+    base += ["--transient", "60", "--record", "12", "--workers", "1", "--no-plots", "-q"]
+    for out, flag in (("reference", ["--engine", "cvode"]), ("compiled", [])):
+        done = CliRunner().invoke(app, [*base, *flag, "--out", out])
+        assert done.exit_code == 0, done.stderr
+    assert '"engine": "cvode"' in (tmp_path / "reference" / "basins.json").read_text()
+    assert '"engine": "dop853"' in (tmp_path / "compiled" / "basins.json").read_text()
+    tables = [pd.read_parquet(tmp_path / out / "basins.parquet") for out in ("reference", "compiled")]
+    assert tables[0].attractor.tolist() == tables[1].attractor.tolist()
+    assert tables[0].attractor.nunique() == 2  # both coexisting orbits
+    parts = [
+        pd.concat(pd.read_parquet(p) for p in (tmp_path / out / "parts").glob("*.parquet"))
+        for out in ("reference", "compiled")
+    ]
+    assert parts[0].sort_values("index").transient.tolist() == parts[1].sort_values("index").transient.tolist()
+    refused = CliRunner().invoke(app, [*base, "--engine", "rk4", "--out", "bad"])
+    assert refused.exit_code == 2 and "--engine: engine must be one of" in refused.stderr
+    assert not (tmp_path / "bad").exists()

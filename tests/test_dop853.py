@@ -82,9 +82,14 @@ def test_the_instances_switch_as_with_cvode(name):
     assert _assert_same_switching(load_case(name)) > 0
 
 
-def test_instance_1_switches_as_with_cvode_over_a_hundred_periods():
-    case = resolve_case("instance-1", Q2=71.165)
-    assert _assert_same_switching(dataclasses.replace(case, t_end=100 * case.parameters.period)) > 700
+def test_instance_1_switches_as_with_cvode_over_four_hundred_periods():
+    """Far from the start too: the roots are located to 100 eps of the time since the last restart,
+    as CVODE's are (to 100 eps of the time since t = 0 the state at a root 1500 s on stood 1e-9
+    past its boundary, and the run stopped on it as a crossing unseen)."""
+    case = resolve_case("instance-1", Q2=71.165, x1=3.0, v1=0.0, x2=4.0, v2=1.0)
+    assert _assert_same_switching(dataclasses.replace(case, t_end=400 * case.parameters.period)) > 3000
+    late = resolve_case(case, t0=1e5)  # 100 eps of the time since t = 0 would be 2e-9 s here
+    assert _assert_same_switching(dataclasses.replace(late, t_end=1e5 + 40 * case.parameters.period)) > 300
 
 
 @pytest.mark.parametrize("block", range(6))
@@ -151,3 +156,14 @@ def test_an_unknown_landing_engine_is_refused_by_name():
     with pytest.raises(InputError, match="engine must be one of") as caught:
         AttractorSettings(engine="rk4")
     assert caught.value.field == "engine"
+
+
+def test_a_start_late_in_time_lands_as_with_the_reference_engine():
+    """The compiled landing's roots and window at t0 = 1e5 s: the same landing as CVODE's."""
+    case = resolve_case("instance-1", Q2=71.165, t0=1e5)
+    compiled = AttractorSettings(transient=40, record=8)
+    a = land(case, compiled, 0, (3.0, 0.0, 4.0, 1.0))
+    b = land(case, dataclasses.replace(compiled, engine="cvode"), 0, (3.0, 0.0, 4.0, 1.0))
+    assert a.ok and (a.period, a.signature, a.rests, a.transient) == (b.period, b.signature, b.rests, b.transient)
+    assert a.period == 1 and a.signature
+    np.testing.assert_allclose(a.points, b.points, atol=1e-6)

@@ -36,7 +36,7 @@ from oscillator.analysis.store import identity
 from oscillator.attractors.continuing import Continued, Mapper, continue_attractors, plane_points
 from oscillator.attractors.features import MEASURES, Measured
 from oscillator.attractors.grouping import regime_of
-from oscillator.attractors.mapping import AttractorSettings
+from oscillator.attractors.mapping import AttractorSettings, check_engine
 from oscillator.attractors.seeding import OnePerRegime
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
@@ -93,6 +93,9 @@ class AtlasSettings:
         seed that reaches them.
     settle : bool
         End each transient once the motion has settled (:class:`~oscillator.attractors.mapping.AttractorSettings`).
+    engine : str
+        The integrator of the starts (:class:`~oscillator.attractors.mapping.AttractorSettings`):
+        ``"dop853"``, compiled whole, or ``"cvode"``, the reference.
     """
 
     fresh_transient: int = 40
@@ -101,8 +104,10 @@ class AtlasSettings:
     lyapunov_periods: int = 100
     starts: int = 1
     settle: bool = True
+    engine: str = "dop853"
 
     def __post_init__(self) -> None:
+        check_engine(self.engine)
         for name, least in (("fresh_transient", 1), ("seed_transient", 1), ("record", 2), ("lyapunov_periods", 1)):
             check_count(getattr(self, name), name, least, 1_000_000)
         check_count(self.starts, "starts", 1, 1000)
@@ -116,6 +121,7 @@ class AtlasSettings:
             max_period=self.record - 1,
             lyapunov_periods=0,
             settle=self.settle,
+            engine=self.engine,
         )
 
 

@@ -39,7 +39,16 @@ from oscillator.model.parameters import check_count
 from oscillator.orbits.signature import signature_of
 from oscillator.text import shown
 
-__all__ = ["MAX_STARTS", "STATE", "AttractorSettings", "Landing", "check_settings", "check_states", "land"]
+__all__ = [
+    "MAX_STARTS",
+    "STATE",
+    "AttractorSettings",
+    "Landing",
+    "check_engine",
+    "check_settings",
+    "check_states",
+    "land",
+]
 
 #: The most starts one search takes (a 1000 x 1000 grid).
 MAX_STARTS = 1_000_000
@@ -298,6 +307,13 @@ def _read(
         rest_time=(float(rest_time[0]), float(rest_time[1])),
         transient=window.ran,
     )
+
+
+def check_engine(engine: object) -> str:
+    """``engine`` if it names an engine of :data:`oscillator.engines.ENGINES`, else refused."""
+    if not isinstance(engine, str) or engine not in ENGINES:
+        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(engine)}", field="engine")
+    return engine
 
 
 def check_settings(settings: object) -> AttractorSettings:

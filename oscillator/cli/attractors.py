@@ -21,6 +21,7 @@ from oscillator.cli.options import (
     AxisOption,
     CaseArgument,
     FullTransientOption,
+    LandingEngineOption,
     NoPlotsOption,
     QuietOption,
     RecordOption,
@@ -63,7 +64,7 @@ def axis_of(values: AxisOption, flag: str) -> Axis:
         raise InputError(f"{flag}: {error}", field=flag) from None
 
 
-def _settings(**given: int | bool | None) -> AttractorSettings:
+def _settings(**given: int | bool | str | None) -> AttractorSettings:
     """The settings the options give, the others :class:`AttractorSettings`' defaults."""
     from oscillator.attractors.mapping import AttractorSettings
 
@@ -85,6 +86,7 @@ def basins(
     transient: TransientOption = None,
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
+    engine: LandingEngineOption = "dop853",
     max_period: Annotated[
         int | None, typer.Option("--max-period", metavar="N", help="The longest period looked for (default 16).")
     ] = None,
@@ -112,7 +114,8 @@ def basins(
     with refusing():
         resolved = case_from(case, None, set_)
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
-        settings = _settings(transient=transient, record=record, max_period=max_period, settle=not full_transient)
+        chosen = {"transient": transient, "record": record, "max_period": max_period, "engine": engine}
+        settings = _settings(**chosen, settle=not full_transient)
         store, lock, client, count = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
     with computing(store, "starts", lock, client):
         from oscillator.attractors.basins import find_basins
@@ -256,6 +259,7 @@ def attractors(
     transient: TransientOption = None,
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
+    engine: LandingEngineOption = "dop853",
     coordinate: Annotated[
         str, typer.Option("--coordinate", metavar="NAME", help="The section coordinate drawn: x1, v1, x2 or v2.")
     ] = "x2",
@@ -284,7 +288,7 @@ def attractors(
     """
     with refusing():
         resolved = case_from(case, None, set_)
-        given = {"transient": transient, "record": record, "settle": not full_transient}
+        given = {"transient": transient, "record": record, "settle": not full_transient, "engine": engine}
         plan = _open_following(resolved, param, start, stop, steps, x, y, tol, given, coordinate, out_dir)
         values, states, settings, store = plan
         count = check_workers(workers)

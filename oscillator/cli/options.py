@@ -13,6 +13,7 @@ __all__ = [
     "CaseArgument",
     "EngineOption",
     "FullTransientOption",
+    "LandingEngineOption",
     "NoPlotsOption",
     "QuietOption",
     "RecordOption",
@@ -66,7 +67,18 @@ EngineOption = Annotated[
         "--engine",
         metavar="NAME",
         help="The integrator: cvode (CVODE through its C API, the default), sksundae (CVODE through "
-        "scikit-sundae's Python API) or scipy (SciPy's solve_ivp).",
+        "scikit-sundae's Python API), dop853 (DOP853 with CVODE's root search, compiled) or scipy "
+        "(SciPy's solve_ivp).",
+    ),
+]
+#: ``--engine`` of the many-start analyses: which integrator lands the starts.
+LandingEngineOption = Annotated[
+    str,
+    typer.Option(
+        "--engine",
+        metavar="NAME",
+        help="The integrator of the starts: dop853 (each start run whole in compiled code, the default) or "
+        "cvode (the reference, through simulate).",
     ),
 ]
 #: ``--out DIR`` of a resumable command: the folder, new or the same computation's to resume.

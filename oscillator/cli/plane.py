@@ -19,6 +19,7 @@ from oscillator.cli.options import (
     AxisOption,
     CaseArgument,
     FullTransientOption,
+    LandingEngineOption,
     NoPlotsOption,
     QuietOption,
     RecordOption,
@@ -64,6 +65,7 @@ def atlas(
     transient: TransientOption = None,
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
+    engine: LandingEngineOption = "dop853",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
@@ -94,7 +96,7 @@ def atlas(
         count = check_workers(workers)
         given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
         chosen = {name: value for name, value in given.items() if value is not None}
-        settings = AtlasSettings(**chosen, settle=not full_transient)
+        settings = AtlasSettings(**chosen, settle=not full_transient, engine=engine)
         folder = out_dir if out_dir is not None else new_folder(resolved, "atlas")
         store = atlas_store(folder, resolved, x_axis, y_axis, settings)
         store.check()

@@ -1,7 +1,7 @@
 """CVODE's callbacks compiled to C (numba ``@cfunc``): the field and the root functions of a mode.
 
-They call the package's compiled kernels (:func:`oscillator.model.kernels.derivative`,
-:func:`oscillator.model.roots.root_kernel`) on the data of CVODE's serial vectors; what changes
+They call the package's compiled kernels, inlined (:func:`oscillator.model.kernels.rates`,
+:func:`oscillator.model.roots.root_values_at`) on the data of CVODE's serial vectors; what changes
 from mode to mode travels in the user-data vector (:data:`LAYOUT`).  numba caches the compiled
 callbacks on disk (``cache=True``), so the compile cost is paid once per install.
 
@@ -24,9 +24,9 @@ from numba.extending import intrinsic
 from numba.np.numpy_support import carray
 
 from oscillator.compiled import cfunc
-from oscillator.model.kernels import derivative, variational_derivative
+from oscillator.model.kernels import rates, variational_derivative
 from oscillator.model.parameters import Parameters
-from oscillator.model.roots import NUM_ROOTS, root_kernel
+from oscillator.model.roots import NUM_ROOTS, root_values_at
 from oscillator.model.types import VARIATIONAL
 
 __all__ = [
@@ -83,8 +83,21 @@ def rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # pragma: no cov
     """``CVRhsFn``: the mode's field at ``t = t_ref + tau`` (CVODE's time is local)."""
     d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
     state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
-    rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
-    derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
+    out = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
+    r = rates(
+        d[0] + tau,
+        state[0],
+        state[1],
+        state[2],
+        state[3],
+        d[COEFFICIENTS:],
+        int(d[1]),
+        int(d[2]),
+        d[3] != 0.0,
+        d[4] != 0.0,
+    )
+    out[0], out[1], out[2], out[3] = r[0], r[1], r[2], r[3]
+    out[4], out[5], out[6], out[7] = r[4], r[5], r[6], r[7]
     return 0
 
 
@@ -92,8 +105,8 @@ def _variational_rhs(tau: float, y: Any, ydot: Any, user_data: Any) -> int:  # p
     """``CVRhsFn`` of the state, the works and the derivative of the flow (24 equations)."""
     d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
     state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
-    rates = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
-    variational_derivative(d[0] + tau, state, rates, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
+    out = carray(_load_pointer(_load_pointer(ydot, 0), DATA_OFFSET), (VARIATIONAL_SIZE,), dtype=np.float64)
+    variational_derivative(d[0] + tau, state, out, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0)
     return 0
 
 
@@ -110,5 +123,7 @@ def roots(tau: float, y: Any, gout: Any, user_data: Any) -> int:  # pragma: no c
     d = carray(user_data, (USER_DATA_SIZE,), dtype=np.float64)
     state = carray(_load_pointer(_load_pointer(y, 0), DATA_OFFSET), (SIZE,), dtype=np.float64)
     g = carray(gout, (NUM_ROOTS,), dtype=np.float64)
-    root_kernel(d[0] + tau, state, g, d[COEFFICIENTS:], int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0, d[5], d[6])
+    c, t = d[COEFFICIENTS:], d[0] + tau
+    x1, v1, x2, v2 = state[0], state[1], state[2], state[3]
+    root_values_at(t, x1, v1, x2, v2, c, int(d[1]), int(d[2]), d[3] != 0.0, d[4] != 0.0, d[5], d[6], g, 0)
     return 0

@@ -61,7 +61,24 @@ N = 8  # x1, v1, x2, v2 and the four works
 R = NUM_ROOTS
 
 # The work vector: scalars, then the arrays (offsets).
-(T_OLD, T_NEW, H_NEXT, T_CUR, DENSE, STEPPED, EVALS, H_MAX, RTOL, ATOL, CAP, NEAR, MAX_STEPS, STARTED) = range(14)
+(
+    T_OLD,
+    T_NEW,
+    H_NEXT,
+    T_CUR,
+    DENSE,
+    STEPPED,
+    EVALS,
+    H_MAX,
+    RTOL,
+    ATOL,
+    CAP,
+    NEAR,
+    MAX_STEPS,
+    STARTED,
+    REJECTED,
+    T_REF,
+) = range(16)
 Y_OLD = 16
 Y_NEW = Y_OLD + N
 F_NEW = Y_NEW + N
@@ -76,7 +93,7 @@ K_AT = G_MID + R
 F_AT = K_AT + _EXTENDED * N
 SIZE = F_AT + _POWER * N
 #: Where each part of the integrator's state sits in the work vector.
-LAYOUT = {"y_out": Y_OUT, "evaluations": EVALS, "t": T_CUR, "size": SIZE}
+LAYOUT = {"y_out": Y_OUT, "evaluations": EVALS, "tau": T_CUR, "t_ref": T_REF, "size": SIZE}
 
 #: What :func:`advance` returns: a root, the target (or the stop time), one step, or a failure.
 ROOT, TARGET, STEPPED_ONE, TOO_MUCH_WORK, TOO_SMALL = 0, 1, 2, -1, -3
@@ -91,34 +108,25 @@ _DIRECTIONS = 4
 
 
 @hot(inline=True)
-def _field(w: Vector, modes: np.ndarray, c: Vector, t: float, at: int, out: int) -> None:  # pragma: no cover - compiled
+def _field(
+    w: Vector, modes: np.ndarray, c: Vector, tau: float, at: int, out: int
+) -> None:  # pragma: no cover - compiled
     """``w[out:out + 8]`` = the mode's field and powers (:func:`~oscillator.model.kernels.rates`)
-    at ``(t, w[at:at + 8])``: offsets into the one work vector, no array made or counted."""
-    r = rates(t, w[at], w[at + 1], w[at + 2], w[at + 3], c, modes[0], modes[1], modes[2] != 0, modes[3] != 0)
+    at ``(t_ref + tau, w[at:at + 8])``: offsets into the one work vector, no array made or counted."""
+    x1, v1, x2, v2 = w[at], w[at + 1], w[at + 2], w[at + 3]
+    r = rates(w[T_REF] + tau, x1, v1, x2, v2, c, modes[0], modes[1], modes[2] != 0, modes[3] != 0)
     w[out], w[out + 1], w[out + 2], w[out + 3] = r[0], r[1], r[2], r[3]
     w[out + 4], w[out + 5], w[out + 6], w[out + 7] = r[4], r[5], r[6], r[7]
     w[EVALS] += 1.0
 
 
 @hot
-def _roots(w: Vector, modes: np.ndarray, c: Vector, t: float, y: int, g: int) -> None:  # pragma: no cover
-    """``w[g:g + 11]`` = the root functions (:func:`~oscillator.model.roots.root_values_at`) at ``(t, w[y:])``."""
-    root_values_at(
-        t,
-        w[y],
-        w[y + 1],
-        w[y + 2],
-        w[y + 3],
-        c,
-        modes[0],
-        modes[1],
-        modes[2] != 0,
-        modes[3] != 0,
-        w[CAP],
-        w[NEAR],
-        w,
-        g,
-    )
+def _roots(w: Vector, modes: np.ndarray, c: Vector, tau: float, y: int, g: int) -> None:  # pragma: no cover
+    """``w[g:g + 11]`` = the root functions (:func:`~oscillator.model.roots.root_values_at`) at
+    ``(t_ref + tau, w[y:])``."""
+    x1, v1, x2, v2 = w[y], w[y + 1], w[y + 2], w[y + 3]
+    left, right = modes[2] != 0, modes[3] != 0
+    root_values_at(w[T_REF] + tau, x1, v1, x2, v2, c, modes[0], modes[1], left, right, w[CAP], w[NEAR], w, g)
 
 
 def new_work(params: Parameters, options: SolverOptions) -> np.ndarray:
@@ -137,7 +145,7 @@ def mode_vector(mode: Mode) -> np.ndarray:
 
 
 @hot
-def _first_step(w: Vector, modes: np.ndarray, c: Vector, t: float) -> float:  # pragma: no cover - compiled
+def _first_step(w: Vector, modes: np.ndarray, c: Vector) -> float:  # pragma: no cover - compiled
     """Hairer's rule for the first step (SciPy's ``select_initial_step``, order 7)."""
     d0, d1 = 0.0, 0.0
     for i in range(N):
@@ -149,7 +157,7 @@ def _first_step(w: Vector, modes: np.ndarray, c: Vector, t: float) -> float:  # 
     h0 = min(h0, w[H_MAX])
     for i in range(N):
         w[Y_TMP + i] = w[Y_NEW + i] + h0 * w[F_NEW + i]
-    _field(w, modes, c, t + h0, Y_TMP, Y_OUT)
+    _field(w, modes, c, h0, Y_TMP, Y_OUT)
     d2 = 0.0
     for i in range(N):
         d2 += ((w[Y_OUT + i] - w[F_NEW + i]) / (w[ATOL] + abs(w[Y_NEW + i]) * w[RTOL])) ** 2
@@ -160,16 +168,19 @@ def _first_step(w: Vector, modes: np.ndarray, c: Vector, t: float) -> float:  # 
 
 @hot
 def restart(w: Vector, modes: np.ndarray, c: Vector, t: float, y: Vector) -> None:  # pragma: no cover - compiled
-    """Integrate ``modes``' field from ``(t, y)`` on: the step size reached so far is kept."""
+    """Integrate ``modes``' field from ``(t, y)`` on: the step size reached so far is kept.  The
+    time is measured from here on, as CVODE's is from its restarts: a root is located to
+    ``100 eps`` of the time since the restart, not of the time since the run's start."""
     for i in range(N):
         w[Y_NEW + i] = y[i]
-    w[T_NEW] = w[T_CUR] = t
+    w[T_REF] = t
+    w[T_NEW] = w[T_CUR] = 0.0
     w[STEPPED] = 0.0
     w[DENSE] = 0.0
-    _field(w, modes, c, t, Y_NEW, F_NEW)
-    _roots(w, modes, c, t, Y_NEW, G_CUR)
+    _field(w, modes, c, 0.0, Y_NEW, F_NEW)
+    _roots(w, modes, c, 0.0, Y_NEW, G_CUR)
     if w[STARTED] == 0.0:
-        w[H_NEXT] = _first_step(w, modes, c, t)
+        w[H_NEXT] = _first_step(w, modes, c)
         w[STARTED] = 1.0
     w[H_NEXT] = min(w[H_NEXT], w[H_MAX])
 
@@ -235,6 +246,7 @@ def _step(w: Vector, modes: np.ndarray, c: Vector, t_stop: float) -> bool:  # pr
             break
         h_abs = h * (max(MIN_FACTOR, SAFETY * error**_EXPONENT) if math.isfinite(error) else MIN_FACTOR)
         rejected = True
+        w[REJECTED] += 1.0
     w[T_OLD], w[T_NEW] = t, t_new
     for i in range(N):
         w[Y_OLD + i] = w[Y_NEW + i]
@@ -391,7 +403,9 @@ def advance(
     """Go on to the first root, ``target`` (``t_stop``) or, with ``one_step``, the end of one step.
 
     Returns what was reached (:data:`ROOT`, :data:`TARGET`, :data:`STEPPED_ONE`, or a failure's
-    code) and the roots that fired as bits; the time is ``w[T_CUR]``, the state ``w[Y_OUT:]``."""
+    code) and the roots that fired as bits; the time is ``w[T_REF] + w[T_CUR]``, the state
+    ``w[Y_OUT:]``."""
+    target, t_stop = target - w[T_REF], t_stop - w[T_REF]
     steps = 0
     while True:
         if w[STEPPED] == 0.0 or w[T_CUR] >= w[T_NEW]:
@@ -460,7 +474,9 @@ class Dop853Engine:
         if kind < 0:
             raise EngineFailure(FAILURES[kind], kind)
         roots = tuple(i for i in range(R) if fired >> i & 1)
-        return Step(float(w[T_CUR]), w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots)
+        # a target is returned at its own time, as CVODE's engines do (t_ref + tau may differ by an ulp)
+        t = min(float(target), float(t_stop)) if kind == TARGET else float(w[T_REF] + w[T_CUR])
+        return Step(t, w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots)
 
     @property
     def rhs_evaluations(self) -> int:

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from oscillator.compiled import njit
-from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, Y_OUT, N, R, advance, restart
+from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, restart
 from oscillator.hybrid.guards import CONSISTENCY
 from oscillator.model.fields import D1, D
 from oscillator.model.g_functions import displacement_values
@@ -166,7 +166,7 @@ def _root(
 ) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
     """At a root: the state checked against its mode and the instant resolved (the state projected in
     ``w[Y_OUT:]``); the next mode, the events written, and whether all went well."""
-    t, y = w[T_CUR], w[Y_OUT : Y_OUT + N]
+    t, y = w[T_REF] + w[T_CUR], w[Y_OUT : Y_OUT + N]
     mode = (modes[0], modes[1], modes[2], modes[3])
     if not _finite(y):
         return mode, 0, False
@@ -202,7 +202,7 @@ def _through_root(
     and the engine restarted where the mode switched (the supervisor's ``_through_mode``).  The
     status (:data:`OK` to go on)."""
     rows, recent, window_rows = buffers
-    t = w[T_CUR]
+    t = w[T_REF] + w[T_CUR]
     mode = (modes[0], modes[1], modes[2], modes[3])
     after, n, ok = _root(w, modes, c, period, options, fired, rows)
     tally[_TOTAL] += n
@@ -300,7 +300,7 @@ def land_compiled(
             count += 1
             if k == checkpoint:
                 if k >= transient or settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period):
-                    ran, tally[_WINDOW_FROM] = k, w[T_CUR]
+                    ran, tally[_WINDOW_FROM] = k, t0 + period * k
                 else:
                     chunk = chunk if k < 2 * _CHUNK else 2 * chunk
                     checkpoint = min(k + chunk, transient)
