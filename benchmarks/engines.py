@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import time
 
 import numpy as np
+from run import best_of
 
 import oscillator as osc
 from oscillator.attractors.mapping import WINDOW_ROWS, AttractorSettings, land
@@ -23,19 +23,9 @@ from oscillator.model.events import WIDTH
 from oscillator.model.fields import coefficients
 
 
-def best(run, repeats):
-    """The shortest of ``repeats`` timed calls, and the last call's value."""
-    times, value = [], None
-    for _ in range(repeats):
-        started = time.perf_counter()
-        value = run()
-        times.append(time.perf_counter() - started)
-    return min(times), value
-
-
 def simulated(case, engine, periods, repeats):
     t_end = periods * case.parameters.period
-    return best(lambda: osc.simulate(case, t_end=t_end, engine=engine, save=SaveAt(steps=False)), repeats)
+    return best_of(repeats, lambda: osc.simulate(case, t_end=t_end, engine=engine, save=SaveAt(steps=False)))
 
 
 def compiled(case, periods, repeats):
@@ -55,7 +45,7 @@ def compiled(case, periods, repeats):
         return work[EVALS] / periods
 
     run()
-    return best(run, repeats)
+    return best_of(repeats, run)
 
 
 def event_error(case, engine, periods):
@@ -100,8 +90,8 @@ def landings(count, repeats):
         timing = {}
         for settings in (reference, compiled_settings):
             land(case, settings, 0, starts[0])
-            timing[settings.engine] = best(
-                lambda s=settings: [land(case, s, i, x) for i, x in enumerate(starts)], repeats
+            timing[settings.engine] = best_of(
+                repeats, lambda s=settings: [land(case, s, i, x) for i, x in enumerate(starts)]
             )
         (t_ref, a), (t_new, b) = timing["cvode"], timing["dop853"]
         same = all(

@@ -185,6 +185,20 @@ def restart(w: Vector, modes: np.ndarray, c: Vector, t: float, y: Vector) -> Non
     w[H_NEXT] = min(w[H_NEXT], w[H_MAX])
 
 
+@hot(inline=True)
+def _stage(
+    w: Vector, modes: np.ndarray, c: Vector, a: np.ndarray, row: int, s: int, start: int, tau: float, h: float
+) -> None:  # pragma: no cover - compiled
+    """Stage ``s``: ``K[s]`` = the field at ``(tau, y + h sum_j a[row, j] K[j])``, ``j < s``, with
+    ``y`` at ``w[start:]``."""
+    for i in range(N):
+        total = 0.0
+        for j in range(s):
+            total += a[row, j] * w[K_AT + N * j + i]
+        w[Y_TMP + i] = w[start + i] + h * total
+    _field(w, modes, c, tau, Y_TMP, K_AT + N * s)
+
+
 @hot
 def _stages(w: Vector, modes: np.ndarray, c: Vector, t: float, h: float) -> None:  # pragma: no cover - compiled
     """One attempt of the Runge-Kutta step from ``(t, y_new)`` by ``h``: the stages in ``K`` and
@@ -192,12 +206,7 @@ def _stages(w: Vector, modes: np.ndarray, c: Vector, t: float, h: float) -> None
     for i in range(N):
         w[K_AT + i] = w[F_NEW + i]
     for s in range(1, _STAGES):
-        for i in range(N):
-            total = 0.0
-            for j in range(s):
-                total += _A[s, j] * w[K_AT + N * j + i]
-            w[Y_TMP + i] = w[Y_NEW + i] + h * total
-        _field(w, modes, c, t + _C[s] * h, Y_TMP, K_AT + N * s)
+        _stage(w, modes, c, _A, s, s, Y_NEW, t + _C[s] * h, h)
     for i in range(N):
         total = 0.0
         for j in range(_STAGES):
@@ -265,13 +274,7 @@ def _dense(w: Vector, modes: np.ndarray, c: Vector) -> None:  # pragma: no cover
         return
     t_old, h = w[T_OLD], w[T_NEW] - w[T_OLD]
     for e in range(_A_EXTRA.shape[0]):
-        s = _STAGES + 1 + e
-        for i in range(N):
-            total = 0.0
-            for j in range(s):
-                total += _A_EXTRA[e, j] * w[K_AT + N * j + i]
-            w[Y_TMP + i] = w[Y_OLD + i] + h * total
-        _field(w, modes, c, t_old + _C_EXTRA[e] * h, Y_TMP, K_AT + N * s)
+        _stage(w, modes, c, _A_EXTRA, e, _STAGES + 1 + e, Y_OLD, t_old + _C_EXTRA[e] * h, h)
     for i in range(N):
         delta = w[Y_NEW + i] - w[Y_OLD + i]
         w[F_AT + i] = delta
