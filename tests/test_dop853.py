@@ -8,12 +8,13 @@ import pandas as pd
 import pytest
 from scipy.integrate import DOP853
 
-from conftest import random_case
+from conftest import chatter_case, random_case
 from oscillator import SimulationFailed, load_case, resolve_case, simulate
 from oscillator.attractors.mapping import AttractorSettings, land, settled
 from oscillator.engines import dop853
-from oscillator.hybrid.batch import settled_compiled
+from oscillator.hybrid.batch import FAILED, land_compiled, options_vector, settled_compiled
 from oscillator.hybrid.recording import SaveAt
+from oscillator.model.events import WIDTH
 from oscillator.model.fields import coefficients
 from oscillator.model.kernels import derivative
 from oscillator.model.phase_space import Mode
@@ -167,3 +168,24 @@ def test_a_start_late_in_time_lands_as_with_the_reference_engine():
     assert a.ok and (a.period, a.signature, a.rests, a.transient) == (b.period, b.signature, b.rests, b.transient)
     assert a.period == 1 and a.signature
     np.testing.assert_allclose(a.points, b.points, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("options", "reason"),
+    [({}, "storm"), ({"storm_events": 100_000, "max_events": 50}, "max_events")],
+)
+def test_a_start_stopped_by_a_guard_is_told_in_the_reference_engines_words(options, reason):
+    """The chattering case (two events a forcing period of 6.3e-8 s): over 600 periods the compiled
+    run stops on the guard, and the start is run again through simulate with CVODE for the words;
+    the landing says the same as the reference's."""
+    case = chatter_case(**options)
+    p = case.parameters
+    status, _, _ = land_compiled(
+        coefficients(p), case.initial.t0, p.period, np.array(case.initial.y), dop853.new_work(p, case.options),
+        options_vector(case.options), (False, 600, 4, 1e-6, 3), np.empty((5, 6)), np.empty((320, WIDTH)),
+    )  # fmt: skip
+    assert status == FAILED
+    settings = AttractorSettings(transient=600, record=4, settle=False)
+    a = land(case, settings, 0, case.initial.y)
+    b = land(case, dataclasses.replace(settings, engine="cvode"), 0, case.initial.y)
+    assert a.status == b.status == "failed" and a.reason == b.reason == reason and a.message == b.message
