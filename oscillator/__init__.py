@@ -50,6 +50,8 @@ _EXPORTS = {
     "read_run": "oscillator.saved",
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
+    "Response": "oscillator.orbits.response",
+    "response": "oscillator.orbits.response",
     "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
     "Attractor": "oscillator.attractors.grouping",
@@ -95,6 +97,7 @@ __all__ = [
     "OscillatorError",
     "Parameters",
     "Reason",
+    "Response",
     "Result",
     "SaveAt",
     "Segment",
@@ -114,6 +117,7 @@ __all__ = [
     "read_run",
     "regime_atlas",
     "resolve_case",
+    "response",
     "simulate",
     "trace_curve",
 ]
@@ -139,6 +143,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
+    from oscillator.orbits.response import Response, response
     from oscillator.orbits.shooting import Orbit, find_orbit
     from oscillator.saved import read_run
 

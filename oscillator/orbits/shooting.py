@@ -42,6 +42,8 @@ from oscillator.text import shown
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from oscillator.orbits.response import Response
+
 __all__ = [
     "Orbit",
     "PeriodMap",
@@ -261,6 +263,13 @@ class Orbit:
         initial = InitialState(t0=self.section, x1=x1, v1=v1, x2=x2, v2=v2)
         t_end = self.section + self.period * self.case.parameters.period
         return dataclasses.replace(self.case, initial=initial, t_end=t_end, expected=(), keep_events_from=None)
+
+    def response(self) -> Response:
+        """The orbit's response measures over one return (:func:`oscillator.orbits.response.response`:
+        peaks, RMS values, rests, contacts, impact velocities, contact forces, energies)."""
+        from oscillator.orbits.response import response
+
+        return response(self.one_period(), self.period)
 
     def plot(self, panel: str = "c") -> Figure:
         """One panel of the article's figures over one return of the orbit (by default ``"c"``,

@@ -1,0 +1,227 @@
+"""The response measures of a periodic motion: what a designer reads off an orbit (issue 38).
+
+:func:`response` runs one return of the motion from its section point and reads the measures from
+the run's own smooth pieces and events, not from samples: each piece (a mode's flow between two
+switches, :class:`~oscillator.hybrid.record.Segment`) is integrated again from its start with
+the integrals below carried along and the interior extrema located as roots (SciPy's DOP853 at
+``rtol = atol = 1e-12`` with events), and every switch is read where it happened.  With ``T`` the
+forcing period and ``nT`` the return's length, per mass ``i``:
+
+* ``x_max``, ``x_min`` (m): the extreme displacements, each at a velocity zero (an event of the
+  run: a reversal or the start of a rest) or constant through a rest; ``x_pp = x_max - x_min``;
+* ``x_rms = sqrt(1/nT integral x_i^2 dt)`` (m), about the spring's rest position ``x_i = 0``;
+* ``v_peak = max |v_i|`` (m/s), at an interior zero of the acceleration or at a switch (the
+  acceleration jumps at a contact);
+* ``a_rms = sqrt(1/nT integral a_i^2 dt)`` (m/s^2), ``a_i`` the field of the mode (0 at rest);
+* ``rest``: the fraction of the return the mass rests;
+
+per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the masses, ``z1 = -d``):
+
+* ``onsets``: contacts begun per forcing period;
+* ``impact_max``, ``impact_mean`` (m/s): the approach speed at each onset, ``|v1|`` on the right
+  stop and ``|v1 - v2|`` between the masses (0 without contacts);
+* ``force_peak`` (N): the largest contact force, ``K6 (x1 - d1)`` on the right stop and
+  ``|K3 (x1 - x2 + d) + C3 (v1 - v2)|`` between the masses (its interior extrema located where
+  ``K3 zdot1 + C3 (a1 - a2) = 0``);
+* ``time``: the fraction of the return in contact;
+
+and per forcing period (J): ``forcing`` (work of ``Q_i sin(Omega t + phi_i)``), ``feedback``
+(work of the constant forces ``-P_i s_i``), ``dampers`` (lost in ``C1, C2, C4, C5``),
+``contact`` (lost in the contact damper ``C3``), ``friction`` (lost to kinetic friction).  Over a
+return of a periodic orbit the mechanical energy comes back, so ``forcing + feedback = dampers +
+contact + friction`` (:attr:`Response.balance`, zero to the integration's tolerance).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from oscillator.hybrid.record import Segment
+from oscillator.hybrid.recording import SaveAt
+from oscillator.hybrid.simulate import simulate
+from oscillator.io.cases import Case
+from oscillator.model.events import EventKind
+from oscillator.model.fields import C3, K3, D, coefficients
+from oscillator.model.kernels import rates
+from oscillator.model.parameters import Parameters, check_count
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+__all__ = ["MASS_MEASURES", "Response", "response"]
+
+#: The measures of each mass and of each contact, in :class:`Response`'s order.
+MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
+CONTACT_MEASURES = ("onsets", "impact_max", "impact_mean", "force_peak", "time")
+ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
+#: The re-integration's tolerances (the run's own are CVODE's 1e-10).
+_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class Response:
+    """The response measures of one return (module docstring): ``mass[i][name]`` for ``i = 1, 2``,
+    ``contact[stop][name]`` for ``stop = "right", "left"``, ``energy[name]`` per forcing period."""
+
+    periods: int
+    mass: dict[int, dict[str, float]]
+    contact: dict[str, dict[str, float]]
+    energy: dict[str, float]
+
+    @property
+    def balance(self) -> float:
+        """``forcing + feedback - dampers - contact - friction`` per period (J): zero for a periodic orbit."""
+        e = self.energy
+        return e["forcing"] + e["feedback"] - e["dampers"] - e["contact"] - e["friction"]
+
+    def columns(self) -> dict[str, float]:
+        """Every measure as a flat mapping: ``x_max_m1``, ``impact_max_left``, ``energy_forcing``, ..."""
+        flat = {f"{name}_m{i}": value for i, values in self.mass.items() for name, value in values.items()}
+        flat |= {f"{name}_{stop}": value for stop, values in self.contact.items() for name, value in values.items()}
+        return flat | {f"energy_{name}": value for name, value in self.energy.items()}
+
+
+def response(case: Case, periods: int = 1) -> Response:
+    """The response measures of the case's motion from its start over ``periods`` forcing periods
+    (module docstring): of an orbit, over its return (:meth:`oscillator.Orbit.response`); of
+    another start, ``response(resolve_case(case, x1=..., v1=..., x2=..., v2=...), periods)``."""
+    check_count(periods, "periods", 1, 100_000)
+    p = case.parameters
+    span = periods * p.period
+    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
+    pieces = [_Piece.of(segment, p) for segment in result.segments if segment.t1 > segment.t0]
+    mass = {i: _mass_measures(pieces, i, span) for i in (1, 2)}
+    events = result.events
+    contact = {stop: _contact_measures(pieces, events, stop, span, periods) for stop in ("right", "left")}
+    totals = np.sum([piece.integrals for piece in pieces], axis=0)
+    energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
+    return Response(periods, mass, contact, energy)
+
+
+# The integrals carried along a piece: x1^2, x2^2, a1^2, a2^2, then the energies.
+_SQUARES, _ENERGY = 0, 4
+
+
+@dataclass(frozen=True)
+class _Piece:
+    """One smooth piece integrated again: its mode, span, the integrals over it, and the extreme
+    speeds and contact force in it (ends and interior extrema)."""
+
+    segment: Segment
+    integrals: np.ndarray
+    speed: tuple[float, float]
+    force: tuple[float, float]
+
+    @classmethod
+    def of(cls, segment: Segment, p: Parameters) -> _Piece:
+        c, mode = coefficients(p), segment.mode
+        flags = (mode.sign(1), mode.sign(2), mode.left, mode.right)
+
+        def field(t: float, y: np.ndarray) -> np.ndarray:
+            return _augmented(t, y, c, flags)
+
+        events = [_velocity_extremum(1, c, flags), _velocity_extremum(2, c, flags), _force_extremum(c, flags)]
+        start = np.concatenate([segment.y0, np.zeros(9)])
+        solved = solve_ivp(
+            field, (segment.t0, segment.t1), start, method="DOP853", rtol=_TOLERANCE, atol=_TOLERANCE, events=events
+        )
+        ends = [(segment.t0, segment.y0), (segment.t1, solved.y[:4, -1])]
+        speeds = [[abs(y[2 * i - 1]) for _, y in ends] for i in (1, 2)]
+        for i in (1, 2):
+            speeds[i - 1] += [abs(y[2 * i - 1]) for y in solved.y_events[i - 1]]
+        forces = [abs(_left_force(y, c)) for _, y in ends] + [abs(_left_force(y, c)) for y in solved.y_events[2]]
+        right = [max(float(p.K6 * (y[0] - p.d1)), 0.0) for _, y in ends]
+        return cls(
+            segment,
+            solved.y[4:, -1],
+            (max(speeds[0]), max(speeds[1])),
+            (max(right) if mode.right else 0.0, max(forces) if mode.left else 0.0),
+        )
+
+
+def _left_force(y: np.ndarray, c: np.ndarray) -> float:
+    """The force between the masses in contact (N): ``K3 (x1 - x2 + d) + C3 (v1 - v2)``."""
+    return float(c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3]))
+
+
+def _augmented(t: float, y: np.ndarray, c: np.ndarray, flags: tuple[int, int, bool, bool]) -> np.ndarray:
+    """The state's field and the integrals' integrands (:func:`~oscillator.model.kernels.rates`)."""
+    s1, s2, left, right = flags
+    v1, a1, v2, a2, forcing, feedback, damping, friction = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
+    contact = c[C3] * (y[1] - y[3]) ** 2 if left else 0.0
+    return np.array(
+        [v1, a1, v2, a2, y[0] ** 2, y[2] ** 2, a1**2, a2**2, forcing, feedback, damping - contact, contact, friction]
+    )
+
+
+def _velocity_extremum(
+    mass: int, c: np.ndarray, flags: tuple[int, int, bool, bool]
+) -> Callable[[float, np.ndarray], float]:
+    """An event where mass ``mass``'s acceleration vanishes (its speed is extreme)."""
+    s1, s2, left, right = flags
+
+    def event(t: float, y: np.ndarray) -> float:
+        r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
+        return float(r[2 * mass - 1]) if (s1 if mass == 1 else s2) else 1.0
+
+    return event
+
+
+def _force_extremum(c: np.ndarray, flags: tuple[int, int, bool, bool]) -> Callable[[float, np.ndarray], float]:
+    """An event where the force between the masses is extreme: ``K3 zdot1 + C3 (a1 - a2) = 0``."""
+    s1, s2, left, right = flags
+
+    def event(t: float, y: np.ndarray) -> float:
+        if not left:
+            return 1.0
+        r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
+        return float(c[K3] * (y[1] - y[3]) + c[C3] * (r[1] - r[3]))
+
+    return event
+
+
+def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, float]:
+    """The measures of mass ``mass`` over the pieces (module docstring)."""
+    column = 2 * (mass - 1)
+    ends = [piece.segment.y0[column] for piece in pieces] + [piece.segment.y1[column] for piece in pieces]
+    rest = sum(piece.segment.t1 - piece.segment.t0 for piece in pieces if piece.segment.mode.sign(mass) == 0)
+    squares = sum(float(piece.integrals[_SQUARES + mass - 1]) for piece in pieces)
+    accelerations = sum(float(piece.integrals[_SQUARES + 1 + mass]) for piece in pieces)
+    high, low = max(ends), min(ends)
+    return {
+        "x_max": float(high),
+        "x_min": float(low),
+        "x_pp": float(high - low),
+        "x_rms": math.sqrt(max(squares, 0.0) / span),
+        "v_peak": float(max(piece.speed[mass - 1] for piece in pieces)),
+        "a_rms": math.sqrt(max(accelerations, 0.0) / span),
+        "rest": rest / span,
+    }
+
+
+def _contact_measures(
+    pieces: list[_Piece], events: pd.DataFrame, stop: str, span: float, periods: int
+) -> dict[str, float]:
+    """The measures of the contact on ``stop`` (module docstring)."""
+    kinds = [EventKind(kind) for kind in events.kind]
+    onsets = [
+        k
+        for k, (kind, mass) in enumerate(zip(kinds, events["mass"], strict=True))
+        if kind.contact_starts and kind.contact == stop and kind.stands_for_event(int(mass))
+    ]
+    rows = events.iloc[onsets]
+    speeds = np.abs(rows.v1 - rows.v2) if stop == "left" else np.abs(rows.v1)
+    inside = [piece for piece in pieces if (piece.segment.mode.left if stop == "left" else piece.segment.mode.right)]
+    return {
+        "onsets": len(onsets) / periods,
+        "impact_max": float(np.max(speeds)) if len(speeds) else 0.0,
+        "impact_mean": float(np.mean(speeds)) if len(speeds) else 0.0,
+        "force_peak": max((piece.force[0 if stop == "right" else 1] for piece in inside), default=0.0),
+        "time": sum(piece.segment.t1 - piece.segment.t0 for piece in inside) / span,
+    }

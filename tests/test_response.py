@@ -1,0 +1,121 @@
+"""The response measures of a periodic motion (issue 38): against the linear oscillator's closed
+form, against the run's own energy audit and events, and against the trajectory's samples."""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import random_case
+from oscillator import Response, find_orbit, resolve_case, response, simulate
+from oscillator.analysis.intervals import rest_intervals
+from oscillator.model.events import EventKind
+
+#: Two linear oscillators side by side: no friction, no coupling, the stops far away.
+LINEAR = dict(
+    m1=1.0, m2=1.5, K1=2.0, K2=0.0, C1=0.1, C2=0.0, K3=0.0, C3=0.0, K4=1.0, K5=0.0, C4=0.2, C5=0.0, K6=1.0,
+    mu_k=0.0, mu_s=0.0, P1=0.0, P2=0.0, d=1000.0, d1=1000.0, Q1=1.0, Q2=0.7, Omega=1.3, phi1=0.0, phi2=0.0,
+)  # fmt: skip
+
+
+def test_the_linear_oscillators_steady_response_is_the_closed_form():
+    """``X = Q / sqrt((K - m W^2)^2 + (C W)^2)``: peaks +-X, RMS X / sqrt 2, peak speed W X, RMS
+    acceleration W^2 X / sqrt 2, and pi C W X^2 lost in the damper and given by the force a period."""
+    case = resolve_case("instance-1", **LINEAR)
+    omega, t0 = LINEAR["Omega"], case.initial.t0
+    state, amplitudes = [], []
+    for m, k, c, q in ((1.0, 2.0, 0.1, 1.0), (1.5, 1.0, 0.2, 0.7)):
+        amplitude, lag = q / math.hypot(k - m * omega**2, c * omega), math.atan2(c * omega, k - m * omega**2)
+        state += [amplitude * math.sin(omega * t0 - lag), omega * amplitude * math.cos(omega * t0 - lag)]
+        amplitudes.append(amplitude)
+    measured = response(resolve_case(case, x1=state[0], v1=state[1], x2=state[2], v2=state[3]))
+    for mass, amplitude in zip((1, 2), amplitudes, strict=True):
+        m = measured.mass[mass]
+        expected = {
+            "x_max": amplitude,
+            "x_min": -amplitude,
+            "x_pp": 2 * amplitude,
+            "x_rms": amplitude / math.sqrt(2),
+            "v_peak": omega * amplitude,
+            "a_rms": omega**2 * amplitude / math.sqrt(2),
+            "rest": 0.0,
+        }
+        for name, value in expected.items():
+            assert m[name] == pytest.approx(value, abs=1e-9), (mass, name)
+    lost = math.pi * omega * (0.1 * amplitudes[0] ** 2 + 0.2 * amplitudes[1] ** 2)
+    assert measured.energy["dampers"] == pytest.approx(lost, abs=1e-9)
+    assert measured.energy["forcing"] == pytest.approx(lost, abs=1e-9)
+    assert abs(measured.balance) < 1e-9
+    assert all(value == 0.0 for stop in measured.contact.values() for value in stop.values())
+
+
+@pytest.mark.parametrize("seed", [145, 200, 268, 1])
+def test_the_measures_are_the_runs_own(seed):
+    """Random systems with contacts, rests and re-sticking, over three forcing periods: the energies
+    are the run's energy audit, the rests and contacts its events, the peaks bound every sample."""
+    case = random_case(seed)
+    p, periods = case.parameters, 3
+    measured = response(case, periods)
+    run = simulate(case, t_end=case.initial.t0 + periods * p.period)
+    audit, events, rows = run.energy, run.events, run.trajectory
+    e = measured.energy
+    assert e["forcing"] * periods == pytest.approx(audit.forcing, rel=1e-7, abs=1e-8)
+    assert e["friction"] * periods == pytest.approx(audit.friction, rel=1e-7, abs=1e-8)
+    assert (e["dampers"] + e["contact"]) * periods == pytest.approx(audit.damping, rel=1e-7, abs=1e-8)
+    assert e["feedback"] * periods == pytest.approx(audit.feedback, rel=1e-7, abs=1e-8)
+    assert measured.balance * periods == pytest.approx(audit.E1 - audit.E0, abs=1e-7 * (1 + abs(audit.forcing)))
+    span, t_from, t_to = periods * p.period, case.initial.t0, case.initial.t0 + periods * p.period
+    for mass in (1, 2):
+        resting = int(rows[f"domain{mass}"].iloc[0]) == 0
+        rest = sum(b - a for a, b in rest_intervals(events, mass, resting, t_from, t_to)) / span
+        m = measured.mass[mass]
+        assert m["rest"] == pytest.approx(rest, abs=1e-9)
+        x, v = rows[f"x{mass}"].to_numpy(), np.abs(rows[f"v{mass}"].to_numpy())
+        assert m["x_min"] <= x.min() + 1e-9 and x.max() <= m["x_max"] + 1e-9
+        assert v.max() <= m["v_peak"] + 1e-9 and m["v_peak"] <= v.max() * (1 + 1e-3) + 1e-9
+    kinds = zip(events.kind, events["mass"], strict=True)
+    onsets = [EventKind(k).contact_starts and EventKind(k).stands_for_event(int(m)) for k, m in kinds]
+    total = measured.contact["right"]["onsets"] + measured.contact["left"]["onsets"]
+    assert total * periods == sum(onsets)
+    left, right = rows[rows.x1 - rows.x2 + p.d < 0], rows[rows.x1 > p.d1]  # in contact, by the geometry
+    forces = {
+        "left": np.abs(p.K3 * (left.x1 - left.x2 + p.d) + p.C3 * (left.v1 - left.v2)),
+        "right": p.K6 * (right.x1 - p.d1),
+    }
+    for stop, force in forces.items():
+        peak = measured.contact[stop]["force_peak"]
+        assert (peak > 0) == (len(force) > 0)
+        if len(force):
+            assert force.max() <= peak + 1e-9 and peak <= force.max() * 1.01
+
+
+def test_bad_periods_are_refused():
+    from oscillator import InputError
+
+    with pytest.raises(InputError, match="periods") as caught:
+        response(resolve_case("instance-1"), 0)
+    assert caught.value.field == "periods"
+
+
+def test_an_orbit_with_a_rest_returns_its_energy():
+    """Instance 1's orbit in which m2 rests twice a period: the energy balance closes to the
+    integration's tolerance, and m2's rest and the contacts are the orbit's."""
+    orbit = find_orbit("instance-1", Q2=71.165, guess=(3.0, 0.0, 6.0, 0.0), transient=60)
+    measured = orbit.response()
+    assert isinstance(measured, Response) and abs(measured.balance) < 1e-7 * measured.energy["forcing"]
+    assert measured.mass[2]["rest"] > 0.0 and measured.mass[1]["rest"] == 0.0
+    assert measured.mass[1]["x_pp"] > 0 and measured.mass[2]["x_max"] > measured.mass[2]["x_min"]
+    flat = measured.columns()
+    assert flat["rest_m2"] == measured.mass[2]["rest"] and "impact_max_left" in flat and "energy_forcing" in flat
+
+
+def test_the_documented_example_prints_what_the_page_shows(capsys):
+    """docs/orbits.md, section 6: its Python block prints the lines shown under it."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "orbits.md").read_text(encoding="utf-8")
+    section = text.split("## 6. Response measures", 1)[1]
+    code = section.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = section.split("```text\n", 1)[1].split("```", 1)[0]
+    exec(compile(code, "docs/orbits.md", "exec"), {})
+    assert capsys.readouterr().out == shown
