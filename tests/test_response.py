@@ -119,3 +119,64 @@ def test_the_documented_example_prints_what_the_page_shows(capsys):
     shown = section.split("```text\n", 1)[1].split("```", 1)[0]
     exec(compile(code, "docs/orbits.md", "exec"), {})
     assert capsys.readouterr().out == shown
+
+
+def den_hartog(m, k, friction, force, omega):
+    """Den Hartog's (1931) steady motion without stops of ``m x'' + k x + F sgn(x') = P cos(W t)``:
+    the half period with ``x' < 0`` solved exactly, ``x = A cos(wn t) + B sin(wn t) + F / k +
+    P / (k - m W^2) cos(W t + phi)`` from ``(X0, 0)`` to ``(-X0, 0)``: four equations linear in
+    ``A, B, X0, sin(phi)`` for a given ``cos(phi)``, and ``cos^2 + sin^2 = 1``.  The amplitude X0."""
+    wn = math.sqrt(k / m)
+    r, theta = force / (k - m * omega**2), wn * math.pi / omega
+    matrix = np.array(
+        [
+            [1.0, 0.0, -1.0, 0.0],
+            [0.0, wn, 0.0, -r * omega],
+            [math.cos(theta), math.sin(theta), 1.0, 0.0],
+            [-wn * math.sin(theta), wn * math.cos(theta), 0.0, r * omega],
+        ]
+    )
+    u0 = np.linalg.solve(matrix, [-friction / k, 0.0, -friction / k, 0.0])
+    u1 = np.linalg.solve(matrix, [-r, 0.0, r, 0.0])
+    roots = np.roots([1 + u1[3] ** 2, 2 * u0[3] * u1[3], u0[3] ** 2 - 1])
+    return max(abs(float((u0 + c * u1)[2])) for c in roots.real if abs(c) <= 1)
+
+
+def test_den_hartogs_coulomb_oscillator_over_a_frequency_band():
+    """Mass 1 alone with Coulomb friction (mu_s = mu_k) and no damper, m2 parked: along the
+    continued branch over Omega in [1.2, 2.5] (continuous sliding) the amplitude is Den Hartog's to
+    1e-8, symmetric, and friction takes 4 F X0 of the forcing's work a period."""
+    from oscillator import continue_orbit
+
+    friction = 0.1
+    over = dict(
+        m1=1.0, K1=1.0, K2=0.0, C1=0.0, C2=0.0, K3=0.0, C3=0.0, P1=0.0, P2=0.0, mu_k=friction / 9.8,
+        mu_s=friction / 9.8, d=1e4, d1=1e4, Q1=1.0, Q2=0.0, Omega=1.2, phi1=0.0, phi2=0.0, x1=1.0, v1=0.0,
+        x2=0.0, v2=0.0, K4=1.0, K5=0.0, C4=0.0, C5=0.0,
+    )  # fmt: skip
+    branch = continue_orbit(resolve_case("instance-1", **over), param="Omega", start=1.2, stop=2.5, transient=300)
+    table = branch.responses()
+    assert branch.complete and len(table) > 50 and table.Omega.min() == 1.2 and table.Omega.max() == 2.5
+    exact = np.array([den_hartog(1.0, 1.0, friction, 1.0, omega) for omega in table.Omega])
+    assert np.max(np.abs(table.x_max_m1 - exact)) < 1e-8
+    assert np.max(np.abs(table.x_min_m1 + exact)) < 1e-8
+    assert (table.rest_m1 == 0).all() and np.allclose(table.rest_m2, 1.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(table.energy_friction, 4 * friction * exact, rtol=1e-8)
+    np.testing.assert_allclose(table.energy_forcing, table.energy_friction, rtol=1e-8)
+
+
+def test_the_linear_oscillators_response_over_a_frequency_band():
+    """The two linear oscillators along a branch over Omega in [1.6, 2.6], above both resonances:
+    every point's peaks and RMS values are the closed form's to 1e-9."""
+    from oscillator import continue_orbit
+
+    case = resolve_case("instance-1", **(LINEAR | {"Omega": 1.6}))
+    branch = continue_orbit(case, param="Omega", start=1.6, stop=2.6, transient=400)
+    table = branch.responses()
+    assert branch.complete and len(table) > 40
+    for mass, (m, k, c, q) in ((1, (1.0, 2.0, 0.1, 1.0)), (2, (1.5, 1.0, 0.2, 0.7))):
+        omega = table.Omega.to_numpy()
+        amplitude = q / np.hypot(k - m * omega**2, c * omega)
+        assert np.max(np.abs(table[f"x_max_m{mass}"] - amplitude)) < 1e-9
+        assert np.max(np.abs(table[f"x_rms_m{mass}"] - amplitude / math.sqrt(2))) < 1e-9
+        assert np.max(np.abs(table[f"v_peak_m{mass}"] - omega * amplitude)) < 1e-9

@@ -144,6 +144,13 @@ class Branch:
         ``coordinate``), if given."""
         return presenter().plot_branch(self, check_coordinate(coordinate or self.coordinate), sweep_points)
 
+    def responses(self) -> pd.DataFrame:
+        """The response measures at every point (:func:`oscillator.orbits.response.branch_responses`):
+        against ``Omega``, the branch's frequency response."""
+        from oscillator.orbits.response import branch_responses
+
+        return branch_responses(self)
+
     def plot_multipliers(self) -> Figure:
         """The multipliers' moduli against the parameter (``figures/multipliers.png``)."""
         return presenter().plot_multipliers(self)

@@ -42,10 +42,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
-from oscillator.io.cases import Case
+from oscillator.io.cases import Case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.kernels import rates
@@ -54,7 +55,9 @@ from oscillator.model.parameters import Parameters, check_count
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-__all__ = ["MASS_MEASURES", "Response", "response"]
+    from oscillator.orbits.branch import Branch
+
+__all__ = ["MASS_MEASURES", "Response", "branch_responses", "response"]
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
 MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
@@ -102,6 +105,45 @@ def response(case: Case, periods: int = 1) -> Response:
     totals = np.sum([piece.integrals for piece in pieces], axis=0)
     energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
     return Response(periods, mass, contact, energy)
+
+
+#: Newton's tolerance on ``|P(y) - y|`` where a branch point is refined before it is measured: the
+#: continuation's corrector stops at 1e-9, which a multiplier near 1 (weak damping, a resting mass)
+#: turns into 1e-6 of the state.
+REFINE = 1e-12
+
+
+def branch_responses(branch: Branch) -> pd.DataFrame:
+    """The response measures at every point of a continued branch: one row per point with the
+    parameter, ``stable``, ``piece`` and every measure of :meth:`Response.columns` (the
+    frequency response of the branch, when the parameter is ``Omega``).  Each point's orbit is
+    refined by Newton to :data:`REFINE` first (it stays as it is where Newton fails: a grazing or
+    sliding point)."""
+    import pandas as pd
+
+    from oscillator.errors import OscillatorError
+    from oscillator.orbits.shooting import find_orbit
+
+    if branch.case is None:
+        raise InputError(
+            "the branch carries no case to run its orbits from; continue it with continue_orbit", field="branch"
+        )
+    rows = []
+    for point in branch.points.itertuples(index=False):
+        values = point._asdict()
+        state = {name: float(values[name]) for name in ("x1", "v1", "x2", "v2")}
+        case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
+        try:
+            refined = find_orbit(case, period=branch.period, guess=list(state.values()), tol=REFINE)
+            case = refined.one_period()
+        except OscillatorError:
+            pass
+        measured = response(case, branch.period)
+        rows.append(
+            {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
+            | measured.columns()
+        )
+    return pd.DataFrame(rows)
 
 
 # The integrals carried along a piece: x1^2, x2^2, a1^2, a2^2, then the energies.
