@@ -51,6 +51,8 @@ _EXPORTS = {
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
     "Response": "oscillator.orbits.response",
+    "FrequencyResponse": "oscillator.attractors.frequency",
+    "frequency_response": "oscillator.attractors.frequency",
     "response": "oscillator.orbits.response",
     "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
@@ -88,6 +90,7 @@ __all__ = [
     "Event",
     "EventKind",
     "ExpectedEvent",
+    "FrequencyResponse",
     "InitialState",
     "InputError",
     "Interrupted",
@@ -112,6 +115,7 @@ __all__ = [
     "find_basins",
     "find_orbit",
     "follow_attractors",
+    "frequency_response",
     "load_case",
     "lyapunov",
     "read_run",
@@ -128,6 +132,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.basins import Basins, find_basins
     from oscillator.attractors.finding import Attractors, find_attractors
     from oscillator.attractors.following import AttractorsOver, follow_attractors
+    from oscillator.attractors.frequency import FrequencyResponse, frequency_response
     from oscillator.attractors.grouping import Attractor
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.attractors.mapping import AttractorSettings

@@ -1,0 +1,72 @@
+"""The frequency response (issue 38): the branches over a span with their measures, and the slow
+sweeps up and down with their jumps, against a hardening Duffing oscillator's folds."""
+
+import numpy as np
+import pytest
+
+from oscillator import AttractorSettings, InputError, frequency_response, resolve_case
+
+#: Mass 1 a hardening Duffing oscillator (K2 > 0, a light damper, no friction, the stops far);
+#: mass 2 a linear one beside it, uncoupled.
+DUFFING = dict(
+    m1=1.0, K1=1.0, K2=0.05, C1=0.05, C2=0.0, K3=0.0, C3=0.0, m2=1.5, K4=1.0, K5=0.0, C4=0.2, C5=0.0, K6=1.0,
+    mu_k=0.0, mu_s=0.0, P1=0.0, P2=0.0, d=1000.0, d1=1000.0, Q1=0.2, Q2=0.1, Omega=0.8, phi1=0.0, phi2=0.0,
+    x1=0.0, v1=0.0, x2=0.0, v2=0.1,
+)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def duffing():
+    case = resolve_case("instance-1", **DUFFING)
+    settings = AttractorSettings(transient=400, record=8)
+    return frequency_response(case, "Omega", (0.8, 1.6), seeds=3, sweep=81, settings=settings)
+
+
+def test_the_branch_folds_twice_and_is_measured_at_every_point(duffing):
+    """One branch from 0.8 to 1.6 through both folds (the seeds on it are not continued again):
+    stable up to the upper fold, unstable between the folds, stable after the lower."""
+    assert len(duffing.branches) == 1 and duffing.branches[0].complete
+    folds = sorted(duffing.folds.Omega)
+    assert len(folds) == 2 and 1.09 < folds[0] < 1.10 < 1.19 < folds[1] < 1.2
+    points = duffing.points
+    assert len(points) == len(duffing.branches[0].points) and not points.x_pp_m1.isna().any()
+    # at 1.15, between the folds, the branch passes three times: large and stable, then unstable,
+    # then small and stable, in that order along it
+    side = np.sign(points.Omega.to_numpy() - 1.15)
+    crossings = np.flatnonzero(side[1:] != side[:-1])
+    assert len(crossings) == 3
+    assert points.stable.iloc[crossings].tolist() == [True, False, True]
+    sizes = points.x_pp_m1.iloc[crossings].to_numpy()
+    assert sizes[0] > sizes[1] > sizes[2] and sizes[0] > 3 * sizes[2]
+
+
+def test_the_sweeps_jump_where_the_branch_folds(duffing):
+    """Up, the large motion holds to the upper fold and drops at the first value past it; down, the
+    small one holds to the lower fold and jumps up at the first value below it (to the sweep's
+    resolution, 0.01)."""
+    low, high = sorted(duffing.folds.Omega)
+    (up,), (down,) = duffing.jumps("up"), duffing.jumps("down")
+    assert high < up <= high + 0.01 + 1e-9 and low - 0.01 - 1e-9 <= down < low
+    sweeps = duffing.sweeps
+    before = sweeps[(sweeps.direction == "up") & (sweeps.Omega < up)].x_pp_m1.iloc[-1]
+    after = sweeps[(sweeps.direction == "up") & (sweeps.Omega >= up)].x_pp_m1.iloc[0]
+    assert before > 5 * after
+    # every sweep value met a period-1 orbit, measured
+    assert (sweeps.period == 1).all() and not sweeps.x_pp_m1.isna().any()
+
+
+@pytest.mark.parametrize(
+    ("arguments", "field"),
+    [
+        ({"param": "Q3"}, "param"),
+        ({"span": (1.6, 1.3)}, "span"),
+        ({"span": (1.3,)}, "span"),
+        ({"span": (-1.0, 1.3)}, "Omega"),
+        ({"period": 0}, "period"),
+        ({"seeds": 1}, "seeds"),
+    ],
+)
+def test_bad_input_is_refused_naming_the_field(arguments, field):
+    with pytest.raises(InputError) as caught:
+        frequency_response("instance-1", **({"param": "Omega", "span": (1.3, 1.85)} | arguments))
+    assert caught.value.field == field
