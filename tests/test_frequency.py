@@ -4,7 +4,7 @@ sweeps up and down with their jumps, against a hardening Duffing oscillator's fo
 import numpy as np
 import pytest
 
-from oscillator import AttractorSettings, InputError, frequency_response, resolve_case
+from oscillator import InputError, frequency_response, resolve_case
 
 #: Mass 1 a hardening Duffing oscillator (K2 > 0, a light damper, no friction, the stops far);
 #: mass 2 a linear one beside it, uncoupled.
@@ -17,9 +17,18 @@ DUFFING = dict(
 
 @pytest.fixture(scope="module")
 def duffing():
-    case = resolve_case("instance-1", **DUFFING)
-    settings = AttractorSettings(transient=400, record=8)
-    return frequency_response(case, "Omega", (0.8, 1.6), seeds=3, sweep=81, settings=settings)
+    """The Duffing example of docs/frequency.md, run as the page shows it (and checked to be the
+    system of :data:`DUFFING`)."""
+    from pathlib import Path
+
+    import oscillator as osc
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "frequency.md").read_text(encoding="utf-8")
+    block = page.split("A hardening Duffing oscillator", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    scope = {"osc": osc}
+    exec(compile("\n".join(line[2:] for line in block.splitlines()), "docs/frequency.md", "exec"), scope)
+    assert scope["case"] == resolve_case("instance-1", **DUFFING)
+    return scope["found"]
 
 
 def test_the_branch_folds_twice_and_is_measured_at_every_point(duffing):
