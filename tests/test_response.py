@@ -180,3 +180,20 @@ def test_the_linear_oscillators_response_over_a_frequency_band():
         assert np.max(np.abs(table[f"x_max_m{mass}"] - amplitude)) < 1e-9
         assert np.max(np.abs(table[f"x_rms_m{mass}"] - amplitude / math.sqrt(2))) < 1e-9
         assert np.max(np.abs(table[f"v_peak_m{mass}"] - omega * amplitude)) < 1e-9
+
+
+def test_the_atlas_impact_velocity_is_the_responses():
+    """``features.impact_velocity`` (the atlas's column) reads the same onsets as the response:
+    m1 hitting the right stop moved in to d1 = 3.5 once a period."""
+    from oscillator import find_attractors
+    from oscillator.attractors.features import impact_velocity
+
+    found = find_attractors("instance-1", Q2=71.165, d1=3.5, transient=100, record=8)
+    (attractor,) = [a for a in found.attractors if a.contacts]
+    assert attractor.orbit is not None
+    measured = attractor.orbit.response()
+    assert measured.contact["right"]["onsets"] == 1.0 and measured.contact["left"]["onsets"] == 0.0
+    assert impact_velocity(attractor.orbit.case, attractor) == pytest.approx(
+        measured.contact["right"]["impact_max"], rel=1e-6
+    )
+    assert measured.contact["right"]["impact_max"] > 1.0

@@ -28,11 +28,12 @@ __all__ = ["MEASURES", "Measured", "impact_velocity"]
 
 
 def impact_velocity(case: Case, attractor: Attractor) -> float:
-    """The largest relative velocity at a contact onset (m/s) over one return from the
-    attractor's last section point (``max(period, 1)`` forcing periods); 0 without contacts."""
+    """The largest approach speed at a contact onset (m/s, :func:`~oscillator.orbits.response.impact_speeds`)
+    over one return from the attractor's last section point (``max(period, 1)`` forcing
+    periods); 0 without contacts."""
     from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.simulate import simulate
-    from oscillator.model.events import EventKind
+    from oscillator.orbits.response import impact_speeds
 
     if not attractor.contacts:
         return 0.0
@@ -40,13 +41,8 @@ def impact_velocity(case: Case, attractor: Attractor) -> float:
     begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
     run = resolve_case(case, **begin)
     result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, save=SaveAt(steps=False))
-    events = result.events
-    onsets = events[events.kind.isin(EventKind.values_where(lambda kind: kind.contact_starts))]
-    if onsets.empty:
-        return 0.0
-    left = onsets.kind.map(lambda kind: EventKind(kind).contact == "left")
-    speed = np.where(left, np.abs(onsets.v1 - onsets.v2), np.abs(onsets.v1))
-    return float(np.max(speed))
+    speeds = np.concatenate([impact_speeds(result.events, stop) for stop in ("right", "left")])
+    return float(np.max(speeds)) if len(speeds) else 0.0
 
 
 #: The measures an attractor can carry, by name: ``measure(case, attractor) -> float``.

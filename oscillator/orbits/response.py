@@ -57,7 +57,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.branch import Branch
 
-__all__ = ["MASS_MEASURES", "Response", "branch_responses", "response"]
+__all__ = ["MASS_MEASURES", "Response", "branch_responses", "impact_speeds", "response"]
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
 MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
@@ -247,10 +247,10 @@ def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, fl
     }
 
 
-def _contact_measures(
-    pieces: list[_Piece], events: pd.DataFrame, stop: str, span: float, periods: int
-) -> dict[str, float]:
-    """The measures of the contact on ``stop`` (module docstring)."""
+def impact_speeds(events: pd.DataFrame, stop: str) -> np.ndarray:
+    """The approach speed at each contact onset on ``stop`` (``"right"`` or ``"left"``) of an event
+    table, in order (m/s): ``|v1|`` on the right stop, ``|v1 - v2|`` between the masses (a contact
+    between the masses is written for both, and counted once)."""
     kinds = [EventKind(kind) for kind in events.kind]
     onsets = [
         k
@@ -258,10 +258,18 @@ def _contact_measures(
         if kind.contact_starts and kind.contact == stop and kind.stands_for_event(int(mass))
     ]
     rows = events.iloc[onsets]
-    speeds = np.abs(rows.v1 - rows.v2) if stop == "left" else np.abs(rows.v1)
+    speeds: np.ndarray = np.abs((rows.v1 - rows.v2) if stop == "left" else rows.v1).to_numpy(float)
+    return speeds
+
+
+def _contact_measures(
+    pieces: list[_Piece], events: pd.DataFrame, stop: str, span: float, periods: int
+) -> dict[str, float]:
+    """The measures of the contact on ``stop`` (module docstring)."""
+    speeds = impact_speeds(events, stop)
     inside = [piece for piece in pieces if (piece.segment.mode.left if stop == "left" else piece.segment.mode.right)]
     return {
-        "onsets": len(onsets) / periods,
+        "onsets": len(speeds) / periods,
         "impact_max": float(np.max(speeds)) if len(speeds) else 0.0,
         "impact_mean": float(np.mean(speeds)) if len(speeds) else 0.0,
         "force_peak": max((piece.force[0 if stop == "right" else 1] for piece in inside), default=0.0),
