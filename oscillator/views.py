@@ -77,9 +77,10 @@ class Views:
         from oscillator.attractors.atlas import Atlas
         from oscillator.attractors.basins import Basins
         from oscillator.attractors.following import AttractorsOver
+        from oscillator.attractors.frequency import FrequencyResponse
         from oscillator.attractors.lyapunov import LyapunovSpectrum
         from oscillator.orbits.curves import Curve
-        from oscillator.report import attractors, plane
+        from oscillator.report import attractors, frequency, plane
 
         draw: dict[type, Callable[..., Figure]] = {
             Basins: attractors.basins_figure,
@@ -87,6 +88,7 @@ class Views:
             AttractorsOver: attractors.following_figure,
             Atlas: plane.atlas_figure,
             Curve: plane.curve_figure,
+            FrequencyResponse: frequency.frequency_figure,
         }
         return draw[type(found)](found, **options)
 

@@ -79,3 +79,19 @@ def test_bad_input_is_refused_naming_the_field(arguments, field):
     with pytest.raises(InputError) as caught:
         frequency_response("instance-1", **({"param": "Omega", "span": (1.3, 1.85)} | arguments))
     assert caught.value.field == field
+
+
+def test_the_figure_draws_the_branch_the_folds_and_the_jumps(duffing):
+    """One panel per mass; stable solid and unstable dashed lines; the two folds marked on each
+    panel; an arrow at each sweep's jump; a measure that is not one refused."""
+    fig = duffing.plot("x_pp")
+    top, bottom = fig.axes
+    styles = {line.get_linestyle() for line in top.lines if line.get_label() in ("stable orbits", "unstable orbits")}
+    assert styles == {"-", "--"}
+    folds = [line for line in top.lines if line.get_label() == "fold"]
+    assert len(folds) == 2 and len([line for line in bottom.lines if line.get_label() == "fold"]) == 2
+    assert len(top.texts) == 2  # the jump up and the jump down, as arrows
+    assert top.get_ylabel() == "x_pp of m1 (m)" and bottom.get_xlabel() == "Omega"
+    with pytest.raises(InputError) as caught:
+        duffing.plot("x_ppp")
+    assert caught.value.field == "measure"

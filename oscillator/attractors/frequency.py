@@ -17,7 +17,8 @@ move of the section point out of scale with the moves around it: :func:`_jumps`)
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -31,6 +32,10 @@ from oscillator.orbits.branch import Bifurcation, Branch
 from oscillator.orbits.continuation import continue_orbit
 from oscillator.orbits.response import REFINE, response
 from oscillator.orbits.shooting import find_orbit
+from oscillator.presenting import presenter
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["JUMP", "JUMP_RATIO", "FrequencyResponse", "frequency_response"]
 
@@ -66,6 +71,13 @@ class FrequencyResponse:
     branches: tuple[Branch, ...]
     points: pd.DataFrame
     sweeps: pd.DataFrame
+    case: Case = field(repr=False, compare=False)  #: the case, as given
+
+    def plot(self, measure: str = "x_pp") -> Figure:
+        """``measure`` of each mass against the parameter, in the engineers' style
+        (:func:`oscillator.report.frequency.frequency_figure`): branches stable solid and unstable
+        dashed, bifurcations marked, the sweeps with their jumps, sticking and contact shaded."""
+        return presenter().plot_global(self, measure=measure)
 
     @property
     def folds(self) -> pd.DataFrame:
@@ -129,7 +141,7 @@ def frequency_response(
     )
     say("sweeping up and down")
     sweeps = pd.concat([_sweep(base, param, values, settings) for values in _sweep_values(low, high, sweep)])
-    return FrequencyResponse(param, tuple(branches), points, sweeps.reset_index(drop=True))
+    return FrequencyResponse(param, tuple(branches), points, sweeps.reset_index(drop=True), base)
 
 
 def _check(case: Case, param: str, span: object, period: int, seeds: int, sweep: int) -> tuple[float, float]:
