@@ -12,7 +12,7 @@ engines put an event at the same time to the accuracy of their solutions.  A roo
 is exactly zero where a search starts takes its sign a rounding step later, as CVODE's does.
 
 Everything from one return to the next runs in compiled code (:func:`advance`), on one float
-vector that holds the integrator's state (:data:`LAYOUT`): the supervisor's loop in Python
+vector that holds the integrator's state (its layout: the offsets below): the supervisor's loop in Python
 (``simulate(case, engine="dop853")``) and the compiled one of the many-start analyses
 (:mod:`oscillator.hybrid.batch`) drive the same functions.  A root that switches nothing leaves the
 step it was found in to be searched on; a switch restarts the method from the root with the new
@@ -35,7 +35,7 @@ from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions, root_values_at
 from oscillator.model.types import Vector
 
-__all__ = ["FAILURES", "LAYOUT", "Dop853Engine", "advance", "new_work", "restart"]
+__all__ = ["FAILURES", "Dop853Engine", "advance", "new_work", "restart"]
 
 _STAGES = int(_coefficients.N_STAGES)  # 12
 _A = np.ascontiguousarray(_coefficients.A[:_STAGES, :_STAGES])
@@ -76,9 +76,8 @@ R = NUM_ROOTS
     NEAR,
     MAX_STEPS,
     STARTED,
-    REJECTED,
     T_REF,
-) = range(16)
+) = range(15)
 Y_OLD = 16
 Y_NEW = Y_OLD + N
 F_NEW = Y_NEW + N
@@ -92,8 +91,6 @@ G_MID = G_HI + R
 K_AT = G_MID + R
 F_AT = K_AT + _EXTENDED * N
 SIZE = F_AT + _POWER * N
-#: Where each part of the integrator's state sits in the work vector.
-LAYOUT = {"y_out": Y_OUT, "evaluations": EVALS, "tau": T_CUR, "t_ref": T_REF, "size": SIZE}
 
 #: What :func:`advance` returns: a root, the target (or the stop time), one step, or a failure.
 ROOT, TARGET, STEPPED_ONE, TOO_MUCH_WORK, TOO_SMALL = 0, 1, 2, -1, -3
@@ -255,7 +252,6 @@ def _step(w: Vector, modes: np.ndarray, c: Vector, t_stop: float) -> bool:  # pr
             break
         h_abs = h * (max(MIN_FACTOR, SAFETY * error**_EXPONENT) if math.isfinite(error) else MIN_FACTOR)
         rejected = True
-        w[REJECTED] += 1.0
     w[T_OLD], w[T_NEW] = t, t_new
     for i in range(N):
         w[Y_OLD + i] = w[Y_NEW + i]

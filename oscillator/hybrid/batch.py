@@ -26,11 +26,9 @@ import numpy as np
 from oscillator.compiled import njit
 from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, restart
 from oscillator.hybrid.guards import CONSISTENCY
-from oscillator.model.fields import D1, D
-from oscillator.model.g_functions import displacement_values
 from oscillator.model.parameters import SolverOptions
-from oscillator.model.roots import violation_code
-from oscillator.model.switching import MAX_ROWS, resolve_compiled
+from oscillator.model.roots import directions_into, violation_code
+from oscillator.model.switching import MAX_ROWS, initial_compiled, resolve_compiled
 from oscillator.model.types import Vector
 
 __all__ = ["FAILED", "OK", "OPTIONS", "WINDOW_FULL", "land_compiled", "options_vector", "settled_compiled"]
@@ -62,48 +60,9 @@ _CHUNK = 8
 
 @njit(cache=True, error_model="numpy")
 def _set_mode(modes: np.ndarray, s1: int, s2: int, left: int, right: int) -> None:  # pragma: no cover - compiled
-    """The engine's mode vector: signs, contact flags and root directions
-    (:func:`oscillator.model.roots.root_directions`)."""
+    """The engine's mode vector: signs, contact flags and root directions."""
     modes[0], modes[1], modes[2], modes[3] = s1, s2, left, right
-    for i in range(R):
-        modes[4 + i] = 0
-    for base, s in ((0, s1), (4, s2)):
-        if s != 0:
-            modes[4 + base] = -s
-            modes[4 + base + 1] = s
-        else:
-            modes[4 + base + 2] = 1
-            modes[4 + base + 3] = -1
-    modes[4 + 8] = -1 if right else 1
-    modes[4 + 9] = 1 if left else -1
-
-
-@njit(cache=True, error_model="numpy")
-def _initial(
-    t0: float, y: Vector, c: Vector, period: float, rows: np.ndarray
-) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
-    """:func:`oscillator.model.resolving.initial_mode` compiled: the mode at the start (``y``
-    projected in place), the events written and whether the instant settled."""
-    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
-    z1, zdot1 = x1 - x2, v1 - v2
-    left = z1 < -c[D] or (z1 == -c[D] and zdot1 < 0.0)
-    right = x1 > c[D1] or (x1 == c[D1] and v1 > 0.0)
-    s1 = 0 if v1 == 0.0 else (1 if v1 > 0.0 else -1)
-    s2 = 0 if v2 == 0.0 else (1 if v2 > 0.0 else -1)
-    mode, n, ok = resolve_compiled(t0, y, c, period, (s1, s2, int(left), int(right)), 0, 0.0, 0.0, rows, 0)
-    if not ok:
-        return mode, n, False
-    on_left, on_right = z1 == -c[D] and zdot1 == 0.0, x1 == c[D1] and v1 == 0.0
-    if on_left or on_right:
-        flags = (mode[2] != 0, mode[3] != 0)
-        relative = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, False)[1]
-        a1 = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, True)[1]
-        new_left = (relative < 0.0) if on_left else flags[0]
-        new_right = (a1 > 0.0) if on_right else flags[1]
-        if (new_left, new_right) != flags:
-            start = (mode[0], mode[1], int(new_left), int(new_right))
-            mode, n, ok = resolve_compiled(t0, y, c, period, start, 0, 0.0, 0.0, rows, n)
-    return mode, n, ok
+    directions_into(modes, 4, s1, s2, left != 0, right != 0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -241,9 +200,9 @@ def _start(
     """The mode at the start and the engine started in it; the storm guard's count (-1: failed)."""
     rows, recent, _ = buffers
     y = np.zeros(N)
-    y[:4] = start
+    y[:4] = start  # the start as given, as the supervisor starts from it
     w[STARTED] = 0.0  # the first step chosen afresh: a landing does not depend on the one before
-    mode, n, ok = _initial(t0, y, c, period, rows)
+    mode, n, ok = initial_compiled(t0, start.copy(), c, period, rows)
     filled, stormy = _storm(recent, 0, t0, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
     if not ok or stormy:
         return -1.0
@@ -271,7 +230,7 @@ def land_compiled(
     many event rows."""
     settle, transient, record, tolerance, max_period = settings
     modes = np.zeros(4 + R, np.int64)
-    buffers = (np.empty((MAX_ROWS, window_rows.shape[1])), np.empty(int(options[_STORM_EVENTS]) + 1), window_rows)
+    buffers = (np.empty((2 * MAX_ROWS, window_rows.shape[1])), np.empty(int(options[_STORM_EVENTS]) + 1), window_rows)
     ring = np.empty((max(8, 3 * max_period), 4))
     ordered = np.empty_like(ring)
     tally = np.zeros(6)

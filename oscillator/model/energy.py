@@ -14,14 +14,12 @@ and switching error.
 
 from __future__ import annotations
 
-import math
-
 from oscillator.compiled import njit
-from oscillator.model.fields import C1, C2, C3, C4, C5, M1, M2, MU_K, OMEGA, P1, P2, PHI1, PHI2, Q1, Q2, G
+from oscillator.model.fields import C1, C2, C3, C4, C5, M1, M2, MU_K, P1, P2, G, drives
 from oscillator.model.parameters import Parameters
 from oscillator.model.types import StateLike, Vector
 
-__all__ = ["POWER_NAMES", "mechanical_energy", "power_terms"]
+__all__ = ["POWER_NAMES", "mechanical_energy", "power_terms", "powers"]
 
 #: Names of the integrated work terms, in the order :func:`power_terms` returns them.
 POWER_NAMES = ("forcing", "feedback", "damping", "friction")
@@ -48,15 +46,25 @@ def mechanical_energy(y: StateLike, p: Parameters, left: bool, right: bool) -> f
     return energy
 
 
+@njit(inline="always", cache=True)
+def powers(
+    v1: float, v2: float, s1: int, s2: int, left: bool, c: Vector, drive1: float, drive2: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """``(forcing, feedback, damping loss, friction loss)`` with the forcings ``drive_i`` given."""
+    forcing = drive1 * v1 + drive2 * v2
+    feedback = -(c[P1] * s1 * v1 + c[P2] * s2 * v2)
+    square1, square2 = v1 * v1, v2 * v2
+    damping = c[C1] * square1 + c[C2] * (square1 * square1) + c[C4] * square2 + c[C5] * (square2 * square2)
+    if left:
+        damping += c[C3] * ((v1 - v2) * (v1 - v2))
+    friction = c[MU_K] * c[G] * (c[M1] * s1 * v1 + c[M2] * s2 * v2)
+    return forcing, feedback, damping, friction
+
+
 @njit(cache=True)
 def power_terms(
     t: float, v1: float, v2: float, s1: int, s2: int, left: bool, c: Vector
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """``(forcing, feedback, damping loss, friction loss)`` of a mode at a point."""
-    forcing = c[Q1] * math.sin(c[OMEGA] * t + c[PHI1]) * v1 + c[Q2] * math.sin(c[OMEGA] * t + c[PHI2]) * v2
-    feedback = -(c[P1] * s1 * v1 + c[P2] * s2 * v2)
-    damping = c[C1] * v1**2 + c[C2] * v1**4 + c[C4] * v2**2 + c[C5] * v2**4
-    if left:
-        damping += c[C3] * (v1 - v2) ** 2
-    friction = c[MU_K] * c[G] * (c[M1] * s1 * v1 + c[M2] * s2 * v2)
-    return forcing, feedback, damping, friction
+    drive1, drive2 = drives(t, c)
+    return powers(v1, v2, s1, s2, left, c, drive1, drive2)

@@ -105,19 +105,37 @@ def _vector(p: Parameters) -> Vector:
     return np.array([getattr(p, name) for name in Parameters.names()], dtype=np.float64)
 
 
-@njit(cache=True)
-def forces(
-    t: float, x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, c: Vector
+@njit(inline="always", cache=True)
+def drives(t: float, c: Vector) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``(Q1 sin(Omega t + phi1), Q2 sin(Omega t + phi2))`` (N): one sine where the forcings are in phase."""
+    phase = c[OMEGA] * t
+    wave = math.sin(phase + c[PHI1])
+    return c[Q1] * wave, c[Q2] * (wave if c[PHI2] == c[PHI1] else math.sin(phase + c[PHI2]))
+
+
+@njit(inline="always", cache=True)
+def mass_forces(
+    x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, c: Vector, drive1: float, drive2: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``(A1, A2)``, see :func:`non_friction_force`."""
-    f1 = c[Q1] * math.sin(c[OMEGA] * t + c[PHI1]) - c[K1] * x1 - c[K2] * x1**3 - c[C1] * v1 - c[C2] * v1**3
-    f2 = c[Q2] * math.sin(c[OMEGA] * t + c[PHI2]) - c[K4] * x2 - c[K5] * x2**3 - c[C4] * v2 - c[C5] * v2**3
+    """``(m1 A1, m2 A2)`` (N): the forcing given, springs, dampers and contacts (cubes as products)."""
+    f1 = drive1 - c[K1] * x1 - c[K2] * (x1 * x1 * x1) - c[C1] * v1 - c[C2] * ((v1 * v1) * v1)
+    f2 = drive2 - c[K4] * x2 - c[K5] * (x2 * x2 * x2) - c[C4] * v2 - c[C5] * ((v2 * v2) * v2)
     if left:
         contact = c[K3] * (x1 - x2 + c[D]) + c[C3] * (v1 - v2)
         f1 -= contact
         f2 += contact
     if right:
         f1 -= c[K6] * (x1 - c[D1])
+    return f1, f2
+
+
+@njit(cache=True)
+def forces(
+    t: float, x1: float, v1: float, x2: float, v2: float, left: bool, right: bool, c: Vector
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``(A1, A2)``, see :func:`non_friction_force`."""
+    drive1, drive2 = drives(t, c)
+    f1, f2 = mass_forces(x1, v1, x2, v2, left, right, c, drive1, drive2)
     return f1 / c[M1], f2 / c[M2]
 
 

@@ -10,18 +10,16 @@ with ``J = df/dy`` (:func:`jacobian`).  The root functions' kernel is
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from oscillator.compiled import njit
+from oscillator.model.energy import powers
 from oscillator.model.fields import (
     C1,
     C2,
     C3,
     C4,
     C5,
-    D1,
     K1,
     K2,
     K3,
@@ -31,16 +29,12 @@ from oscillator.model.fields import (
     M1,
     M2,
     MU_K,
-    OMEGA,
     P1,
     P2,
-    PHI1,
-    PHI2,
-    Q1,
-    Q2,
-    D,
     G,
     coefficients,
+    drives,
+    mass_forces,
 )
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
@@ -56,31 +50,15 @@ def rates(
     """The mode's field (4.9)-(4.14) and the powers of the energy audit, as one scalar function:
     ``(v1, a1, v2, a2, forcing, feedback, damping loss, friction loss)``.
 
-    The formulas of :func:`~oscillator.model.fields.forces`, :func:`~oscillator.model.fields.kinetic`
-    and :func:`~oscillator.model.energy.power_terms`, written as the compiler likes them (inlined
-    into its caller, cubes as products, one sine where the forcings are in phase): the integrators call it at
-    every stage, where calls and powers cost more than the arithmetic."""
-    phase = c[OMEGA] * t
-    wave = math.sin(phase + c[PHI1])
-    drive1 = c[Q1] * wave
-    drive2 = c[Q2] * (wave if c[PHI2] == c[PHI1] else math.sin(phase + c[PHI2]))
-    # the terms in the order, and so to the bit, of forces() and power_terms()
-    square1, square2 = v1 * v1, v2 * v2
-    f1 = drive1 - c[K1] * x1 - c[K2] * (x1 * x1 * x1) - c[C1] * v1 - c[C2] * (square1 * v1)
-    f2 = drive2 - c[K4] * x2 - c[K5] * (x2 * x2 * x2) - c[C4] * v2 - c[C5] * (square2 * v2)
-    damping = c[C1] * square1 + c[C2] * (square1 * square1) + c[C4] * square2 + c[C5] * (square2 * square2)
-    if left:
-        contact = c[K3] * (x1 - x2 + c[D]) + c[C3] * (v1 - v2)
-        f1 -= contact
-        f2 += contact
-        damping += c[C3] * ((v1 - v2) * (v1 - v2))
-    if right:
-        f1 -= c[K6] * (x1 - c[D1])
+    The forces of :func:`~oscillator.model.fields.mass_forces`, the powers of
+    :func:`~oscillator.model.energy.powers`, each forcing's sine once
+    (:func:`~oscillator.model.fields.drives`), all inlined into the caller: the integrators call it
+    at every stage, where a call costs more than the arithmetic."""
+    drive1, drive2 = drives(t, c)
+    f1, f2 = mass_forces(x1, v1, x2, v2, left, right, c, drive1, drive2)
     a1 = 0.0 if s1 == 0 else f1 / c[M1] - s1 * (c[MU_K] * c[G] + c[P1] / c[M1])
     a2 = 0.0 if s2 == 0 else f2 / c[M2] - s2 * (c[MU_K] * c[G] + c[P2] / c[M2])
-    forcing = drive1 * v1 + drive2 * v2
-    feedback = -(c[P1] * s1 * v1 + c[P2] * s2 * v2)
-    friction = c[MU_K] * c[G] * (c[M1] * s1 * v1 + c[M2] * s2 * v2)
+    forcing, feedback, damping, friction = powers(v1, v2, s1, s2, left, c, drive1, drive2)
     return v1, a1, v2, a2, forcing, feedback, damping, friction
 
 

@@ -6,7 +6,6 @@ into the run's event log; :func:`resolve`, the same as records), and the mode at
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -15,10 +14,9 @@ import numpy as np
 from oscillator.errors import Reason, SimulationFailed
 from oscillator.model.events import WIDTH, Event, event_of_row
 from oscillator.model.fields import coefficients
-from oscillator.model.g_functions import displacement_values
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
-from oscillator.model.switching import MAX_ROWS, resolve_compiled
+from oscillator.model.switching import MAX_ROWS, initial_compiled, resolve_compiled
 from oscillator.model.types import StateLike
 
 __all__ = ["MAX_ROWS", "Resolution", "initial_mode", "resolve", "resolve_rows"]
@@ -117,34 +115,15 @@ def initial_mode(t0: float, y: StateLike, p: Parameters) -> Resolution:
     Contacts follow ``z1 <= -d`` and ``x1 >= d1``.  Exactly on a stop, the contact counts if the
     velocity points into it; with zero velocity there the contact force vanishes, so both
     choices give the same field at ``t0`` and the acceleration decides (the integrator never
-    reports a crossing that starts exactly at its initial time).
+    reports a crossing that starts exactly at its initial time).  The rules are compiled
+    (:func:`~oscillator.model.switching.initial_compiled`, which the compiled landings call too).
     """
     x1, v1, x2, v2 = (float(v) for v in y[:4])
-    state = np.array([x1, v1, x2, v2])
-    z1, zdot1 = x1 - x2, v1 - v2
-    left = z1 < -p.d or (z1 == -p.d and zdot1 < 0)
-    right = x1 > p.d1 or (x1 == p.d1 and v1 > 0)
-    signs = [int(math.copysign(1, v)) if v != 0 else 0 for v in (v1, v2)]
-    mode = Mode.from_signs(signs[0], signs[1], left=left, right=right)
-    c, out = coefficients(p), np.empty((2 * MAX_ROWS, WIDTH))
-    mode, count = _settle_from(t0, state, p, mode, out, 0)
-    on_left, on_right = z1 == -p.d and zdot1 == 0, x1 == p.d1 and v1 == 0
-    if on_left or on_right:
-        numbers = _numbers(mode)
-        rel = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, False)[1]
-        a1 = displacement_values(float(t0), x1, v1, x2, v2, mode.left, mode.right, numbers[0], numbers[1], c, True)[1]
-        contacts = {"left": (rel < 0) if on_left else mode.left, "right": (a1 > 0) if on_right else mode.right}
-        if (contacts["left"], contacts["right"]) != (mode.left, mode.right):
-            mode, count = _settle_from(t0, state, p, mode.with_contacts(**contacts), out, count)
-    return Resolution(mode, out[:count].copy(), (x1, v1, x2, v2))
-
-
-def _settle_from(t: float, y: np.ndarray, p: Parameters, mode: Mode, out: np.ndarray, start: int) -> tuple[Mode, int]:
-    # no root fired: the instant is only settled (one compiled entry point, compiled once)
-    (s1, s2, left, right), end, settled = resolve_compiled(
-        float(t), y, coefficients(p), p.period, _numbers(mode), 0, 0.0, 0.0, out, start
+    out = np.empty((2 * MAX_ROWS, WIDTH))
+    (s1, s2, left, right), count, settled = initial_compiled(
+        float(t0), np.array([x1, v1, x2, v2]), coefficients(p), p.period, out
     )
-    after = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
+    mode = Mode.from_signs(s1, s2, left=bool(left), right=bool(right))
     if not settled:
-        raise _storm(t, after)
-    return after, end
+        raise _storm(t0, mode)
+    return Resolution(mode, out[:count].copy(), (x1, v1, x2, v2))

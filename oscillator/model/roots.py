@@ -60,7 +60,16 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import StateLike, Vector
 
-__all__ = ["NUM_ROOTS", "Root", "mode_violation", "root_directions", "root_kernel", "root_values", "root_values_at"]
+__all__ = [
+    "NUM_ROOTS",
+    "Root",
+    "directions_into",
+    "mode_violation",
+    "root_directions",
+    "root_kernel",
+    "root_values",
+    "root_values_at",
+]
 
 
 class Root(enum.IntEnum):
@@ -85,24 +94,30 @@ class Root(enum.IntEnum):
 
 
 NUM_ROOTS = len(Root)
-_OFFSET = {1: 0, 2: 4}
+
+
+@njit(cache=True)
+def directions_into(out: np.ndarray, at: int, s1: int, s2: int, left: bool, right: bool) -> None:  # pragma: no cover
+    """``out[at:at + 11]`` = the root directions of the mode ``(s1, s2, left, right)`` (the module
+    table): what the compiled engines take; :func:`root_directions` for a :class:`Mode`."""
+    for i in range(NUM_ROOTS):
+        out[at + i] = 0
+    for base, s in ((0, s1), (4, s2)):
+        if s != 0:
+            out[at + base] = -s
+            out[at + base + 1] = s
+        else:
+            out[at + base + 2] = 1
+            out[at + base + 3] = -1
+    out[at + 8] = -1 if right else 1
+    out[at + 9] = 1 if left else -1
 
 
 def root_directions(mode: Mode) -> list[int]:
     """CVODE root directions for a mode (see the module table)."""
-    directions = [0] * NUM_ROOTS
-    for mass, base in _OFFSET.items():
-        s = mode.sign(mass)
-        if s:
-            directions[base] = -s
-            directions[base + 1] = s
-        else:
-            directions[base + 1] = 0
-            directions[base + 2] = 1
-            directions[base + 3] = -1
-    directions[Root.RIGHT_STOP] = -1 if mode.right else 1
-    directions[Root.LEFT_STOP] = 1 if mode.left else -1
-    return directions
+    directions = np.zeros(NUM_ROOTS, np.int64)
+    directions_into(directions, 0, mode.sign(1), mode.sign(2), mode.left, mode.right)
+    return [int(d) for d in directions]
 
 
 @njit(inline="always", cache=True)

@@ -63,7 +63,7 @@ from oscillator.model.theorems import (
 )
 from oscillator.model.types import Vector
 
-__all__ = ["MAX_ROWS", "resolve_compiled"]
+__all__ = ["MAX_ROWS", "initial_compiled", "resolve_compiled"]
 
 #: Rounds of re-checking at one instant before the instant is declared an event storm.
 MAX_ROUNDS = 8
@@ -539,3 +539,32 @@ def resolve_compiled(
 
 
 # --------------------------------------------------------------------------- entry points
+
+
+@njit(cache=True)
+def initial_compiled(
+    t0: float, y: Vector, c: Vector, period: float, out: np.ndarray
+) -> tuple[tuple[int, int, int, int], int, bool]:  # pragma: no cover - compiled
+    """The mode at the start (:func:`oscillator.model.resolving.initial_mode` says the rules):
+    the mode, the events written into ``out`` (room for ``2 MAX_ROWS``) and whether the instant
+    settled.  ``y[:4]`` is projected in place."""
+    x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
+    z1, zdot1 = x1 - x2, v1 - v2
+    left = z1 < -c[D] or (z1 == -c[D] and zdot1 < 0.0)
+    right = x1 > c[D1] or (x1 == c[D1] and v1 > 0.0)
+    s1 = 0 if v1 == 0.0 else (1 if v1 > 0.0 else -1)
+    s2 = 0 if v2 == 0.0 else (1 if v2 > 0.0 else -1)
+    mode, n, ok = resolve_compiled(t0, y, c, period, (s1, s2, int(left), int(right)), 0, 0.0, 0.0, out, 0)
+    if not ok:
+        return mode, n, False
+    on_left, on_right = z1 == -c[D] and zdot1 == 0.0, x1 == c[D1] and v1 == 0.0
+    if on_left or on_right:
+        flags = (mode[2] != 0, mode[3] != 0)
+        relative = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, False)[1]
+        a1 = displacement_values(t0, x1, v1, x2, v2, flags[0], flags[1], mode[0], mode[1], c, True)[1]
+        new_left = (relative < 0.0) if on_left else flags[0]
+        new_right = (a1 > 0.0) if on_right else flags[1]
+        if (new_left, new_right) != flags:
+            start = (mode[0], mode[1], int(new_left), int(new_right))
+            mode, n, ok = resolve_compiled(t0, y, c, period, start, 0, 0.0, 0.0, out, n)
+    return mode, n, ok
