@@ -39,6 +39,7 @@ __all__ = [
     "check_runner",
     "check_workers",
     "connect",
+    "keyed",
     "run_tasks",
 ]
 
@@ -90,6 +91,12 @@ def check_progress(progress: object) -> None:
         raise InputError(
             f"progress must be a function progress(done, total) or None, got {shown(progress)}", field="progress"
         )
+
+
+def keyed(key: Any, function: Callable[..., T], *arguments: Any) -> tuple[Any, T]:
+    """``(key, function(*arguments))``: a task whose result comes back with its key, so that
+    results yielded as they finish can be put in order (``executor.map(keyed, [(k, f, ...)])``)."""
+    return key, function(*arguments)
 
 
 class Executor:

@@ -1,51 +1,57 @@
 """The frequency response: every branch of periodic orbits over a parameter's span, with the
 response measures at each point, and what slow sweeps up and down meet (issue 38).
 
-:func:`frequency_response` finds the periodic attractors at a few values of the parameter (seeds:
-:func:`~oscillator.attractors.finding.find_attractors` from the given starts), continues each orbit
-both ways to the span's ends through folds and unstable stretches
-(:func:`~oscillator.orbits.continuation.continue_orbit`; a seed already on a branch is not
-continued again), and measures every point of every branch (:meth:`~oscillator.orbits.branch.Branch.responses`:
-peaks, RMS values, rests, contacts, impact velocities, contact forces, energies, each orbit
-refined by Newton first).  The sweeps are what an experiment turning the knob slowly sees: at
-each of ``sweep`` values, up the span and then down, the motion lands from where it was at the
-value before (:func:`~oscillator.attractors.mapping.land`), and its attractor is measured; a
-``jump`` marks a value where the motion left the attractor it followed (another period, or a
-move of the section point out of scale with the moves around it: :func:`_jumps`).
+:func:`frequency_response` works in three stages, each on the executor's workers
+(:mod:`oscillator.attractors.responding` holds the tasks):
+
+1. **branches**: the periodic attractors at ``seeds`` values of the parameter
+   (:func:`~oscillator.attractors.finding.find_attractors` from the given starts), and, seed
+   after seed, each orbit not on a branch already traced continued both ways to the span's ends
+   through folds and unstable stretches (:func:`~oscillator.orbits.continuation.continue_orbit`,
+   started again just beyond a point where the corrector fails inside the span);
+2. **measures**: every point of every branch measured (:func:`~oscillator.orbits.response.branch_responses`:
+   peaks, RMS values, rests, contacts, impact velocities, contact forces, energies, each orbit
+   refined by Newton first);
+3. **sweeps**: what an experiment turning the knob slowly sees: at each of ``sweep`` values, up
+   the span and then down, the motion lands from where it was at the value before
+   (:func:`~oscillator.attractors.mapping.land`), and its attractor is measured; a ``jump``
+   marks a value where the motion left the attractor it followed.
+
+With a :class:`FrequencyStore`, each seed's branches, each branch's measures and each sweep are
+kept as they finish, and a run into the same folder reads them back instead of computing them.
 """
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 
-from oscillator.attractors.finding import find_attractors
-from oscillator.attractors.mapping import AttractorSettings, check_settings, land
-from oscillator.errors import InputError, OscillatorError
+from oscillator.analysis.execution import Executor, keyed
+from oscillator.analysis.store import ResumableFolder, identity
+from oscillator.attractors.mapping import AttractorSettings, check_settings, check_states
+from oscillator.attractors.responding import continued, measured, on_branch, seed_orbits, sweep
+from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, resolve_case
+from oscillator.io.files import atomic_path
 from oscillator.model.parameters import Parameters, check_count
-from oscillator.orbits.branch import Bifurcation, Branch
-from oscillator.orbits.continuation import continue_orbit
-from oscillator.orbits.response import REFINE, response
-from oscillator.orbits.shooting import find_orbit
+from oscillator.orbits.branch import Bifurcation, Branch, points_from_disk, points_on_disk
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["JUMP", "JUMP_RATIO", "FrequencyResponse", "frequency_response"]
+__all__ = ["FrequencyResponse", "FrequencyStore", "check_frequency", "frequency_response", "frequency_store"]
 
-#: A sweep jumps where its orbit's section point moves by more than this fraction of its size and
-#: by more than :data:`JUMP_RATIO` times the moves before and after it (or the period changes).
-JUMP = 0.05
-JUMP_RATIO = 3.0
-#: Two orbits at one parameter value are one where their section points agree to this (times
-#: ``1 + |P|``): a seed on a branch is not continued again.
-SAME_ORBIT = 1e-4
+#: The points of a branch measured in one task.
+CHUNK = 16
 
 
 @dataclass(frozen=True)
@@ -57,10 +63,12 @@ class FrequencyResponse:
     param : str
         The parameter swept (``"Omega"`` for a frequency response).
     branches : tuple of Branch
-        Every branch continued, each from a seed to one end of the span.
+        Every branch continued, each from a seed (or a restart) to one end of the span.
     points : DataFrame
-        One row per branch point: ``branch`` (its index in ``branches``), the parameter,
-        ``stable``, ``piece`` and every response measure (:meth:`oscillator.Response.columns`).
+        One row per branch point: ``branch`` (its index in ``branches``), the branch's columns
+        (the parameter, ``x1 v1 x2 v2`` at the section, the multipliers ``mu1..mu4``,
+        ``stable``, ``signature``, ``piece``: :class:`~oscillator.orbits.branch.Branch`) and every
+        response measure (:meth:`oscillator.Response.columns`).
     sweeps : DataFrame
         One row per sweep value: ``direction`` (``"up"``, ``"down"``), the parameter, ``period``
         (0: aperiodic or failed), ``signature``, ``jump`` and the response measures of the
@@ -74,21 +82,23 @@ class FrequencyResponse:
     case: Case = field(repr=False, compare=False)  #: the case, as given
 
     def plot(self, measure: str = "x_pp") -> Figure:
-        """``measure`` of each mass against the parameter, in the engineers' style
+        """``measure`` against the parameter, in the engineers' style
         (:func:`oscillator.report.frequency.frequency_figure`): branches stable solid and unstable
         dashed, bifurcations marked, the sweeps with their jumps, sticking and contact shaded."""
         return presenter().plot_global(self, measure=measure)
 
     @property
+    def bifurcations(self) -> pd.DataFrame:
+        """Every branch's bifurcations, with ``branch`` (its index in ``branches``) first."""
+        frames = [branch.bifurcations.assign(branch=k) for k, branch in enumerate(self.branches)]
+        frame = pd.concat([f for f in frames if len(f)] or [pd.DataFrame(columns=["branch", self.param, "kind"])])
+        return frame[["branch", *[c for c in frame.columns if c != "branch"]]].reset_index(drop=True)
+
+    @property
     def folds(self) -> pd.DataFrame:
         """The branches' folds: the parameter and the branch."""
-        rows = [
-            {"branch": k, self.param: float(row[self.param])}
-            for k, branch in enumerate(self.branches)
-            for _, row in branch.bifurcations.iterrows()
-            if row["kind"] == Bifurcation.FOLD
-        ]
-        return pd.DataFrame(rows, columns=["branch", self.param])
+        rows = self.bifurcations
+        return rows.loc[rows["kind"] == Bifurcation.FOLD, ["branch", self.param]].reset_index(drop=True)
 
     def jumps(self, direction: str) -> list[float]:
         """The values at which the sweep ``direction`` (``"up"`` or ``"down"``) jumped."""
@@ -107,7 +117,10 @@ def frequency_response(
     sweep: int = 41,
     settings: AttractorSettings | None = None,
     max_points: int = 3000,
-    progress: Callable[[str], None] | None = None,
+    workers: int | None = 1,
+    client: Any = None,
+    store: FrequencyStore | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> FrequencyResponse:
     """The branches of period-``period`` orbits over ``span`` of ``param`` with their response
     measures, and the sweeps up and down (module docstring).
@@ -115,37 +128,30 @@ def frequency_response(
     ``seeds`` values (2 to 1000, evenly over the span) look for attractors from ``states`` (the
     case's start by default); ``sweep`` values (2 to 100000) make each sweep; ``settings`` are the
     landings' (:class:`~oscillator.attractors.mapping.AttractorSettings`); ``max_points`` bounds
-    each branch.  ``progress`` is told each stage in words."""
+    each branch.  ``workers`` (None: every core) or a Dask ``client`` run the tasks; ``store``
+    keeps them as they finish (:func:`frequency_store`); ``progress(done, total)`` is told after
+    each task, in seeds, branch points and sweep values (the total grows as the branches are
+    found)."""
     base = resolve_case(case) if isinstance(case, str) else case
-    low, high = _check(base, param, span, period, seeds, sweep)
+    low, high = check_frequency(base, param, span, period=period, seeds=seeds, sweep=sweep, max_points=max_points)
     settings = check_settings(settings)
-    say = progress or (lambda _: None)
-    branches: list[Branch] = []
-    for value in np.linspace(low, high, seeds):
-        say(f"attractors at {param} = {value:.6g}")
-        found = find_attractors(resolve_case(base, **{param: float(value)}), states=states, settings=settings)
-        for attractor in found.attractors:
-            if attractor.period != period or attractor.orbit is None:
-                continue
-            state = attractor.orbit.state
-            if any(_on(base, branch, float(value), state) for branch in branches):
-                continue
-            for stop in (high, low):
-                if stop != value:
-                    say(f"continuing the orbit of {param} = {value:.6g} to {stop:.6g}")
-                    branches.append(_continued(base, param, float(value), stop, period, state, max_points))
-    say("measuring the branches")
-    points = pd.concat(
-        [branch.responses().assign(branch=k) for k, branch in enumerate(branches)] or [pd.DataFrame()],
-        ignore_index=True,
-    )
-    say("sweeping up and down")
-    sweeps = pd.concat([_sweep(base, param, values, settings) for values in _sweep_values(low, high, sweep)])
-    return FrequencyResponse(param, tuple(branches), points, sweeps.reset_index(drop=True), base)
+    starts = None if states is None else check_states(states)
+    job = _Job(base, param, (low, high), period, settings, max_points, store, _Tally(progress, seeds + 2 * sweep))
+    with Executor(workers, client, progress) as executor:
+        job.executor = executor
+        branches = job.branches(np.linspace(low, high, seeds), starts)
+        points = job.measures(branches)
+        sweeps = job.sweeps(sweep)
+    return FrequencyResponse(param, tuple(branches), points, sweeps, base)
 
 
-def _check(case: Case, param: str, span: object, period: int, seeds: int, sweep: int) -> tuple[float, float]:
+def check_frequency(
+    case: Case, param: str, span: object, *, period: int = 1, seeds: int = 5, sweep: int = 41, max_points: int = 3000
+) -> tuple[float, float]:
+    """:func:`frequency_response`'s arguments checked before any work (the command line does so
+    before it creates its folder): the span, as ``(low, high)``; else the first refused, named."""
     Parameters.check_name(param, "param")
+    check_count(max_points, "max_points", 2, 100_000)
     check_count(period, "period", 1, 1000)
     check_count(seeds, "seeds", 2, 1000)
     check_count(sweep, "sweep", 2, 100_000)
@@ -155,107 +161,217 @@ def _check(case: Case, param: str, span: object, period: int, seeds: int, sweep:
         raise InputError(f"span must be two numbers (low, high), got {span!r}", field="span") from None
     if not (np.isfinite(low) and np.isfinite(high) and low < high):
         raise InputError(
-            f"span must be two finite numbers, low < high, got {span!r}; give e.g. (1.3, 1.85)", field="span"
+            f"span must be two finite numbers, low < high, got {span!r}; give the lower value first", field="span"
         )
     for value in (low, high):
         resolve_case(case, **{param: value})  # each end must be a valid value, or it is refused by name
     return low, high
 
 
-def _continued(
-    case: Case, param: str, start: float, stop: float, period: int, state: np.ndarray, max_points: int
-) -> Branch:
-    at = resolve_case(case, **{param: start})
-    return continue_orbit(at, param=param, start=start, stop=stop, period=period, guess=state, max_points=max_points)
+class _Tally:
+    """``progress(done, total)`` kept across the stages; the total grows by the branch points."""
+
+    def __init__(self, progress: Callable[[int, int], None] | None, total: int) -> None:
+        self.progress, self.done, self.total = progress, 0, total
+
+    def add(self, done: int = 0, total: int = 0) -> None:
+        self.done, self.total = self.done + done, self.total + total
+        if self.progress is not None:
+            self.progress(self.done, self.total)
 
 
-def _on(case: Case, branch: Branch, value: float, state: np.ndarray) -> bool:
-    """Whether the orbit through ``state`` at ``value`` lies on ``branch``: from the state between
-    two consecutive points of one piece that bracket ``value``, Newton at ``value`` reaches
-    ``state`` (within :data:`SAME_ORBIT`)."""
-    points = branch.points
-    params = points[branch.param].to_numpy(float)
-    states = points[["x1", "v1", "x2", "v2"]].to_numpy(float)
-    pieces = points["piece"].to_numpy()
-    at = resolve_case(case, **{branch.param: value})
-    for k in range(len(points) - 1):
-        a, b = params[k], params[k + 1]
-        if pieces[k] != pieces[k + 1] or not min(a, b) <= value <= max(a, b):
-            continue
-        weight = 0.0 if a == b else (value - a) / (b - a)
-        if _same(_orbit_state(at, branch.period, states[k] + weight * (states[k + 1] - states[k])), state):
-            return True
-    return False
+@dataclass
+class _Job:
+    """One frequency response as it is computed: the stages, each read back from the store where
+    it holds them."""
+
+    case: Case
+    param: str
+    span: tuple[float, float]
+    period: int
+    settings: AttractorSettings
+    max_points: int
+    store: FrequencyStore | None
+    tally: _Tally
+    executor: Executor = field(default_factory=Executor)
+
+    def branches(self, values: np.ndarray, starts: np.ndarray | None) -> list[Branch]:
+        """Seed after seed, the orbits at the seed not on a branch already traced, each continued
+        both ways (the two directions of every new orbit of a seed in parallel)."""
+        kept = {k: self._read(f"seed-{k:04d}") for k in range(len(values))}
+        missing = [k for k, part in kept.items() if part is None]
+        arguments = (self.case, self.param)
+        tasks = [(k, seed_orbits, *arguments, float(values[k]), self.period, starts, self.settings) for k in missing]
+        orbits = dict(self.executor.map(keyed, tasks))
+        found: list[Branch] = []
+        for k, value in enumerate(values):
+            part = kept[k]
+            if part is None:
+                part = self._continue(float(value), orbits[k], found)
+                self._write(f"seed-{k:04d}", *_branches_on_disk(part))
+            else:
+                part = _branches_from_disk(self.case, self.param, *part)
+            found += part
+            self.tally.add(1)
+        return found
+
+    def _continue(self, value: float, states: list[np.ndarray], found: list[Branch]) -> list[Branch]:
+        low, high = self.span
+        new = [state for state in states if not any(on_branch(self.case, b, value, state) for b in found)]
+        arguments = (self.case, self.param, self.span)
+        tasks = [
+            (k, continued, *arguments, value, stop, self.period, state, self.max_points, tuple(found))
+            for k, (state, stop) in enumerate((state, stop) for state in new for stop in (high, low) if stop != value)
+        ]
+        done = sorted(self.executor.map(keyed, tasks), key=lambda item: item[0])
+        return [branch for _, branches in done for branch in branches if len(branch.points) > 1]
+
+    def measures(self, branches: list[Branch]) -> pd.DataFrame:
+        """The response measures of every branch point, in chunks of :data:`CHUNK` points."""
+        frames: dict[int, pd.DataFrame] = {}
+        tasks = []
+        for b, branch in enumerate(branches):
+            part = self._read(f"measures-{b:04d}")
+            if part is not None:
+                frames[b] = part[0]
+                continue
+            count = len(branch.points)
+            tasks += [(b, measured, branch, first, min(first + CHUNK, count)) for first in range(0, count, CHUNK)]
+        self.tally.add(sum(len(frame) for frame in frames.values()), sum(len(branch.points) for branch in branches))
+        chunks: dict[int, list[pd.DataFrame]] = {b: [] for b in range(len(branches)) if b not in frames}
+        for b, chunk in self.executor.map(keyed, tasks):
+            chunks[b].append(chunk)
+            self.tally.add(len(chunk))
+            if sum(len(c) for c in chunks[b]) == len(branches[b].points):
+                frames[b] = pd.concat(chunks[b]).sort_index().reset_index(drop=True)
+                self._write(f"measures-{b:04d}", frames[b])
+        parts = [_joined(b, branch, frames[b]) for b, branch in enumerate(branches) if len(frames[b])]
+        return pd.concat(parts or [pd.DataFrame(columns=["branch", self.param])], ignore_index=True)
+
+    def sweeps(self, count: int) -> pd.DataFrame:
+        """The sweeps up and down, in parallel."""
+        low, high = self.span
+        up = np.linspace(low, high, count)
+        found = {}
+        tasks = []
+        for direction, values in (("up", up), ("down", up[::-1])):
+            part = self._read(f"sweep-{direction}")
+            if part is None:
+                tasks.append((direction, sweep, self.case, self.param, values, self.settings))
+            else:
+                found[direction] = part[0]
+                self.tally.add(count)
+        for direction, table in self.executor.map(keyed, tasks):
+            found[direction] = table
+            self._write(f"sweep-{direction}", table)
+            self.tally.add(count)
+        return pd.concat([found["up"], found["down"]], ignore_index=True)
+
+    def _read(self, name: str) -> tuple[pd.DataFrame, Any] | None:
+        return None if self.store is None else self.store.read(name)
+
+    def _write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
+        if self.store is not None:
+            self.store.write(name, frame, meta)
 
 
-def _orbit_state(case: Case, period: int, guess: np.ndarray) -> np.ndarray | None:
-    """The period-``period`` orbit Newton reaches from ``guess``: to :data:`REFINE`, else (where
-    the map is not smooth enough for that: a sliding or grazing point near) to Newton's default
-    1e-9; None where it does not converge."""
-    for tol in (REFINE, 1e-9):
+def _joined(index: int, branch: Branch, measures: pd.DataFrame) -> pd.DataFrame:
+    """A branch's points (state, multipliers, signature) with their measures, ``branch`` first."""
+    points = branch.points.reset_index(drop=True)
+    extra = measures.drop(columns=[c for c in measures.columns if c in points.columns])
+    return pd.concat([points, extra], axis=1).assign(branch=index)[["branch", *points.columns, *extra.columns]]
+
+
+def _branches_on_disk(branches: list[Branch]) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
+    """A seed's branches as one table (points, ``branch`` their index among the seed's) and the
+    rest of each (section, period, ending, bifurcations) as the part's metadata."""
+    frames = [points_on_disk(branch.points).assign(branch=k) for k, branch in enumerate(branches)]
+    meta = [
+        {
+            "section": branch.section,
+            "period": branch.period,
+            "complete": branch.complete,
+            "message": branch.message,
+            "reason": None if branch.reason is None else branch.reason.value,
+            "bifurcations": branch.bifurcations.to_dict("records"),
+        }
+        for branch in branches
+    ]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame({"branch": []}), meta
+
+
+def _branches_from_disk(case: Case, param: str, frame: pd.DataFrame, meta: Any) -> list[Branch]:
+    """:func:`_branches_on_disk` read back (a ``KeyError``, ``TypeError`` or ``ValueError`` where
+    the part is damaged)."""
+    if not isinstance(meta, list):
+        raise ValueError("no branches in its metadata")
+    branches = []
+    for k, info in enumerate(meta):
+        rows = frame[frame["branch"] == k].drop(columns="branch").reset_index(drop=True)
+        bifurcations = pd.DataFrame(
+            info["bifurcations"], columns=[param, "kind", "x1", "v1", "x2", "v2", "jump", "before", "after"]
+        )
+        if not bifurcations["kind"].isin([kind.value for kind in Bifurcation]).all():
+            raise ValueError("a bifurcation of an unknown kind")
+        reason = None if info["reason"] is None else Reason(info["reason"])
+        points = points_from_disk(rows)
+        ending = bool(info["complete"]), str(info["message"]), reason
+        branches.append(Branch(param, points, bifurcations, float(info["section"]), int(info["period"]), *ending, case))
+    return branches
+
+
+class FrequencyStore(ResumableFolder):
+    """The resumable folder of a frequency response (``frc.json``): one part per seed (its
+    branches), per branch (its measures) and per sweep."""
+
+    FORMAT = 1
+    _META = b"oscillator"
+
+    def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
+        super().__init__(folder, "frc.json", identity, name=name)
+        #: The parts read back from earlier runs.
+        self.reused = 0
+
+    def write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
+        """The part ``name``: ``frame``, with ``meta`` (JSON) in its metadata, written atomically."""
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), self._META: json.dumps(meta)})
+        with atomic_path(self.parts / f"{name}.parquet") as temporary:
+            pq.write_table(table, temporary)
+
+    def read(self, name: str) -> tuple[pd.DataFrame, Any] | None:
+        """The part ``name`` and its metadata, or None if there is none; a damaged part is
+        refused with its name."""
+        path = self.parts / f"{name}.parquet"
+        if not path.exists() and not path.is_symlink():
+            return None
+        self.plain(path)
         try:
-            return find_orbit(case, period=period, guess=guess, tol=tol).state
-        except OscillatorError:
-            continue
-    return None
+            table = pq.read_table(path)
+            meta = json.loads((table.schema.metadata or {})[self._META])
+            frame = table.to_pandas()
+        except Exception as exc:  # pyarrow raises many types for a damaged file
+            if isinstance(exc, MemoryError):
+                raise
+            raise self.damaged(path, "it cannot be read") from exc
+        self.reused += 1
+        return frame, meta
 
 
-def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    if a is None or b is None:
-        return False
-    return float(np.max(np.abs(a - b))) <= SAME_ORBIT * (1.0 + float(np.max(np.abs(b))))
-
-
-def _sweep_values(low: float, high: float, count: int) -> tuple[np.ndarray, np.ndarray]:
-    up = np.linspace(low, high, count)
-    return up, up[::-1]
-
-
-def _sweep(case: Case, param: str, values: np.ndarray, settings: AttractorSettings) -> pd.DataFrame:
-    """One slow sweep over ``values``: each landing starts where the one before ended, and the
-    orbit met is refined by Newton and measured; the jumps are marked (:func:`_jumps`)."""
-    direction = "up" if values[-1] > values[0] else "down"
-    start = np.array(case.initial.y, dtype=float)
-    rows: list[dict[str, object]] = []
-    states: list[np.ndarray | None] = []
-    for value in values:
-        at = resolve_case(case, **{param: float(value)})
-        landing = land(at, settings, 0, (float(start[0]), float(start[1]), float(start[2]), float(start[3])))
-        if landing.ok and len(landing.points):
-            start = landing.points[-1]
-        period = landing.period if landing.ok else 0
-        state = _orbit_state(at, period, start) if period else None
-        row: dict[str, object] = {"direction": direction, param: float(value), "period": period}
-        row["signature"] = landing.signature
-        if state is not None:
-            begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in state), strict=True))
-            row |= response(resolve_case(at, **begin), period).columns()
-        rows.append(row)
-        states.append(state)
-    table = pd.DataFrame(rows)
-    table["jump"] = _jumps(table["period"].to_numpy(), states)
-    return table
-
-
-def _jumps(periods: np.ndarray, states: list[np.ndarray | None]) -> np.ndarray:
-    """Where a sweep jumps: the period changes, or the orbit's section point moves by more than
-    :data:`JUMP_RATIO` times the moves on either side (and by more than :data:`JUMP` of its size).
-    An orbit followed towards a fold moves ever faster, but its moves grow step by step; a jump
-    is one move out of scale with its neighbours."""
-    count = len(states)
-    moves = np.zeros(count)
-    for k in range(1, count):
-        a, b = states[k - 1], states[k]
-        moves[k] = np.inf if a is None or b is None else float(np.max(np.abs(b - a)))
-    jumps = np.zeros(count, dtype=bool)
-    for k in range(1, count):
-        if periods[k] != periods[k - 1]:
-            jumps[k] = True
-            continue
-        state = states[k]
-        if state is None or not np.isfinite(moves[k]):
-            continue
-        neighbours = max(moves[k - 1] if k > 1 else 0.0, moves[k + 1] if k + 1 < count else 0.0)
-        size = JUMP * (1.0 + float(np.max(np.abs(state))))
-        jumps[k] = moves[k] > size and (not np.isfinite(neighbours) or moves[k] > JUMP_RATIO * neighbours)
-    return jumps
+def frequency_store(
+    folder: Path,
+    case: Case,
+    param: str,
+    span: tuple[float, float],
+    *,
+    period: int = 1,
+    seeds: int = 5,
+    states: np.ndarray | None = None,
+    sweep: int = 41,
+    settings: AttractorSettings | None = None,
+    max_points: int = 3000,
+) -> FrequencyStore:
+    """The resumable folder of this frequency response (:class:`FrequencyStore`)."""
+    pieces = {"param": param, "span": list(span), "period": period, "seeds": seeds, "sweep": sweep}
+    pieces |= {"states": states, "settings": check_settings(settings), "max_points": max_points}
+    return FrequencyStore(folder, identity(case, **pieces), name=case.name)

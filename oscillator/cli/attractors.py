@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
 
-__all__ = ["attractors", "basins", "lyapunov"]
+__all__ = ["attractors", "basins", "landing_settings", "lyapunov"]
 
 
 def axis_of(values: AxisOption, flag: str) -> Axis:
@@ -64,7 +64,7 @@ def axis_of(values: AxisOption, flag: str) -> Axis:
         raise InputError(f"{flag}: {error}", field=flag) from None
 
 
-def _settings(**given: int | bool | str | None) -> AttractorSettings:
+def landing_settings(**given: int | bool | str | None) -> AttractorSettings:
     """The settings the options give, the others :class:`AttractorSettings`' defaults."""
     from oscillator.attractors.mapping import AttractorSettings
 
@@ -115,7 +115,7 @@ def basins(
         resolved = case_from(case, None, set_)
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
         chosen = {"transient": transient, "record": record, "max_period": max_period, "engine": engine}
-        settings = _settings(**chosen, settle=not full_transient)
+        settings = landing_settings(**chosen, settle=not full_transient)
         store, lock, client, count = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
     with computing(store, "starts", lock, client):
         from oscillator.attractors.basins import find_basins
@@ -330,7 +330,7 @@ def _open_following(
         raise InputError(f"--steps must be a whole number from 2 to 10000, got {steps!r}", field="--steps")
     if (x is None) != (y is None):
         raise InputError("give both --x and --y for a slice of fresh starts, or neither", field="--x")
-    settings = _settings(**given)
+    settings = landing_settings(**given)
     load("oscillator.attractors.following", notice=True)
     from oscillator.attractors.basins import grid_starts
     from oscillator.attractors.following import check_values, following_store

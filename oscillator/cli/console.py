@@ -55,6 +55,10 @@ FLAGS = {
     "at": "--at",
     "x": "--x",
     "y": "--y",
+    "span": "--param",
+    "seeds": "--seeds",
+    "sweep": "--sweep",
+    "measure": "--measure",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.

@@ -21,7 +21,17 @@ from oscillator.presenting import presenter
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["BIFURCATION_KINDS", "Bifurcation", "Branch", "Skipped", "check_coordinate", "skipped"]
+__all__ = [
+    "BIFURCATION_KINDS",
+    "MULTIPLIERS",
+    "Bifurcation",
+    "Branch",
+    "Skipped",
+    "check_coordinate",
+    "points_from_disk",
+    "points_on_disk",
+    "skipped",
+]
 
 
 class Bifurcation(enum.StrEnum):
@@ -170,3 +180,27 @@ def check_coordinate(name: str) -> str:
     if name not in STATE:
         raise InputError(f"coordinate must be one of {', '.join(STATE)}, got {name!r}", field="coordinate")
     return name
+
+
+#: The multipliers' columns of a branch's points.
+MULTIPLIERS = tuple(f"mu{k}" for k in range(1, 5))
+
+
+def points_on_disk(points: pd.DataFrame) -> pd.DataFrame:
+    """The points with each complex multiplier ``muK`` as two columns ``muK_re``, ``muK_im``
+    (Parquet has no complex numbers)."""
+    frame = points.copy()
+    for name in MULTIPLIERS:
+        values = frame.pop(name).to_numpy(complex)
+        frame[f"{name}_re"], frame[f"{name}_im"] = values.real, values.imag
+    return frame
+
+
+def points_from_disk(frame: pd.DataFrame) -> pd.DataFrame:
+    """:func:`points_on_disk` undone; the multipliers' columns back where they were."""
+    points = frame.copy()
+    for name in MULTIPLIERS:
+        points[name] = points.pop(f"{name}_re").to_numpy(float) + 1j * points.pop(f"{name}_im").to_numpy(float)
+    order = [c for c in frame.columns if not c.endswith(("_re", "_im"))]
+    at = order.index("stable") if "stable" in order else len(order)
+    return points[[*order[:at], *MULTIPLIERS, *order[at:]]]

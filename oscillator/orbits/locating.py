@@ -60,6 +60,8 @@ def between(cont: Continuer, a: OrbitPoint, b: OrbitPoint, ds: float, locate_tol
     if a.tangent[4] * b.tangent[4] < 0:
         sign = np.sign(a.tangent[4])
         left, right = bisect(cont, a, b, ds, lambda p: np.sign(p.tangent[4]) == sign, locate_tol)
+        if not _at_fold(left, right):  # the slope dP/dlam jumped near a switch's change, not a fold
+            return []
         return [Located(record_bifurcation(cont, Bifurcation.FOLD, left, right, a.signature, b.signature), left, right)]
     if a.unstable != b.unstable:
         count = a.unstable
@@ -69,6 +71,18 @@ def between(cont: Continuer, a: OrbitPoint, b: OrbitPoint, ds: float, locate_tol
         kind = Bifurcation.of_multiplier(mu)
         return [Located(record_bifurcation(cont, kind, left, right, a.signature, b.signature), left, right)]
     return []
+
+
+#: At a fold a multiplier is 1: the turn is a fold where one is within this of 1 on either side.
+FOLD_MULTIPLIER = 0.05
+
+
+def _at_fold(left: OrbitPoint, right: OrbitPoint) -> bool:
+    """Whether the branch turns at a fold between ``left`` and ``right``: a multiplier is near 1
+    (:data:`FOLD_MULTIPLIER`).  Beside a point where the cycle of switches changes, the central
+    difference ``dP/dlam`` can straddle it and turn the tangent without a fold."""
+    values = np.concatenate([left.multipliers, right.multipliers])
+    return bool(np.min(np.abs(values - 1.0)) <= FOLD_MULTIPLIER)
 
 
 def signature_change(

@@ -57,7 +57,15 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.branch import Branch
 
-__all__ = ["MASS_MEASURES", "Response", "branch_responses", "impact_speeds", "response"]
+__all__ = [
+    "CONTACT_MEASURES",
+    "ENERGY_MEASURES",
+    "MASS_MEASURES",
+    "Response",
+    "branch_responses",
+    "impact_speeds",
+    "response",
+]
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
 MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")

@@ -6,17 +6,21 @@ in contact shaded."""
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
-from oscillator.orbits.response import MASS_MEASURES
-from oscillator.report.orbits import BIFURCATION_MARKERS
+from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES
+from oscillator.report import markup as mk
+from oscillator.report.orbits import BIFURCATION_MARKERS, modified_blocks
 from oscillator.report.outputs import color_of, wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
+
     import pandas as pd
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
@@ -24,29 +28,45 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.attractors.frequency import FrequencyResponse
 
-__all__ = ["frequency_figure"]
+__all__ = ["MEASURES", "figure_measures", "frequency_blocks", "frequency_figure", "write_frequency"]
 
-#: The units of the mass measures.
+#: The units of the measures.
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
+UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
+#: The panels of a measure of each kind: ``(column suffix, what it is of, the mass whose rests are shaded)``.
+PANELS = {
+    **dict.fromkeys(MASS_MEASURES, (("_m1", "m1", 1), ("_m2", "m2", 2))),
+    **dict.fromkeys(
+        CONTACT_MEASURES, (("_right", "the right stop", 1), ("_left", "the contact between the masses", 2))
+    ),
+}
+#: Every measure the figure draws.
+MEASURES = (*MASS_MEASURES, *CONTACT_MEASURES, *(f"energy_{name}" for name in ENERGY_MEASURES))
 
 
 def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
-    """``measure`` (one of the mass measures: ``x_pp``, ``x_max``, ``x_rms``, ``v_peak``,
-    ``a_rms``, ...) of each mass against the parameter (module docstring)."""
+    """``measure`` against the parameter (module docstring): a mass measure (``x_pp``,
+    ``x_max``, ``x_rms``, ``v_peak``, ``a_rms``, ...) in one panel per mass, a contact measure
+    (``impact_max``, ``force_peak``, ``onsets``, ...) in one panel per contact, an energy
+    (``energy_friction``, ...) in one panel."""
     from matplotlib.figure import Figure
 
-    if measure not in MASS_MEASURES:
-        raise InputError(f"measure must be one of {', '.join(MASS_MEASURES)}, got {measure!r}", field="measure")
-    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
-    axes = fig.subplots(2, 1, sharex=True)
-    for mass, ax in zip((1, 2), axes, strict=True):
-        column = f"{measure}_m{mass}"
+    if measure not in MEASURES:
+        raise InputError(f"measure must be one of {', '.join(MEASURES)}, got {measure!r}", field="measure")
+    panels = PANELS.get(measure, (("", "", 0),))
+    fig = Figure(figsize=(8.0, 3.5 * len(panels)), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0])
+    for (suffix, of, mass), ax in zip(panels, axes, strict=True):
+        column = f"{measure}{suffix}"
         _shade(ax, found, mass)
         _branches(ax, found, column)
         _sweeps(ax, found, column)
-        unit = UNITS[measure]
-        ax.set_ylabel(f"{measure} of m{mass}" + (f" ({unit})" if unit else ""))
+        unit = UNITS.get(measure, "J per period")
+        ax.set_ylabel(f"{measure} of {of}" if of else measure, fontsize=9)
+        if unit:
+            ax.set_ylabel(f"{ax.get_ylabel()} ({unit})", fontsize=9)
         ax.grid(alpha=0.3)
+        ax.ticklabel_format(useOffset=False)
     axes[-1].set_xlabel(found.param)
     count = len(found.branches)
     axes[0].set_title(
@@ -124,14 +144,85 @@ def _sweeps(ax: Axes, found: FrequencyResponse, column: str) -> None:
 def _shade(ax: Axes, found: FrequencyResponse, mass: int) -> None:
     """The values where the sweeps' motion has this mass resting, or a contact, shaded."""
     sweeps = found.sweeps
-    if sweeps.empty or f"rest_m{mass}" not in sweeps:
+    if sweeps.empty or (mass and f"rest_m{mass}" not in sweeps):
         return
     values = np.sort(sweeps[found.param].unique())
     step = float(np.min(np.diff(values))) if len(values) > 1 else 0.0
     contact = sweeps[[c for c in ("onsets_right", "onsets_left") if c in sweeps]].fillna(0).sum(axis=1) > 0
-    for mask, color, label in (
-        (sweeps[f"rest_m{mass}"].fillna(0) > 0, "tab:orange", f"m{mass} sticks"),
-        (contact, "tab:blue", "contact"),
-    ):
+    shaded = [(sweeps[f"rest_m{mass}"].fillna(0) > 0, "tab:orange", f"m{mass} sticks")] if mass else []
+    for mask, color, label in [*shaded, (contact, "tab:blue", "contact")]:
         for value in np.unique(sweeps[found.param][mask]):
             ax.axvspan(value - step / 2, value + step / 2, color=color, alpha=0.12, lw=0, label=label)
+
+
+def frequency_figure_name(measure: str) -> str:
+    """The file name of the figure of ``measure``: ``frequency-x-pp`` for ``x_pp``."""
+    return f"frequency-{measure.replace('_', '-')}"
+
+
+def figure_measures(found: FrequencyResponse, measure: str) -> list[str]:
+    """The measures ``oscillator frc`` draws: ``measure``, and the largest impact velocity where
+    any orbit or sweep value has a contact."""
+    columns = [c for c in ("onsets_right", "onsets_left") if c in found.points or c in found.sweeps]
+    contacts = any(
+        (frame[c].fillna(0) > 0).any() for frame in (found.points, found.sweeps) for c in columns if c in frame
+    )
+    return list(dict.fromkeys([measure, *(["impact_max"] if contacts else [])]))
+
+
+def frequency_blocks(found: FrequencyResponse, measures: list[str]) -> list[mk.Block]:
+    """The report: what was found (branches, points, stable share, folds and other bifurcations,
+    the sweeps' jumps), then the figures."""
+    points, param = found.points, found.param
+    low, high = float(found.sweeps[param].min()), float(found.sweeps[param].max())
+    stable = float(points.stable.mean()) if len(points) else 0.0
+    count = len(found.branches)
+    summary = (
+        f"{count} branch{'es' if count != 1 else ''} of periodic orbits over {param} from {low:g} to {high:g}, "
+        f"{len(points)} points, {stable:.0%} of them stable. The slow sweep up jumps at "
+        f"{_values(found.jumps('up'))}; the slow sweep down at {_values(found.jumps('down'))}."
+    )
+    blocks: list[mk.Block] = [mk.Heading(1, (f"{found.case.name}: frequency response over {param}",))]
+    blocks += [mk.Paragraph((summary,))]
+    blocks += modified_blocks(found.case)
+    rows = found.bifurcations
+    if len(rows):
+        blocks += [mk.Heading(2, ("Bifurcations along the branches",))]
+        table = tuple(
+            (str(int(r.branch)), f"{float(r[param]):.8g}", str(r.kind).replace("_", " ")) for _, r in rows.iterrows()
+        )
+        blocks += [mk.Table(("branch", param, "kind"), table)]
+    blocks += [mk.Heading(2, ("Branches",))]
+    blocks += [mk.Table(("branch", f"{param} from", "to", "points", "stable", "ended"), _branch_rows(found))]
+    blocks += [mk.Figure(frequency_figure_name(m), f"{m} against {param}") for m in measures]
+    return blocks
+
+
+def _values(values: list[float]) -> str:
+    return ", ".join(f"{value:g}" for value in values) if values else "no value"
+
+
+def _branch_rows(found: FrequencyResponse) -> tuple[tuple[str, ...], ...]:
+    rows = []
+    for k, branch in enumerate(found.branches):
+        values = branch.points[found.param].to_numpy(float)
+        ended = "at the span's end" if branch.complete else branch.message
+        share = f"{branch.points.stable.mean():.0%}"
+        rows.append((str(k), f"{values[0]:.8g}", f"{values[-1]:.8g}", str(len(values)), share, ended))
+    return tuple(rows)
+
+
+def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp", *, plots: bool = True) -> list[str]:
+    """``points.parquet`` (every branch point with its measures; the multipliers as real and
+    imaginary parts), ``bifurcations.parquet``, ``sweeps.parquet``, the figures of
+    :func:`figure_measures` and the report; what could not be drawn (the tables stay)."""
+    from oscillator.orbits.branch import points_on_disk
+    from oscillator.report.outputs import write_folder
+
+    measures = figure_measures(found, measure)
+    figures = (
+        [(frequency_figure_name(m), functools.partial(frequency_figure, found, m)) for m in measures] if plots else []
+    )
+    tables = {"points": points_on_disk(found.points), "bifurcations": found.bifurcations, "sweeps": found.sweeps}
+    title = f"{found.case.name}: frequency response"
+    return write_folder(folder, tables, figures, frequency_blocks(found, measures if plots else []), title)

@@ -30,7 +30,7 @@ import pandas as pd
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, read_untrusted, replace_file
-from oscillator.orbits.branch import BIFURCATION_KINDS, Branch
+from oscillator.orbits.branch import BIFURCATION_KINDS, MULTIPLIERS, Branch, points_from_disk, points_on_disk
 from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
 from oscillator.report.orbits import branch_status, draw_branch, draw_multipliers, report_blocks
@@ -57,29 +57,6 @@ PENDING = ("figures", "report")
 _MAX_RUN_JSON = 1 << 20
 
 
-MULTIPLIERS = tuple(f"mu{k}" for k in range(1, 5))
-
-
-def _points_on_disk(points: pd.DataFrame) -> pd.DataFrame:
-    """The points with each complex multiplier ``muK`` as two columns ``muK_re``, ``muK_im``
-    (Parquet has no complex numbers)."""
-    frame = points.copy()
-    for name in MULTIPLIERS:
-        values = frame.pop(name).to_numpy(complex)
-        frame[f"{name}_re"], frame[f"{name}_im"] = values.real, values.imag
-    return frame
-
-
-def _points_from_disk(frame: pd.DataFrame) -> pd.DataFrame:
-    """:func:`_points_on_disk` undone; the multipliers' columns back where they were."""
-    points = frame.copy()
-    for name in MULTIPLIERS:
-        points[name] = points.pop(f"{name}_re").to_numpy(float) + 1j * points.pop(f"{name}_im").to_numpy(float)
-    order = [c for c in frame.columns if not c.endswith(("_re", "_im"))]
-    at = order.index("stable") if "stable" in order else len(order)
-    return points[[*order[:at], *MULTIPLIERS, *order[at:]]]
-
-
 def write_branch(
     branch: Branch,
     case: Case,
@@ -98,7 +75,7 @@ def write_branch(
 
     temporary = claim.temporary
     try:
-        _points_on_disk(branch.points).to_parquet(temporary / "branch.parquet", index=False)
+        points_on_disk(branch.points).to_parquet(temporary / "branch.parquet", index=False)
         branch.bifurcations.to_parquet(temporary / "bifurcations.parquet", index=False)
         if sweep_points is not None:
             sweep_points.to_parquet(temporary / "sweep_points.parquet", index=False)
@@ -255,7 +232,7 @@ def read_branch(folder: Path) -> BranchFolder:
         raise _damaged(folder / "branch.parquet", "it has no points")
     if not rows["kind"].isin(BIFURCATION_KINDS).all():
         raise _damaged(folder / "bifurcations.parquet", f"kind must be one of {', '.join(BIFURCATION_KINDS)}")
-    points = _points_from_disk(points)
+    points = points_from_disk(points)
     sweep = None
     if (folder / "sweep_points.parquet").exists():
         sweep = _table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})

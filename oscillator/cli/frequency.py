@@ -1,0 +1,158 @@
+"""``oscillator frc``: the frequency response over a parameter's span (resumable, local or on Dask)."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.text import Text
+
+from oscillator.analysis.execution import check_workers
+from oscillator.cli.attractors import landing_settings
+from oscillator.cli.commands import command
+from oscillator.cli.console import fail, load, out, say
+from oscillator.cli.inputs import case_from
+from oscillator.cli.options import (
+    CaseArgument,
+    FullTransientOption,
+    LandingEngineOption,
+    NoPlotsOption,
+    QuietOption,
+    RecordOption,
+    ResumableOutOption,
+    SchedulerOption,
+    SetOption,
+    TransientOption,
+    WorkersOption,
+)
+from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, with_progress
+from oscillator.errors import InputError
+from oscillator.text import printable
+
+__all__ = ["frc"]
+
+#: ``--param NAME LOW HIGH``: the parameter and its span.
+SpanOption = tuple[str, float, float]
+
+
+@command(125, "The frequency response: every branch of periodic orbits, and slow sweeps up and down.")
+def frc(
+    case: CaseArgument,
+    param: Annotated[
+        SpanOption, typer.Option("--param", metavar="NAME LOW HIGH", help="The parameter and its span, e.g. Omega.")
+    ],
+    period: Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return.")] = 1,
+    seeds: Annotated[int, typer.Option("--seeds", metavar="N", help="Values where attractors are sought.")] = 5,
+    sweep: Annotated[int, typer.Option("--sweep", metavar="N", help="Values of each slow sweep.")] = 41,
+    measure: Annotated[
+        str, typer.Option("--measure", metavar="NAME", help="The measure drawn: x_pp, x_max, v_peak, impact_max, ...")
+    ] = "x_pp",
+    starts: Annotated[
+        int, typer.Option("--starts", metavar="N", help="Starts at each seed: the case's, and N-1 around it.")
+    ] = 1,
+    max_points: Annotated[int, typer.Option("--max-points", metavar="N", help="The most points a branch.")] = 3000,
+    transient: TransientOption = None,
+    record: RecordOption = None,
+    full_transient: FullTransientOption = False,
+    engine: LandingEngineOption = "dop853",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    out_dir: ResumableOutOption = None,
+    set_: SetOption = None,
+    no_plots: NoPlotsOption = False,
+    quiet: QuietOption = False,
+) -> None:
+    """The frequency response over a parameter's span: the periodic attractors at --seeds values
+    (from the case's start, or --starts around it),
+    each orbit continued both ways through folds and unstable stretches, every branch point
+    measured (amplitudes, peak velocity, RMS acceleration, rests, impact velocities, contact
+    forces, energies), and slow sweeps up and down with their jumps.
+
+    Writes points.parquet, bifurcations.parquet, sweeps.parquet, figures/frequency-*.png (the
+    --measure of each mass, and the impact velocities where there are contacts) and a report.
+    Parts are kept as they finish: the same command with the same --out resumes.
+
+    \b
+    Examples:
+      oscillator frc instance-1 --param Omega 1.3 1.85 --out runs/frc
+      oscillator frc instance-1 --param Omega 1.5 1.7 --seeds 3 --sweep 21 --measure v_peak
+      oscillator frc instance-1 --set Q2=71.165 --param Omega 1.5999 1.6001 --starts 16 --out runs/frc-window
+    """
+    with refusing():
+        resolved = case_from(case, None, set_)
+        name, low, high = param
+        settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
+        options: dict[str, Any] = {"period": period, "seeds": seeds, "sweep": sweep, "max_points": max_points}
+        store = _opened(resolved, (name, low, high), measure, starts, settings, options, out_dir)
+        count = check_workers(workers)
+        folder = store.folder
+        lock, client = locked(folder, scheduler)
+    with computing(store, "parts", lock, client):
+        from oscillator.attractors.frequency import frequency_response
+
+        store.open()
+        run = functools.partial(
+            frequency_response,
+            resolved,
+            name,
+            (low, high),
+            settings=settings,
+            workers=count,
+            client=client,
+            store=store,
+            **options,
+        )
+        found = with_progress(run, f"{resolved.name}: frequency response over {name}", "steps", quiet)
+        store.write_status("computed", branches=len(found.branches))
+    _finish(found, store, measure, no_plots, quiet)
+
+
+def _opened(
+    case: Any,
+    param: SpanOption,
+    measure: str,
+    starts: int,
+    settings: Any,
+    options: dict[str, Any],
+    out_dir: Path | None,
+) -> Any:
+    """Everything refused before work (the span, the counts, the measure, the folder); the
+    frequency response's store, and ``options`` completed with the starts."""
+    from oscillator.report.frequency import MEASURES
+
+    if measure not in MEASURES:
+        raise InputError(f"--measure must be one of {', '.join(MEASURES)}, got {measure!r}", field="--measure")
+    load("oscillator.attractors.frequency", notice=True)
+    from oscillator.attractors.atlas import fresh_starts
+    from oscillator.attractors.frequency import check_frequency, frequency_store
+    from oscillator.model.parameters import check_count
+
+    name, low, high = param
+    check_frequency(case, name, (low, high), **options)
+    options["states"] = fresh_starts(case, check_count(starts, "--starts", 1, 1000))
+    folder = out_dir if out_dir is not None else new_folder(case, "frc")
+    store = frequency_store(folder, case, name, (low, high), settings=settings, **options)
+    store.check()
+    return store
+
+
+def _finish(found: Any, store: Any, measure: str, no_plots: bool, quiet: bool) -> None:
+    folder: Path = store.folder
+    if store.reused and not quiet:
+        say(f"resumed: {store.reused} parts read from {printable(str(folder))}, the rest computed")
+    from oscillator.report.frequency import write_frequency
+
+    problems = outputs(folder, "parts", lambda: write_frequency(found, folder, measure, plots=not no_plots))
+    if not quiet:
+        points = found.points
+        out.print(Text(f"  {len(found.branches)} branches, {len(points)} points, {points.stable.mean():.0%} stable"))
+        for direction in ("up", "down"):
+            jumps = ", ".join(f"{value:g}" for value in found.jumps(direction)) or "none"
+            out.print(Text(f"  sweep {direction}: jumps at {jumps}"))
+        for _, row in found.bifurcations.iterrows():
+            out.print(Text(f"  branch {int(row.branch)}: {str(row.kind).replace('_', ' ')} at {row[found.param]:.8g}"))
+    say(f"written to {printable(str(folder))}")
+    if problems:
+        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)

@@ -1,0 +1,132 @@
+"""``oscillator frc`` and the frequency response's stages (issue 38): Instance 1's branches over
+[1.3, 1.85] in one chain through the points where the corrector fails, the coexistence window at
+Omega = 1.6 (Q2 = 71.165) with the sweeps' hysteresis, resume, and bad input."""
+
+import itertools
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from oscillator import frequency_response, resolve_case
+from oscillator.attractors.atlas import fresh_starts
+from oscillator.attractors.responding import RESTART, jumps
+from oscillator.cli.app import app
+
+
+@pytest.mark.slow
+def test_instance_1_is_one_chain_of_branches_that_the_sweeps_follow():
+    """Over [1.3, 1.85] the period-1 orbit is one family: the branches follow each other, each
+    started RESTART of the span beyond where the one before failed, without overlap; no fold (the
+    corrector's failures are not folds); the sweeps' orbits lie on the branches."""
+    found = frequency_response("instance-1", "Omega", (1.3, 1.85), workers=2)
+    ends = sorted((b.points.Omega.min(), b.points.Omega.max()) for b in found.branches)
+    assert ends[0][0] == 1.3 and ends[-1][1] == 1.85
+    for (_, end), (start, _) in itertools.pairwise(ends):
+        assert start == pytest.approx(end + RESTART * 0.55, abs=1e-9)
+    assert found.folds.empty and found.points.stable.all()
+    assert not found.jumps("up") and not found.jumps("down")
+    points = found.points.sort_values("Omega")
+    for _, row in found.sweeps.iterrows():
+        nearest = points.iloc[int(np.argmin(np.abs(points.Omega.to_numpy() - row.Omega)))]
+        if abs(nearest.Omega - row.Omega) < 1e-12:  # a sweep value the branch passed: the same orbit
+            assert row.x_pp_m2 == pytest.approx(nearest.x_pp_m2, abs=1e-7)
+    inside = points[(points.Omega > 1.4) & (points.Omega < 1.55)]
+    assert (inside.rest_m1 == 0).all() and (inside.rest_m2 == 0).all()
+    assert (points[(points.Omega > 1.34) & (points.Omega < 1.36)].rest_m1 > 0).all()  # m1 sticks there
+
+
+@pytest.fixture(scope="module")
+def window():
+    case = resolve_case("instance-1", Q2=71.165)
+    return frequency_response(case, "Omega", (1.5999, 1.6001), states=fresh_starts(case, 16), sweep=41)
+
+
+def test_the_coexistence_at_omega_1_6_is_a_hysteresis_window(window):
+    """At Q2 = 71.165 the orbit without rest and the one in which m2 rests coexist on a window
+    around 1.6 (docs/attractors.md): the first branch gains its rest with a jump at its sliding
+    onset, the second (seeded at 1.6) runs onto the first there and ends below; the sweep up
+    jumps at the first value past the onset, the sweep down at the first value below the second
+    branch's end."""
+    onset = window.bifurcations[window.bifurcations.kind == "sliding_onset"].Omega
+    assert len(onset) == 1
+    onset = float(onset.iloc[0])
+    seeded = window.branches[1:]  # the orbit with rest, from the seed at 1.6, up and down
+    assert len(seeded) == 2 and all(b.points.Omega.max() <= onset for b in seeded)
+    low = min(float(b.points.Omega.min()) for b in seeded)
+    assert 1.59997 < low < 1.6 < onset < 1.60004
+    step = 0.0002 / 40
+    (up,), (down,) = window.jumps("up"), window.jumps("down")
+    assert onset < up <= onset + step + 1e-12 and low - step - 1e-12 <= down < low
+    points = window.points
+    first, second = (points[points.branch == k] for k in (0, 2))
+    at = [part.iloc[int(np.argmin(np.abs(part.Omega.to_numpy() - 1.6)))] for part in (first, second)]
+    assert all(abs(row.Omega - 1.6) < 1e-5 for row in at)
+    assert at[0].rest_m2 == 0 and at[1].rest_m2 > 1e-3  # both at 1.6: one rests, one does not
+
+
+def test_jumps_need_a_move_out_of_scale_and_a_change():
+    """A move three times its neighbours is a jump where the cycle of switches changes with it (or
+    it is large); steady growth towards a fold is not."""
+    states = [np.array([1.0 + 1e-4 * k, 0, 0, 0]) for k in range(5)]
+    states[3] = states[3] + 0.01
+    states[4] = states[4] + 0.01
+    signatures = ["a", "a", "a", "b", "b"]
+    assert jumps(np.ones(5, int), states, signatures).tolist() == [False, False, False, True, False]
+    assert not jumps(np.ones(5, int), states, ["a"] * 5).any()  # small and the same cycle: a kink
+    growing = [np.array([1.0 + 1e-3 * k**2, 0, 0, 0]) for k in range(6)]
+    assert not jumps(np.ones(6, int), growing, ["a"] * 6).any()
+
+
+ARGS = ["frc", "instance-1", "--set", "Q2=71.165", "--param", "Omega", "1.5999", "1.6001", "--starts", "16"]
+
+
+def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
+    """The command writes the tables the library computes; run again, it reads every part back;
+    with a part deleted, it computes that part again, to the same tables."""
+    runner = CliRunner()
+    folder = tmp_path / "frc"
+    done = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
+    assert done.exit_code == 0, done.stderr
+    assert "sweep up: jumps at 1.60003" in done.stdout
+    points = pd.read_parquet(folder / "points.parquet")
+    assert len(points) == len(window.points)
+    np.testing.assert_allclose(points.x_pp_m2, window.points.x_pp_m2, rtol=0, atol=1e-12)
+    parts = sorted(p.name for p in (folder / "parts").iterdir())
+    again = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
+    assert f"resumed: {len(parts)} parts read" in again.stdout
+    (folder / "parts" / "measures-0001.parquet").unlink()
+    (folder / "parts" / "sweep-down.parquet").unlink()
+    third = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
+    assert f"resumed: {len(parts) - 2} parts read" in third.stdout
+    pd.testing.assert_frame_equal(pd.read_parquet(folder / "points.parquet"), points)
+    assert pd.read_parquet(folder / "sweeps.parquet").jump.sum() == 2
+
+
+def test_a_damaged_part_is_refused_by_name(tmp_path):
+    runner = CliRunner()
+    folder = tmp_path / "frc"
+    assert (
+        runner.invoke(app, [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]).exit_code == 0
+    )
+    (folder / "parts" / "seed-0001.parquet").write_bytes(b"not parquet")
+    done = runner.invoke(app, [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"])
+    assert done.exit_code == 2 and "seed-0001.parquet is damaged" in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("extra", "said"),
+    [
+        (["--param", "Omega", "1.85", "1.3"], "--param must be two finite numbers, low < high"),
+        (["--param", "Omeg", "1.3", "1.5"], "--param 'Omeg' is not a parameter"),
+        (["--param", "Omega", "1.3", "1.5", "--period", "0"], "--period must be a whole number from 1"),
+        (["--param", "Omega", "1.3", "1.5", "--measure", "loudness"], "--measure must be one of x_max"),
+        (["--param", "Omega", "1.3", "1.5", "--starts", "0"], "--starts must be a whole number"),
+    ],
+)
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path, extra, said):
+    folder = tmp_path / "frc"
+    done = CliRunner().invoke(app, ["frc", "instance-1", *extra, "--out", str(folder)])
+    assert done.exit_code == 2 and done.stderr.startswith(f"error: {said}") and len(done.stderr.splitlines()) == 1
+    assert not folder.exists()
