@@ -205,13 +205,13 @@ class _Job:
         orbits = dict(self.executor.map(keyed, tasks))
         found: list[Branch] = []
         for k, value in enumerate(values):
-            part = kept[k]
-            if part is None:
-                part = self._continue(float(value), orbits[k], found)
-                self._write(f"seed-{k:04d}", *_branches_on_disk(part))
+            stored = kept[k]
+            if stored is None:
+                branches = self._continue(float(value), orbits[k], found)
+                self._write(f"seed-{k:04d}", *_branches_on_disk(branches))
             else:
-                part = _branches_from_disk(self.case, self.param, *part)
-            found += part
+                branches = _branches_from_disk(self.case, self.param, *stored)
+            found += branches
             self.tally.add(1)
         return found
 

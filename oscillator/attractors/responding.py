@@ -107,12 +107,12 @@ def continued(
         beyond = float(values[-1] + heading * RESTART * (high - low))
         if not low < beyond < high:
             return found
-        state = orbit_state(
+        restart = orbit_state(
             resolve_case(case, **{param: beyond}), period, branch.points[list(STATE)].to_numpy(float)[-1]
         )
-        if state is None or any(on_branch(case, other, beyond, state) for other in (*known, *found)):
+        if restart is None or any(on_branch(case, other, beyond, restart) for other in (*known, *found)):
             return found
-        start, stop = beyond, (high if heading > 0 else low)
+        start, stop, state = beyond, (high if heading > 0 else low), restart
 
 
 def trimmed(case: Case, branch: Branch, known: Sequence[Branch]) -> Branch:
