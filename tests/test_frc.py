@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 
 from oscillator import frequency_response, resolve_case
 from oscillator.attractors.atlas import fresh_starts
+from oscillator.attractors.frequency import FrequencyStore
 from oscillator.attractors.responding import RESTART, jumps
 from oscillator.cli.app import app
 
@@ -104,15 +105,25 @@ def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
     assert pd.read_parquet(folder / "sweeps.parquet").jump.sum() == 2
 
 
-def test_a_damaged_part_is_refused_by_name(tmp_path):
+@pytest.mark.parametrize("damage", ["bytes", "metadata", "measures"])
+def test_a_damaged_part_is_refused_by_name(tmp_path, damage):
+    """A part that cannot be read, a seed's part whose metadata is not its branches, a branch's
+    measures of another length: each refused in one line naming the part, exit 2."""
     runner = CliRunner()
     folder = tmp_path / "frc"
-    assert (
-        runner.invoke(app, [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]).exit_code == 0
-    )
-    (folder / "parts" / "seed-0001.parquet").write_bytes(b"not parquet")
-    done = runner.invoke(app, [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"])
-    assert done.exit_code == 2 and "seed-0001.parquet is damaged" in done.stderr
+    command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
+    assert runner.invoke(app, command).exit_code == 0
+    parts = folder / "parts"
+    name = "measures-0000" if damage == "measures" else "seed-0000"
+    if damage == "bytes":
+        (parts / f"{name}.parquet").write_bytes(b"not parquet")
+    else:
+        frame = pd.read_parquet(parts / f"{name}.parquet")
+        store = FrequencyStore(folder, {})
+        store.write(name, frame.iloc[:-1] if damage == "measures" else frame, [{"section": 0.0}])
+    done = runner.invoke(app, command)
+    assert done.exit_code == 2 and f"{name}.parquet is damaged" in done.stderr, done.stderr
+    assert len(done.stderr.splitlines()) == 1
 
 
 @pytest.mark.parametrize(

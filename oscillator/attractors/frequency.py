@@ -27,7 +27,7 @@ import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -49,6 +49,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = ["FrequencyResponse", "FrequencyStore", "check_frequency", "frequency_response", "frequency_store"]
+
+T = TypeVar("T")
 
 #: The points of a branch measured in one task.
 CHUNK = 16
@@ -136,9 +138,9 @@ def frequency_response(
     low, high = check_frequency(base, param, span, period=period, seeds=seeds, sweep=sweep, max_points=max_points)
     settings = check_settings(settings)
     starts = None if states is None else check_states(states)
-    job = _Job(base, param, (low, high), period, settings, max_points, store, _Tally(progress, seeds + 2 * sweep))
+    tally = _Tally(progress, seeds + 2 * sweep)
     with Executor(workers, client, progress) as executor:
-        job.executor = executor
+        job = _Job(base, param, (low, high), period, settings, max_points, store, tally, executor)
         branches = job.branches(np.linspace(low, high, seeds), starts)
         points = job.measures(branches)
         sweeps = job.sweeps(sweep)
@@ -180,7 +182,7 @@ class _Tally:
             self.progress(self.done, self.total)
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Job:
     """One frequency response as it is computed: the stages, each read back from the store where
     it holds them."""
@@ -193,7 +195,7 @@ class _Job:
     max_points: int
     store: FrequencyStore | None
     tally: _Tally
-    executor: Executor = field(default_factory=Executor)
+    executor: Executor
 
     def branches(self, values: np.ndarray, starts: np.ndarray | None) -> list[Branch]:
         """Seed after seed, the orbits at the seed not on a branch already traced, each continued
@@ -210,7 +212,7 @@ class _Job:
                 branches = self._continue(float(value), orbits[k], found)
                 self._write(f"seed-{k:04d}", *_branches_on_disk(branches))
             else:
-                branches = _branches_from_disk(self.case, self.param, *stored)
+                branches = self._stored(f"seed-{k:04d}", _branches_from_disk, self.case, self.param, *stored)
             found += branches
             self.tally.add(1)
         return found
@@ -233,7 +235,7 @@ class _Job:
         for b, branch in enumerate(branches):
             part = self._read(f"measures-{b:04d}")
             if part is not None:
-                frames[b] = part[0]
+                frames[b] = self._stored(f"measures-{b:04d}", _measures_of, branch, part[0])
                 continue
             count = len(branch.points)
             tasks += [(b, measured, branch, first, min(first + CHUNK, count)) for first in range(0, count, CHUNK)]
@@ -267,12 +269,28 @@ class _Job:
             self.tally.add(count)
         return pd.concat([found["up"], found["down"]], ignore_index=True)
 
+    def _stored(self, name: str, read: Callable[..., T], *arguments: Any) -> T:
+        """``read(*arguments)`` of the stored part ``name``; a part that does not hold what it
+        should is refused by name."""
+        try:
+            return read(*arguments)
+        except (KeyError, TypeError, ValueError) as exc:
+            assert self.store is not None
+            raise self.store.damaged(self.store.parts / f"{name}.parquet", f"it does not hold {exc}") from None
+
     def _read(self, name: str) -> tuple[pd.DataFrame, Any] | None:
         return None if self.store is None else self.store.read(name)
 
     def _write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
         if self.store is not None:
             self.store.write(name, frame, meta)
+
+
+def _measures_of(branch: Branch, frame: pd.DataFrame) -> pd.DataFrame:
+    """A stored branch's measures, one row per point of the branch (a ``ValueError`` otherwise)."""
+    if len(frame) != len(branch.points) or "x_pp_m1" not in frame:
+        raise ValueError(f"the measures of its {len(branch.points)} points")
+    return frame
 
 
 def _joined(index: int, branch: Branch, measures: pd.DataFrame) -> pd.DataFrame:

@@ -163,10 +163,8 @@ def frequency_figure_name(measure: str) -> str:
 def figure_measures(found: FrequencyResponse, measure: str) -> list[str]:
     """The measures ``oscillator frc`` draws: ``measure``, and the largest impact velocity where
     any orbit or sweep value has a contact."""
-    columns = [c for c in ("onsets_right", "onsets_left") if c in found.points or c in found.sweeps]
-    contacts = any(
-        (frame[c].fillna(0) > 0).any() for frame in (found.points, found.sweeps) for c in columns if c in frame
-    )
+    frames = (found.points, found.sweeps)
+    contacts = any((f[c].fillna(0) > 0).any() for f in frames for c in ("onsets_right", "onsets_left") if c in f)
     return list(dict.fromkeys([measure, *(["impact_max"] if contacts else [])]))
 
 
