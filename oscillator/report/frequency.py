@@ -33,11 +33,22 @@ __all__ = ["MEASURES", "figure_measures", "frequency_blocks", "frequency_figure"
 #: The units of the measures.
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
 UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
-#: The panels of a measure of each kind: ``(column suffix, what it is of, the mass whose rests are shaded)``.
+#: What the sweeps' values are shaded by: the columns any of which is positive, the colour, the label.
+_CONTACT = (("onsets_right", "onsets_left"), "tab:blue", "contact")
+_STICKS = {mass: ((f"rest_m{mass}",), "tab:orange", f"m{mass} sticks") for mass in (1, 2)}
+#: The panels of a measure of each kind: ``(column suffix, what it is of, what is shaded)``.
 PANELS = {
-    **dict.fromkeys(MASS_MEASURES, (("_m1", "m1", 1), ("_m2", "m2", 2))),
+    **dict.fromkeys(MASS_MEASURES, (("_m1", "m1", (_STICKS[1], _CONTACT)), ("_m2", "m2", (_STICKS[2], _CONTACT)))),
     **dict.fromkeys(
-        CONTACT_MEASURES, (("_right", "the right stop", 1), ("_left", "the contact between the masses", 2))
+        CONTACT_MEASURES,
+        (
+            ("_right", "the right stop", ((("onsets_right",), "tab:blue", "contact with the right stop"),)),
+            (
+                "_left",
+                "the contact between the masses",
+                ((("onsets_left",), "tab:blue", "contact between the masses"),),
+            ),
+        ),
     ),
 }
 #: Every measure the figure draws.
@@ -53,12 +64,12 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
 
     if measure not in MEASURES:
         raise InputError(f"measure must be one of {', '.join(MEASURES)}, got {measure!r}", field="measure")
-    panels = PANELS.get(measure, (("", "", 0),))
+    panels = PANELS.get(measure, (("", "", (_CONTACT,)),))
     fig = Figure(figsize=(8.0, 3.5 * len(panels)), layout="constrained")
     axes = np.atleast_1d(fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0])
-    for (suffix, of, mass), ax in zip(panels, axes, strict=True):
+    for (suffix, of, shades), ax in zip(panels, axes, strict=True):
         column = f"{measure}{suffix}"
-        _shade(ax, found, mass)
+        _shade(ax, found, shades)
         _branches(ax, found, column)
         _sweeps(ax, found, column)
         unit = UNITS.get(measure, "J per period")
@@ -141,16 +152,15 @@ def _sweeps(ax: Axes, found: FrequencyResponse, column: str) -> None:
                 )
 
 
-def _shade(ax: Axes, found: FrequencyResponse, mass: int) -> None:
-    """The values where the sweeps' motion has this mass resting, or a contact, shaded."""
+def _shade(ax: Axes, found: FrequencyResponse, shades: tuple[tuple[tuple[str, ...], str, str], ...]) -> None:
+    """The sweep values where the motion has what ``shades`` name (a mass resting, a contact)."""
     sweeps = found.sweeps
-    if sweeps.empty or (mass and f"rest_m{mass}" not in sweeps):
+    if sweeps.empty:
         return
     values = np.sort(sweeps[found.param].unique())
     step = float(np.min(np.diff(values))) if len(values) > 1 else 0.0
-    contact = sweeps[[c for c in ("onsets_right", "onsets_left") if c in sweeps]].fillna(0).sum(axis=1) > 0
-    shaded = [(sweeps[f"rest_m{mass}"].fillna(0) > 0, "tab:orange", f"m{mass} sticks")] if mass else []
-    for mask, color, label in [*shaded, (contact, "tab:blue", "contact")]:
+    for columns, color, label in shades:
+        mask = sweeps[[c for c in columns if c in sweeps]].fillna(0).sum(axis=1) > 0
         for value in np.unique(sweeps[found.param][mask]):
             ax.axvspan(value - step / 2, value + step / 2, color=color, alpha=0.12, lw=0, label=label)
 
