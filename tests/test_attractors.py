@@ -93,6 +93,26 @@ def test_two_period_one_attractors_coexist_at_q2_71_165_and_every_label_holds_fo
         assert np.max(np.abs(end - other.orbit.state)) > 1e-3
 
 
+def test_each_periodic_attractor_carries_its_orbits_response_measures_into_the_tables():
+    """Refined measures each refined orbit (issue 38): the rest fraction of m2 in the measures
+    agrees with the rest intervals the landings counted, the x_pp of m2 with the orbit refined to
+    1e-12 and measured apart to 1e-7; the attractors-over-a-parameter table carries them."""
+    from oscillator import response
+
+    found = find_attractors("instance-1", states=[NO_REST_START, REST_START], Q2=71.165, settings=QUICK)
+    no_rest, rest = found.attractors
+    assert no_rest.measures["rest_m2"] == 0 and rest.measures["rest_m2"] > 1e-3
+    for attractor in found.attractors:
+        tight = find_orbit(found.case, guess=attractor.orbit.state, tol=1e-12)
+        assert attractor.measures["x_pp_m2"] == pytest.approx(
+            response(tight.one_period()).columns()["x_pp_m2"], abs=1e-7
+        )
+    over = follow_attractors("instance-1", "Q2", [71.165, 71.17], states=[NO_REST_START, REST_START], settings=QUICK)
+    table = over.table()
+    assert {"x_pp_m1", "impact_max_right", "energy_friction"} <= set(table.columns)
+    assert sorted(table[table.Q2 == 71.165].rest_m2 > 0) == [False, True]
+
+
 @pytest.mark.parametrize(("q2", "rests"), [(71.10, 2.0), (71.20, 0.0)])
 def test_one_attractor_on_either_side_of_the_window(q2, rests):
     found = find_attractors("instance-1", states=[NO_REST_START, REST_START], Q2=q2, settings=QUICK)

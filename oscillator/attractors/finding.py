@@ -26,7 +26,7 @@ from oscillator.attractors.lyapunov import lyapunov
 from oscillator.attractors.mapping import STATE, AttractorSettings, Landing, check_settings, check_states, land
 from oscillator.errors import OscillatorError
 from oscillator.io.cases import Case, resolve_case
-from oscillator.orbits.shooting import find_orbit
+from oscillator.orbits.shooting import Orbit, find_orbit
 
 __all__ = ["Attractors", "Refined", "assemble", "find_attractors", "labelled", "share_interval", "share_text"]
 
@@ -38,10 +38,19 @@ def largest_exponent(multipliers: np.ndarray, span: float) -> float:
         return float(np.log(np.max(np.abs(multipliers)))) / span
 
 
+def _responses(orbit: Orbit) -> dict[str, float]:
+    """The orbit's response measures by column (none where its return cannot be run again)."""
+    try:
+        return orbit.response().columns()
+    except OscillatorError:
+        return {}
+
+
 @dataclass(frozen=True)
 class Refined:
     """The describer of :func:`find_attractors`: a periodic attractor with its orbit refined by
-    Newton from its cycle (multipliers, stability) and its largest exponent from them; an
+    Newton from its cycle (multipliers, stability), its largest exponent from them and its
+    response measures (:meth:`~oscillator.orbits.shooting.Orbit.response`, in ``measures``); an
     aperiodic one with the QR average of its largest exponent over ``lyapunov_periods`` (0: not
     computed).  What the refinement met is in the attractor's ``note``."""
 
@@ -55,7 +64,10 @@ class Refined:
             except OscillatorError as error:
                 return dataclasses.replace(attractor, forcing_period=period, note=f"not refined: {error}")
             largest = largest_exponent(orbit.multipliers, attractor.period * period)
-            return dataclasses.replace(attractor, orbit=orbit, lyapunov=largest, forcing_period=period, note=orbit.note)
+            measures = _responses(orbit)
+            return dataclasses.replace(
+                attractor, orbit=orbit, lyapunov=largest, forcing_period=period, note=orbit.note, measures=measures
+            )
         if self.lyapunov_periods == 0:
             return dataclasses.replace(attractor, forcing_period=period)
         try:

@@ -151,6 +151,7 @@ def _row(
         "stable": None if orbit is None else bool(orbit.stable),
         "largest_multiplier": math.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
         "lyapunov": attractor.lyapunov,
+        **attractor.response_columns(),
         "points": json.dumps(attractor.points.tolist()),
     }
 

@@ -87,7 +87,9 @@ class Attractor:
         The fraction of the time m1 and m2 rest (1: a mass that rests throughout, with no rest
         interval beginning).
     measures : dict
-        The measures a describer added (:data:`~oscillator.attractors.features.MEASURES`: the
+        The measures a describer added (:class:`~oscillator.attractors.finding.Refined`: the
+        response measures of the refined orbit, :data:`~oscillator.orbits.response.COLUMNS`;
+        :data:`~oscillator.attractors.features.MEASURES`: the
         largest impact velocity, ...), by name.
     """
 
@@ -120,6 +122,14 @@ class Attractor:
             1,
             rest_time=landing.rest_time,
         )
+
+    def response_columns(self) -> dict[str, float]:
+        """The response measures of its refined orbit by column
+        (:data:`~oscillator.orbits.response.COLUMNS`), NaN where they were not measured (an
+        aperiodic set, an orbit Newton did not refine)."""
+        from oscillator.orbits.response import COLUMNS
+
+        return {name: self.measures.get(name, math.nan) for name in COLUMNS}
 
     @property
     def kind(self) -> str:

@@ -58,6 +58,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.branch import Branch
 
 __all__ = [
+    "COLUMNS",
     "CONTACT_MEASURES",
     "ENERGY_MEASURES",
     "MASS_MEASURES",
@@ -71,6 +72,13 @@ __all__ = [
 MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
 CONTACT_MEASURES = ("onsets", "impact_max", "impact_mean", "force_peak", "time")
 ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
+#: Every measure's column, in :meth:`Response.columns`'s order: ``x_max_m1, ..., impact_max_right,
+#: ..., energy_friction``.
+COLUMNS = (
+    *(f"{name}_m{mass}" for mass in (1, 2) for name in MASS_MEASURES),
+    *(f"{name}_{stop}" for stop in ("right", "left") for name in CONTACT_MEASURES),
+    *(f"energy_{name}" for name in ENERGY_MEASURES),
+)
 #: The re-integration's tolerances (the run's own are CVODE's 1e-10).
 _TOLERANCE = 1e-12
 

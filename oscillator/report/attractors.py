@@ -27,6 +27,7 @@ from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.io.cases import case_to_toml
 from oscillator.io.files import atomic_path
 from oscillator.model.parameters import labelled
+from oscillator.orbits.response import COLUMNS
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
 from oscillator.report.global_folders import write_found
@@ -61,10 +62,15 @@ __all__ = [
 
 
 #: The columns of ``attractors.parquet`` (the same when every start failed and there is no attractor).
-ATTRACTOR_COLUMNS = (
-    "attractor name kind period signature rests_m1 rests_m2 contacts rest_time_m1 rest_time_m2 starts fraction low "
-    "high stable largest_multiplier lyapunov points note"
-).split()
+ATTRACTOR_COLUMNS = [
+    *(
+        "attractor name kind period signature rests_m1 rests_m2 contacts rest_time_m1 rest_time_m2 starts fraction low "
+        "high stable largest_multiplier lyapunov"
+    ).split(),
+    *COLUMNS,
+    "points",
+    "note",
+]
 
 
 def attractor_table(basins: Basins) -> pd.DataFrame:
@@ -93,6 +99,7 @@ def attractor_table(basins: Basins) -> pd.DataFrame:
                 "stable": None if orbit is None else bool(orbit.stable),
                 "largest_multiplier": np.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
                 "lyapunov": attractor.lyapunov,
+                **attractor.response_columns(),
                 "points": json.dumps(attractor.points.tolist()),
                 "note": attractor.note,
             }
