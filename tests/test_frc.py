@@ -38,6 +38,32 @@ def test_instance_1_is_one_chain_of_branches_that_the_sweeps_follow():
     assert (points[(points.Omega > 1.34) & (points.Omega < 1.36)].rest_m1 > 0).all()  # m1 sticks there
 
 
+@pytest.mark.slow
+def test_an_impacting_systems_impact_speeds_are_those_of_its_orbits_events():
+    """Instance 1's system with d = 1, d1 = 3.5 (docs/frequency.md): contacts with the right stop
+    and between the masses at every branch point; at a few points the largest approach speeds
+    equal those read from the events of ``simulate`` run one period from the branch's orbit; the
+    energy closes at every point."""
+    from oscillator import simulate
+    from oscillator.orbits.response import impact_speeds
+
+    case = resolve_case("instance-1", d=1.0, d1=3.5)
+    found = frequency_response(case, "Omega", (1.3, 1.85), seeds=2, sweep=5, workers=2)
+    points = found.points
+    assert (points.onsets_right == 1).all() and points.onsets_left.isin([1.0, 2.0]).all()
+    assert ((points.onsets_left == 2) == (points.Omega < 1.7306)).mean() > 0.99  # a grazing ends one
+    balance = points.energy_forcing + points.energy_feedback
+    balance -= points.energy_dampers + points.energy_contact + points.energy_friction
+    assert np.max(np.abs(balance)) < 1e-6 * points.energy_friction.max()
+    for _, row in points.iloc[:: max(len(points) // 6, 1)].iterrows():
+        branch = found.branches[int(row.branch)]
+        start = dict(zip(("x1", "v1", "x2", "v2"), (float(row[n]) for n in ("x1", "v1", "x2", "v2")), strict=True))
+        at = resolve_case(case, Omega=float(row.Omega), t0=branch.section, **start)
+        events = simulate(at, t_end=at.initial.t0 + at.parameters.period, rtol=1e-12, atol=1e-12).events
+        for stop in ("right", "left"):
+            assert row[f"impact_max_{stop}"] == pytest.approx(impact_speeds(events, stop).max(), abs=1e-6)
+
+
 @pytest.fixture(scope="module")
 def window():
     case = resolve_case("instance-1", Q2=71.165)

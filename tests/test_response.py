@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import random_case
-from oscillator import Response, find_orbit, resolve_case, response, simulate
+from oscillator import InputError, Response, find_orbit, resolve_case, response, simulate
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.model.events import EventKind
 
@@ -197,3 +197,31 @@ def test_the_atlas_impact_velocity_is_the_responses():
         measured.contact["right"]["impact_max"], rel=1e-6
     )
     assert measured.contact["right"]["impact_max"] > 1.0
+
+
+def test_the_atlas_colours_by_any_response_measure_it_was_computed_with(tmp_path):
+    """``regime_atlas(..., measures=...)``: a column for each measure named, per attractor; with m1
+    on the stop moved in (d1 = 3.5) the largest impact speed on it equals the atlas's own
+    ``impact_velocity`` (measured apart, by ``features.impact_velocity``), 0 where the stop is far
+    (d1 = 5); the figure coloured by it; a name that is not a measure refused; an atlas without
+    measures keeps the identity it had (its folders still resume)."""
+    from oscillator.analysis.axes import Axis
+    from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
+    from oscillator.report.plane import atlas_figure
+
+    x, y = Axis("Omega", 1.55, 1.65, 2), Axis("d1", 3.5, 5.0, 2)
+    atlas = regime_atlas(
+        resolve_case("instance-1"), x, y, settings=AtlasSettings(), measures=("impact_max_right", "x_pp_m1")
+    )
+    table = atlas.table
+    assert atlas.measures == ("impact_max_right", "x_pp_m1") and (table.period == 1).all()
+    near, far = table[table.d1 == 3.5], table[table.d1 == 5.0]
+    assert (near.impact_max_right > 1.0).all() and (far.impact_max_right == 0).all()
+    np.testing.assert_allclose(table.impact_max_right, table.impact_velocity, rtol=1e-6)
+    assert (table.x_pp_m1 > 5).all()
+    label = atlas_figure(atlas, by="impact_max_right").axes[-1].get_ylabel()
+    assert label == "largest impact_max_right over the attractors (m/s)"
+    with pytest.raises(InputError, match="measures: 'loudness' is not a response measure"):
+        regime_atlas(resolve_case("instance-1"), x, y, measures=("loudness",))
+    plain = atlas_store(tmp_path / "a", resolve_case("instance-1"), x, y, AtlasSettings())
+    assert "measures" not in plain.identity

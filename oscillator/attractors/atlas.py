@@ -22,7 +22,7 @@ coexist keeps each, with their number.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -48,7 +48,7 @@ from oscillator.text import shown
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["COLUMNS", "Atlas", "AtlasSettings", "atlas_store", "fresh_starts", "regime_atlas"]
+__all__ = ["COLUMNS", "Atlas", "AtlasSettings", "atlas_store", "check_measures", "fresh_starts", "regime_atlas"]
 
 COLUMNS = {
     "row": "int64",
@@ -150,9 +150,17 @@ class Atlas(Presented):
     table: pd.DataFrame
 
     def plot(self, by: str = "regime") -> Figure:
-        """The plane coloured by ``by``: ``regime``, ``period``, ``coexisting``, ``lyapunov`` or
-        ``impact_velocity`` (as ``oscillator atlas`` draws it)."""
+        """The plane coloured by ``by``: ``regime``, ``period``, ``coexisting``, ``lyapunov``,
+        ``impact_velocity`` or a response measure the atlas was computed with (``measures``:
+        its largest value over the attractors), as ``oscillator atlas`` draws it."""
         return presenter().plot_global(self, by=by)
+
+    @property
+    def measures(self) -> tuple[str, ...]:
+        """The response measures the table has a column for (``regime_atlas``'s ``measures``)."""
+        from oscillator.orbits.response import COLUMNS
+
+        return tuple(name for name in self.table.columns if name in COLUMNS)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(codes, coexisting, regimes)``: at each point the code of its regime (the regime of
@@ -182,9 +190,27 @@ class Atlas(Presented):
         return pd.DataFrame(rows)
 
 
-def atlas_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AtlasSettings) -> LandingStore:
-    """The resumable folder of this atlas (:class:`~oscillator.attractors.store.LandingStore`)."""
-    return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings), name=case.name)
+def atlas_store(
+    folder: Path, case: Case, x: Axis, y: Axis, settings: AtlasSettings, measures: Sequence[str] = ()
+) -> LandingStore:
+    """The resumable folder of this atlas (:class:`~oscillator.attractors.store.LandingStore`);
+    the response ``measures`` are part of its identity where there are any."""
+    extra = {"measures": list(check_measures(measures))} if measures else {}
+    return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings, **extra), name=case.name)
+
+
+def check_measures(measures: object) -> tuple[str, ...]:
+    """Response measures by column name (:data:`~oscillator.orbits.response.COLUMNS`), each once."""
+    from oscillator.orbits.response import COLUMNS
+
+    names = (measures,) if isinstance(measures, str) else tuple(measures)  # type: ignore[arg-type]
+    for name in names:
+        if name not in COLUMNS:
+            raise InputError(
+                f"measures: {shown(name)} is not a response measure; give names of {', '.join(COLUMNS)}",
+                field="measures",
+            )
+    return tuple(dict.fromkeys(names))
 
 
 def regime_atlas(
@@ -196,6 +222,7 @@ def regime_atlas(
     store: LandingStore | None = None,
     workers: int = 1,
     client: Any = None,
+    measures: Sequence[str] = (),
     progress: Callable[[int, int], None] | None = None,
 ) -> Atlas:
     """The atlas over the plane of the parameters ``x`` and ``y``, row by row (each row's points
@@ -212,10 +239,15 @@ def regime_atlas(
         resumes).
     workers, client
         Local processes or a Dask client, as for :func:`~oscillator.attractors.finding.find_attractors`.
+    measures : sequence of str
+        Response measures (:data:`~oscillator.orbits.response.COLUMNS`: ``x_pp_m2``,
+        ``impact_max_right``, ...) each periodic attractor gets as a column, over one return from
+        its last section point; NaN for an aperiodic one.  About 20 ms an attractor.
     progress : callable, optional
         ``progress(done, total)`` in points, after every row.
     """
     settings = settings or AtlasSettings()
+    responses = check_measures(measures)
     if not isinstance(settings, AtlasSettings):
         raise InputError(f"settings must be an AtlasSettings or None, got {shown(settings)}", field="settings")
     executor = Executor(workers, client, progress)
@@ -230,19 +262,19 @@ def regime_atlas(
             case,
             plane_points(x, y),
             mapper,
-            describe=Measured(settings.lyapunov_periods),
+            describe=Measured(settings.lyapunov_periods, responses=responses),
             seeding=OnePerRegime(),
             executor=executor,
             store=store,
             progress=progress,
         )
-    frame = _table(continued, x.count)
+    frame = _table(continued, x.count, responses)
     frame.insert(2, x.name, x.values[frame.column.to_numpy()])
     frame.insert(3, y.name, y.values[frame.row.to_numpy()])
     return Atlas(case, x, y, frame)
 
 
-def _table(continued: Continued, columns: int) -> pd.DataFrame:
+def _table(continued: Continued, columns: int, responses: tuple[str, ...]) -> pd.DataFrame:
     """One row per attractor of each point, in the points' order (or one failed row for a point
     where every start failed)."""
     parts = []
@@ -274,7 +306,11 @@ def _table(continued: Continued, columns: int) -> pd.DataFrame:
             for a in found.attractors
         ]
         parts.append(pd.DataFrame(rows).astype(COLUMNS))
-    return pd.concat(parts, ignore_index=True)
+    table = pd.concat(parts, ignore_index=True)
+    for name in responses:  # after the fixed columns, in the order asked
+        by_point = [[a.measures.get(name, math.nan) for a in f.attractors] or [math.nan] for f in continued.found]
+        table[name] = np.concatenate([np.asarray(values, dtype=float) for values in by_point])
+    return table
 
 
 def _failed(row: int, column: int, message: str) -> pd.DataFrame:

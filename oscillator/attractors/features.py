@@ -52,18 +52,38 @@ MEASURES: dict[str, Callable[[Case, Attractor], float]] = {"impact_velocity": im
 @dataclass(frozen=True)
 class Measured:
     """The atlas's describer: the largest exponent from one return's monodromy (periodic) or the
-    QR average over ``lyapunov_periods`` (aperiodic), NaN where it cannot be computed, and the
-    ``measures`` named (of :data:`MEASURES`)."""
+    QR average over ``lyapunov_periods`` (aperiodic), NaN where it cannot be computed, the
+    ``measures`` named (of :data:`MEASURES`) and the ``responses`` named."""
 
     lyapunov_periods: int = 100
     measures: tuple[str, ...] = tuple(MEASURES)
+    #: Response measures (:data:`~oscillator.orbits.response.COLUMNS`) of a periodic attractor,
+    #: over one return from its last section point (NaN for an aperiodic one).
+    responses: tuple[str, ...] = ()
 
     def __call__(self, case: Case, attractor: Attractor) -> Attractor:
         values = {name: MEASURES[name](case, attractor) for name in self.measures}
+        values |= self._responses(case, attractor)
         period = case.parameters.period
         return dataclasses.replace(
             attractor, lyapunov=self._largest(case, attractor), forcing_period=period, measures=values
         )
+
+    def _responses(self, case: Case, attractor: Attractor) -> dict[str, float]:
+        """The ``responses`` named, one return run from the attractor's last section point
+        (without Newton's refinement, as the exponent); NaN where that is not a periodic orbit."""
+        from oscillator.orbits.response import response
+
+        if not self.responses:
+            return {}
+        try:
+            if not attractor.period:
+                raise OscillatorError("aperiodic")
+            begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
+            columns = response(resolve_case(case, **begin), attractor.period).columns()
+        except OscillatorError:
+            columns = {}
+        return {name: columns.get(name, math.nan) for name in self.responses}
 
     def _largest(self, case: Case, attractor: Attractor) -> float:
         try:

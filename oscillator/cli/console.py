@@ -59,6 +59,7 @@ FLAGS = {
     "seeds": "--seeds",
     "sweep": "--sweep",
     "measure": "--measure",
+    "measures": "--measures",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.

@@ -49,6 +49,15 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["atlas", "curve"]
 
+#: ``--measures NAMES``: response measures as the atlas's columns and figures.
+MeasuresOption = Annotated[
+    str | None,
+    typer.Option(
+        "--measures",
+        metavar="NAMES",
+        help="Response measures as columns and figures, comma-separated: x_pp_m2,impact_max_right,...",
+    ),
+]
 #: ``--x NAME LOW HIGH`` of a curve: a parameter and its range.
 RangeOption = tuple[str, float, float]
 
@@ -62,6 +71,7 @@ def atlas(
         int | None,
         typer.Option("--starts", metavar="N", help="Fresh starts at every point: the case's, and N-1 around it."),
     ] = None,
+    measures: MeasuresOption = None,
     transient: TransientOption = None,
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
@@ -75,7 +85,8 @@ def atlas(
 ) -> None:
     """The regime atlas over two parameters: at every point the attractors (from the case's start
     and seeds from the row before), each one's period, rests and contacts per period, impact
-    velocity and largest Lyapunov exponent; the regime of each, and where several coexist.
+    velocity and largest Lyapunov exponent; the regime of each, and where several coexist; with
+    --measures, the response measures named (over one return of each periodic attractor).
 
     One fresh start a point (--starts), run 40 forcing periods (--transient), then 10 recorded
     (--record). Writes atlas.parquet, figures/atlas.png (Fig. 14's lines marked) and a report.
@@ -85,20 +96,22 @@ def atlas(
     Examples:
       oscillator atlas instance-1 --x Omega 1.3 1.85 12 --y Q2 68.5 72 8 --out runs/atlas
       oscillator atlas instance-1 --x Omega 1.59 1.61 3 --y Q2 71.1 71.2 3 --starts 4 --transient 60 --record 16
+      oscillator atlas instance-1 --x Omega 1.3 1.85 6 --y d1 3.3 4 4 --measures impact_max_right,x_pp_m1
     """
     with refusing():
         resolved = case_from(case, None, set_)
         from oscillator.analysis.axes import parameter_plane
 
         x_axis, y_axis = parameter_plane(resolved, axis_of(x, "--x"), axis_of(y, "--y"))
-        from oscillator.attractors.atlas import AtlasSettings, atlas_store
+        from oscillator.attractors.atlas import AtlasSettings, atlas_store, check_measures
 
         count = check_workers(workers)
         given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
         chosen = {name: value for name, value in given.items() if value is not None}
         settings = AtlasSettings(**chosen, settle=not full_transient, engine=engine)
         folder = out_dir if out_dir is not None else new_folder(resolved, "atlas")
-        store = atlas_store(folder, resolved, x_axis, y_axis, settings)
+        responses = check_measures([] if measures is None else [n.strip() for n in measures.split(",") if n.strip()])
+        store = atlas_store(folder, resolved, x_axis, y_axis, settings, responses)
         store.check()
         load("oscillator.attractors.atlas", notice=True)
         lock, client = locked(folder, scheduler)
@@ -106,9 +119,8 @@ def atlas(
         from oscillator.attractors.atlas import regime_atlas
 
         store.open()
-        run = functools.partial(
-            regime_atlas, resolved, x_axis, y_axis, settings=settings, store=store, workers=count, client=client
-        )
+        options: dict[str, Any] = {"settings": settings, "store": store, "measures": responses}
+        run = functools.partial(regime_atlas, resolved, x_axis, y_axis, workers=count, client=client, **options)
         found = with_progress(run, f"{resolved.name}: atlas", "points", quiet)
         store.write_status("computed", points=x_axis.count * y_axis.count)
     _finish_atlas(found, store, no_plots, quiet)

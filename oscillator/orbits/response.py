@@ -62,10 +62,12 @@ __all__ = [
     "CONTACT_MEASURES",
     "ENERGY_MEASURES",
     "MASS_MEASURES",
+    "UNITS",
     "Response",
     "branch_responses",
     "impact_speeds",
     "response",
+    "unit_of",
 ]
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
@@ -79,6 +81,18 @@ COLUMNS = (
     *(f"{name}_{stop}" for stop in ("right", "left") for name in CONTACT_MEASURES),
     *(f"energy_{name}" for name in ENERGY_MEASURES),
 )
+#: The unit of each measure (empty: a fraction or a count per period); energies in J per period.
+UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
+UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
+UNITS |= {name: "J per period" for name in ENERGY_MEASURES}
+
+
+def unit_of(column: str) -> str:
+    """The unit of a measure's column (``impact_max_right``: ``m/s``)."""
+    name = column.removeprefix("energy_") if column.startswith("energy_") else column.rsplit("_", 1)[0]
+    return UNITS[name]
+
+
 #: The re-integration's tolerances (the run's own are CVODE's 1e-10).
 _TOLERANCE = 1e-12
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
-from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES
+from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS
 from oscillator.report import markup as mk
 from oscillator.report.orbits import BIFURCATION_MARKERS, modified_blocks
 from oscillator.report.outputs import color_of, wrapped_title
@@ -30,9 +30,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["MEASURES", "figure_measures", "frequency_blocks", "frequency_figure", "write_frequency"]
 
-#: The units of the measures.
-UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
-UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
 #: What the sweeps' values are shaded by: the columns any of which is positive, the colour, the label.
 _CONTACT = (("onsets_right", "onsets_left"), "tab:blue", "contact")
 _STICKS = {mass: ((f"rest_m{mass}",), "tab:orange", f"m{mass} sticks") for mass in (1, 2)}
@@ -72,7 +69,7 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
         _shade(ax, found, shades)
         _branches(ax, found, column)
         _sweeps(ax, found, column)
-        unit = UNITS.get(measure, "J per period")
+        unit = UNITS[measure.removeprefix("energy_")]
         ax.set_ylabel(f"{measure} of {of}" if of else measure, fontsize=9)
         if unit:
             ax.set_ylabel(f"{ax.get_ylabel()} ({unit})", fontsize=9)

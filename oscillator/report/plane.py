@@ -34,6 +34,7 @@ __all__ = [
     "ATLAS_MEASURES",
     "atlas_blocks",
     "atlas_figure",
+    "atlas_measures",
     "curve_blocks",
     "curve_figure",
     "read_atlas",
@@ -53,6 +54,15 @@ ATLAS_MEASURES = {
 }
 
 
+def atlas_measures(atlas: Atlas) -> dict[str, str]:
+    """What this atlas can be coloured by, and how each is named: :data:`ATLAS_MEASURES` and the
+    response measures it was computed with (their largest value over a point's attractors)."""
+    from oscillator.orbits.response import unit_of
+
+    units = {name: f" ({unit_of(name)})" if unit_of(name) else "" for name in atlas.measures}
+    return ATLAS_MEASURES | {name: f"largest {name} over the attractors{units[name]}" for name in atlas.measures}
+
+
 def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
     """The plane coloured by one of :data:`ATLAS_MEASURES`: categories (regime, period, number of
     attractors) in a legend, the exponent and the impact velocity on a colour bar; points where
@@ -60,8 +70,9 @@ def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
     each in its own colour), not drawn across it."""
     from matplotlib.figure import Figure
 
-    if by not in ATLAS_MEASURES:
-        raise InputError(f"by must be one of {', '.join(ATLAS_MEASURES)}, got {by!r}", field="by")
+    named = atlas_measures(atlas)
+    if by not in named:
+        raise InputError(f"by must be one of {', '.join(named)}, got {by!r}", field="by")
     fig = Figure(figsize=(8.0, 6.5), layout="constrained")
     ax = fig.add_subplot()
     handles = _atlas_values(fig, ax, atlas, by)
@@ -78,7 +89,7 @@ def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
     ax.set_xlabel(labelled(atlas.x.name))
     ax.set_ylabel(labelled(atlas.y.name))
     ax.ticklabel_format(useOffset=False)
-    title = f"{figure_title(atlas.case)}: {ATLAS_MEASURES[by]} over {atlas.x.name} and {atlas.y.name}"
+    title = f"{figure_title(atlas.case)}: {named[by]} over {atlas.x.name} and {atlas.y.name}"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
     if handles:
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
@@ -92,14 +103,14 @@ def _atlas_values(fig: Figure, ax: Any, atlas: Atlas, by: str) -> list[Any]:
 
     x, y = atlas.x.values, atlas.y.values
     table = atlas.table[atlas.table.status == "ok"]
-    if by in ("lyapunov", "impact_velocity"):
-        frame = table if by == "impact_velocity" else table[table.attractor <= 0]
+    if by == "lyapunov" or by in ("impact_velocity", *atlas.measures):
+        frame = table[table.attractor <= 0] if by == "lyapunov" else table
         values = np.full((atlas.y.count, atlas.x.count), np.nan)
         cells = frame.groupby(["row", "column"])[by].max()
         values[cells.index.get_level_values(0), cells.index.get_level_values(1)] = cells.to_numpy()
         finite = np.ma.masked_invalid(np.where(np.isfinite(values), values, np.nan))
         mesh = ax.pcolormesh(x, y, finite, cmap="viridis", shading="nearest")
-        fig.colorbar(mesh, ax=ax, label=ATLAS_MEASURES[by])
+        fig.colorbar(mesh, ax=ax, label=atlas_measures(atlas)[by])
         return []
     first = table[table.attractor <= 0].drop_duplicates(["row", "column"])
     labels = first.regime if by == "regime" else first[by].astype(int)
@@ -169,7 +180,7 @@ def atlas_blocks(atlas: Atlas) -> list[mk.Block]:
     blocks += [mk.Table(("regime (first attractor)", "points", "share"), rows)]
     blocks += [
         mk.Figure(atlas_figure_name(by), f"the {what} over the plane; hatched where several attractors coexist")
-        for by, what in ATLAS_MEASURES.items()
+        for by, what in atlas_measures(atlas).items()
     ]
     return blocks
 
@@ -182,8 +193,8 @@ def atlas_figure_name(by: str) -> str:
 
 def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
     """``atlas.parquet`` (one row per attractor of each point), a figure for each of
-    :data:`ATLAS_MEASURES` and the report."""
-    measures = ATLAS_MEASURES if plots else {}
+    :func:`atlas_measures` and the report."""
+    measures = atlas_measures(atlas) if plots else {}
     figure = [(atlas_figure_name(by), functools.partial(atlas_figure, atlas, by)) for by in measures]
     title = f"{atlas.case.name}: regime atlas"
     return write_folder(folder, {"atlas": atlas.table}, figure, atlas_blocks(atlas), title)
