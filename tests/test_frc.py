@@ -9,11 +9,12 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from oscillator import frequency_response, resolve_case
+from oscillator import frequency_response, resolve_case, response
 from oscillator.attractors.atlas import fresh_starts
 from oscillator.attractors.frequency import FrequencyStore
-from oscillator.attractors.responding import RESTART, jumps
+from oscillator.attractors.responding import RESTART, jumps, orbit_state
 from oscillator.cli.app import app
+from test_orbits import BILINEAR
 
 
 @pytest.mark.slow
@@ -62,6 +63,42 @@ def test_an_impacting_systems_impact_speeds_are_those_of_its_orbits_events():
         events = simulate(at, t_end=at.initial.t0 + at.parameters.period, rtol=1e-12, atol=1e-12).events
         for stop in ("right", "left"):
             assert row[f"impact_max_{stop}"] == pytest.approx(impact_speeds(events, stop).max(), abs=1e-6)
+
+
+def test_a_period_doubling_gives_the_period_2_branch_that_the_sweep_meets():
+    """docs/frequency.md's example: the period-1 branch doubles at 2.4253769 and is unstable
+    beyond; the period-2 branch born there starts within 1e-3 of the span beyond it, is stable,
+    and is the orbit the sweep up
+    lands on (x_pp of m1 to 1e-3 from the branch's points, to 1e-7 from its orbit refined at 2.5);
+    the sweep up jumps at the
+    first value past the doubling."""
+    from pathlib import Path
+
+    import oscillator as osc
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "frequency.md").read_text(encoding="utf-8")
+    block = page.split("**A period doubling.**", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    scope = {"osc": osc}
+    exec(compile(block, "docs/frequency.md", "exec"), scope)  # the page's example, as shown
+    assert scope["BILINEAR"] == BILINEAR
+    case, found = resolve_case("instance-1", **BILINEAR), scope["found"]
+    single, double = found.branches
+    (row,) = single.bifurcations.itertuples()
+    assert row.kind == "period_doubling" and abs(row.Omega - 2.4253769) < 1e-6
+    assert double.period == 2 and 0 < double.points.Omega.min() - row.Omega <= 1e-3 * 0.7 + 1e-9
+    assert double.points.stable.all() and not single.points[single.points.Omega > row.Omega + 1e-3].stable.any()
+    points = found.points[found.points.period == 2].sort_values("Omega")
+    up = found.sweeps[(found.sweeps.direction == "up") & (found.sweeps.Omega > points.Omega.min())]
+    assert (up.period == 2).all()
+    np.testing.assert_allclose(up.x_pp_m1, np.interp(up.Omega, points.Omega, points.x_pp_m1), atol=1e-3)
+    # at 2.5, Newton from the branch's state there reaches the orbit the sweep measured
+    guess = [np.interp(2.5, points.Omega, points[name]) for name in ("x1", "v1", "x2", "v2")]
+    at = resolve_case(case, Omega=2.5)
+    state = orbit_state(at, 2, np.array(guess))
+    begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in state), strict=True))
+    exact = response(resolve_case(at, **begin), 2).columns()["x_pp_m1"]
+    assert up[np.isclose(up.Omega, 2.5)].x_pp_m1.iloc[0] == pytest.approx(exact, abs=1e-7)
+    assert found.jumps("up") == [pytest.approx(2.44)]
 
 
 @pytest.fixture(scope="module")

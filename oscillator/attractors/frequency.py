@@ -37,7 +37,7 @@ import pyarrow.parquet as pq
 from oscillator.analysis.execution import Executor, keyed
 from oscillator.analysis.store import ResumableFolder, identity
 from oscillator.attractors.mapping import AttractorSettings, check_settings, check_states
-from oscillator.attractors.responding import continued, measured, on_branch, seed_orbits, sweep
+from oscillator.attractors.responding import continued, doubled, measured, on_branch, seed_orbits, sweep
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.io.files import atomic_path
@@ -52,6 +52,8 @@ __all__ = ["FrequencyResponse", "FrequencyStore", "check_frequency", "frequency_
 
 T = TypeVar("T")
 
+#: The longest period of a branch born at a period doubling.
+MAX_PERIOD = 16
 #: The points of a branch measured in one task.
 CHUNK = 16
 
@@ -65,9 +67,11 @@ class FrequencyResponse:
     param : str
         The parameter swept (``"Omega"`` for a frequency response).
     branches : tuple of Branch
-        Every branch continued, each from a seed (or a restart) to one end of the span.
+        Every branch continued, each from a seed (or a restart) to one end of the span, then the
+        branches of period ``2n`` born at their period doublings.
     points : DataFrame
-        One row per branch point: ``branch`` (its index in ``branches``), the branch's columns
+        One row per branch point: ``branch`` (its index in ``branches``), ``period`` (its
+        orbits' forcing periods per return: 2n on a branch born at a period doubling), the branch's columns
         (the parameter, ``x1 v1 x2 v2`` at the section, the multipliers ``mu1..mu4``,
         ``stable``, ``signature``, ``piece``: :class:`~oscillator.orbits.branch.Branch`) and every
         response measure (:meth:`oscillator.Response.columns`).
@@ -215,6 +219,33 @@ class _Job:
                 branches = self._stored(f"seed-{k:04d}", _branches_from_disk, self.case, self.param, *stored)
             found += branches
             self.tally.add(1)
+        return self._doublings(found)
+
+    def _doublings(self, found: list[Branch]) -> list[Branch]:
+        """The period-``2n`` branches born at the branches' period doublings, level after level
+        (period 2, then 4, ...; up to :data:`MAX_PERIOD`), each level's doublings in parallel."""
+        level = list(range(len(found)))
+        while level:
+            kept: dict[str, list[Branch]] = {}
+            tasks = []
+            for b in level:
+                branch = found[b]
+                rows = np.flatnonzero(branch.bifurcations["kind"] == Bifurcation.PERIOD_DOUBLING)
+                for r in rows if 2 * branch.period <= MAX_PERIOD else []:
+                    name = f"doubling-{b:04d}-{r:03d}"
+                    stored = self._read(name)
+                    if stored is not None:
+                        kept[name] = self._stored(name, _branches_from_disk, self.case, self.param, *stored)
+                        continue
+                    arguments = (self.case, self.param, self.span, branch, int(r), self.max_points, tuple(found))
+                    tasks.append((name, doubled, *arguments))
+            for name, branches in self.executor.map(keyed, tasks):
+                kept[name] = [branch for branch in branches if len(branch.points) > 1]
+                self._write(name, *_branches_on_disk(kept[name]))
+            level = []
+            for name in sorted(kept):
+                level += range(len(found), len(found) + len(kept[name]))
+                found += kept[name]
         return found
 
     def _continue(self, value: float, states: list[np.ndarray], found: list[Branch]) -> list[Branch]:
@@ -297,7 +328,8 @@ def _joined(index: int, branch: Branch, measures: pd.DataFrame) -> pd.DataFrame:
     """A branch's points (state, multipliers, signature) with their measures, ``branch`` first."""
     points = branch.points.reset_index(drop=True)
     extra = measures.drop(columns=[c for c in measures.columns if c in points.columns])
-    return pd.concat([points, extra], axis=1).assign(branch=index)[["branch", *points.columns, *extra.columns]]
+    joined = pd.concat([points, extra], axis=1).assign(branch=index, period=branch.period)
+    return joined[["branch", "period", *points.columns, *extra.columns]]
 
 
 def _branches_on_disk(branches: list[Branch]) -> tuple[pd.DataFrame, list[dict[str, Any]]]:

@@ -7,6 +7,7 @@ worker runs (:mod:`oscillator.analysis.execution`), called by
   each point where the corrector fails inside the span (:data:`RESTART`): a sliding or grazing
   point it cannot step across, or a cluster of them, leaves a gap of ``RESTART`` of the span
   instead of ending the branch;
+* :func:`doubled`: the branch of period ``2n`` born at a period-``n`` branch's period doubling;
 * :func:`measured`: the response measures of a run of one branch's points;
 * :func:`sweep`: one slow sweep, up or down, with its jumps (:func:`jumps`).
 
@@ -29,7 +30,7 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Branch
 from oscillator.orbits.continuation import continue_orbit
 from oscillator.orbits.response import REFINE, branch_responses, response
-from oscillator.orbits.shooting import STATE, find_orbit
+from oscillator.orbits.shooting import STATE, find_orbit, period_map
 
 __all__ = [
     "JUMP",
@@ -37,6 +38,7 @@ __all__ = [
     "RESTART",
     "SAME_ORBIT",
     "continued",
+    "doubled",
     "jumps",
     "measured",
     "on_branch",
@@ -113,6 +115,58 @@ def continued(
         if restart is None or any(on_branch(case, other, beyond, restart) for other in (*known, *found)):
             return found
         start, stop, state = beyond, (high if heading > 0 else low), restart
+
+
+#: Where a period-``2n`` orbit is sought beside a period doubling: this fraction of the span
+#: beyond it, either side, from the orbit moved along the eigenvector of the multiplier -1 by
+#: these fractions of ``1 + |y|``.
+DOUBLED_BESIDE = (1e-3, 1e-2)
+DOUBLED_MOVES = (1e-2, 1e-1)
+
+
+def doubled(
+    case: Case,
+    param: str,
+    span: tuple[float, float],
+    branch: Branch,
+    row: int,
+    max_points: int,
+    known: Sequence[Branch] = (),
+) -> list[Branch]:
+    """The period-``2n`` branch born at the period doubling ``row`` of ``branch`` (period ``n``):
+    beside it (:data:`DOUBLED_BESIDE`, first on the side of larger values), Newton for a
+    period-``2n`` orbit from the doubling's orbit moved along the eigenvector of its multiplier
+    -1 (:data:`DOUBLED_MOVES`), kept where its half-return point is another point (a genuine
+    period ``2n``, not the period-``n`` orbit twice); then continued away from the doubling to
+    the span's end on that side (:func:`continued`).  Empty where none is found."""
+    low, high = span
+    at = branch.bifurcations.iloc[row]
+    value, y = float(at[param]), at[list(STATE)].to_numpy(float)
+    base = resolve_case(case, **{param: value}, t0=branch.section)
+    try:
+        monodromy = period_map(base, branch.section, y, branch.period).monodromy
+    except OscillatorError:
+        return []
+    assert monodromy is not None
+    values, vectors = np.linalg.eig(monodromy)
+    direction = np.real(vectors[:, int(np.argmin(np.abs(values + 1.0)))])
+    direction /= float(np.max(np.abs(direction))) or 1.0
+    size = 1.0 + float(np.max(np.abs(y)))
+    for side in (1.0, -1.0):
+        for beside in DOUBLED_BESIDE:
+            start = value + side * beside * (high - low)
+            if not low < start < high:
+                continue
+            near = resolve_case(case, **{param: start}, t0=branch.section)
+            for move in DOUBLED_MOVES:
+                state = orbit_state(near, 2 * branch.period, y + move * size * direction)
+                if state is None:
+                    continue
+                half = period_map(near, branch.section, state, branch.period, derivative=False).end
+                if float(np.max(np.abs(half - state))) > 1e-6 * size:
+                    stop = high if side > 0 else low
+                    return continued(case, param, span, start, stop, 2 * branch.period, state, max_points, known)
+    return []
 
 
 def trimmed(case: Case, branch: Branch, known: Sequence[Branch]) -> Branch:

@@ -198,7 +198,7 @@ def frequency_blocks(found: FrequencyResponse, measures: list[str]) -> list[mk.B
         )
         blocks += [mk.Table(("branch", param, "kind"), table)]
     blocks += [mk.Heading(2, ("Branches",))]
-    blocks += [mk.Table(("branch", f"{param} from", "to", "points", "stable", "ended"), _branch_rows(found))]
+    blocks += [mk.Table(("branch", "period", f"{param} from", "to", "points", "stable", "ended"), _branch_rows(found))]
     blocks += [mk.Figure(frequency_figure_name(m), f"{m} against {param}") for m in measures]
     return blocks
 
@@ -213,7 +213,9 @@ def _branch_rows(found: FrequencyResponse) -> tuple[tuple[str, ...], ...]:
         values = branch.points[found.param].to_numpy(float)
         ended = "at the span's end" if branch.complete else branch.message
         share = f"{branch.points.stable.mean():.0%}"
-        rows.append((str(k), f"{values[0]:.8g}", f"{values[-1]:.8g}", str(len(values)), share, ended))
+        rows.append(
+            (str(k), str(branch.period), f"{values[0]:.8g}", f"{values[-1]:.8g}", str(len(values)), share, ended)
+        )
     return tuple(rows)
 
 
