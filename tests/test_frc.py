@@ -130,6 +130,53 @@ def test_the_coexistence_at_omega_1_6_is_a_hysteresis_window(window):
     assert at[0].rest_m2 == 0 and at[1].rest_m2 > 1e-3  # both at 1.6: one rests, one does not
 
 
+def test_an_interrupted_frequency_response_keeps_its_parts_and_resumes_to_the_same_tables(tmp_path, window):
+    """Ctrl-C in the measures stage: the seeds' branches and the measures finished are kept;
+    run again into the store, it goes on from there (its progress counts the kept points at once)
+    to the tables of an uninterrupted run."""
+    from oscillator.attractors.frequency import frequency_store
+
+    case = resolve_case("instance-1", Q2=71.165)
+    arguments = ("Omega", (1.5999, 1.6001))
+    options = {"states": fresh_starts(case, 16), "sweep": 41}
+
+    def stop_in_the_measures(done, total):
+        if done > 5 + 45:  # the 5 seeds, the first branch's 45 points and a chunk more
+            raise KeyboardInterrupt
+
+    store = frequency_store(tmp_path / "frc", case, *arguments, **options)
+    store.check()
+    store.open()
+    with pytest.raises(KeyboardInterrupt):
+        frequency_response(case, *arguments, store=store, progress=stop_in_the_measures, **options)
+    kept = sorted(p.name for p in store.parts.iterdir())
+    assert kept[-5:] == [f"seed-{k:04d}.parquet" for k in range(5)] and "measures-0000.parquet" in kept
+    assert not any(name.startswith("sweep") for name in kept)
+    again = frequency_store(tmp_path / "frc", case, *arguments, **options)
+    again.check()
+    seen = []
+    found = frequency_response(case, *arguments, store=again, progress=lambda d, t: seen.append(d), **options)
+    assert 45 in np.diff(seen) and again.reused == len(kept)  # the kept branch's points counted at once
+    pd.testing.assert_frame_equal(found.points, window.points)
+    pd.testing.assert_frame_equal(found.sweeps, window.sweeps)
+
+
+@pytest.mark.slow
+def test_the_frequency_response_is_the_same_on_two_workers_and_on_dask(window):
+    """The window's frequency response on 2 local workers and on a Dask cluster: the same tables
+    as in one process."""
+    distributed = pytest.importorskip("distributed")
+    case = resolve_case("instance-1", Q2=71.165)
+    options = {"states": fresh_starts(case, 16), "sweep": 41}
+    two = frequency_response(case, "Omega", (1.5999, 1.6001), workers=2, **options)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        with distributed.Client(cluster) as client:
+            dask = frequency_response(case, "Omega", (1.5999, 1.6001), client=client, **options)
+    for found in (two, dask):
+        pd.testing.assert_frame_equal(found.points, window.points)
+        pd.testing.assert_frame_equal(found.sweeps, window.sweeps)
+
+
 def test_jumps_need_a_move_out_of_scale_and_a_change():
     """A move three times its neighbours is a jump where the cycle of switches changes with it (or
     it is large); steady growth towards a fold is not."""
