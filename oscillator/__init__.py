@@ -54,6 +54,8 @@ _EXPORTS = {
     "FrequencyResponse": "oscillator.attractors.frequency",
     "frequency_response": "oscillator.attractors.frequency",
     "response": "oscillator.orbits.response",
+    "Sensitivities": "oscillator.orbits.sensitivity",
+    "sensitivities": "oscillator.orbits.sensitivity",
     "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
     "Attractor": "oscillator.attractors.grouping",
@@ -104,6 +106,7 @@ __all__ = [
     "Result",
     "SaveAt",
     "Segment",
+    "Sensitivities",
     "SimulationFailed",
     "SolverOptions",
     "SolverStats",
@@ -122,6 +125,7 @@ __all__ = [
     "regime_atlas",
     "resolve_case",
     "response",
+    "sensitivities",
     "simulate",
     "trace_curve",
 ]
@@ -149,6 +153,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.response import Response, response
+    from oscillator.orbits.sensitivity import Sensitivities, sensitivities
     from oscillator.orbits.shooting import Orbit, find_orbit
     from oscillator.saved import read_run
 

@@ -56,6 +56,8 @@ class Reason(enum.StrEnum):
     """Newton's system is singular (a multiplier 1: a fold, or a family of orbits)."""
     NO_MONODROMY = "no_monodromy"
     """No monodromy matrix: the orbit grazes a boundary (the saltation matrix is undefined)."""
+    NOT_DIFFERENTIABLE = "not_differentiable"
+    """No derivative in the parameters: the orbit sits on a grazing, sliding or rest-threshold point."""
     NO_ORBIT = "no_orbit"
     """No orbit where one was sought (a located bifurcation's side, the end of a range)."""
     MAX_POINTS = "max_points"

@@ -50,7 +50,10 @@ def test_the_steps_are_scipys_dop853_step_for_step():
         assert dop853._step(w, modes, c, 10.0)
         ours.append(w[dop853.T_NEW])
     assert len(ours) == len(times) > 200 and ours[-1] == times[-1] == 10.0
-    np.testing.assert_allclose(np.diff(ours), np.diff(times), rtol=1e-6)
+    # every step chosen alike; the last is the remainder to t_end, where the times' rounding
+    # (the compiled sums may use fused multiply-adds on this CPU) shows as a relative difference
+    np.testing.assert_allclose(np.diff(ours)[:-1], np.diff(times)[:-1], rtol=1e-6)
+    np.testing.assert_allclose(ours, times, rtol=0, atol=1e-7)
     np.testing.assert_allclose(w[dop853.Y_NEW : dop853.Y_NEW + 8], theirs.y, rtol=1e-9, atol=1e-10)
     dense, t = theirs.dense_output(), 10.0 - 0.3 * (theirs.t - theirs.t_old)
     dop853._dense(w, modes, c)

@@ -198,7 +198,7 @@ class _Piece:
         def field(t: float, y: np.ndarray) -> np.ndarray:
             return _augmented(t, y, c, flags)
 
-        events = [_velocity_extremum(1, c, flags), _velocity_extremum(2, c, flags), _force_extremum(c, flags)]
+        events = [velocity_extremum(1, c, flags), velocity_extremum(2, c, flags), force_extremum(c, flags)]
         start = np.concatenate([segment.y0, np.zeros(9)])
         solved = solve_ivp(
             field, (segment.t0, segment.t1), start, method="DOP853", rtol=_TOLERANCE, atol=_TOLERANCE, events=events
@@ -232,7 +232,7 @@ def _augmented(t: float, y: np.ndarray, c: np.ndarray, flags: tuple[int, int, bo
     )
 
 
-def _velocity_extremum(
+def velocity_extremum(
     mass: int, c: np.ndarray, flags: tuple[int, int, bool, bool]
 ) -> Callable[[float, np.ndarray], float]:
     """An event where mass ``mass``'s acceleration vanishes (its speed is extreme)."""
@@ -245,7 +245,7 @@ def _velocity_extremum(
     return event
 
 
-def _force_extremum(c: np.ndarray, flags: tuple[int, int, bool, bool]) -> Callable[[float, np.ndarray], float]:
+def force_extremum(c: np.ndarray, flags: tuple[int, int, bool, bool]) -> Callable[[float, np.ndarray], float]:
     """An event where the force between the masses is extreme: ``K3 zdot1 + C3 (a1 - a2) = 0``."""
     s1, s2, left, right = flags
 

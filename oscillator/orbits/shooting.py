@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.orbits.response import Response
+    from oscillator.orbits.sensitivity import Sensitivities
 
 __all__ = [
     "Orbit",
@@ -270,6 +271,14 @@ class Orbit:
         from oscillator.orbits.response import response
 
         return response(self.one_period(), self.period)
+
+    def sensitivities(self, params: str | Sequence[str]) -> Sensitivities:
+        """The exact derivatives of the orbit in ``params`` through every switch: of its section
+        point(s), switch times and response measures
+        (:func:`oscillator.orbits.sensitivity.sensitivities`)."""
+        from oscillator.orbits.sensitivity import sensitivities
+
+        return sensitivities(self, params)
 
     def plot(self, panel: str = "c") -> Figure:
         """One panel of the article's figures over one return of the orbit (by default ``"c"``,

@@ -1,0 +1,452 @@
+"""Exact parameter sensitivities of a periodic orbit, through every switch (docs/sensitivities.md).
+
+The stroboscopic map ``P(y, c)`` is one run over ``n`` forcing periods.  Its derivative in the
+parameters ``c`` at fixed ``y`` is carried along the run's smooth pieces by the tangent equations
+(:mod:`oscillator.orbits.tangent`), ``sigma' = J sigma + df/dc``, from ``sigma = 0``, and through
+each switch by the saltation rule with one more column: the switch time ``t_s`` is set by a
+boundary ``h(t, y, c) = 0`` and moves with the parameters,
+
+    tau = dt_s/dc = -(n . sigma- + dh/dc) / (n . f- + h_t),      sigma+ = sigma- + (f- - f+) tau,
+
+then the velocity of a mass that comes to rest is pinned (:func:`~oscillator.model.saltation.
+rest_projection`).  ``dh/dc`` is ``e_d`` on the left stop (``h = x1 - x2 + d``), ``-e_d1`` on the
+right stop (``h = x1 - d1``), zero on ``v_i = 0`` and ``dA_i/dc - s d(mu_s g + p_i)/dc`` on a flow
+barrier.  At the end, ``t1 = t0 + n 2 pi / Omega`` moves with ``Omega``:
+``dP/dc = sigma(t1) + f(t1) dt1/dc``.
+
+A periodic orbit ``y* = P(y*, c)`` moves by ``dy*/dc = (I - M)^-1 dP/dc`` (``M = dP/dy``, the
+monodromy), with the displacement of a mass at rest all period kept where it stuck (its row of
+``I - M`` is zero: a continuum of orbits).  A second pass from ``sigma = dy*/dc`` gives the
+derivative of everything along the orbit: its section points, its switch times and its response
+measures (:mod:`oscillator.orbits.response_derivatives`).
+
+Where the orbit grazes a boundary (``n . f- + h_t = 0``), meets rest with its force on the static
+threshold, or passes a boundary without crossing it, the map is not differentiable; the distances
+to each such point are measured (:attr:`Sensitivities.margins`) and the derivative is refused
+below :data:`MARGIN`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+from scipy.integrate import solve_ivp
+
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.hybrid.record import Segment
+from oscillator.model.fields import coefficients
+from oscillator.model.parameters import Parameters
+from oscillator.model.phase_space import Mode
+from oscillator.model.saltation import boundary_of, elementary_switches, rest_projection
+from oscillator.orbits.tangent import INTEGRALS, force_gradient, tangent_rates, threshold_gradient
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.orbits.shooting import Orbit
+
+__all__ = [
+    "MARGIN",
+    "Pass",
+    "Piece",
+    "Sensitivities",
+    "Switch",
+    "check_params",
+    "selector_of",
+    "sensitivities",
+    "tangent_pass",
+]
+
+#: The smallest relative distance to a point where the map is not differentiable (a grazing, a
+#: rest on its threshold) at which derivatives are still given.
+MARGIN = 1e-6
+#: The re-integration's tolerances (as the response measures').
+_TOLERANCE = 1e-12
+_STATE = ("x1", "v1", "x2", "v2")
+_POSITION = {name: k for k, name in enumerate(Parameters.names())}
+
+
+def check_params(params: object) -> tuple[str, ...]:
+    """``params`` as a tuple of parameter names (one name or a sequence), each checked."""
+    names = (params,) if isinstance(params, str) else tuple(params) if isinstance(params, Sequence) else None
+    if not names:
+        raise InputError(
+            f"params must name one or more parameters ({', '.join(Parameters.names())}), got {params!r}",
+            field="params",
+        )
+    return tuple(Parameters.check_name(name, "params") for name in names)
+
+
+@dataclass(frozen=True)
+class Switch:
+    """One switch of the pass: its time, the modes either side, ``tau = dt_s/dc`` (k), the state
+    and ``sigma`` either side, and the boundary that set its time: its normal ``n``, and the speed
+    ``n . f- + h_t`` at which the flow crossed it (zero at a grazing)."""
+
+    t: float
+    before: Mode
+    after: Mode
+    tau: np.ndarray
+    y: np.ndarray
+    sigma_before: np.ndarray
+    sigma_after: np.ndarray
+    normal: np.ndarray
+    speed: float
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One smooth piece of the pass: its mode, ends, ``sigma`` at each end (after the switch that
+    began it, before the one that ends it), the end times' derivatives ``tau``, the response
+    integrals and their derivatives, and its interior extrema ``(which, t, y, sigma)``."""
+
+    mode: Mode
+    t0: float
+    t1: float
+    y0: np.ndarray
+    y1: np.ndarray
+    sigma0: np.ndarray
+    sigma1: np.ndarray
+    tau0: np.ndarray
+    tau1: np.ndarray
+    integrals: np.ndarray
+    derivatives: np.ndarray
+    extrema: list[tuple[str, float, np.ndarray, np.ndarray]]
+    samples: np.ndarray = field(repr=False)
+
+
+@dataclass(frozen=True)
+class Pass:
+    """A tangent pass over a run's segments: the pieces and switches in order, ``sigma`` at the
+    end and ``dt1/dc``, and at each of ``marks`` the state and its total derivative."""
+
+    pieces: list[Piece]
+    switches: list[Switch]
+    end: np.ndarray
+    marks: list[np.ndarray]
+
+
+def selector_of(params: tuple[str, ...]) -> np.ndarray:
+    """``dc/dparams`` (25 x k): column ``j`` is the unit vector of parameter ``j``."""
+    selector = np.zeros((len(Parameters.names()), len(params)))
+    for j, name in enumerate(params):
+        selector[_POSITION[name], j] = 1.0
+    return selector
+
+
+def _flags(mode: Mode) -> tuple[int, int, bool, bool]:
+    return mode.sign(1), mode.sign(2), mode.left, mode.right
+
+
+def _rates(t: float, state: np.ndarray, c: np.ndarray, columns: np.ndarray, mode: Mode) -> np.ndarray:
+    out = np.empty_like(state)
+    tangent_rates(t, state, c, columns, *_flags(mode), out)
+    return out
+
+
+def _pack(y: np.ndarray, sigma: np.ndarray, k: int) -> np.ndarray:
+    return np.concatenate([y, np.zeros(INTEGRALS), sigma.ravel(), np.zeros(INTEGRALS * k)])
+
+
+def _boundary_gradient(name: str, t: float, y: np.ndarray, c: np.ndarray, mode: Mode, after: Mode) -> np.ndarray:
+    """``dh/dc`` (25) of the boundary ``name`` (:func:`~oscillator.model.saltation.elementary_switches`)."""
+    gradient = np.zeros(len(c))
+    if name == "left":
+        gradient[_POSITION["d"]] = 1.0
+    elif name == "right":
+        gradient[_POSITION["d1"]] = -1.0
+    elif name.startswith("barrier"):
+        mass = int(name[-1])
+        forces = np.empty((2, len(c)))
+        x1, v1, x2, v2 = (float(v) for v in y)
+        force_gradient(t, x1, v1, x2, v2, mode.left, mode.right, c, forces)
+        static = np.empty(len(c))
+        threshold_gradient(c, mass, True, static)
+        gradient = forces[mass - 1] - after.sign(mass) * static
+    return gradient
+
+
+def _through(
+    t: float,
+    y_before: np.ndarray,
+    y_after: np.ndarray,
+    sigma: np.ndarray,
+    p: Parameters,
+    before: Mode,
+    after: Mode,
+    selector: np.ndarray,
+) -> Switch:
+    """``sigma`` carried through the switch ``before -> after`` at ``t`` (module docstring)."""
+    c = coefficients(p)
+    columns = np.flatnonzero(selector.any(axis=1))
+    taus, speeds, normals = [], [], []
+    carried = sigma.copy()
+    for mode, new, name in elementary_switches(before, after):
+        boundary = boundary_of(name, t, y_before, p, mode, new)
+        f_minus = _rates(t, _pack(y_before, np.zeros((4, 0)), 0), c, columns[:0], mode)[:4]
+        f_plus = _rates(t, _pack(y_after, np.zeros((4, 0)), 0), c, columns[:0], new)[:4]
+        speed = float(boundary.normal @ f_minus + boundary.rate)
+        speeds.append(speed)
+        normals.append(boundary.normal)
+        if speed == 0.0:
+            raise _not_differentiable(f"the flow is tangent to the {boundary.name} at t = {t:.10g} s (a grazing)", 0.0)
+        gradient = _boundary_gradient(name, t, y_before, c, mode, new) @ selector
+        tau = -(boundary.normal @ carried + gradient) / speed
+        carried = carried + np.outer(f_minus - f_plus, tau)
+        taus.append(tau)
+    carried = rest_projection(after) @ carried
+    return Switch(t, before, after, taus[0], y_before.copy(), sigma.copy(), carried, normals[0], speeds[0])
+
+
+def _piece(
+    segment: Segment, sigma: np.ndarray, tau0: np.ndarray, c: np.ndarray, columns: np.ndarray, marks: Sequence[float]
+) -> tuple[Piece, dict[float, np.ndarray]]:
+    """One segment integrated again with the tangent system from ``sigma`` at its start."""
+    from oscillator.orbits.response import force_extremum, velocity_extremum
+
+    k = len(columns)
+    mode = segment.mode
+    flags = _flags(mode)
+    events = [velocity_extremum(1, c, flags), velocity_extremum(2, c, flags), force_extremum(c, flags)]
+    start = _pack(segment.y0, sigma, k)
+    solved = solve_ivp(
+        lambda t, s: _rates(t, s, c, columns, mode),
+        (segment.t0, segment.t1),
+        start,
+        method="DOP853",
+        rtol=_TOLERANCE,
+        atol=_TOLERANCE,
+        events=events if segment.t1 > segment.t0 else None,
+        dense_output=True,
+    )
+    end = solved.y[:, -1]
+    body = 4 + INTEGRALS
+    extrema = [
+        (which, float(t), y[:4].copy(), y[body : body + 4 * k].reshape(4, k))
+        for which, times, states in zip(
+            ("v1", "v2", "left"), solved.t_events or [], solved.y_events or [], strict=False
+        )
+        for t, y in zip(times, states, strict=True)
+    ]
+    inside = {t: solved.sol(t) for t in marks if segment.t0 <= t < segment.t1} if solved.sol is not None else {}
+    grid = np.linspace(segment.t0, segment.t1, 33)
+    samples = solved.sol(grid)[:4].T if solved.sol is not None and segment.t1 > segment.t0 else segment.y0[None, :]
+    piece = Piece(
+        mode,
+        segment.t0,
+        segment.t1,
+        segment.y0.copy(),
+        end[:4].copy(),
+        sigma.copy(),
+        end[body : body + 4 * k].reshape(4, k).copy(),
+        tau0,
+        np.zeros(k),
+        end[4:body].copy(),
+        end[body + 4 * k :].reshape(INTEGRALS, k).copy(),
+        extrema,
+        samples,
+    )
+    return piece, {t: np.concatenate([v[:4], v[body : body + 4 * k]]) for t, v in inside.items()}
+
+
+def tangent_pass(
+    segments: Sequence[Segment],
+    p: Parameters,
+    params: tuple[str, ...],
+    sigma0: np.ndarray,
+    t_end: float,
+    dt_end: np.ndarray,
+    marks: Sequence[float] = (),
+) -> Pass:
+    """The tangent system along ``segments`` (a run from ``segments[0].t0`` to ``t_end``, whose end
+    time moves by ``dt_end``), from ``sigma0`` (4 x k) at the start; see the module docstring."""
+    selector = selector_of(params)
+    c = coefficients(p)
+    columns = np.array([_POSITION[name] for name in params], dtype=np.int64)
+    k = len(params)
+    sigma = rest_projection(segments[0].mode) @ np.asarray(sigma0, dtype=float).reshape(4, k)
+    tau = np.zeros(k)
+    pieces: list[Piece] = []
+    switches: list[Switch] = []
+    found: dict[float, np.ndarray] = {}
+    for index, segment in enumerate(segments):
+        piece, inside = _piece(segment, sigma, tau, c, columns, marks)
+        found |= inside
+        if index + 1 < len(segments):
+            following = segments[index + 1]
+            switch = _through(
+                following.t0, piece.y1, following.y0, piece.sigma1, p, segment.mode, following.mode, selector
+            )
+            switches.append(switch)
+            sigma, tau = switch.sigma_after, switch.tau
+        else:
+            switch = None
+        pieces.append(_with_end(piece, tau if switch is not None else dt_end))
+    last = pieces[-1]
+    f_end = _rates(t_end, _pack(last.y1, np.zeros((4, 0)), 0), c, columns[:0], last.mode)[:4]
+    end = last.sigma1 + np.outer(f_end, dt_end)
+    marked = []
+    for t in marks:
+        v = found.get(t)
+        if v is None:
+            raise ValueError(f"no piece holds the time {t!r}")
+        marked.append(v)
+    return Pass(pieces, switches, end, marked)
+
+
+def _with_end(piece: Piece, tau1: np.ndarray) -> Piece:
+    from dataclasses import replace
+
+    return replace(piece, tau1=np.asarray(tau1, dtype=float))
+
+
+def _not_differentiable(why: str, distance: float) -> SimulationFailed:
+    return SimulationFailed(
+        f"the orbit is not differentiable in its parameters here: {why}, at a relative distance {distance:.3g} "
+        f"(below {MARGIN:g}); this is a bifurcation point (grazing, sliding or a rest on its threshold), where "
+        "the measures have one derivative on each side: move the parameter off it",
+        reason=Reason.NOT_DIFFERENTIABLE,
+        field="params",
+    )
+
+
+@dataclass(frozen=True)
+class Sensitivities:
+    """The derivatives of a periodic orbit in its parameters (:func:`sensitivities`).
+
+    Attributes
+    ----------
+    orbit : Orbit
+        The orbit differentiated.
+    params : tuple of str
+        The parameters, in the columns' order.
+    map : DataFrame
+        ``dP/dc`` at the orbit's state, at fixed state (rows ``x1, v1, x2, v2``).
+    state : DataFrame
+        ``dy*/dc``: how the orbit's section point moves (rows ``x1, v1, x2, v2``).
+    points : DataFrame
+        Each section point of a period-``n`` orbit (``point`` 0 to ``n - 1``, at ``section + k T``)
+        and its derivative (one column per parameter, rows ``point, variable``).
+    switches : DataFrame
+        Every switch over one return: ``t``, the domains of m1 and m2 either side (and the
+        contacts), the ``speed`` at which the flow crossed the boundary that set its time
+        (``n . f- + h_t``), and ``dt/d<param>`` for each parameter.
+    measures : DataFrame
+        Every response measure (index: :data:`oscillator.orbits.response.COLUMNS`): ``value`` and
+        ``d/d<param>`` for each parameter.
+    margins : DataFrame
+        The distance from each point where the map is not differentiable (``what``, ``t``,
+        ``distance``, relative to the terms it compares), nearest first.
+    """
+
+    orbit: Orbit
+    params: tuple[str, ...]
+    map: pd.DataFrame
+    state: pd.DataFrame
+    points: pd.DataFrame
+    switches: pd.DataFrame
+    measures: pd.DataFrame
+    margins: pd.DataFrame
+
+    @property
+    def margin(self) -> float:
+        """The smallest distance in :attr:`margins` (``inf`` without any)."""
+        return float(self.margins.distance.min()) if len(self.margins) else float("inf")
+
+    def of(self, measure: str) -> pd.Series:
+        """The derivatives of one measure (``impact_max_right``, ...) in each parameter."""
+        if measure not in self.measures.index:
+            raise InputError(
+                f"no response measure named {measure!r}; choose one of {', '.join(self.measures.index)}",
+                field="measure",
+            )
+        return self.measures.loc[measure, [f"d/d{name}" for name in self.params]]
+
+
+def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
+    """The exact derivatives of ``orbit`` in ``params`` through every switch (module docstring):
+    of its map, its section point(s), its switch times and every response measure.
+
+    Raises
+    ------
+    InputError
+        A name that is not a parameter.
+    SimulationFailed
+        (``reason = "not_differentiable"``) the orbit sits on a grazing, sliding or rest-threshold
+        point (:data:`MARGIN`): no derivative exists there.
+    """
+    from oscillator.orbits.response_derivatives import margins_of, measure_derivatives
+    from oscillator.orbits.shooting import period_map
+
+    names = check_params(params)
+    case, p = orbit.case, orbit.case.parameters
+    image = period_map(case, orbit.section, orbit.state, orbit.period)
+    span = orbit.period * p.period
+    dt_end = np.array([-span / p.Omega if name == "Omega" else 0.0 for name in names])
+    k = len(names)
+    first = tangent_pass(image.segments, p, names, np.zeros((4, k)), image.t1, dt_end)
+    dP = first.end
+    assert image.monodromy is not None
+    system = np.eye(4) - image.monodromy
+    for mass in orbit.resting:
+        system[2 * mass - 2] = 0.0
+        system[2 * mass - 2, 2 * mass - 2] = 1.0
+        dP = dP.copy()
+        dP[2 * mass - 2] = 0.0
+    dy = np.linalg.solve(system, dP)
+    marks = [orbit.section + n * p.period for n in range(orbit.period)]
+    along = tangent_pass(image.segments, p, names, dy, image.t1, dt_end, marks)
+    margins = margins_of(along, p)
+    if len(margins) and margins.distance.iloc[0] < MARGIN:
+        nearest = margins.iloc[0]
+        raise _not_differentiable(f"{nearest.what} at t = {nearest.t:.10g} s", float(nearest.distance))
+    columns = [f"d/d{name}" for name in names]
+    return Sensitivities(
+        orbit=orbit,
+        params=names,
+        map=pd.DataFrame(first.end, index=list(_STATE), columns=columns),
+        state=pd.DataFrame(dy, index=list(_STATE), columns=columns),
+        points=_points(along, marks, p, names, orbit),
+        switches=_switch_table(along, names),
+        measures=measure_derivatives(along, p, names, orbit.period, span, dt_end),
+        margins=margins,
+    )
+
+
+def _points(along: Pass, marks: list[float], p: Parameters, names: tuple[str, ...], orbit: Orbit) -> pd.DataFrame:
+    """The section points ``y(section + n T)`` and their total derivatives (the time moves with ``Omega``)."""
+    k = len(names)
+    c = coefficients(p)
+    rows = []
+    for n, (t, value) in enumerate(zip(marks, along.marks, strict=True)):
+        y, sigma = value[:4], value[4:].reshape(4, k)
+        moved = np.array([-(t - orbit.section) / p.Omega if name == "Omega" else 0.0 for name in names])
+        mode = next(piece.mode for piece in along.pieces if piece.t0 <= t < piece.t1)
+        f = _rates(t, _pack(y, np.zeros((4, 0)), 0), c, np.zeros(0, dtype=np.int64), mode)[:4]
+        total = sigma + np.outer(f, moved)
+        for row, name in enumerate(_STATE):
+            derivatives = dict(zip([f"d/d{param}" for param in names], total[row], strict=True))
+            rows.append({"point": n, "variable": name, "value": y[row]} | derivatives)
+    return pd.DataFrame(rows)
+
+
+def domains_text(mode: Mode) -> str:
+    """``"(m1, m2)"`` domains of a mode and its contacts, e.g. ``"(2, 0) left"``."""
+    contacts = " ".join(name for name in ("left", "right") if getattr(mode, name))
+    return f"({mode.domain1}, {mode.domain2})" + (f" {contacts}" if contacts else "")
+
+
+def _switch_table(along: Pass, names: tuple[str, ...]) -> pd.DataFrame:
+    rows = [
+        {
+            "t": s.t,
+            "before": domains_text(s.before),
+            "after": domains_text(s.after),
+            "speed": s.speed,
+        }
+        | {f"dt/d{name}": float(tau) for name, tau in zip(names, s.tau, strict=True)}
+        for s in along.switches
+    ]
+    return pd.DataFrame(rows)

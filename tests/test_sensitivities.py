@@ -1,0 +1,191 @@
+"""Exact parameter sensitivities of periodic orbits (issue 39): against Richardson-extrapolated
+central differences of the map and of the orbits that `simulate` builds, on orbits that slide,
+rest all period, re-stick, strike each stop, and have period 2; refused at a grazing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import oscillator as osc
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.io.cases import resolve_case
+from oscillator.orbits.shooting import find_orbit, period_map
+from test_orbits import BILINEAR
+
+#: CVODE's tolerances for the differences: the map is smooth in the parameters to about 1e-12 there.
+TIGHT = {"rtol": 1e-14, "atol": 1e-14}
+#: The differences' step, relative to the parameter (or absolute below 1), and Newton's tolerance.
+STEP, NEWTON = 2e-3, 1e-11
+
+
+def richardson(f, value: float, h: float | None = None):
+    """``(4 D(h/2) - D(h)) / 3`` with ``D(h)`` the central difference of ``f`` at ``value``: the
+    truncation error falls from ``h^2`` to ``h^4``.  ``h`` is :data:`STEP` relative to the value
+    (absolute below 1) unless given: within the orbit's regime either side."""
+    h = STEP * max(abs(value), 1.0) if h is None else h
+
+    def central(step):
+        return (np.asarray(f(value + step)) - np.asarray(f(value - step))) / (2 * step)
+
+    return (4 * central(h / 2) - central(h)) / 3
+
+
+def close(exact, differenced, size, step, rel=1e-7):
+    """Agreement to ``rel`` of the derivative, or of a thousandth of the quantity's size where the
+    derivative nearly vanishes, or to the differences' resolution: the map's rounding (1e-12 at
+    CVODE's 1e-14) over the step."""
+    exact, differenced, size = (np.asarray(v, dtype=float) for v in (exact, differenced, size))
+    return np.abs(exact - differenced) <= rel * np.maximum(np.abs(exact), 1e-3 * np.abs(size)) + 1e-12 / step
+
+
+def check(orbit, params, steps=None):
+    """Every derivative of ``sensitivities(orbit, params)`` against the differences: the map at the
+    orbit's state, the orbit's state, and every response measure of the orbits either side
+    (``steps``: a difference step for some of the parameters)."""
+    found = osc.sensitivities(orbit, params)
+    steps = steps or {}
+    p = orbit.case.parameters
+    for name in params:
+        column = f"d/d{name}"
+
+        def image(value, name=name):
+            case = resolve_case(orbit.case, **{name: value})
+            return period_map(case, orbit.section, orbit.state, orbit.period, derivative=False).end
+
+        def moved(value, name=name):
+            return find_orbit(orbit.case, guess=orbit.state, period=orbit.period, tol=NEWTON, **{name: value})
+
+        value = getattr(p, name)
+        step = steps.get(name, STEP * max(abs(value), 1.0))
+        assert close(found.map[column], richardson(image, value, step), orbit.state, step).all(), name
+        moving = richardson(lambda v: moved(v).state, value, step)
+        assert close(found.state[column], moving, orbit.state, step).all(), name
+        measured = richardson(lambda v: pd.Series(moved(v).response().columns())[found.measures.index], value, step)
+        ok = close(found.measures[column], measured, found.measures["value"], step)
+        assert ok.all(), (name, found.measures.index[~ok].tolist(), measured[~ok], found.measures[column][~ok])
+    return found
+
+
+def test_sensitivities_of_an_orbit_that_slides_all_period():
+    """Instance 1 at Omega = 1.85: both masses slide all period (reversals only, no rest)."""
+    orbit = find_orbit("instance-1", Omega=1.85, tol=NEWTON, **TIGHT)
+    found = check(orbit, ["Omega", "mu_k"])
+    assert found.measures.loc["rest_m1", "value"] == 0 and found.margin > 0.1
+    # the switch times move: each reversal's dt/dOmega is finite and the table has one per switch
+    assert len(found.switches) == len(orbit.events) and np.isfinite(found.switches["dt/dOmega"]).all()
+
+
+def test_sensitivities_of_an_orbit_in_which_a_mass_rests_all_period():
+    """m2 forced too weakly to leave rest: it stays where it stuck (dx2 = 0, rest fraction 1)."""
+    orbit = find_orbit("instance-1", Omega=1.85, Q2=1.0, tol=NEWTON, **TIGHT)
+    assert orbit.resting == (2,)
+    found = check(orbit, ["Q1", "K1"])
+    assert (found.state.loc[["x2", "v2"]] == 0).all().all()
+    assert found.measures.loc["rest_m2", "value"] == 1
+    assert (abs(found.measures.loc["rest_m2"].iloc[1:]) < 1e-12).all()
+
+
+def test_sensitivities_of_an_orbit_that_sticks_and_leaves_rest_through_its_flow_barrier():
+    """Attractor A1 of docs/attractors.md (Q2 = 71.165, Omega = 1.6): m2 rests twice a period and
+    leaves rest by crossing its flow barrier, whose position moves with Q2 and mu_s (A1 ends at
+    Q2 = 71.17025: the differences' steps stay inside)."""
+    orbit = find_orbit("instance-1", Omega=1.6, Q2=71.165, x2=6.0, v2=0.0, transient=200, tol=NEWTON, **TIGHT)
+    found = check(orbit, ["Q2", "mu_s"], steps={"Q2": 1e-3, "mu_s": 1e-4})
+    kinds = set(orbit.events.kind)
+    assert {"sliding_onset", "sliding_vanish"} <= kinds and found.measures.loc["rest_m2", "value"] > 0
+    assert found.measures.loc["rest_m2", "d/dmu_s"] > 0  # a higher static threshold holds m2 longer
+
+
+def test_sensitivities_of_an_orbit_striking_the_right_stop_and_the_other_mass():
+    """The impacting system of docs/frequency.md (d = 1, d1 = 3.5) at Omega = 1.5: one impact a
+    period on the right stop, two between the masses; the contact parameters and the clearances."""
+    orbit = find_orbit("instance-1", Omega=1.5, d=1, d1=3.5, tol=NEWTON, **TIGHT)
+    found = check(orbit, ["d1", "C3"])
+    assert found.measures.loc["onsets_right", "value"] == 1 and found.measures.loc["onsets_left", "value"] == 2
+    assert found.measures.loc["force_peak_right", "d/dd1"] < 0  # a stop moved out is struck more softly
+
+
+@pytest.mark.slow
+def test_sensitivities_of_the_impacting_orbit_in_the_stop_stiffness_and_the_gap():
+    orbit = find_orbit("instance-1", Omega=1.5, d=1, d1=3.5, tol=NEWTON, **TIGHT)
+    found = check(orbit, ["K6", "d"])
+    assert found.measures.loc["force_peak_right", "d/dK6"] > 0
+
+
+def test_sensitivities_of_an_oscillator_against_a_stop_and_its_period_2_orbit():
+    """The bilinear oscillator of docs/orbits.md: its period-1 orbit (right stop only) below the
+    period doubling and its period-2 orbit beyond; both section points of the period-2 orbit."""
+    single = find_orbit("instance-1", Omega=2.3, tol=NEWTON, **BILINEAR, **TIGHT)
+    check(single, ["d1", "C1"])
+    doubled = find_orbit("instance-1", period=2, Omega=2.44, tol=NEWTON, **BILINEAR, **TIGHT)
+    found = check(doubled, ["Omega", "K6"], steps={"Omega": 5e-4})  # its amplitude grows as a root beyond the doubling
+    points = found.points.pivot(index="variable", columns="point", values="d/dOmega")
+    assert np.allclose(points[0].loc[["x1", "v1", "x2", "v2"]], found.state["d/dOmega"], rtol=1e-9, atol=1e-12)
+
+    def second(value):
+        moved = find_orbit(doubled.case, guess=doubled.state, period=2, tol=NEWTON, Omega=value)
+        case = resolve_case(moved.case, Omega=value)
+        return period_map(case, moved.section, moved.state, 1, derivative=False).end
+
+    differenced = richardson(second, doubled.case.parameters.Omega, 5e-4)
+    assert close(points[1].loc[["x1", "v1", "x2", "v2"]], differenced, doubled.state, 5e-4).all()
+
+
+def test_sensitivities_are_refused_at_a_grazing_and_given_beside_it():
+    """The impacting system's second contact between the masses vanishes at a grazing near Omega =
+    1.7306: located by bisection on the number of onsets, the orbit there is refused with its
+    distance; 1e-6 below it the derivatives are given with the margin measured."""
+    kw = {"d": 1, "d1": 3.5, "rtol": 1e-13, "atol": 1e-13}
+    low, high = 1.72, 1.74
+    guess = find_orbit("instance-1", Omega=low, tol=1e-11, **kw).state
+    for _ in range(40):
+        middle = 0.5 * (low + high)
+        orbit = find_orbit("instance-1", Omega=middle, guess=guess, tol=1e-11, **kw)
+        if orbit.response().columns()["onsets_left"] == 2:
+            low, guess = middle, orbit.state
+        else:
+            high = middle
+    assert 1.7300 < low < 1.7310
+    at = find_orbit("instance-1", Omega=low, guess=guess, tol=1e-11, **kw)
+    with pytest.raises(SimulationFailed, match="not differentiable") as refused:
+        at.sensitivities("Omega")
+    assert refused.value.reason == Reason.NOT_DIFFERENTIABLE and "relative distance" in str(refused.value)
+    beside = find_orbit("instance-1", Omega=low - 1e-6, guess=guess, tol=1e-11, **kw).sensitivities("Omega")
+    assert 1e-6 < beside.margin < 1e-2 and np.isfinite(beside.of("impact_max_left")).all()
+
+
+def test_the_largest_of_tied_values_has_a_derivative_only_where_they_move_alike():
+    """A symmetric orbit's two velocity peaks tie: Omega keeps the symmetry (a derivative); two tied
+    candidates that move apart give the largest a kink (nan, refused rather than one side's)."""
+    from oscillator.orbits.response_derivatives import _largest
+
+    orbit = find_orbit("instance-1", Omega=1.85, tol=NEWTON, **TIGHT)
+    assert np.isfinite(orbit.sensitivities("Omega").of("v_peak_m1")).all()
+    alike = _largest([(2.0, np.array([1.0, 3.0])), (2.0, np.array([1.0, 3.0])), (1.0, np.array([9.0, 9.0]))], 2)
+    assert alike[0] == 2.0 and np.array_equal(alike[1], [1.0, 3.0])
+    apart = _largest([(2.0, np.array([1.0, 3.0])), (2.0 - 1e-12, np.array([1.0, -3.0]))], 2)
+    assert apart[1][0] == 1.0 and np.isnan(apart[1][1])
+
+
+def test_bad_parameters_are_refused_with_the_field():
+    orbit = find_orbit("instance-1", Omega=1.85)
+    with pytest.raises(InputError, match="params") as bad:
+        orbit.sensitivities("Omegaa")
+    assert bad.value.field == "params"
+    with pytest.raises(InputError, match="params"):
+        orbit.sensitivities([])
+    with pytest.raises(InputError, match="measure"):
+        orbit.sensitivities("Omega").of("impact")
+
+
+def test_the_documented_example_prints_what_the_page_shows(capsys):
+    """docs/sensitivities.md: its Python block prints the block under it."""
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "sensitivities.md").read_text(encoding="utf-8")
+    code = page.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = page.split("```text\n", 1)[1].split("```", 1)[0]
+    exec(compile(code, "docs/sensitivities.md", "exec"), {})
+    assert capsys.readouterr().out == shown
