@@ -189,3 +189,24 @@ def test_the_documented_example_prints_what_the_page_shows(capsys):
     shown = page.split("```text\n", 1)[1].split("```", 1)[0]
     exec(compile(code, "docs/sensitivities.md", "exec"), {})
     assert capsys.readouterr().out == shown
+
+
+def test_the_orbit_command_prints_the_sensitivities_and_refuses_a_bad_name(capsys):
+    """`oscillator orbit ... --sensitivities d1,Omega`: the library's derivatives, as printed."""
+    from oscillator.cli.app import main
+
+    args = ["orbit", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--set", "Omega=1.5"]
+    with pytest.raises(SystemExit) as done:
+        main([*args, "--sensitivities", "d1, Omega"])
+    assert done.value.code == 0
+    shown = capsys.readouterr().out
+    expected = find_orbit("instance-1", d=1, d1=3.5, Omega=1.5).sensitivities(["d1", "Omega"])
+    line = next(line for line in shown.splitlines() if line.strip().startswith("impact_max_right"))
+    assert [float(v) for v in line.split()[1:]] == pytest.approx(
+        expected.measures.loc["impact_max_right"].to_list(), rel=1e-5
+    )
+    assert "nearest point without a derivative: m1 nearly sticking" in shown
+    with pytest.raises(SystemExit) as refused:
+        main([*args, "--sensitivities", "d1,Omegaa"])
+    assert refused.value.code == 2
+    assert "--sensitivities 'Omegaa' is not a parameter; did you mean 'Omega'?" in capsys.readouterr().err

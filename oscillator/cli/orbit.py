@@ -33,6 +33,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.shooting import Orbit
 
 __all__ = ["continue_", "orbit"]
 
@@ -44,6 +45,14 @@ GuessOption = Annotated[
 TransientOption = Annotated[
     int | None,
     typer.Option("--transient", metavar="N", help="Forcing periods simulated before Newton (default 100)."),
+]
+SensitivitiesOption = Annotated[
+    str | None,
+    typer.Option(
+        "--sensitivities",
+        metavar="NAMES",
+        help="Also print the orbit's exact derivatives in these parameters (comma-separated, e.g. d1,K3,Omega).",
+    ),
 ]
 SectionOption = Annotated[
     float | None,
@@ -80,19 +89,22 @@ def orbit(
     max_iterations: Annotated[
         int, typer.Option("--max-iterations", metavar="N", help="Newton steps before giving up (1 to 200).")
     ] = 20,
+    sensitivities: SensitivitiesOption = None,
 ) -> None:
     """Find the periodic orbit of the stroboscopic map by Newton's method; print it, its events
-    and its Floquet multipliers.
+    and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md).
 
     \b
     Examples:
       oscillator orbit instance-1
       oscillator orbit instance-1 --set Q2=70.5
       oscillator orbit instance-1 --set Q2=70.5 --transient 20 --max-iterations 40
+      oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.5 --sensitivities d1,K3,Omega
     """
     try:
         resolved = case_from(case, None, set_)
         start = _guess(guess)
+        names = _names(sensitivities)
         load("oscillator.orbits.shooting", notice=True)
         from oscillator.orbits.shooting import find_orbit
 
@@ -123,6 +135,49 @@ def orbit(
         table.add_row(f"{mu.real:+.6e} {mu.imag:+.6e}i", f"{abs(mu):.6e}")
     out.print(table)
     out.print(_events_table(found.events))
+    if names:
+        _print_sensitivities(found, names)
+
+
+def _names(text: str | None) -> tuple[str, ...]:
+    """``--sensitivities``' names, each a parameter (checked before the orbit is sought)."""
+    if text is None:
+        return ()
+    from oscillator.model.parameters import Parameters
+
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names:
+        raise InputError("--sensitivities needs parameter names, e.g. d1,K3,Omega", field="sensitivities")
+    return tuple(Parameters.check_name(name, "sensitivities", label="--sensitivities") for name in names)
+
+
+def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
+    """The orbit's derivatives, after the orbit itself (printed already: a refusal keeps it)."""
+    try:
+        derivatives = found.sensitivities(names)
+    except OscillatorError as error:
+        raise fail(message(error), code=_code(error)) from None
+    columns = [f"d/d{name}" for name in names]
+    table = Table(title="Sensitivities of the section point", title_justify="left", box=box.SIMPLE_HEAD)
+    table.add_column("")
+    for column in columns:
+        table.add_column(column, justify="right")
+    for row, values in derivatives.state.iterrows():
+        table.add_row(str(row), *(f"{value:+.6g}" for value in values))
+    out.print(table)
+    table = Table(title="Sensitivities of the response measures", title_justify="left", box=box.SIMPLE_HEAD)
+    table.add_column("measure", no_wrap=True)
+    for column in ("value", *columns):
+        table.add_column(column, justify="right", no_wrap=True)
+    for row, values in derivatives.measures.iterrows():
+        table.add_row(str(row), *(f"{value:+.6g}" for value in values))
+    out.print(table)
+    nearest = (
+        f"{derivatives.margins.what[0]}, relative distance {derivatives.margin:.3g}"
+        if len(derivatives.margins)
+        else "none"
+    )
+    out.print(Text(f"nearest point without a derivative: {nearest}"))
 
 
 def _progress_bar(name: str) -> tuple[Progress, Callable[[float], None]]:
