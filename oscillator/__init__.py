@@ -55,6 +55,8 @@ _EXPORTS = {
     "frequency_response": "oscillator.attractors.frequency",
     "response": "oscillator.orbits.response",
     "Sensitivities": "oscillator.orbits.sensitivity",
+    "Design": "oscillator.designing.optimise",
+    "design": "oscillator.designing.optimise",
     "sensitivities": "oscillator.orbits.sensitivity",
     "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
@@ -88,6 +90,7 @@ __all__ = [
     "Branch",
     "Case",
     "Curve",
+    "Design",
     "EnergyAudit",
     "Event",
     "EventKind",
@@ -114,6 +117,7 @@ __all__ = [
     "SweepSettings",
     "case_names",
     "continue_orbit",
+    "design",
     "find_attractors",
     "find_basins",
     "find_orbit",
@@ -140,6 +144,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.grouping import Attractor
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.designing.optimise import Design, design
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.hybrid.record import Segment
     from oscillator.hybrid.recording import SaveAt

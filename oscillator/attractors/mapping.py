@@ -28,6 +28,7 @@ from oscillator.engines import ENGINES
 from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.batch import OK, land_compiled, options_vector
+from oscillator.hybrid.counting import counted
 from oscillator.hybrid.guards import ARITHMETIC_ERRORS
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
@@ -214,7 +215,9 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
     begin = (float(start[0]), float(start[1]), float(start[2]), float(start[3]))
     try:
         window = _compiled_window(case, settings, begin) if settings.engine == "dop853" else None
-        if window is None:
+        if window is not None:
+            counted()
+        else:
             window = _simulated_window(case, settings, begin)
     except OscillatorError as error:
         reason = error.reason if isinstance(error, SimulationFailed) else Reason.REFUSED

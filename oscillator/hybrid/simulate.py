@@ -12,6 +12,7 @@ import numpy as np
 from oscillator.engines import Engine, EngineChoice, build_engine
 from oscillator.errors import InputError, Interrupted, Reason, SimulationFailed
 from oscillator.hybrid.guards import start_problem
+from oscillator.hybrid.counting import counted
 from oscillator.hybrid.record import RunRecord
 from oscillator.hybrid.recording import SaveAt, recording
 from oscillator.hybrid.result import Result, Status
@@ -194,6 +195,7 @@ def _checked(save: object, case: Case, keep_from: float) -> SaveAt:
 def _run(case: Case, integrator: Engine, save: SaveAt, progress: Callable[[float], None] | None) -> Result:
     """Run the supervisor; the result, or the failure with its partial result."""
     p, options = case.parameters, case.options
+    counted()
     policy = recording(save, max_rows=options.max_trajectory_rows, period=p.period)
     supervisor = Supervisor(
         p, options, integrator, policy, progress=progress, segments=save.segments, derivative=save.derivative

@@ -1,0 +1,1 @@
+"""Robust design over an operating band (issue 39): :func:`~oscillator.designing.optimise.design`."""

@@ -1,0 +1,133 @@
+"""Judging a design: its worst case over the band and over every attractor (docs/design.md).
+
+Two ways, one for each stage of :func:`~oscillator.designing.optimise.design`:
+
+* :func:`survey` (global): at each band value, :func:`~oscillator.find_attractors` from
+  ``starts`` fresh starts (:func:`~oscillator.attractors.atlas.fresh_starts`); every attractor's
+  response measures.  An attractor without them (aperiodic, or a periodic one Newton could not
+  refine) counts as the worst: the design is not judged good on what it cannot measure.
+* :func:`follow` (local): the attractors a survey found, each continued by Newton to a nearby
+  design (:func:`~oscillator.find_orbit` from its section point), with the exact derivatives of
+  their measures in the design's parameters (:func:`~oscillator.sensitivities`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from oscillator.attractors.mapping import AttractorSettings
+from oscillator.designing.problem import Problem
+from oscillator.hybrid.counting import runs
+
+__all__ = ["Judged", "Seen", "follow", "survey", "survey_task"]
+
+
+@dataclass(frozen=True)
+class Seen:
+    """One attractor at one band value: the band value, the attractor's period and section point
+    (for Newton to continue it), its measures (``nan`` where unmeasured) and, when followed, their
+    derivatives in the design's parameters."""
+
+    band: float
+    period: int
+    state: np.ndarray = field(repr=False)
+    measures: Mapping[str, float] = field(repr=False)
+    gradients: Mapping[str, np.ndarray] = field(default_factory=dict, repr=False)
+
+    def value(self, measure: str) -> float:
+        value = self.measures.get(measure, math.nan)
+        return math.inf if not math.isfinite(value) else float(value)
+
+
+@dataclass(frozen=True)
+class Judged:
+    """A design and what was seen of it: ``objective`` (the worst value over ``seen``),
+    ``violation`` (0 when every constraint holds on every attractor), ``runs`` (simulations)."""
+
+    design: np.ndarray
+    seen: tuple[Seen, ...]
+    objective: float
+    violation: float
+    runs: int
+    how: str
+
+    @classmethod
+    def of(cls, problem: Problem, design: np.ndarray, seen: list[Seen], runs: int, how: str) -> Judged:
+        worst = {
+            measure: max((s.value(measure) for s in seen), default=math.inf)
+            for measure in {problem.objective, *(c.measure for c in problem.constraints)}
+        }
+        return cls(
+            np.array(design, dtype=float), tuple(seen), worst[problem.objective], problem.violation(worst), runs, how
+        )
+
+    @property
+    def feasible(self) -> bool:
+        return self.violation == 0.0
+
+    def key(self) -> tuple[float, float]:
+        """Better designs sort first: feasible before not, then the smaller worst objective."""
+        return (self.violation, self.objective)
+
+    def active(self, measure: str) -> Seen:
+        """The attractor (and band value) where ``measure`` is worst."""
+        return max(self.seen, key=lambda s: s.value(measure))
+
+
+def survey_task(
+    problem: Problem, settings: AttractorSettings, design: tuple[float, ...], band: float
+) -> tuple[list[Seen], int]:
+    """The attractors at one band value of one design, and the runs it took (a worker's task)."""
+    from oscillator.attractors.atlas import fresh_starts
+    from oscillator.attractors.finding import find_attractors
+    from oscillator.io.cases import resolve_case
+
+    before = runs()
+    case = resolve_case(problem.case, **problem.design(design), **{problem.over[0]: float(band)})
+    found = find_attractors(case, states=fresh_starts(case, problem.starts), settings=settings)
+    seen = [
+        Seen(float(band), attractor.period, np.array(attractor.points[0], dtype=float), dict(attractor.measures))
+        for attractor in found.attractors
+    ]
+    return seen, runs() - before
+
+
+def survey(problem: Problem, settings: AttractorSettings, design: np.ndarray) -> Judged:
+    """:func:`survey_task` at every band value, in this process."""
+    seen, total = [], 0
+    for band in problem.band_values():
+        found, cost = survey_task(problem, settings, tuple(design), float(band))
+        seen += found
+        total += cost
+    return Judged.of(problem, design, seen, total, "survey")
+
+
+def follow(problem: Problem, judged: Judged, design: np.ndarray, *, gradients: bool = True) -> Judged:
+    """``judged``'s attractors continued to ``design`` by Newton, each with the derivatives of the
+    objective's and the constraints' measures in the design's parameters (``gradients``; else
+    only their values, :meth:`~oscillator.Orbit.response`).  An attractor that Newton loses (it
+    ended at a fold or a boundary of its regime) raises the library's error."""
+    from oscillator.orbits.shooting import find_orbit
+
+    before = runs()
+    measures = {problem.objective, *(c.measure for c in problem.constraints)}
+    seen = []
+    for s in judged.seen:
+        if not math.isfinite(min(s.value(m) for m in measures)):
+            seen.append(s)  # unmeasured: it stays the worst
+            continue
+        overrides: dict[str, Any] = problem.design(design) | {problem.over[0]: s.band}
+        orbit = find_orbit(problem.case, guess=s.state, period=s.period, **overrides)
+        if not gradients:
+            seen.append(Seen(s.band, s.period, orbit.state, orbit.response().columns()))
+            continue
+        found = orbit.sensitivities(problem.names)
+        values = found.measures["value"].to_dict()
+        slopes = {m: found.measures.loc[m, [f"d/d{n}" for n in problem.names]].to_numpy(float) for m in measures}
+        seen.append(Seen(s.band, s.period, orbit.state, values, slopes))
+    return Judged.of(problem, design, seen, runs() - before, "followed")

@@ -1,0 +1,273 @@
+"""Robust design over an operating band: a global search, then gradient refinement with the exact
+sensitivities, then a check from fresh starts (docs/design.md).
+
+1. **Global**: ``candidates`` designs spread over the box of ``vary`` (a Halton sequence,
+   unscrambled: the same designs every time), each surveyed at every band value from ``starts``
+   fresh starts (:func:`~oscillator.designing.judging.survey_task`, on every core or Dask).  The best
+   is the feasible one with the smallest worst objective (or, with none feasible, the one that
+   breaks the constraints least).
+2. **Refinement**: from it, SciPy's SLSQP on the epigraph form ``min t`` subject to
+   ``m_k(x) <= t`` for the objective on every attractor ``k`` at every band value and
+   ``c_ik(x) <= b_i`` for every constraint, each function and its gradient given by continuing the
+   attractors to ``x`` (:func:`~oscillator.designing.judging.follow`: Newton and the exact
+   sensitivities).  The worst case over the attractors is a maximum of smooth functions; the
+   epigraph form is smooth where each is.
+3. **Check**: the refined design surveyed again from fresh starts.  An attractor the refinement
+   did not follow (one born on the way) that is worse is added and the refinement runs again (at
+   most :data:`ROUNDS` times).  The design returned is judged by that survey.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from oscillator.analysis.execution import Executor, keyed
+from oscillator.attractors.mapping import AttractorSettings
+from oscillator.designing.judging import Judged, Seen, follow, survey, survey_task
+from oscillator.designing.problem import Constraint, Problem
+from oscillator.errors import OscillatorError
+from oscillator.io.cases import Case
+from oscillator.model.parameters import check_count
+
+__all__ = ["ROUNDS", "Design", "design", "refine"]
+
+#: The most refinements (each followed by a survey that may find a worse attractor).
+ROUNDS = 3
+
+
+@dataclass(frozen=True)
+class Design:
+    """What :func:`design` found.
+
+    Attributes
+    ----------
+    problem : Problem
+    best : Judged
+        The design returned, judged by a survey from fresh starts: ``best.design`` (in
+        ``problem.names``' order), ``best.objective`` (its worst case), ``best.violation``.
+    start : Judged
+        The global search's best, where the refinement began.
+    candidates : DataFrame
+        The global search: one row per candidate (its parameters, ``objective``, ``violation``,
+        ``runs``).
+    history : DataFrame
+        Every design the refinement judged (``round``, its parameters, ``objective``,
+        ``violation``, ``runs``, ``how``: ``followed`` or ``survey``).
+    runs : dict
+        Simulations by stage: ``global``, ``refine``, ``check``.
+    message : str
+        Why the refinement stopped where it did.
+    """
+
+    problem: Problem
+    best: Judged
+    start: Judged
+    candidates: pd.DataFrame = field(repr=False)
+    history: pd.DataFrame = field(repr=False)
+    runs: dict[str, int]
+    message: str
+
+    @property
+    def values(self) -> dict[str, float]:
+        """The best design by parameter name."""
+        return self.problem.design(self.best.design)
+
+
+def _row(problem: Problem, judged: Judged, **extra: object) -> dict[str, object]:
+    scores = {"objective": judged.objective, "violation": judged.violation, "runs": judged.runs, "how": judged.how}
+    return extra | problem.design(judged.design) | scores
+
+
+def _global(
+    problem: Problem,
+    settings: AttractorSettings,
+    count: int,
+    executor: Executor,
+    progress: Callable[[int, int], None] | None,
+) -> list[Judged]:
+    """Every candidate of the global stage, judged by a survey."""
+    from scipy.stats import qmc
+
+    unit = qmc.Halton(d=len(problem.vary), scramble=False).random(count + 1)[1:]
+    designs = problem.lower + unit * (problem.upper - problem.lower)
+    bands = problem.band_values()
+    tasks = [
+        ((k, j), survey_task, problem, settings, tuple(x), float(b))
+        for k, x in enumerate(designs)
+        for j, b in enumerate(bands)
+    ]
+    found: dict[int, list[tuple[int, list[Seen], int]]] = {k: [] for k in range(count)}
+    for done, ((k, j), (seen, cost)) in enumerate(executor.map(keyed, tasks), start=1):
+        found[k].append((j, seen, cost))
+        if progress is not None:
+            progress(done, len(tasks))
+    judged = []
+    for k, x in enumerate(designs):
+        parts = sorted(found[k], key=lambda part: part[0])
+        seen = [s for _, part, _ in parts for s in part]
+        judged.append(Judged.of(problem, x, seen, sum(cost for _, _, cost in parts), "survey"))
+    return judged
+
+
+class _Epigraph:
+    """SLSQP's functions on ``z = (u, t)``, ``x = lower + u (upper - lower)``: each design followed
+    once (a cache), every design it judged kept."""
+
+    def __init__(self, problem: Problem, base: Judged) -> None:
+        self.problem, self.base = problem, base
+        self.scale = problem.upper - problem.lower
+        self.judged: list[Judged] = []
+        self._cache: dict[tuple[float, ...], Judged] = {}
+
+    def at(self, z: np.ndarray) -> Judged:
+        u = np.clip(z[:-1], 0.0, 1.0)
+        key = tuple(u)
+        if key not in self._cache:
+            base = self.judged[-1] if self.judged else self.base
+            judged = follow(self.problem, base, self.problem.lower + u * self.scale)
+            self._cache[key] = judged
+            self.judged.append(judged)
+        return self._cache[key]
+
+    def _rows(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The inequalities ``g(z) >= 0`` and their gradients."""
+        judged = self.at(z)
+        t = z[-1]
+        values, gradients = [], []
+        bounds: list[tuple[str, float, float]] = [(self.problem.objective, math.nan, 1.0)]
+        bounds += [(c.measure, c.bound, 0.0) for c in self.problem.constraints]
+        for seen in judged.seen:
+            for measure, bound, weight in bounds:
+                gradient = seen.gradients.get(measure)
+                if gradient is None:
+                    continue
+                if not np.isfinite(gradient).all():
+                    raise OscillatorError(
+                        f"{measure} has no derivative at a tie of two largest values (band value {seen.band:g})"
+                    )
+                limit = t if weight else bound
+                values.append(limit - seen.value(measure))
+                gradients.append(np.concatenate([-gradient * self.scale, [weight]]))
+        return np.array(values), np.array(gradients)
+
+    def constraints(self) -> dict[str, Any]:
+        return {"type": "ineq", "fun": lambda z: self._rows(z)[0], "jac": lambda z: self._rows(z)[1]}
+
+
+def refine(problem: Problem, start: Judged, *, max_iterations: int = 50) -> tuple[list[Judged], str]:
+    """SLSQP from ``start`` (module docstring, stage 2): every design judged, and why it stopped."""
+    from scipy.optimize import minimize
+
+    epigraph = _Epigraph(problem, start)
+    u0 = (start.design - problem.lower) / epigraph.scale
+    z0 = np.concatenate([u0, [start.objective]])
+    bounds = [(0.0, 1.0)] * len(u0) + [(None, None)]
+    try:
+        solved = minimize(
+            lambda z: z[-1],
+            z0,
+            jac=lambda z: np.concatenate([np.zeros(len(u0)), [1.0]]),
+            method="SLSQP",
+            bounds=bounds,
+            constraints=[epigraph.constraints()],
+            options={"maxiter": max_iterations, "ftol": 1e-10},
+        )
+        message = f"SLSQP: {solved.message} after {solved.nit} iterations"
+        epigraph.at(solved.x)
+    except OscillatorError as error:
+        message = f"the refinement stopped: {error}"
+    return epigraph.judged, message
+
+
+def _refined(
+    problem: Problem, settings: AttractorSettings, start: Judged, spent: dict[str, int]
+) -> tuple[Judged, list[dict[str, object]], str]:
+    """Stages 2 and 3 (module docstring) from a feasible ``start``: the design, the history's rows
+    and why the refinement stopped; ``spent`` gains their simulations."""
+    best, rows, message = start, [], "no refinement"
+    for round_ in range(1, ROUNDS + 1):
+        steps, message = refine(problem, best)
+        spent["refine"] += sum(j.runs for j in steps)
+        rows += [_row(problem, j, round=round_) for j in steps]
+        refined = min(steps, key=Judged.key) if steps else best
+        checked = survey(problem, settings, refined.design)
+        spent["check"] += checked.runs
+        rows.append(_row(problem, checked, round=round_))
+        settled = (checked.violation, checked.objective) <= (
+            refined.violation,
+            refined.objective + 1e-6 * abs(refined.objective),
+        )
+        if settled or round_ == ROUNDS:
+            return (checked if checked.key() <= start.key() else start), rows, message
+        best = Judged.of(problem, refined.design, list(refined.seen) + list(checked.seen), 0, "followed")
+    return best, rows, message
+
+
+def design(
+    case: Case | str,
+    vary: Mapping[str, Sequence[float]],
+    over: Mapping[str, Sequence[float]],
+    objective: str,
+    constraints: Sequence[str | Constraint] = (),
+    *,
+    band: int = 5,
+    starts: int = 4,
+    candidates: int = 16,
+    settings: AttractorSettings | None = None,
+    workers: int = 1,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Design:
+    """The design of ``vary``'s parameters that makes the worst ``objective`` over the band of
+    ``over`` and every attractor there smallest, subject to ``constraints`` (module docstring).
+
+    Parameters
+    ----------
+    case : Case or str
+    vary : mapping
+        The parameters chosen and their ranges, e.g. ``{"d1": (3.3, 4.2), "K6": (0.5, 4.0)}``.
+    over : mapping
+        The operating band: one parameter and its range, e.g. ``{"Omega": (1.4, 1.6)}``.
+    objective : str
+        A response measure's column (:data:`oscillator.orbits.response.COLUMNS`), minimised in
+        the worst case.
+    constraints : sequence of str
+        ``"measure <= bound"`` on every attractor at every band value.
+    band : int
+        Band values judged (ends included).
+    starts : int
+        Fresh starts at each band value (:func:`~oscillator.attractors.atlas.fresh_starts`).
+    candidates : int
+        Designs of the global search.
+    settings : AttractorSettings, optional
+        The multistart's transient, recorded periods and tolerances.
+    workers, client
+        Local processes or a Dask client for the global search and the checks' surveys.
+    progress : callable, optional
+        ``progress(done, total)`` over the global search's surveys.
+    """
+    from oscillator.attractors.mapping import check_settings
+
+    problem = Problem.of(case, vary, over, objective, constraints, band=band, starts=starts)
+    settings = check_settings(settings)
+    candidates = check_count(candidates, "candidates", 1, 100_000)
+    with Executor(workers, client, progress) as executor:
+        judged = _global(problem, settings, candidates, executor, progress)
+    start = min(judged, key=Judged.key)
+    spent = {"global": sum(j.runs for j in judged), "refine": 0, "check": 0}
+    if start.feasible:
+        best, rows, message = _refined(problem, settings, start, spent)
+    else:
+        best, rows = start, []
+        message = (
+            f"no candidate of the global search meets the constraints (the least violation is {start.violation:.4g}, "
+            f"at {problem.design(start.design)}); relax `constraints`, widen `vary` or give more `candidates`"
+        )
+    candidates_table = pd.DataFrame([_row(problem, j) for j in judged]).drop(columns="how")
+    return Design(problem, best, start, candidates_table, pd.DataFrame(rows), spent, message)

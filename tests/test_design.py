@@ -1,0 +1,89 @@
+"""Robust design over an operating band (issue 39): the worked design of docs/design.md checked by
+its constraint, a brute-force grid and the simulations it took; bad input refused with the field;
+an infeasible problem reported, not refined."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import oscillator as osc
+from oscillator.attractors.mapping import AttractorSettings
+from oscillator.designing.judging import Judged, survey
+from oscillator.errors import InputError
+
+#: docs/design.md's problem: the right stop's distance and stiffness that make Instance 1's largest
+#: displacement of m1 over Omega in [1.4, 1.6] smallest, with impacts on the stop no faster than 5 m/s.
+VARY = {"d1": (2.5, 4.5), "K6": (1.0, 40.0)}
+OVER = {"Omega": (1.4, 1.6)}
+QUICK = AttractorSettings(transient=100, record=8)
+SMALL = {"band": 3, "starts": 2, "candidates": 8, "settings": QUICK}
+
+
+@pytest.fixture(scope="module")
+def worked():
+    return osc.design("instance-1", VARY, OVER, "x_max_m1", ["impact_max_right <= 5"], **SMALL)
+
+
+def test_the_optimum_sits_on_its_constraint_and_its_bound(worked):
+    """A closer stop limits m1 but is struck faster: the optimum puts the worst impact speed over
+    the band exactly at its limit, with the stiffest stop allowed; the refinement lowered the
+    global search's best, and the check from fresh starts agrees with the followed value."""
+    assert worked.best.feasible and worked.values["K6"] == pytest.approx(40.0, abs=1e-9)
+    assert 3.3 < worked.values["d1"] < 3.5
+    impact = max(s.value("impact_max_right") for s in worked.best.seen)
+    assert impact == pytest.approx(5.0, abs=1e-6)
+    assert worked.best.objective < worked.start.objective - 0.01
+    followed = worked.history[worked.history.how == "followed"].objective.min()
+    assert worked.best.objective == pytest.approx(followed, rel=1e-7)
+    assert worked.runs["global"] == worked.candidates.runs.sum() > 0 and worked.runs["refine"] > 0
+
+
+def test_no_candidate_of_the_global_search_beats_the_optimum(worked):
+    """Every feasible candidate surveyed is worse than the refined design."""
+    feasible = worked.candidates[worked.candidates.violation == 0]
+    assert len(feasible) and (feasible.objective >= worked.best.objective).all()
+
+
+@pytest.mark.slow
+def test_a_brute_force_grid_finds_its_best_within_one_step_of_the_optimum(worked):
+    """An independent 6 x 6 grid over (d1, K6), each design judged from fresh starts: its best
+    feasible design is within one grid step of the optimiser's and no better."""
+    problem = worked.problem
+    axes = [np.linspace(low, high, 6) for _, low, high in problem.vary]
+    judged = [survey(problem, QUICK, np.array([a, b])) for a in axes[0] for b in axes[1]]
+    best = min((j for j in judged if j.feasible), key=Judged.key)
+    step = (problem.upper - problem.lower) / 5
+    assert (np.abs(best.design - worked.best.design) <= step + 1e-12).all()
+    assert best.objective >= worked.best.objective - 1e-9
+
+
+def test_an_infeasible_problem_is_reported_with_the_fix_and_not_refined():
+    found = osc.design("instance-1", VARY, OVER, "x_max_m1", ["x_max_m1 <= 1"], **SMALL)
+    assert not found.best.feasible and found.best.violation > 2
+    assert "no candidate of the global search meets the constraints" in found.message
+    assert "relax `constraints`" in found.message and found.runs["refine"] == 0
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        ({"vary": {"d2": (1, 2)}}, "vary", "'d2' is not a parameter"),
+        ({"vary": {"d1": (4, 3)}}, "vary", "is empty; give low < high"),
+        ({"vary": {}}, "vary", "vary must map parameters"),
+        ({"over": {"Omega": (1, 2), "Q2": (1, 2)}}, "over", "one parameter"),
+        ({"over": {"d1": (3, 4)}}, "over", "d1 is varied too"),
+        ({"objective": "impact"}, "objective", "is not a response measure"),
+        ({"constraints": ["impact_max_right < 5"]}, "constraints", "write 'measure <= value'"),
+        ({"constraints": ["rest_m3 <= 0"]}, "constraints", "is not a response measure"),
+        ({"candidates": 0}, "candidates", "candidates"),
+    ],
+)
+def test_bad_input_is_refused_with_the_field_and_the_fix(change, field, words):
+    arguments = {"vary": VARY, "over": OVER, "objective": "x_max_m1", "constraints": ["impact_max_right <= 5"]}
+    arguments |= change
+    options = dict(SMALL) | {key: value for key, value in change.items() if key == "candidates"}
+    arguments.pop("candidates", None)
+    with pytest.raises(InputError, match=words) as refused:
+        osc.design("instance-1", **arguments, **options)
+    assert refused.value.field == field
