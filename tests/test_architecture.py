@@ -99,6 +99,7 @@ LAYERS = (
     ("hybrid",),
     ("analysis", "orbits"),
     ("attractors",),
+    ("designing",),
     ("report",),
     ("cli",),
     ("__init__", "__main__", "saved", "views"),

@@ -11,8 +11,8 @@ import numpy as np
 
 from oscillator.engines import Engine, EngineChoice, build_engine
 from oscillator.errors import InputError, Interrupted, Reason, SimulationFailed
-from oscillator.hybrid.guards import start_problem
 from oscillator.hybrid.counting import counted
+from oscillator.hybrid.guards import start_problem
 from oscillator.hybrid.record import RunRecord
 from oscillator.hybrid.recording import SaveAt, recording
 from oscillator.hybrid.result import Result, Status
