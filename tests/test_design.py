@@ -87,3 +87,95 @@ def test_bad_input_is_refused_with_the_field_and_the_fix(change, field, words):
     with pytest.raises(InputError, match=words) as refused:
         osc.design("instance-1", **arguments, **options)
     assert refused.value.field == field
+
+
+def test_an_interrupted_design_keeps_its_surveys_and_resumes_to_the_same_design(tmp_path):
+    """Ctrl-C during the global search: the surveys finished are kept; the same design into the
+    same folder reads them back and ends where an uninterrupted run does."""
+    from oscillator.designing.optimise import design_store
+    from oscillator.designing.problem import Problem
+
+    problem = Problem.of("instance-1", VARY, OVER, "x_max_m1", ["impact_max_right <= 5"], band=3, starts=2)
+
+    def store():
+        return design_store(tmp_path / "design", problem, QUICK, 8)
+
+    def stop(done, total):
+        if done == 10:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        osc.design(
+            "instance-1", VARY, OVER, "x_max_m1", ["impact_max_right <= 5"], **SMALL, store=store(), progress=stop
+        )
+    assert len(list((tmp_path / "design" / "parts").glob("survey-*.parquet"))) == 10  # kept before the report
+    again = store()
+    resumed = osc.design("instance-1", VARY, OVER, "x_max_m1", ["impact_max_right <= 5"], **SMALL, store=again)
+    whole = osc.design("instance-1", VARY, OVER, "x_max_m1", ["impact_max_right <= 5"], **SMALL)
+    assert again.reused == 10 and resumed.runs["global"] == whole.runs["global"]
+    assert np.array_equal(resumed.best.design, whole.best.design) and resumed.best.objective == whole.best.objective
+
+
+def test_the_command_writes_its_folder_with_an_escaped_report_and_resumes(tmp_path, capsys):
+    """`oscillator design` on a case file whose name is markup: tables, best.json as the library's
+    design, figures, a report that shows the name as text; the same command again resumes."""
+    import json
+    from pathlib import Path
+
+    from oscillator.cli.app import main
+
+    hostile = tmp_path / "<img src=x onerror=alert(1)>.toml"
+    hostile.write_text((Path(__file__).parents[1] / "cases" / "instance-1.toml").read_text(encoding="utf-8"))
+    out = tmp_path / "out"
+    args = [
+        "design", str(hostile), "--vary", "d1=2.5,4.5", "--vary", "K6=1,40", "--over", "Omega", "1.4", "1.6",
+        "--objective", "x_max_m1", "--constraint", "impact_max_right <= 5", "--band", "3", "--starts", "2",
+        "--candidates", "8", "--transient", "100", "--record", "8", "--workers", "1", "--out", str(out),
+    ]  # fmt: skip
+    for _ in range(2):
+        with pytest.raises(SystemExit) as done:
+            main(args)
+        assert done.value.code == 0
+    printed = capsys.readouterr()
+    assert "resumed: 24 surveys read" in printed.err + printed.out
+    best = json.loads((out / "best.json").read_text(encoding="utf-8"))
+    assert best["feasible"] and best["design"]["K6"] == pytest.approx(40.0)
+    assert 3.41 < best["design"]["d1"] < 3.42
+    assert {p.name for p in (out / "figures").glob("*.png")} == {"design-search.png", "design-response.png"}
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "<img src=x" not in html and "&lt;img src=x onerror=alert(1)&gt;" in html
+
+
+@pytest.mark.parametrize(
+    ("flags", "words"),
+    [
+        (["--vary", "d1=2.5"], "--vary 'd1=2.5': write NAME=LOW,HIGH"),
+        (["--vary", "d1=2.5,4.5", "--objective", "x_max"], "--objective: 'x_max' is not a response measure"),
+        (["--vary", "d1=4,3"], "--vary: d1's range (4, 3) is empty"),
+        (["--vary", "d1=2.5,4.5", "--constraint", "x_max_m1 < 3"], "--constraint: 'x_max_m1 < 3' is not a bound"),
+        (["--vary", "d1=2.5,4.5", "--candidates", "0"], "--candidates"),
+    ],
+)
+def test_the_command_refuses_bad_input_with_the_flag(tmp_path, capsys, flags, words):
+    from oscillator.cli.app import main
+
+    base = ["design", "instance-1", "--over", "Omega", "1.4", "1.6", "--out", str(tmp_path / "d")]
+    if "--objective" not in flags:
+        flags = [*flags, "--objective", "x_max_m1"]
+    with pytest.raises(SystemExit) as done:
+        main([*base, *flags])
+    assert done.value.code == 2 and words in capsys.readouterr().err
+    assert not (tmp_path / "d").exists()
+
+
+def test_the_documented_example_finds_the_documented_design(worked):
+    """docs/design.md's Python block, run as shown: the design the page reports."""
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "design.md").read_text(encoding="utf-8")
+    scope: dict = {}
+    exec(compile(page.split("```python\n", 1)[1].split("```", 1)[0], "docs/design.md", "exec"), scope)
+    found = scope["found"]
+    assert found.values == pytest.approx(worked.values, rel=1e-9)
+    assert f"`d1 = {found.values['d1']:.8g}`" in page and f"{found.best.objective:.8g} m" in page
+    assert f"| {found.runs['refine']} (" in page and f"| {found.runs['global']} |" in page

@@ -37,7 +37,7 @@ COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 COMMANDS = (
     "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue",
-    "basins", "attractors", "lyapunov", "frc", "atlas", "curve",
+    "basins", "attractors", "lyapunov", "frc", "atlas", "curve", "design",
 )  # fmt: skip
 
 
@@ -113,6 +113,10 @@ def shrunk(arguments: list[str]) -> list[str]:
     elif command == "frc":  # two seeds, short branches, three sweep values, in this process
         for option, value in (("--seeds", "2"), ("--sweep", "3"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)
+    elif command == "design":  # two band values, one start, three candidates, short runs, in this process
+        for option, value in (("--band", "2"), ("--starts", "1"), ("--candidates", "3"), ("--transient", "30"),
+                              ("--record", "4"), ("--workers", "1")):  # fmt: skip
+            arguments = _set(arguments, option, value)
     elif command == "curve":  # a coarse curve: the same command, fewer points
         arguments = _set(arguments, "--step", "0.5")
     elif command == "lyapunov":
@@ -177,7 +181,7 @@ def test_every_command_of_a_page_runs_as_shown(tmp_path, monkeypatch, page):
 #: folder that ``run``'s example writes); the groups run side by side.
 HELP_GROUPS = {"runs": ("list", "show", "check", "run", "report"), "sweeps": ("sweep", "locate"),
                "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov"),
-               "atlas": ("atlas", "curve"), "frc": ("frc",)}  # fmt: skip
+               "atlas": ("atlas", "curve"), "frc": ("frc",), "design": ("design",)}  # fmt: skip
 
 
 def test_every_command_has_a_help_example_in_a_group():

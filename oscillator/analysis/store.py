@@ -23,7 +23,7 @@ from oscillator.errors import InputError
 from oscillator.io.files import atomic_folder, check_name, read_untrusted, replace_file
 from oscillator.text import printable
 
-__all__ = ["ResumableFolder", "identity"]
+__all__ = ["ResumableFolder", "TableFolder", "identity"]
 
 #: The largest marker file read.
 MAX_MARKER = 1 << 20
@@ -156,3 +156,48 @@ class ResumableFolder:
     ) -> InputError:
         """The refusal of a damaged part or marker, naming it, why and the fix."""
         return InputError(f"{printable(str(path))} is damaged ({why}); {fix}", field="folder")
+
+
+class TableFolder(ResumableFolder):
+    """A resumable folder whose parts are tables: each a Parquet file with a JSON value in its
+    metadata (a part's settings or summary), written atomically and read back whole or refused by
+    name.  :attr:`reused` counts the parts read back."""
+
+    _META = b"oscillator"
+
+    def __init__(self, folder: Path, marker: str, identity: dict[str, Any], *, name: str = "") -> None:
+        super().__init__(folder, marker, identity, name=name)
+        #: The parts read back from earlier runs.
+        self.reused = 0
+
+    def write(self, name: str, frame: Any, meta: Any = None) -> None:
+        """The part ``name``: ``frame`` (a DataFrame), with ``meta`` (JSON) in its metadata."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from oscillator.io.files import atomic_path
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), self._META: json.dumps(meta)})
+        with atomic_path(self.parts / f"{name}.parquet") as temporary:
+            pq.write_table(table, temporary)
+
+    def read(self, name: str) -> tuple[Any, Any] | None:
+        """The part ``name`` (a DataFrame) and its metadata, or None if there is none; a damaged
+        part is refused with its name."""
+        import pyarrow.parquet as pq
+
+        path = self.parts / f"{name}.parquet"
+        if not path.exists() and not path.is_symlink():
+            return None
+        self.plain(path)
+        try:
+            table = pq.read_table(path)
+            meta = json.loads((table.schema.metadata or {})[self._META])
+            frame = table.to_pandas()
+        except Exception as exc:  # pyarrow raises many types for a damaged file
+            if isinstance(exc, MemoryError):
+                raise
+            raise self.damaged(path, "it cannot be read") from exc
+        self.reused += 1
+        return frame, meta

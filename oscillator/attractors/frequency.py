@@ -23,7 +23,6 @@ kept as they finish, and a run into the same folder reads them back instead of c
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,16 +30,13 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import pandas as pd
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 from oscillator.analysis.execution import Executor, keyed
-from oscillator.analysis.store import ResumableFolder, identity
+from oscillator.analysis.store import TableFolder, identity
 from oscillator.attractors.mapping import AttractorSettings, check_settings, check_states
 from oscillator.attractors.responding import continued, doubled, measured, on_branch, seed_orbits, sweep
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, resolve_case
-from oscillator.io.files import atomic_path
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch, points_from_disk, points_on_disk
 from oscillator.presenting import presenter
@@ -370,42 +366,14 @@ def _branches_from_disk(case: Case, param: str, frame: pd.DataFrame, meta: Any) 
     return branches
 
 
-class FrequencyStore(ResumableFolder):
+class FrequencyStore(TableFolder):
     """The resumable folder of a frequency response (``frc.json``): one part per seed (its
     branches), per branch (its measures) and per sweep."""
 
     FORMAT = 1
-    _META = b"oscillator"
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "frc.json", identity, name=name)
-        #: The parts read back from earlier runs.
-        self.reused = 0
-
-    def write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
-        """The part ``name``: ``frame``, with ``meta`` (JSON) in its metadata, written atomically."""
-        table = pa.Table.from_pandas(frame, preserve_index=False)
-        table = table.replace_schema_metadata({**(table.schema.metadata or {}), self._META: json.dumps(meta)})
-        with atomic_path(self.parts / f"{name}.parquet") as temporary:
-            pq.write_table(table, temporary)
-
-    def read(self, name: str) -> tuple[pd.DataFrame, Any] | None:
-        """The part ``name`` and its metadata, or None if there is none; a damaged part is
-        refused with its name."""
-        path = self.parts / f"{name}.parquet"
-        if not path.exists() and not path.is_symlink():
-            return None
-        self.plain(path)
-        try:
-            table = pq.read_table(path)
-            meta = json.loads((table.schema.metadata or {})[self._META])
-            frame = table.to_pandas()
-        except Exception as exc:  # pyarrow raises many types for a damaged file
-            if isinstance(exc, MemoryError):
-                raise
-            raise self.damaged(path, "it cannot be read") from exc
-        self.reused += 1
-        return frame, meta
 
 
 def frequency_store(

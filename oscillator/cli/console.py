@@ -60,6 +60,11 @@ FLAGS = {
     "sweep": "--sweep",
     "measure": "--measure",
     "measures": "--measures",
+    "vary": "--vary",
+    "objective": "--objective",
+    "constraints": "--constraint",
+    "band": "--band",
+    "candidates": "--candidates",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.

@@ -19,12 +19,15 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.problem import Problem
 from oscillator.hybrid.counting import runs
 
-__all__ = ["Judged", "Seen", "follow", "survey", "survey_task"]
+_STATE = ("x1", "v1", "x2", "v2")
+
+__all__ = ["Judged", "Seen", "follow", "seen_from_table", "seen_table", "survey", "survey_task"]
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,33 @@ class Seen:
     def value(self, measure: str) -> float:
         value = self.measures.get(measure, math.nan)
         return math.inf if not math.isfinite(value) else float(value)
+
+
+def seen_table(seen: list[Seen]) -> pd.DataFrame:
+    """``seen`` as a table: ``band, period, x1, v1, x2, v2`` and every response measure (``nan``
+    where unmeasured), one row per attractor (a design store's part)."""
+    from oscillator.orbits.response import COLUMNS
+
+    rows = [
+        {"band": s.band, "period": s.period, **dict(zip(_STATE, s.state, strict=True))}
+        | {name: float(s.measures.get(name, math.nan)) for name in COLUMNS}
+        for s in seen
+    ]
+    return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS])
+
+
+def seen_from_table(table: pd.DataFrame) -> list[Seen]:
+    """:func:`seen_table` read back."""
+    measures = [column for column in table.columns if column not in ("band", "period", *_STATE)]
+    return [
+        Seen(
+            float(row["band"]),
+            int(row["period"]),
+            row[list(_STATE)].to_numpy(float),
+            row[measures].astype(float).to_dict(),
+        )
+        for _, row in table.iterrows()
+    ]
 
 
 @dataclass(frozen=True)

@@ -22,20 +22,22 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from oscillator.analysis.execution import Executor, keyed
+from oscillator.analysis.store import TableFolder, identity
 from oscillator.attractors.mapping import AttractorSettings
-from oscillator.designing.judging import Judged, Seen, follow, survey, survey_task
+from oscillator.designing.judging import Judged, Seen, follow, seen_from_table, seen_table, survey, survey_task
 from oscillator.designing.problem import Constraint, Problem
 from oscillator.errors import OscillatorError
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count
 
-__all__ = ["ROUNDS", "Design", "design", "refine"]
+__all__ = ["ROUNDS", "Design", "DesignStore", "design", "design_store", "refine"]
 
 #: The most refinements (each followed by a survey that may find a worse attractor).
 ROUNDS = 3
@@ -84,29 +86,63 @@ def _row(problem: Problem, judged: Judged, **extra: object) -> dict[str, object]
     return extra | problem.design(judged.design) | scores
 
 
+class DesignStore(TableFolder):
+    """The resumable folder of a design (``design.json``): one part per survey of the global
+    search (``survey-KKKK-BBB``: candidate ``K`` at band value ``B``), its attractors as
+    :func:`~oscillator.designing.judging.seen_table` and its simulations in the metadata.  The
+    refinement and the check are computed again on resuming (a few percent of the work)."""
+
+    FORMAT = 1
+
+    def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
+        super().__init__(folder, "design.json", identity, name=name)
+
+
+def design_store(folder: Path, problem: Problem, settings: AttractorSettings | None, candidates: int) -> DesignStore:
+    """The resumable folder of this design (:class:`DesignStore`)."""
+    from oscillator.attractors.mapping import check_settings
+
+    pieces: dict[str, Any] = {"vary": [list(v) for v in problem.vary], "over": list(problem.over)}
+    pieces |= {"objective": problem.objective, "constraints": [str(c) for c in problem.constraints]}
+    pieces |= {"band": problem.band, "starts": problem.starts, "candidates": candidates}
+    return DesignStore(
+        folder, identity(problem.case, settings=check_settings(settings), **pieces), name=problem.case.name
+    )
+
+
 def _global(
     problem: Problem,
     settings: AttractorSettings,
     count: int,
     executor: Executor,
     progress: Callable[[int, int], None] | None,
+    store: DesignStore | None,
 ) -> list[Judged]:
-    """Every candidate of the global stage, judged by a survey."""
+    """Every candidate of the global stage, judged by a survey (read back from ``store`` where it
+    holds one, and kept there as each finishes)."""
     from scipy.stats import qmc
 
     unit = qmc.Halton(d=len(problem.vary), scramble=False).random(count + 1)[1:]
     designs = problem.lower + unit * (problem.upper - problem.lower)
     bands = problem.band_values()
-    tasks = [
-        ((k, j), survey_task, problem, settings, tuple(x), float(b))
-        for k, x in enumerate(designs)
-        for j, b in enumerate(bands)
-    ]
     found: dict[int, list[tuple[int, list[Seen], int]]] = {k: [] for k in range(count)}
-    for done, ((k, j), (seen, cost)) in enumerate(executor.map(keyed, tasks), start=1):
+    tasks = []
+    for k, x in enumerate(designs):
+        for j, b in enumerate(bands):
+            kept = store.read(f"survey-{k:04d}-{j:03d}") if store is not None else None
+            if kept is not None:
+                found[k].append((j, seen_from_table(kept[0]), int(kept[1]["runs"])))
+            else:
+                tasks.append(((k, j), survey_task, problem, settings, tuple(x), float(b)))
+    total = len(designs) * len(bands)
+    done = total - len(tasks)
+    for (k, j), (seen, cost) in executor.map(keyed, tasks):
+        if store is not None:
+            store.write(f"survey-{k:04d}-{j:03d}", seen_table(seen), {"runs": cost})
         found[k].append((j, seen, cost))
+        done += 1
         if progress is not None:
-            progress(done, len(tasks))
+            progress(done, total)
     judged = []
     for k, x in enumerate(designs):
         parts = sorted(found[k], key=lambda part: part[0])
@@ -223,6 +259,7 @@ def design(
     workers: int = 1,
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
+    store: DesignStore | None = None,
 ) -> Design:
     """The design of ``vary``'s parameters that makes the worst ``objective`` over the band of
     ``over`` and every attractor there smallest, subject to ``constraints`` (module docstring).
@@ -251,6 +288,9 @@ def design(
         Local processes or a Dask client for the global search and the checks' surveys.
     progress : callable, optional
         ``progress(done, total)`` over the global search's surveys.
+    store : DesignStore, optional
+        Keep each survey of the global search in this folder as it finishes, and read back those
+        it holds (:func:`design_store`): an interrupted design resumes.
     """
     from oscillator.attractors.mapping import check_settings
 
@@ -258,7 +298,10 @@ def design(
     settings = check_settings(settings)
     candidates = check_count(candidates, "candidates", 1, 100_000)
     with Executor(workers, client, progress) as executor:
-        judged = _global(problem, settings, candidates, executor, progress)
+        if store is not None:
+            store.check()
+            store.open()
+        judged = _global(problem, settings, candidates, executor, progress, store)
     start = min(judged, key=Judged.key)
     spent = {"global": sum(j.runs for j in judged), "refine": 0, "check": 0}
     if start.feasible:

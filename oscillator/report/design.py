@@ -1,0 +1,193 @@
+"""A design's folder: its tables, the figures of the search and of the responses before and after,
+and the report (docs/design.md)."""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from oscillator.designing.judging import seen_table, survey_task
+from oscillator.orbits.response import unit_of
+from oscillator.report import markup as mk
+from oscillator.report.orbits import modified_blocks
+from oscillator.report.outputs import wrapped_title
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+    from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.designing.optimise import Design
+
+__all__ = ["band_responses", "design_blocks", "design_figure", "write_design"]
+
+#: Band values of the responses drawn before and after.
+RESPONSE_VALUES = 21
+
+
+def band_responses(found: Design, settings: AttractorSettings, count: int = RESPONSE_VALUES) -> pd.DataFrame:
+    """Every attractor's measures over ``count`` values across the band (and a little beyond) for
+    the global search's best design (``design = "before"``) and the design found (``"after"``)."""
+    problem = found.problem
+    name, low, high = problem.over
+    margin = 0.25 * (high - low)
+    values = np.linspace(low - margin, high + margin, count)
+    frames = []
+    for label, judged in (("before", found.start), ("after", found.best)):
+        for value in values:
+            seen, _ = survey_task(problem, settings, tuple(judged.design), float(value))
+            frame = seen_table(seen).assign(design=label)
+            frames.append(frame)
+    return pd.concat(frames, ignore_index=True).rename(columns={"band": name})
+
+
+def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
+    """The objective and each constrained measure against the band's parameter, every attractor,
+    before (the global search's best, grey) and after (the design found); the band shaded, each
+    constraint's bound dashed."""
+    import matplotlib.pyplot as plt
+
+    problem = found.problem
+    name, low, high = problem.over
+    measures = [
+        problem.objective,
+        *dict.fromkeys(c.measure for c in problem.constraints if c.measure != problem.objective),
+    ]
+    fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.8 * len(measures) + 0.6), sharex=True, squeeze=False)
+    for ax, measure in zip(axes[:, 0], measures, strict=True):
+        ax.axvspan(low, high, color="0.92", zorder=0, label="operating band")
+        for label, style in (
+            ("before", {"color": "0.55", "marker": "x", "s": 18}),
+            ("after", {"color": "C0", "marker": "o", "s": 14}),
+        ):
+            rows = responses[responses.design == label]
+            ax.scatter(rows[name], rows[measure], label=f"{label}: {_design_text(found, label)}", **style)
+        for constraint in problem.constraints:
+            if constraint.measure == measure:
+                ax.axhline(
+                    constraint.bound, color="C3", linestyle="--", linewidth=1, label=f"bound {constraint.bound:g}"
+                )
+        unit = unit_of(measure)
+        ax.set_ylabel(f"{measure} ({unit})" if unit else measure)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="best")
+    axes[-1, 0].set_xlabel(name)
+    axes[-1, 0].ticklabel_format(useOffset=False, axis="x")
+    fig.suptitle(
+        wrapped_title(problem.case, f"worst {problem.objective} over {name} in [{low:g}, {high:g}]"), fontsize=9
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _design_text(found: Design, label: str) -> str:
+    judged = found.start if label == "before" else found.best
+    return ", ".join(f"{n} = {v:.5g}" for n, v in found.problem.design(judged.design).items())
+
+
+def search_figure(found: Design) -> Figure:
+    """The global search's candidates in the plane of the first two varied parameters (or the
+    worst objective against the one), coloured by their worst objective (infeasible: grey
+    crosses), the refinement's path and the design found."""
+    import matplotlib.pyplot as plt
+
+    problem, table = found.problem, found.candidates
+    names = problem.names
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    feasible = table[table.violation == 0]
+    infeasible = table[table.violation > 0]
+    history = found.history[found.history.how == "followed"] if len(found.history) else found.history
+    if len(names) >= 2:
+        x, y = names[0], names[1]
+        shown = ax.scatter(feasible[x], feasible[y], c=feasible.objective, cmap="viridis", s=40, label="candidates")
+        fig.colorbar(shown, ax=ax, label=f"worst {problem.objective}")
+        ax.scatter(infeasible[x], infeasible[y], color="0.6", marker="x", label="breaks a constraint")
+        if len(history):
+            ax.plot(history[x], history[y], color="C3", linewidth=1, marker=".", label="refinement")
+        best = problem.design(found.best.design)
+        ax.scatter([best[x]], [best[y]], color="C3", marker="*", s=160, zorder=5, label="design found")
+        ax.set_xlabel(x)
+        ax.set_ylabel(y)
+    else:
+        x = names[0]
+        ax.scatter(feasible[x], feasible.objective, color="C0", label="candidates")
+        ax.scatter(infeasible[x], infeasible.objective, color="0.6", marker="x", label="breaks a constraint")
+        ax.scatter([found.best.design[0]], [found.best.objective], color="C3", marker="*", s=160, label="design found")
+        ax.set_xlabel(x)
+        ax.set_ylabel(f"worst {problem.objective}")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    ax.set_title(wrapped_title(problem.case, "the global search and the refinement"), fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def design_blocks(found: Design, plots: bool) -> list[mk.Block]:
+    """The report: the problem, the design found with its worst case and simulations, how the
+    refinement ended, the best candidates, the figures."""
+    problem = found.problem
+    name, low, high = problem.over
+    ranges = ", ".join(f"{n} in [{a:g}, {b:g}]" for n, a, b in problem.vary)
+    constraints = "; ".join(str(c) for c in problem.constraints) or "none"
+    blocks: list[mk.Block] = [mk.Heading(1, (f"{problem.case.name}: design over {name} in [{low:g}, {high:g}]",))]
+    aim = (
+        f"Minimise the worst {problem.objective} over {problem.band} values of {name} and every attractor "
+        f"that {problem.starts} fresh starts reach at each, choosing {ranges}; constraints: {constraints}."
+    )
+    blocks += [mk.Paragraph((aim,))]
+    blocks += modified_blocks(problem.case)
+    verdict = (
+        "meets every constraint" if found.best.feasible else f"breaks the constraints by {found.best.violation:.4g}"
+    )
+    rows = tuple((n, f"{v:.10g}") for n, v in found.values.items())
+    rows += ((f"worst {problem.objective}", f"{found.best.objective:.10g}"), ("constraints", verdict))
+    rows += tuple((f"simulations: {stage}", str(count)) for stage, count in found.runs.items())
+    blocks += [mk.Heading(2, ("The design found",)), mk.Table(("", "value"), rows), mk.Paragraph((found.message,))]
+    best = found.candidates.sort_values(["violation", "objective"]).head(10)
+    header = (*problem.names, f"worst {problem.objective}", "violation", "simulations")
+    table = tuple(
+        (*(f"{r[n]:.6g}" for n in problem.names), f"{r.objective:.6g}", f"{r.violation:.3g}", str(int(r.runs)))
+        for _, r in best.iterrows()
+    )
+    blocks += [mk.Heading(2, ("The global search's best candidates",)), mk.Table(header, table)]
+    if plots:
+        blocks += [mk.Figure("design-search", "the candidates, the refinement and the design found")]
+        blocks += [mk.Figure("design-response", f"the measures against {name}, before and after")]
+    return blocks
+
+
+def write_design(found: Design, folder: Path, settings: AttractorSettings, *, plots: bool = True) -> list[str]:
+    """``candidates.parquet``, ``history.parquet``, ``attractors.parquet`` (the design found's
+    attractors at each band value), ``best.json``, the figures and the report; what could not be
+    drawn (the tables stay)."""
+    from oscillator.io.files import atomic_path
+    from oscillator.report.outputs import write_folder
+
+    best = {"design": found.values, "objective": found.best.objective, "violation": found.best.violation}
+    best |= {"feasible": found.best.feasible, "runs": found.runs, "message": found.message}
+    with atomic_path(folder / "best.json") as temporary:
+        temporary.write_text(json.dumps(_finite(best), indent=2), encoding="utf-8")
+    figures: list[tuple[str, Callable[[], Figure]]] = []
+    if plots:
+        figures = [
+            ("design-search", functools.partial(search_figure, found)),
+            ("design-response", lambda: design_figure(found, band_responses(found, settings))),
+        ]
+    tables = {"candidates": found.candidates, "history": found.history, "attractors": seen_table(list(found.best.seen))}
+    title = f"{found.problem.case.name}: design"
+    return write_folder(folder, tables, figures, design_blocks(found, plots), title)
+
+
+def _finite(value: object) -> object:
+    """``value`` with non-finite floats as None (JSON has no infinity)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
