@@ -77,6 +77,8 @@ def test_an_infeasible_problem_is_reported_with_the_fix_and_not_refined():
         ({"constraints": ["impact_max_right < 5"]}, "constraints", "write 'measure <= value'"),
         ({"constraints": ["rest_m3 <= 0"]}, "constraints", "is not a response measure"),
         ({"candidates": 0}, "candidates", "candidates"),
+        ({"objective": ["x_max_m1", "x_pp_m1", "x_max_m2"]}, "objective", "two different ones"),
+        ({"objective": ["x_max_m1", "x_max_m1"]}, "objective", "two different ones"),
     ],
 )
 def test_bad_input_is_refused_with_the_field_and_the_fix(change, field, words):
@@ -179,3 +181,27 @@ def test_the_documented_example_finds_the_documented_design(worked):
     assert found.values == pytest.approx(worked.values, rel=1e-9)
     assert f"`d1 = {found.values['d1']:.8g}`" in page and f"{found.best.objective:.8g} m" in page
     assert f"| {found.runs['refine']} (" in page and f"| {found.runs['global']} |" in page
+
+
+def test_two_objectives_give_a_pareto_front_whose_refined_points_meet_their_bounds():
+    """Amplitude against impact speed: the front runs from the stop out of reach (no impact) to
+    the closest, stiffest stop; no point beats another in both; each refined point's impact speed
+    sits on the bound it was refined under, and the design minimising the amplitude alone ends it."""
+    from oscillator.designing.front import non_dominated
+
+    found = osc.design("instance-1", VARY, OVER, ["x_max_m1", "impact_max_right"], **SMALL, front=5)
+    front = found.front
+    assert len(front) >= 4 and non_dominated(front[["objective", "second"]].to_numpy()).all()
+    assert front.second.is_monotonic_increasing and front.objective.is_monotonic_decreasing
+    assert front.second.iloc[0] == 0 and front.objective.iloc[0] == pytest.approx(3.9, abs=0.01)
+    bounded = front[front.eps.notna()]
+    assert len(bounded) >= 2 and np.allclose(bounded.second, bounded.eps, rtol=1e-6)
+    assert front.iloc[-1][["d1", "K6"]].tolist() == pytest.approx(list(found.values.values()))
+    assert found.values == pytest.approx({"d1": 2.5, "K6": 40.0})  # the amplitude alone: the closest, stiffest stop
+
+
+def test_the_pareto_front_keeps_what_no_other_design_beats():
+    from oscillator.designing.front import non_dominated
+
+    points = np.array([[1.0, 5.0], [2.0, 4.0], [2.0, 4.0], [3.0, 4.5], [4.0, 1.0], [1.0, 6.0]])
+    assert non_dominated(points).tolist() == [True, True, False, False, True, False]

@@ -115,7 +115,7 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
     elif command == "design":  # two band values, one start, three candidates, short runs, in this process
         for option, value in (("--band", "2"), ("--starts", "1"), ("--candidates", "3"), ("--transient", "30"),
-                              ("--record", "4"), ("--workers", "1")):  # fmt: skip
+                              ("--record", "4"), ("--workers", "1"), ("--front", "2")):  # fmt: skip
             arguments = _set(arguments, option, value)
     elif command == "curve":  # a coarse curve: the same command, fewer points
         arguments = _set(arguments, "--step", "0.5")

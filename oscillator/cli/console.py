@@ -65,6 +65,7 @@ FLAGS = {
     "constraints": "--constraint",
     "band": "--band",
     "candidates": "--candidates",
+    "front": "--front",
 }
 
 #: Consoles that never read markup or emoji codes in what they print.

@@ -42,7 +42,12 @@ OverOption = Annotated[
     typer.Option("--over", metavar="NAME LOW HIGH", help="The operating band, e.g. Omega 1.4 1.6."),
 ]
 ObjectiveOption = Annotated[
-    str, typer.Option("--objective", metavar="MEASURE", help="The response measure whose worst case is minimised.")
+    list[str],
+    typer.Option(
+        "--objective",
+        metavar="MEASURE",
+        help="The response measure whose worst case is minimised; give two for their Pareto front.",
+    ),
 ]
 ConstraintOption = Annotated[
     list[str] | None,
@@ -74,6 +79,9 @@ def design(
     band: Annotated[int, typer.Option("--band", metavar="N", help="Band values judged.")] = 5,
     starts: Annotated[int, typer.Option("--starts", metavar="N", help="Fresh starts at each band value.")] = 4,
     candidates: Annotated[int, typer.Option("--candidates", metavar="N", help="Designs of the global search.")] = 16,
+    front: Annotated[
+        int, typer.Option("--front", metavar="N", help="Points of the Pareto front (two objectives).")
+    ] = 5,
     transient: TransientOption = None,
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
@@ -88,7 +96,8 @@ def design(
     """Choose the --vary parameters so that the worst --objective over --band values of the --over
     band, and over every attractor --starts fresh starts reach at each, is smallest, with every
     --constraint holding on every attractor: a global search over --candidates designs, then
-    gradient refinement with the exact sensitivities, then a check from fresh starts.
+    gradient refinement with the exact sensitivities, then a check from fresh starts. With two
+    --objective, also their Pareto front (--front points, each a refined design).
 
     Writes candidates.parquet, history.parquet, attractors.parquet, best.json, figures (the
     search, the measures over the band before and after) and a report. The global search's
@@ -110,6 +119,7 @@ def design(
         from oscillator.model.parameters import check_count
 
         count = check_count(candidates, "candidates", 1, 100_000)
+        check_count(front, "front", 1, 100)
         store = design_store(
             out_dir if out_dir is not None else new_folder(resolved, "design"), problem, settings, count
         )
@@ -122,6 +132,7 @@ def design(
         store.open()
         constraints = [str(c) for c in problem.constraints]
         options: dict[str, Any] = {"band": band, "starts": starts, "candidates": count, "settings": settings}
+        options["front"] = front
         options |= {"workers": processes, "client": client, "store": store}
         run = functools.partial(
             run_design, resolved, _ranges(vary), {name: (low, high)}, objective, constraints, **options
@@ -144,6 +155,8 @@ def _finish(found: Any, store: Any, settings: Any, no_plots: bool, quiet: bool) 
         out.print(Text(f"  worst {found.problem.objective}: {found.best.objective:.10g}"))
         out.print(Text(f"  simulations: {', '.join(f'{k} {v}' for k, v in found.runs.items())}"))
         out.print(Text(f"  {found.message}"))
+        if len(found.front):
+            out.print(Text(f"  Pareto front: {len(found.front)} designs (front.parquet)"))
     say(f"written to {printable(str(folder))}")
     if problems:
         raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)

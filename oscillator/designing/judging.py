@@ -77,7 +77,8 @@ def seen_from_table(table: pd.DataFrame) -> list[Seen]:
 @dataclass(frozen=True)
 class Judged:
     """A design and what was seen of it: ``objective`` (the worst value over ``seen``),
-    ``violation`` (0 when every constraint holds on every attractor), ``runs`` (simulations)."""
+    ``violation`` (0 when every constraint holds on every attractor), ``runs`` (simulations),
+    ``worst`` (the worst value of every measure judged)."""
 
     design: np.ndarray
     seen: tuple[Seen, ...]
@@ -85,16 +86,13 @@ class Judged:
     violation: float
     runs: int
     how: str
+    worst: Mapping[str, float] = field(default_factory=dict)
 
     @classmethod
     def of(cls, problem: Problem, design: np.ndarray, seen: list[Seen], runs: int, how: str) -> Judged:
-        worst = {
-            measure: max((s.value(measure) for s in seen), default=math.inf)
-            for measure in {problem.objective, *(c.measure for c in problem.constraints)}
-        }
-        return cls(
-            np.array(design, dtype=float), tuple(seen), worst[problem.objective], problem.violation(worst), runs, how
-        )
+        worst = {measure: max((s.value(measure) for s in seen), default=math.inf) for measure in problem.measures}
+        design = np.array(design, dtype=float)
+        return cls(design, tuple(seen), worst[problem.objective], problem.violation(worst), runs, how, worst)
 
     @property
     def feasible(self) -> bool:
@@ -145,7 +143,7 @@ def follow(problem: Problem, judged: Judged, design: np.ndarray, *, gradients: b
     from oscillator.orbits.shooting import find_orbit
 
     before = runs()
-    measures = {problem.objective, *(c.measure for c in problem.constraints)}
+    measures = set(problem.measures)
     seen = []
     for s in judged.seen:
         if not math.isfinite(min(s.value(m) for m in measures)):

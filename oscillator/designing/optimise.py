@@ -31,6 +31,7 @@ import pandas as pd
 from oscillator.analysis.execution import Executor, keyed
 from oscillator.analysis.store import TableFolder, identity
 from oscillator.attractors.mapping import AttractorSettings
+from oscillator.designing.front import pareto_front
 from oscillator.designing.judging import Judged, Seen, follow, seen_from_table, seen_table, survey, survey_task
 from oscillator.designing.problem import Constraint, Problem
 from oscillator.errors import OscillatorError
@@ -62,9 +63,15 @@ class Design:
         Every design the refinement judged (``round``, its parameters, ``objective``,
         ``violation``, ``runs``, ``how``: ``followed`` or ``survey``).
     runs : dict
-        Simulations by stage: ``global``, ``refine``, ``check``.
+        Simulations by stage: ``global``, ``refine``, ``check`` (the front's points included).
     message : str
         Why the refinement stopped where it did.
+    front : DataFrame
+        With two objectives, the Pareto front (:mod:`oscillator.designing.front`): one row per
+        design on it, its parameters, ``eps`` (the bound on the second objective it was refined
+        under; ``nan`` for ``best`` and the candidates), ``objective`` and ``second`` (the two
+        worst cases), ``refined`` (False for a candidate of the global search that no refined
+        design beats), ``violation``, ``runs``; empty with one objective.
     """
 
     problem: Problem
@@ -74,6 +81,7 @@ class Design:
     history: pd.DataFrame = field(repr=False)
     runs: dict[str, int]
     message: str
+    front: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
 
     @property
     def values(self) -> dict[str, float]:
@@ -82,8 +90,13 @@ class Design:
 
 
 def _row(problem: Problem, judged: Judged, **extra: object) -> dict[str, object]:
-    scores = {"objective": judged.objective, "violation": judged.violation, "runs": judged.runs, "how": judged.how}
-    return extra | problem.design(judged.design) | scores
+    """A table's row: ``extra``, the design, its worst objective (and ``second``, the worst of the
+    second objective, when there is one), violation, simulations and how it was judged."""
+    scores = {"objective": judged.objective}
+    if problem.also:
+        scores["second"] = judged.worst.get(problem.also[0], np.nan)
+    scores |= {"violation": judged.violation, "runs": judged.runs}
+    return extra | problem.design(judged.design) | scores | {"how": judged.how}
 
 
 class DesignStore(TableFolder):
@@ -105,6 +118,8 @@ def design_store(folder: Path, problem: Problem, settings: AttractorSettings | N
     pieces: dict[str, Any] = {"vary": [list(v) for v in problem.vary], "over": list(problem.over)}
     pieces |= {"objective": problem.objective, "constraints": [str(c) for c in problem.constraints]}
     pieces |= {"band": problem.band, "starts": problem.starts, "candidates": candidates}
+    if problem.also:
+        pieces["also"] = list(problem.also)
     return DesignStore(
         folder, identity(problem.case, settings=check_settings(settings), **pieces), name=problem.case.name
     )
@@ -249,12 +264,13 @@ def design(
     case: Case | str,
     vary: Mapping[str, Sequence[float]],
     over: Mapping[str, Sequence[float]],
-    objective: str,
+    objective: str | Sequence[str],
     constraints: Sequence[str | Constraint] = (),
     *,
     band: int = 5,
     starts: int = 4,
     candidates: int = 16,
+    front: int = 5,
     settings: AttractorSettings | None = None,
     workers: int = 1,
     client: Any = None,
@@ -271,9 +287,10 @@ def design(
         The parameters chosen and their ranges, e.g. ``{"d1": (3.3, 4.2), "K6": (0.5, 4.0)}``.
     over : mapping
         The operating band: one parameter and its range, e.g. ``{"Omega": (1.4, 1.6)}``.
-    objective : str
+    objective : str or two str
         A response measure's column (:data:`oscillator.orbits.response.COLUMNS`), minimised in
-        the worst case.
+        the worst case; or two, traded along a Pareto front (:attr:`Design.front`), ``best``
+        minimising the first.
     constraints : sequence of str
         ``"measure <= bound"`` on every attractor at every band value.
     band : int
@@ -282,6 +299,8 @@ def design(
         Fresh starts at each band value (:func:`~oscillator.attractors.atlas.fresh_starts`).
     candidates : int
         Designs of the global search.
+    front : int
+        Points of the Pareto front, with two objectives (each a refined design).
     settings : AttractorSettings, optional
         The multistart's transient, recorded periods and tolerances.
     workers, client
@@ -297,6 +316,7 @@ def design(
     problem = Problem.of(case, vary, over, objective, constraints, band=band, starts=starts)
     settings = check_settings(settings)
     candidates = check_count(candidates, "candidates", 1, 100_000)
+    front = check_count(front, "front", 1, 100)
     with Executor(workers, client, progress) as executor:
         if store is not None:
             store.check()
@@ -313,4 +333,7 @@ def design(
             f"at {problem.design(start.design)}); relax `constraints`, widen `vary` or give more `candidates`"
         )
     candidates_table = pd.DataFrame([_row(problem, j) for j in judged]).drop(columns="how")
-    return Design(problem, best, start, candidates_table, pd.DataFrame(rows), spent, message)
+    pareto = pd.DataFrame()
+    if problem.also and best.feasible:
+        pareto = pareto_front(problem, judged, best, lambda sub, s: _refined(sub, settings, s, spent)[0], front)
+    return Design(problem, best, start, candidates_table, pd.DataFrame(rows), spent, message, pareto)

@@ -97,6 +97,8 @@ class Problem:
     constraints: tuple[Constraint, ...]
     band: int
     starts: int
+    #: A second objective, traded against the first along a Pareto front (empty for one).
+    also: tuple[str, ...] = ()
 
     @classmethod
     def of(
@@ -104,12 +106,13 @@ class Problem:
         case: Case | str,
         vary: Mapping[str, Sequence[float]],
         over: Mapping[str, Sequence[float]],
-        objective: str,
+        objective: str | Sequence[str],
         constraints: Sequence[str | Constraint] = (),
         band: int = 5,
         starts: int = 4,
     ) -> Problem:
-        """Every argument checked, with the field and the fix on a bad one."""
+        """Every argument checked, with the field and the fix on a bad one.  ``objective`` is one
+        measure, or two traded along a Pareto front."""
         if not isinstance(vary, Mapping) or not vary:
             raise InputError("vary must map parameters to ranges, e.g. {'d1': (3.3, 4.2)}", field="vary")
         if not isinstance(over, Mapping) or len(over) != 1:
@@ -123,15 +126,28 @@ class Problem:
             )
         if isinstance(constraints, str):
             constraints = [constraints]
+        objectives = [objective] if isinstance(objective, str) else list(objective)
+        if not 1 <= len(objectives) <= 2 or len(set(map(str, objectives))) != len(objectives):
+            raise InputError(
+                "objective must be one response measure, or two different ones for a Pareto front; "
+                f"got {shown(objective)}",
+                field="objective",
+            )
         return cls(
             case=resolve_case(case),
             vary=ranges,
             over=band_span,
-            objective=check_measure(objective, "objective"),
+            objective=check_measure(objectives[0], "objective"),
             constraints=tuple(check_constraint(c) for c in constraints),
             band=check_count(band, "band", 1, 1000),
             starts=check_count(starts, "starts", 1, 10_000),
+            also=tuple(check_measure(name, "objective") for name in objectives[1:]),
         )
+
+    @property
+    def measures(self) -> tuple[str, ...]:
+        """Every measure judged: the objectives and the constrained ones, each once."""
+        return tuple(dict.fromkeys([self.objective, *self.also, *(c.measure for c in self.constraints)]))
 
     @property
     def names(self) -> tuple[str, ...]:

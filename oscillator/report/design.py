@@ -128,6 +128,37 @@ def search_figure(found: Design) -> Figure:
     return fig
 
 
+def front_figure(found: Design) -> Figure:
+    """The two worst cases of every candidate (grey; infeasible: crosses) and the Pareto front's
+    refined designs (joined), each labelled with its parameters."""
+    import matplotlib.pyplot as plt
+
+    problem, table, front = found.problem, found.candidates, found.front
+    (second,) = problem.also
+    fig, ax = plt.subplots(figsize=(7, 5))
+    feasible, infeasible = table[table.violation == 0], table[table.violation > 0]
+    ax.scatter(feasible.second, feasible.objective, color="0.6", label="candidates")
+    ax.scatter(infeasible.second, infeasible.objective, color="0.6", marker="x", label="breaks a constraint")
+    ax.plot(front.second, front.objective, color="C3", label="Pareto front")
+    refined = front[front.refined.astype(bool)]
+    ax.scatter(refined.second, refined.objective, color="C3", zorder=3, label="refined designs")
+    sketched = front[~front.refined.astype(bool)]
+    ax.scatter(
+        sketched.second, sketched.objective, facecolor="white", edgecolor="C3", zorder=3, label="candidates on it"
+    )
+    for _, row in front.iterrows():
+        text = ", ".join(f"{n} = {row[n]:.4g}" for n in problem.names)
+        ax.annotate(text, (row.second, row.objective), fontsize=7, xytext=(4, 4), textcoords="offset points")
+    for axis, measure in ((ax.set_xlabel, second), (ax.set_ylabel, problem.objective)):
+        unit = unit_of(measure)
+        axis(f"worst {measure} ({unit})" if unit else f"worst {measure}")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    ax.set_title(wrapped_title(problem.case, "the Pareto front of the two worst cases"), fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def design_blocks(found: Design, plots: bool) -> list[mk.Block]:
     """The report: the problem, the design found with its worst case and simulations, how the
     refinement ended, the best candidates, the figures."""
@@ -156,16 +187,39 @@ def design_blocks(found: Design, plots: bool) -> list[mk.Block]:
         for _, r in best.iterrows()
     )
     blocks += [mk.Heading(2, ("The global search's best candidates",)), mk.Table(header, table)]
+    if len(found.front):
+        blocks += _front_blocks(found, plots)
     if plots:
         blocks += [mk.Figure("design-search", "the candidates, the refinement and the design found")]
         blocks += [mk.Figure("design-response", f"the measures against {name}, before and after")]
     return blocks
 
 
+def _front_blocks(found: Design, plots: bool) -> list[mk.Block]:
+    problem = found.problem
+    (second,) = problem.also
+    header = (*problem.names, f"worst {problem.objective}", f"worst {second}", "refined under", "simulations")
+    rows = tuple(
+        (
+            *(f"{r[n]:.8g}" for n in problem.names),
+            f"{r.objective:.8g}",
+            f"{r.second:.8g}",
+            ("alone" if r.refined else "a candidate") if np.isnan(r.eps) else f"{second} <= {r.eps:.6g}",
+            str(int(r.runs)),
+        )
+        for _, r in found.front.iterrows()
+    )
+    blocks: list[mk.Block] = [mk.Heading(2, (f"The Pareto front of {problem.objective} and {second}",))]
+    blocks += [mk.Table(header, rows)]
+    if plots:
+        blocks += [mk.Figure("design-front", f"worst {problem.objective} against worst {second}")]
+    return blocks
+
+
 def write_design(found: Design, folder: Path, settings: AttractorSettings, *, plots: bool = True) -> list[str]:
     """``candidates.parquet``, ``history.parquet``, ``attractors.parquet`` (the design found's
-    attractors at each band value), ``best.json``, the figures and the report; what could not be
-    drawn (the tables stay)."""
+    attractors at each band value), ``front.parquet`` (with two objectives), ``best.json``, the
+    figures and the report; what could not be drawn (the tables stay)."""
     from oscillator.io.files import atomic_path
     from oscillator.report.outputs import write_folder
 
@@ -173,13 +227,17 @@ def write_design(found: Design, folder: Path, settings: AttractorSettings, *, pl
     best |= {"feasible": found.best.feasible, "runs": found.runs, "message": found.message}
     with atomic_path(folder / "best.json") as temporary:
         temporary.write_text(json.dumps(_finite(best), indent=2), encoding="utf-8")
+    tables = {"candidates": found.candidates, "history": found.history, "attractors": seen_table(list(found.best.seen))}
     figures: list[tuple[str, Callable[[], Figure]]] = []
     if plots:
         figures = [
             ("design-search", functools.partial(search_figure, found)),
             ("design-response", lambda: design_figure(found, band_responses(found, settings))),
         ]
-    tables = {"candidates": found.candidates, "history": found.history, "attractors": seen_table(list(found.best.seen))}
+        if len(found.front):
+            figures.append(("design-front", functools.partial(front_figure, found)))
+    if len(found.front):
+        tables["front"] = found.front
     title = f"{found.problem.case.name}: design"
     return write_folder(folder, tables, figures, design_blocks(found, plots), title)
 
