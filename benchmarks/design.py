@@ -22,7 +22,7 @@ from oscillator.hybrid.counting import runs
 
 VARY = {"d1": (2.5, 4.5), "K6": (1.0, 40.0)}
 OVER = {"Omega": (1.4, 1.6)}
-OBJECTIVE, CONSTRAINTS = "x_max_m1", ["impact_max_right <= 5"]
+OBJECTIVE, CONSTRAINTS = "x_max_m1", ["impact_max_right <= 5", "rest_m2 <= 0.01"]
 SETTINGS = AttractorSettings(transient=100, record=8)
 #: Nelder-Mead's penalty on a broken constraint (per unit of the measure).
 PENALTY = 1e3

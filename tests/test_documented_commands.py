@@ -105,11 +105,12 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
         if command == "attractors":
             arguments = _set(_set(arguments, "--steps", "3"), "--tol", "1e-3")
-    elif command == "atlas":  # a 3 x 2 plane, in this process
+    elif command == "atlas":  # a 3 x 2 plane, short runs, in this process
         for option, count in (("--x", "3"), ("--y", "2")):
             arguments = list(arguments)
             arguments[arguments.index(option) + 4] = count
-        arguments = _set(arguments, "--workers", "1")
+        for option, value in (("--workers", "1"), ("--transient", "30"), ("--record", "8")):
+            arguments = _set(arguments, option, value)
     elif command == "frc":  # two seeds, short branches, three sweep values, in this process
         for option, value in (("--seeds", "2"), ("--sweep", "3"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)
@@ -117,6 +118,9 @@ def shrunk(arguments: list[str]) -> list[str]:
         for option, value in (("--band", "2"), ("--starts", "1"), ("--candidates", "3"), ("--transient", "30"),
                               ("--record", "4"), ("--workers", "1"), ("--front", "2")):  # fmt: skip
             arguments = _set(arguments, option, value)
+        arguments = (
+            [*arguments, "--no-plots"] if "--no-plots" not in arguments else arguments
+        )  # tests/test_design.py draws
     elif command == "curve":  # a coarse curve: the same command, fewer points
         arguments = _set(arguments, "--step", "0.5")
     elif command == "lyapunov":

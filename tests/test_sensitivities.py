@@ -4,6 +4,8 @@ rest all period, re-stick, strike each stop, and have period 2; refused at a gra
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -54,15 +56,17 @@ def check(orbit, params, steps=None):
             case = resolve_case(orbit.case, **{name: value})
             return period_map(case, orbit.section, orbit.state, orbit.period, derivative=False).end
 
+        @functools.cache
         def moved(value, name=name):
-            return find_orbit(orbit.case, guess=orbit.state, period=orbit.period, tol=NEWTON, **{name: value})
+            found = find_orbit(orbit.case, guess=orbit.state, period=orbit.period, tol=NEWTON, **{name: value})
+            return found.state, pd.Series(found.response().columns())
 
         value = getattr(p, name)
         step = steps.get(name, STEP * max(abs(value), 1.0))
         assert close(found.map[column], richardson(image, value, step), orbit.state, step).all(), name
-        moving = richardson(lambda v: moved(v).state, value, step)
+        moving = richardson(lambda v: moved(v)[0], value, step)
         assert close(found.state[column], moving, orbit.state, step).all(), name
-        measured = richardson(lambda v: pd.Series(moved(v).response().columns())[found.measures.index], value, step)
+        measured = richardson(lambda v: moved(v)[1][found.measures.index], value, step)
         ok = close(found.measures[column], measured, found.measures["value"], step)
         assert ok.all(), (name, found.measures.index[~ok].tolist(), measured[~ok], found.measures[column][~ok])
     return found
