@@ -27,7 +27,7 @@ from oscillator.cli.options import (
     TransientOption,
     WorkersOption,
 )
-from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, with_progress
+from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, say_reused, with_progress
 from oscillator.errors import InputError
 from oscillator.text import printable
 
@@ -144,8 +144,7 @@ def design(
 
 def _finish(found: Any, store: Any, settings: Any, no_plots: bool, quiet: bool) -> None:
     folder: Path = store.folder
-    if store.reused and not quiet:
-        say(f"resumed: {store.reused} surveys read from {printable(str(folder))}, the rest computed")
+    say_reused(store, store.reused, "surveys", quiet)
     from oscillator.report.design import write_design
 
     problems = outputs(folder, "surveys", lambda: write_design(found, folder, settings, plots=not no_plots))

@@ -27,7 +27,7 @@ from oscillator.cli.options import (
     TransientOption,
     WorkersOption,
 )
-from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, with_progress
+from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, say_reused, with_progress
 from oscillator.errors import InputError
 from oscillator.text import printable
 
@@ -140,8 +140,7 @@ def _opened(
 
 def _finish(found: Any, store: Any, measure: str, no_plots: bool, quiet: bool) -> None:
     folder: Path = store.folder
-    if store.reused and not quiet:
-        say(f"resumed: {store.reused} parts read from {printable(str(folder))}, the rest computed")
+    say_reused(store, store.reused, "parts", quiet)
     from oscillator.report.frequency import write_frequency
 
     problems = outputs(folder, "parts", lambda: write_frequency(found, folder, measure, plots=not no_plots))
