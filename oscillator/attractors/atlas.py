@@ -199,16 +199,17 @@ def atlas_store(
     return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings, **extra), name=case.name)
 
 
-def check_measures(measures: object) -> tuple[str, ...]:
-    """Response measures by column name (:data:`~oscillator.orbits.response.COLUMNS`), each once."""
+def check_measures(measures: object, field: str = "measures") -> tuple[str, ...]:
+    """Response measures by column name (:data:`~oscillator.orbits.response.COLUMNS`), each once;
+    a bad one refused for ``field``."""
     from oscillator.orbits.response import COLUMNS
 
     names = (measures,) if isinstance(measures, str) else tuple(measures)  # type: ignore[arg-type]
     for name in names:
         if name not in COLUMNS:
             raise InputError(
-                f"measures: {shown(name)} is not a response measure; give names of {', '.join(COLUMNS)}",
-                field="measures",
+                f"{field}: {shown(name)} is not a response measure; give names of {', '.join(COLUMNS)}",
+                field=field,
             )
     return tuple(dict.fromkeys(names))
 

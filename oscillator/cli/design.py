@@ -115,7 +115,8 @@ def design(
         from oscillator.designing.problem import Problem
 
         name, low, high = over
-        problem = Problem.of(resolved, _ranges(vary), {name: (low, high)}, objective, constraint or [], band, starts)
+        ranges = _ranges(vary)
+        problem = Problem.of(resolved, ranges, {name: (low, high)}, objective, constraint or [], band, starts)
         from oscillator.model.parameters import check_count
 
         count = check_count(candidates, "candidates", 1, 100_000)
@@ -134,9 +135,7 @@ def design(
         options: dict[str, Any] = {"band": band, "starts": starts, "candidates": count, "settings": settings}
         options["front"] = front
         options |= {"workers": processes, "client": client, "store": store}
-        run = functools.partial(
-            run_design, resolved, _ranges(vary), {name: (low, high)}, objective, constraints, **options
-        )
+        run = functools.partial(run_design, resolved, ranges, {name: (low, high)}, objective, constraints, **options)
         found = with_progress(run, f"{resolved.name}: design over {name}", "surveys", quiet)
         store.write_status("computed", feasible=found.best.feasible)
     _finish(found, store, settings, no_plots, quiet)

@@ -32,14 +32,11 @@ _BOUND = re.compile(r"^\s*([A-Za-z_0-9]+)\s*<=\s*([-+0-9.eE]+)\s*$")
 
 
 def check_measure(name: object, field: str) -> str:
-    """``name`` if it is a response measure's column (:data:`~oscillator.orbits.response.COLUMNS`)."""
-    from oscillator.orbits.response import COLUMNS
+    """``name`` if it is a response measure's column (:func:`~oscillator.attractors.atlas.check_measures`)."""
+    from oscillator.attractors.atlas import check_measures
 
-    if not isinstance(name, str) or name not in COLUMNS:
-        raise InputError(
-            f"{field}: {shown(name)} is not a response measure; choose one of {', '.join(COLUMNS)}", field=field
-        )
-    return name
+    (checked,) = check_measures((name,), field)
+    return checked
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from scipy.integrate import solve_ivp
 
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.record import Segment
-from oscillator.model.fields import coefficients
+from oscillator.model.fields import coefficients, state_derivative
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import boundary_of, elementary_switches, rest_projection
@@ -180,13 +180,12 @@ def _through(
 ) -> Switch:
     """``sigma`` carried through the switch ``before -> after`` at ``t`` (module docstring)."""
     c = coefficients(p)
-    columns = np.flatnonzero(selector.any(axis=1))
     taus, speeds, normals = [], [], []
     carried = sigma.copy()
     for mode, new, name in elementary_switches(before, after):
         boundary = boundary_of(name, t, y_before, p, mode, new)
-        f_minus = _rates(t, _pack(y_before, np.zeros((4, 0)), 0), c, columns[:0], mode)[:4]
-        f_plus = _rates(t, _pack(y_after, np.zeros((4, 0)), 0), c, columns[:0], new)[:4]
+        f_minus = np.array(state_derivative(t, y_before, p, mode))
+        f_plus = np.array(state_derivative(t, y_after, p, new))
         speed = float(boundary.normal @ f_minus + boundary.rate)
         speeds.append(speed)
         normals.append(boundary.normal)
@@ -285,7 +284,7 @@ def tangent_pass(
             switch = None
         pieces.append(_with_end(piece, tau if switch is not None else dt_end))
     last = pieces[-1]
-    f_end = _rates(t_end, _pack(last.y1, np.zeros((4, 0)), 0), c, columns[:0], last.mode)[:4]
+    f_end = np.array(state_derivative(t_end, last.y1, p, last.mode))
     end = last.sigma1 + np.outer(f_end, dt_end)
     marked = []
     for t in marks:
@@ -418,13 +417,12 @@ def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
 def _points(along: Pass, marks: list[float], p: Parameters, names: tuple[str, ...], orbit: Orbit) -> pd.DataFrame:
     """The section points ``y(section + n T)`` and their total derivatives (the time moves with ``Omega``)."""
     k = len(names)
-    c = coefficients(p)
     rows = []
     for n, (t, value) in enumerate(zip(marks, along.marks, strict=True)):
         y, sigma = value[:4], value[4:].reshape(4, k)
         moved = np.array([-(t - orbit.section) / p.Omega if name == "Omega" else 0.0 for name in names])
         mode = next(piece.mode for piece in along.pieces if piece.t0 <= t < piece.t1)
-        f = _rates(t, _pack(y, np.zeros((4, 0)), 0), c, np.zeros(0, dtype=np.int64), mode)[:4]
+        f = np.array(state_derivative(t, y, p, mode))
         total = sigma + np.outer(f, moved)
         for row, name in enumerate(_STATE):
             derivatives = dict(zip([f"d/d{param}" for param in names], total[row], strict=True))

@@ -4,8 +4,6 @@ and the report (docs/design.md)."""
 from __future__ import annotations
 
 import functools
-import json
-import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -222,11 +220,12 @@ def write_design(found: Design, folder: Path, settings: AttractorSettings, *, pl
     figures and the report; what could not be drawn (the tables stay)."""
     from oscillator.io.files import atomic_path
     from oscillator.report.outputs import write_folder
+    from oscillator.report.runs import json_text
 
     best = {"design": found.values, "objective": found.best.objective, "violation": found.best.violation}
     best |= {"feasible": found.best.feasible, "runs": found.runs, "message": found.message}
     with atomic_path(folder / "best.json") as temporary:
-        temporary.write_text(json.dumps(_finite(best), indent=2), encoding="utf-8")
+        temporary.write_text(json_text(best), encoding="utf-8")
     tables = {"candidates": found.candidates, "history": found.history, "attractors": seen_table(list(found.best.seen))}
     figures: list[tuple[str, Callable[[], Figure]]] = []
     if plots:
@@ -240,12 +239,3 @@ def write_design(found: Design, folder: Path, settings: AttractorSettings, *, pl
         tables["front"] = found.front
     title = f"{found.problem.case.name}: design"
     return write_folder(folder, tables, figures, design_blocks(found, plots), title)
-
-
-def _finite(value: object) -> object:
-    """``value`` with non-finite floats as None (JSON has no infinity)."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
