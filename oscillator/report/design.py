@@ -46,17 +46,14 @@ def band_responses(found: Design, settings: AttractorSettings, count: int = RESP
 
 
 def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
-    """The objective and each constrained measure against the band's parameter, every attractor,
+    """The objective(s) and each constrained measure against the band's parameter, every attractor,
     before (the global search's best, grey) and after (the design found); the band shaded, each
     constraint's bound dashed."""
     import matplotlib.pyplot as plt
 
     problem = found.problem
     name, low, high = problem.over
-    measures = [
-        problem.objective,
-        *dict.fromkeys(c.measure for c in problem.constraints if c.measure != problem.objective),
-    ]
+    measures = problem.measures  # the objectives, then the constrained measures, each once
     fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.8 * len(measures) + 0.6), sharex=True, squeeze=False)
     for ax, measure in zip(axes[:, 0], measures, strict=True):
         ax.axvspan(low, high, color="0.92", zorder=0, label="operating band")
