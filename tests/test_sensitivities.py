@@ -44,11 +44,12 @@ def close(exact, differenced, size, step, rel=1e-7):
 
 def check(orbit, params, steps=None):
     """Every derivative of ``sensitivities(orbit, params)`` against the differences: the map at the
-    orbit's state, the orbit's state, and every response measure of the orbits either side
-    (``steps``: a difference step for some of the parameters)."""
+    orbit's state, the orbit's state, every response measure and every simple multiplier of the
+    orbits either side (``steps``: a difference step for some of the parameters)."""
     found = osc.sensitivities(orbit, params)
     steps = steps or {}
     p = orbit.case.parameters
+    base = found.multipliers["value"].to_numpy()
     for name in params:
         column = f"d/d{name}"
 
@@ -59,7 +60,7 @@ def check(orbit, params, steps=None):
         @functools.cache
         def moved(value, name=name):
             found = find_orbit(orbit.case, guess=orbit.state, period=orbit.period, tol=NEWTON, **{name: value})
-            return found.state, pd.Series(found.response().columns())
+            return found.state, pd.Series(found.response().columns()), found.multipliers
 
         value = getattr(p, name)
         step = steps.get(name, STEP * max(abs(value), 1.0))
@@ -69,6 +70,20 @@ def check(orbit, params, steps=None):
         measured = richardson(lambda v: moved(v)[1][found.measures.index], value, step)
         ok = close(found.measures[column], measured, found.measures["value"], step)
         assert ok.all(), (name, found.measures.index[~ok].tolist(), measured[~ok], found.measures[column][~ok])
+
+        def matched(v, moved=moved):  # each multiplier of the moved orbit nearest the orbit's own
+            values = moved(v)[2]
+            return np.array([values[np.argmin(np.abs(values - mu))] for mu in base])
+
+        exact, differenced = found.multipliers[column].to_numpy(), richardson(matched, value, step)
+        simple = np.isfinite(exact)
+        assert simple.sum() >= 2, name
+        gap = np.abs(exact - differenced)
+        assert (gap[simple] <= 1e-7 * np.maximum(np.abs(exact), 1e-3 * np.abs(base))[simple] + 1e-12 / step).all(), (
+            name,
+            exact,
+            differenced,
+        )
     return found
 
 
@@ -171,6 +186,48 @@ def test_the_largest_of_tied_values_has_a_derivative_only_where_they_move_alike(
     assert alike[0] == 2.0 and np.array_equal(alike[1], [1.0, 3.0])
     apart = _largest([(2.0, np.array([1.0, 3.0])), (2.0 - 1e-12, np.array([1.0, -3.0]))], 2)
     assert apart[1][0] == 1.0 and np.isnan(apart[1][1])
+
+
+def test_the_jacobians_derivative_is_exact_in_the_state_and_in_every_parameter():
+    """The compiled dJ/dy . u + dJ/dc_p of the second-order pass against differences of the
+    compiled Jacobian, with the cubic springs and dampers on, in modes with each contact and a
+    mass at rest: in the state exactly (J is quadratic there), in the parameters to 1e-8."""
+    from oscillator.model.fields import coefficients
+    from oscillator.model.kernels import jacobian
+    from oscillator.orbits.tangent import jacobian_gradient
+
+    c = coefficients(resolve_case("instance-1", K2=0.7, C2=0.3, K5=0.4, C5=0.2).parameters).copy()
+    rng = np.random.default_rng(7)
+    y, u = rng.normal(size=4), rng.normal(size=4)
+
+    def jac(y, c, flags):
+        out = np.empty(16)
+        jacobian(*y, c, *flags, out)
+        return out
+
+    found = np.empty(16)
+    for flags in [(1, 1, True, True), (1, -1, False, True), (0, 1, True, False), (-1, 0, True, True)]:
+        jacobian_gradient(y, c, u, -1, *flags, found)
+        assert np.allclose(found, (jac(y + u, c, flags) - jac(y - u, c, flags)) / 2, rtol=0, atol=1e-14)
+        assert np.any(found != 0) or flags[0] == 0
+        for position in range(len(c)):
+            jacobian_gradient(y, c, np.zeros(4), position, *flags, found)
+            moved = c.copy()
+            moved[position] += 1e-6
+            ahead = jac(y, moved, flags)
+            moved[position] -= 2e-6
+            assert np.allclose(found, (ahead - jac(y, moved, flags)) / 2e-6, rtol=1e-6, atol=1e-8), position
+
+
+def test_a_repeated_multiplier_has_no_derivative():
+    """``w^H dM v / (w^H v)`` only for a simple multiplier: a double one gives nan, the others theirs."""
+    from oscillator.orbits.monodromy_derivative import multiplier_derivatives
+
+    monodromy = np.diag([0.5, 0.5, 0.2, 0.1])
+    derivative = np.array([np.diag([1.0, 2.0, 3.0, 4.0])])
+    values, moved = multiplier_derivatives(monodromy, derivative)
+    assert np.allclose(values, [0.5, 0.5, 0.2, 0.1])
+    assert np.isnan(moved[:2]).all() and np.allclose(moved[2:, 0], [3.0, 4.0])
 
 
 def test_bad_parameters_are_refused_with_the_field():

@@ -8,6 +8,7 @@ marked ``"incomplete"``; 130 on Ctrl-C, the branch so far kept marked ``"interru
 
 from __future__ import annotations
 
+import cmath
 import sys
 import time
 from collections.abc import Callable
@@ -132,7 +133,7 @@ def orbit(
     for column in ("multiplier", "modulus"):
         table.add_column(column, justify="right")
     for mu in found.multipliers:
-        table.add_row(f"{mu.real:+.6e} {mu.imag:+.6e}i", f"{abs(mu):.6e}")
+        table.add_row(_complex_text(mu), f"{abs(mu):.6e}")
     out.print(table)
     out.print(_events_table(found.events))
     if names:
@@ -172,12 +173,30 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
     for row, values in derivatives.measures.iterrows():
         table.add_row(str(row), *(f"{value:+.6g}" for value in values))
     out.print(table)
+    table = Table(title="Sensitivities of the Floquet multipliers", title_justify="left", box=box.SIMPLE_HEAD)
+    for column in ("multiplier", *columns):
+        table.add_column(column, justify="right", no_wrap=True)
+    for _, row in derivatives.multipliers.iterrows():
+        table.add_row(*(_compact(row[column]) for column in ("value", *columns)))
+    out.print(table)
     nearest = (
         f"{derivatives.margins.what[0]}, relative distance {derivatives.margin:.3g}"
         if len(derivatives.margins)
         else "none"
     )
     out.print(Text(f"nearest point without a derivative: {nearest}"))
+
+
+def _complex_text(value: complex) -> str:
+    """A multiplier or its derivative: ``+1.234560e-01 +0.000000e+00i``, or ``nan`` (not simple)."""
+    return "nan" if cmath.isnan(value) else f"{value.real:+.6e} {value.imag:+.6e}i"
+
+
+def _compact(value: complex) -> str:
+    """``+0.0119323`` for a real value, ``-0.59391+0.72083i`` for a complex one, ``nan`` (not simple)."""
+    if cmath.isnan(value):
+        return "nan"
+    return f"{value.real:+.6g}" if value.imag == 0 else f"{value.real:+.6g}{value.imag:+.6g}i"
 
 
 def _progress_bar(name: str) -> tuple[Progress, Callable[[float], None]]:

@@ -18,7 +18,8 @@ A periodic orbit ``y* = P(y*, c)`` moves by ``dy*/dc = (I - M)^-1 dP/dc`` (``M =
 monodromy), with the displacement of a mass at rest all period kept where it stuck (its row of
 ``I - M`` is zero: a continuum of orbits).  A second pass from ``sigma = dy*/dc`` gives the
 derivative of everything along the orbit: its section points, its switch times and its response
-measures (:mod:`oscillator.orbits.response_derivatives`).
+measures (:mod:`oscillator.orbits.response_derivatives`), and a second-order pass the derivatives of the
+multipliers (:mod:`oscillator.orbits.monodromy_derivative`).
 
 Where the orbit grazes a boundary (``n . f- + h_t = 0``), meets rest with its force on the static
 threshold, or passes a boundary without crossing it, the map is not differentiable; the distances
@@ -28,6 +29,7 @@ below :data:`MARGIN`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -41,7 +43,7 @@ from oscillator.hybrid.record import Segment
 from oscillator.model.fields import coefficients, state_derivative
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
-from oscillator.model.saltation import boundary_of, elementary_switches, rest_projection
+from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
 from oscillator.orbits.tangent import INTEGRALS, force_gradient, tangent_rates, threshold_gradient
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -49,11 +51,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "MARGIN",
+    "Crossing",
     "Pass",
     "Piece",
     "Sensitivities",
     "Switch",
     "check_params",
+    "crossings",
     "selector_of",
     "sensitivities",
     "tangent_pass",
@@ -168,7 +172,30 @@ def _boundary_gradient(name: str, t: float, y: np.ndarray, c: np.ndarray, mode: 
     return gradient
 
 
-def _through(
+@dataclass(frozen=True)
+class Crossing:
+    """One boundary crossed at a switch (:func:`~oscillator.model.saltation.elementary_switches`):
+    the modes either side, the boundary, the fields either side, the speed ``n . f- + h_t``,
+    ``tau`` (k) and ``sigma`` (4 x k) just before it."""
+
+    before: Mode
+    after: Mode
+    name: str
+    boundary: Boundary
+    f_minus: np.ndarray
+    f_plus: np.ndarray
+    speed: float
+    tau: np.ndarray
+    sigma: np.ndarray
+
+    @property
+    def sigma_after(self) -> np.ndarray:
+        """``sigma`` just after the crossing, ``sigma + (f- - f+) tau``."""
+        moved: np.ndarray = self.sigma + np.outer(self.f_minus - self.f_plus, self.tau)
+        return moved
+
+
+def crossings(
     t: float,
     y_before: np.ndarray,
     y_after: np.ndarray,
@@ -177,26 +204,26 @@ def _through(
     before: Mode,
     after: Mode,
     selector: np.ndarray,
-) -> Switch:
-    """``sigma`` carried through the switch ``before -> after`` at ``t`` (module docstring)."""
+) -> list[Crossing]:
+    """The boundaries the switch ``before -> after`` at ``t`` crosses, each with ``tau`` and the
+    ``sigma`` it meets (module docstring), one after the other.
+
+    Raises the refusal (:class:`~oscillator.errors.SimulationFailed`) at a grazing."""
     c = coefficients(p)
-    taus, speeds, normals = [], [], []
+    found = []
     carried = sigma.copy()
     for mode, new, name in elementary_switches(before, after):
         boundary = boundary_of(name, t, y_before, p, mode, new)
         f_minus = np.array(state_derivative(t, y_before, p, mode))
         f_plus = np.array(state_derivative(t, y_after, p, new))
         speed = float(boundary.normal @ f_minus + boundary.rate)
-        speeds.append(speed)
-        normals.append(boundary.normal)
         if speed == 0.0:
             raise _not_differentiable(f"the flow is tangent to the {boundary.name} at t = {t:.10g} s (a grazing)", 0.0)
         gradient = _boundary_gradient(name, t, y_before, c, mode, new) @ selector
         tau = -(boundary.normal @ carried + gradient) / speed
-        carried = carried + np.outer(f_minus - f_plus, tau)
-        taus.append(tau)
-    carried = rest_projection(after) @ carried
-    return Switch(t, before, after, taus[0], y_before.copy(), sigma.copy(), carried, normals[0], speeds[0])
+        found.append(Crossing(mode, new, name, boundary, f_minus, f_plus, speed, tau, carried))
+        carried = found[-1].sigma_after
+    return found
 
 
 def _piece(
@@ -275,8 +302,20 @@ def tangent_pass(
         found |= inside
         if index + 1 < len(segments):
             following = segments[index + 1]
-            switch = _through(
-                following.t0, piece.y1, following.y0, piece.sigma1, p, segment.mode, following.mode, selector
+            t = following.t0
+            crossed = crossings(t, piece.y1, following.y0, piece.sigma1, p, segment.mode, following.mode, selector)
+            first, after = crossed[0], following.mode
+            carried = rest_projection(after) @ crossed[-1].sigma_after
+            switch = Switch(
+                t,
+                segment.mode,
+                after,
+                first.tau,
+                piece.y1.copy(),
+                piece.sigma1.copy(),
+                carried,
+                first.boundary.normal,
+                first.speed,
             )
             switches.append(switch)
             sigma, tau = switch.sigma_after, switch.tau
@@ -338,6 +377,11 @@ class Sensitivities:
     margins : DataFrame
         The distance from each point where the map is not differentiable (``what``, ``t``,
         ``distance``, relative to the terms it compares), nearest first.
+    multipliers : DataFrame
+        The Floquet multipliers (largest modulus first, as :attr:`Orbit.multipliers`): ``value``
+        (complex), ``modulus``, ``d/d<param>`` (complex) and ``d|mu|/d<param>``; ``nan`` for a
+        multiplier that is not simple.  Computed when first asked (a second-order pass,
+        :mod:`oscillator.orbits.monodromy_derivative`).
     """
 
     orbit: Orbit
@@ -348,6 +392,25 @@ class Sensitivities:
     switches: pd.DataFrame
     measures: pd.DataFrame
     margins: pd.DataFrame
+    #: What :attr:`multipliers` needs: the run's segments, ``dy*/dc`` and ``dt1/dc``.
+    _along: tuple[Sequence[Segment], np.ndarray, np.ndarray] = field(repr=False, compare=False)
+
+    @functools.cached_property
+    def multipliers(self) -> pd.DataFrame:
+        """The multipliers and their derivatives (class docstring)."""
+        from oscillator.orbits.monodromy_derivative import monodromy_derivative, multiplier_derivatives
+
+        segments, dy, dt_end = self._along
+        monodromy, derivative = monodromy_derivative(segments, self.orbit.case.parameters, self.params, dy, dt_end)
+        values, moved = multiplier_derivatives(monodromy, derivative)
+        table = pd.DataFrame({"value": values, "modulus": np.abs(values)})
+        for j, name in enumerate(self.params):
+            table[f"d/d{name}"] = moved[:, j]
+        for j, name in enumerate(self.params):
+            # d|mu| = Re(conj(mu) dmu) / |mu|
+            with np.errstate(invalid="ignore", divide="ignore"):
+                table[f"d|mu|/d{name}"] = (values.conj() * moved[:, j]).real / np.abs(values)
+        return table
 
     @property
     def margin(self) -> float:
@@ -411,6 +474,7 @@ def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
         switches=_switch_table(along, names),
         measures=measure_derivatives(along, p, names, orbit.period, span, dt_end),
         margins=margins,
+        _along=(image.segments, dy, dt_end),
     )
 
 

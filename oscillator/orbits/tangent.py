@@ -53,7 +53,14 @@ from oscillator.model.fields import (
 from oscillator.model.kernels import jacobian, rates
 from oscillator.model.types import Vector
 
-__all__ = ["INTEGRALS", "force_gradient", "tangent_rates", "threshold_gradient"]
+__all__ = [
+    "INTEGRALS",
+    "force_gradient",
+    "jacobian_gradient",
+    "monodromy_rates",
+    "tangent_rates",
+    "threshold_gradient",
+]
 
 #: The response integrals carried with the state, in :mod:`oscillator.orbits.response`'s order.
 INTEGRALS = 9
@@ -197,3 +204,89 @@ def tangent_rates(
         # d(a_i^2) = 2 a_i da_i, da_i the velocity row of the tangent just computed
         integral[2 * k + j] = 2.0 * a1 * tangent[1 * k + j]
         integral[3 * k + j] = 2.0 * a2 * tangent[3 * k + j]
+
+
+@njit(cache=True)
+def jacobian_gradient(
+    y: Vector, c: Vector, direction: Vector, p: int, s1: int, s2: int, left: bool, right: bool, out: Vector
+) -> None:  # pragma: no cover - compiled
+    """Fill ``out`` (16, row by row) with the derivative of ``J = df/dy``
+    (:func:`~oscillator.model.kernels.jacobian`) along the state ``direction`` (4) and in the
+    parameter at position ``p`` of ``c`` (none when ``p < 0``): ``sum_m dJ/dy_m direction_m + dJ/dc_p``.
+
+    ``J`` depends on the state only through the cubic spring and damper (``3 K2 x1^2``, ``3 C2 v1^2``,
+    ...) and on the parameters through the stiffnesses and dampings over the masses; a resting mass's
+    rows stay zero."""
+    for k in range(16):
+        out[k] = 0.0
+    for mass in (1, 2):
+        sign = s1 if mass == 1 else s2
+        if sign == 0:
+            continue
+        own, other = 2 * mass - 2, 4 - 2 * mass
+        linear_k, cubic_k, linear_c, cubic_c, m = (K1, K2, C1, C2, M1) if mass == 1 else (K4, K5, C4, C5, M2)
+        x, v, weight = y[own], y[own + 1], c[m]
+        stiffness = c[linear_k] + 3.0 * c[cubic_k] * x * x + (c[K3] if left else 0.0)
+        damping = c[linear_c] + 3.0 * c[cubic_c] * v * v + (c[C3] if left else 0.0)
+        d_stiffness = 6.0 * c[cubic_k] * x * direction[own] + (p == linear_k) + 3.0 * x * x * (p == cubic_k)
+        d_damping = 6.0 * c[cubic_c] * v * direction[own + 1] + (p == linear_c) + 3.0 * v * v * (p == cubic_c)
+        if left:
+            d_stiffness += p == K3
+            d_damping += p == C3
+        if right and mass == 1:
+            stiffness += c[K6]
+            d_stiffness += p == K6
+        d_weight = 1.0 if p == m else 0.0
+        row = 4 * (2 * mass - 1)
+        out[row + own] = -d_stiffness / weight + stiffness * d_weight / (weight * weight)
+        out[row + own + 1] = -d_damping / weight + damping * d_weight / (weight * weight)
+        if left:
+            out[row + other] = (p == K3) / weight - c[K3] * d_weight / (weight * weight)
+            out[row + other + 1] = (p == C3) / weight - c[C3] * d_weight / (weight * weight)
+
+
+@njit(cache=True)
+def monodromy_rates(
+    t: float, state: Vector, c: Vector, columns: np.ndarray, s1: int, s2: int, left: bool, right: bool, out: Vector
+) -> None:  # pragma: no cover - compiled
+    """The right-hand side of the second-order tangent system for the parameters ``columns`` (``k``):
+    the state, ``sigma_j' = J sigma_j + df/dc_j``, the flow's derivative ``Phi' = J Phi`` and its
+    derivative in each parameter ``Psi_j' = J Psi_j + (dJ/dy . sigma_j + dJ/dc_j) Phi``
+    (:mod:`oscillator.orbits.monodromy_derivative`).  Layout of ``state`` and ``out``: ``y`` (4),
+    ``sigma`` (4 x k, row by row), ``Phi`` (4 x 4), ``Psi`` (k x 4 x 4)."""
+    k = len(columns)
+    y = state[:4]
+    r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
+    out[0], out[1], out[2], out[3] = r[0], r[1], r[2], r[3]
+    jac = np.empty(16)
+    jacobian(y[0], y[1], y[2], y[3], c, s1, s2, left, right, jac)
+    fc = np.empty((4, _SIZE))
+    field_gradient(t, y, c, s1, s2, left, right, fc)
+    sigma = state[4 : 4 + 4 * k]
+    phi = state[4 + 4 * k : 20 + 4 * k]
+    psi = state[20 + 4 * k :]
+    for row in range(4):
+        for col in range(4):
+            total = 0.0
+            for m in range(4):
+                total += jac[4 * row + m] * phi[4 * m + col]
+            out[4 + 4 * k + 4 * row + col] = total
+    direction = np.empty(4)
+    bent = np.empty(16)
+    for j in range(k):
+        p = columns[j]
+        for row in range(4):
+            direction[row] = sigma[row * k + j]
+        for row in range(4):
+            total = fc[row, p]
+            for m in range(4):
+                total += jac[4 * row + m] * direction[m]
+            out[4 + row * k + j] = total
+        jacobian_gradient(y, c, direction, p, s1, s2, left, right, bent)
+        base = 16 * j
+        for row in range(4):
+            for col in range(4):
+                total = 0.0
+                for m in range(4):
+                    total += jac[4 * row + m] * psi[base + 4 * m + col] + bent[4 * row + m] * phi[4 * m + col]
+                out[20 + 4 * k + base + 4 * row + col] = total
