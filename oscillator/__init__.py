@@ -58,6 +58,8 @@ _EXPORTS = {
     "Design": "oscillator.designing.optimise",
     "design": "oscillator.designing.optimise",
     "sensitivities": "oscillator.orbits.sensitivity",
+    "explore": "oscillator.exploring",
+    "Explorer": "oscillator.exploring.app",
     "Branch": "oscillator.orbits.branch",
     "continue_orbit": "oscillator.orbits.continuation",
     "Attractor": "oscillator.attractors.grouping",
@@ -95,6 +97,7 @@ __all__ = [
     "Event",
     "EventKind",
     "ExpectedEvent",
+    "Explorer",
     "FrequencyResponse",
     "InitialState",
     "InputError",
@@ -118,6 +121,7 @@ __all__ = [
     "case_names",
     "continue_orbit",
     "design",
+    "explore",
     "find_attractors",
     "find_basins",
     "find_orbit",
@@ -146,6 +150,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.mapping import AttractorSettings
     from oscillator.designing.optimise import Design, design
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
+    from oscillator.exploring import explore
+    from oscillator.exploring.app import Explorer
     from oscillator.hybrid.record import Segment
     from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status

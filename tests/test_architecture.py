@@ -101,6 +101,7 @@ LAYERS = (
     ("attractors",),
     ("designing",),
     ("report",),
+    ("exploring",),
     ("cli",),
     ("__init__", "__main__", "saved", "views"),
 )

@@ -1,0 +1,84 @@
+"""``oscillator explore``: the explorer in the browser, served on this machine (docs/explore.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from oscillator.cli.commands import command
+from oscillator.cli.console import fail, load, message, say, warn
+from oscillator.cli.inputs import case_from
+from oscillator.cli.options import SetOption
+from oscillator.errors import InputError, OscillatorError
+
+
+@command(150, "Explore a case in the browser: move a parameter, see the motion; click a map, see its attractor.")
+def explore(
+    target: Annotated[
+        str,
+        typer.Argument(
+            metavar="CASE|FOLDER",
+            help="A named case, a case file (.toml), or a folder of oscillator atlas or basins.",
+        ),
+    ],
+    set_: SetOption = None,
+    periods: Annotated[
+        int, typer.Option("--periods", metavar="N", help="Forcing periods simulated on every change (1 to 10000).")
+    ] = 50,
+    port: Annotated[int, typer.Option("--port", metavar="PORT", help="The port to serve on (0: a free one).")] = 5006,
+    address: Annotated[
+        str,
+        typer.Option(
+            "--address",
+            metavar="ADDRESS",
+            help="The address to serve on: this machine only (127.0.0.1) unless another is given, with a warning.",
+        ),
+    ] = "127.0.0.1",
+) -> None:
+    """Serve the explorer of CASE, or of an atlas or basins FOLDER, on this machine and print its
+    address; open it in a browser.  Every parameter and the start have a slider; on each change the
+    motion is simulated again and the time series, phase portraits, stroboscopic points and event
+    table redraw.  On a folder's map, a click on a cell shows the attractors there.  Ctrl-C stops.
+
+    \b
+    Examples:
+      oscillator explore instance-1
+      oscillator explore instance-3 --set Omega=2.2 --periods 20
+      oscillator explore runs/atlas --port 5007
+    """
+    try:
+        load("oscillator.exploring.app", notice=True)
+        from oscillator.exploring.app import Explorer
+        from oscillator.exploring.maps import picture_of
+        from oscillator.exploring.scene import check_periods
+        from oscillator.exploring.serving import check_address, is_loopback, serve
+
+        check_periods(periods)
+        check_address(address, port)
+        picture = picture_of(target) if Path(target).is_dir() else None
+        if picture is not None and set_:
+            raise InputError("--set applies to a case, not to a folder (its map has its own values)", field="--set")
+        case = picture.case if picture is not None else case_from(target, None, set_)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted", code=130) from None
+    if not is_loopback(address):
+        warn(
+            f"serving on {address}: anyone who can reach this machine on port {port} can open the explorer and run "
+            "simulations on it; serve on 127.0.0.1 (the default) unless that is what you want"
+        )
+
+    def page() -> object:  # one explorer per browser tab, on the folder read once above
+        return Explorer(case, periods, picture=picture).layout
+
+    def ready(url: str) -> None:
+        say(f"explorer of {target} at {url} (Ctrl-C stops it)")
+
+    try:
+        serve(page, address=address, port=port, title=f"oscillator explore {target}", ready=ready)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    say("stopped")

@@ -1,0 +1,30 @@
+"""The explorer in the browser: move a parameter, see the motion and its switches; click a map, see
+its attractor (docs/explore.md).  :func:`explore` builds it for a notebook; ``oscillator explore``
+serves it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.exploring.app import Explorer
+    from oscillator.io.cases import Case
+
+__all__ = ["explore"]
+
+
+def explore(case_or_folder: Case | str | Path, periods: int = 50, **overrides: float) -> Explorer:
+    """The explorer of a case (a name, a case file or a :class:`~oscillator.Case`, with
+    ``overrides`` of its parameters and start) or of an atlas or basins folder: displayed by a
+    notebook, served by ``oscillator explore``."""
+    from oscillator.exploring.app import Explorer
+    from oscillator.exploring.maps import picture_of
+    from oscillator.exploring.scene import check_periods
+    from oscillator.io.cases import resolve_case
+
+    periods = check_periods(periods)
+    if isinstance(case_or_folder, str | Path) and Path(case_or_folder).is_dir():
+        picture = picture_of(case_or_folder)
+        return Explorer(resolve_case(picture.case, **overrides), periods, picture=picture)
+    return Explorer(resolve_case(case_or_folder, **overrides), periods)

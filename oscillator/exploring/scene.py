@@ -1,0 +1,156 @@
+"""What the explorer shows of one motion: computed here, drawn by :mod:`oscillator.exploring.app`.
+
+A :class:`Scene` is the motion of a case over a number of forcing periods from its start: the
+trajectory on a grid of the period, every switching event (time, mass, kind, theorem, equation),
+the stroboscopic (Poincaré) points ``y(t0 + kT)``, and the intervals in which each mass rests
+and each stop is in contact, exact from the run's smooth pieces (a rest shorter than the grid's
+step is kept).  Nothing here draws or serves: the page is a view of these values, and the tests
+compare them with :func:`~oscillator.simulate` directly.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.analysis.intervals import spans
+from oscillator.errors import InputError
+from oscillator.hybrid.recording import SaveAt
+from oscillator.hybrid.simulate import simulate
+from oscillator.io.cases import Case, resolve_case, section_times
+from oscillator.model.parameters import Parameters
+
+__all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "Scene", "scene_of"]
+
+#: The forcing periods a scene spans unless asked otherwise.
+PERIODS = 50
+#: Trajectory points per forcing period (the events are exact whatever the grid).
+GRID = 64
+#: The event table's columns, in the page's order.
+EVENT_COLUMNS = ("t", "mass", "kind", "from_domain", "to_domain", "theorem", "equation", "boundary")
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """One motion as the explorer shows it.
+
+    Attributes
+    ----------
+    case : Case
+        The case simulated (its ``t_end`` set by the periods).
+    periods : int
+        Forcing periods from the start.
+    trajectory : DataFrame
+        ``t, x1, v1, x2, v2`` on :data:`GRID` points a period, with the state on both sides of
+        every switch.
+    events : DataFrame
+        Every switching event, :data:`EVENT_COLUMNS` and the state.
+    strobe : DataFrame
+        ``k, t, x1, v1, x2, v2`` at ``t0 + kT``, ``k = 0 .. periods``.
+    rests : dict
+        Mass (1, 2) -> the ``(from, to)`` intervals in which it rests.
+    contacts : dict
+        ``"left"`` (between the masses), ``"right"`` (the right stop) -> its contact intervals.
+    seconds : float
+        The simulation's wall time.
+    status : str
+        How the run ended (``"complete"``; a failure's message otherwise).
+    """
+
+    case: Case
+    periods: int
+    trajectory: pd.DataFrame
+    events: pd.DataFrame
+    strobe: pd.DataFrame
+    rests: dict[int, list[tuple[float, float]]]
+    contacts: dict[str, list[tuple[float, float]]]
+    seconds: float
+    status: str
+
+    @property
+    def t0(self) -> float:
+        return float(self.case.initial.t0)
+
+    @property
+    def t_end(self) -> float:
+        return float(self.case.t_end)
+
+
+def check_periods(periods: object) -> int:
+    """``periods`` as a whole number from 1 to 10000, or refused naming the field."""
+    if isinstance(periods, bool) or not isinstance(periods, int | np.integer) or not 1 <= periods <= 10_000:
+        raise InputError(f"periods must be a whole number from 1 to 10000, got {periods!r}", field="periods")
+    return int(periods)
+
+
+def scene_of(case: Case | str, periods: int = PERIODS, **overrides: float) -> Scene:
+    """The motion of ``case`` (with ``overrides`` of its parameters and start) over ``periods``
+    forcing periods from its start: one :func:`~oscillator.simulate` run with the CVODE engine.
+
+    Raises
+    ------
+    InputError
+        An unknown name or an impossible value (the field named).
+    """
+    periods = check_periods(periods)
+    base = resolve_case(case, **overrides)
+    marks = section_times(base, 0, periods)
+    run_case = resolve_case(base, t_end=float(marks[-1]))
+    grid = np.linspace(marks[0], marks[-1], periods * GRID + 1)
+    started = time.perf_counter()
+    result = simulate(run_case, save=SaveAt(ts=grid, segments=True))
+    seconds = time.perf_counter() - started
+    trajectory = result.trajectory[["t", "x1", "v1", "x2", "v2"]]
+    return Scene(
+        case=run_case,
+        periods=periods,
+        trajectory=_with_switches(trajectory, result.events),
+        events=result.events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
+        strobe=_strobe(trajectory, marks),
+        rests={mass: _intervals(result.segments, lambda mode, m=mass: mode.sign(m) == 0) for mass in (1, 2)},
+        contacts={
+            side: _intervals(result.segments, lambda mode, s=side: getattr(mode, s)) for side in ("left", "right")
+        },
+        seconds=seconds,
+        status=result.status.value if not result.message else result.message,
+    )
+
+
+def _with_switches(trajectory: pd.DataFrame, events: pd.DataFrame) -> pd.DataFrame:
+    """The grid's rows and each event's state, in time order: the corners of a contact or a
+    stop show where they are, not cut by the grid."""
+    switches = events[["t", "x1", "v1", "x2", "v2"]]
+    merged = pd.concat([trajectory, switches], ignore_index=True)
+    return merged.sort_values("t", kind="stable").reset_index(drop=True)
+
+
+def _strobe(trajectory: pd.DataFrame, marks: np.ndarray) -> pd.DataFrame:
+    """The grid's rows at the section times (the grid holds them, one every :data:`GRID` rows)."""
+    t = trajectory.t.to_numpy(float)
+    rows = trajectory.iloc[np.clip(np.searchsorted(t, marks - 1e-9 * (1.0 + np.abs(marks))), 0, len(t) - 1)]
+    strobe = rows.reset_index(drop=True).assign(t=marks)
+    strobe.insert(0, "k", np.arange(len(marks)))
+    return strobe
+
+
+def _intervals(segments: tuple, holds) -> list[tuple[float, float]]:  # type: ignore[type-arg,no-untyped-def]
+    """The maximal intervals over which ``holds(mode)`` is true, from the run's smooth pieces."""
+    if not segments:
+        return []
+    times = [segment.t0 for segment in segments]
+    states = [bool(holds(segment.mode)) for segment in segments]
+    return [(a, b) for state, a, b in spans(times, states, segments[-1].t1) if state and b > a]
+
+
+def with_changes(case: Case, values: dict[str, float]) -> Case:
+    """``case`` with the changed ``values`` (parameters and start), checked."""
+    changed = {name: value for name, value in values.items() if _current(case, name) != value}
+    return resolve_case(case, **changed) if changed else case
+
+
+def _current(case: Case, name: str) -> float:
+    holder = case.parameters if name in Parameters.names() else case.initial
+    return float(getattr(holder, name))

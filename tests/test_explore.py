@@ -1,0 +1,168 @@
+"""The explorer's computations, without a browser (issue 40): what it shows is what `simulate` and
+`find_attractors` give; its controls; the server's refusals, its warning and Ctrl-C."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import oscillator as osc
+from oscillator.errors import InputError
+from oscillator.exploring.controls import START, controls_of
+from oscillator.exploring.scene import GRID, scene_of
+from oscillator.exploring.serving import check_address, is_loopback
+from oscillator.hybrid.recording import SaveAt
+from oscillator.io.cases import resolve_case, section_times
+
+COMMAND = str(Path(sys.executable).with_name("oscillator"))
+
+
+def test_a_scene_is_the_motion_simulate_gives_with_its_strobe_points_and_intervals():
+    """Instance 1 (both masses rest at the start, then slide) over 10 periods with K3 moved: the
+    events are simulate's, the strobe points its states at t0 + kT, the rests its rests."""
+    scene = scene_of("instance-1", 10, K3=2.5)
+    case = resolve_case("instance-1", K3=2.5)
+    marks = section_times(case, 0, 10)
+    direct = osc.simulate(resolve_case(case, t_end=float(marks[-1])), save=SaveAt(ts=marks))
+    # the same run but for the grid CVODE stops at: the same events, to its tolerance (rtol 1e-10)
+    assert np.allclose(scene.events.t, direct.events.t, rtol=0, atol=1e-8)
+    assert scene.events[["mass", "kind", "theorem", "equation"]].equals(
+        direct.events[["mass", "kind", "theorem", "equation"]]
+    )
+    assert np.allclose(scene.strobe[["x1", "v1", "x2", "v2"]], direct.trajectory[["x1", "v1", "x2", "v2"]], atol=1e-9)
+    assert len(scene.trajectory) == 10 * GRID + 1 + len(direct.events)
+    # m2 rests from t0 until its first event (it leaves rest through the flow barrier, Thm 5.4)
+    first = direct.events[direct.events.mass == 2].iloc[0]
+    assert scene.rests[2][0] == (pytest.approx(1.0), pytest.approx(first.t)) and first.theorem == "5.4"
+    for mass in (1, 2):  # each rest ends where the mass leaves domain 0
+        leaving = direct.events[(direct.events.mass == mass) & (direct.events.from_domain == 0)].t.tolist()
+        assert [b for _, b in scene.rests[mass] if b < scene.t_end] == pytest.approx(leaving)
+    assert scene.contacts == {"left": [], "right": []} and scene.status == "complete"
+
+
+def test_a_scene_of_an_impacting_motion_has_its_contacts():
+    """The impacting system (d = 1, d1 = 3.5): contact intervals where the mode says so."""
+    scene = scene_of("instance-1", 5, d=1, d1=3.5, Omega=1.5)
+    for side in ("left", "right"):
+        assert scene.contacts[side], side
+        for a, b in scene.contacts[side]:
+            middle = scene.trajectory.iloc[np.argmin(np.abs(scene.trajectory.t - 0.5 * (a + b)))]
+            gap = middle.x1 - middle.x2 + 1 if side == "left" else middle.x1 - 3.5
+            assert (gap < 1e-6) if side == "left" else (gap > -1e-6), (side, a, b, gap)
+
+
+def test_every_parameter_and_start_value_has_a_physical_control():
+    """25 parameters and the start; each slider holds the case's value; masses, Omega and g stay
+    above zero, springs and friction at or above it."""
+    case = resolve_case("instance-3")
+    controls = controls_of(case)
+    assert [c.name for c in controls] == [*osc.Parameters.names(), *START]
+    for control in controls:
+        assert control.start <= control.value <= control.end and control.step > 0, control
+        if control.name in ("m1", "m2", "Omega", "g"):
+            assert control.start > 0
+        elif control.group == "parameters" and control.name not in ("phi1", "phi2", "d", "d1"):
+            assert control.start >= 0
+
+
+def test_bad_input_is_refused_naming_the_field():
+    with pytest.raises(InputError, match="periods must be a whole number"):
+        scene_of("instance-1", 0)
+    with pytest.raises(InputError) as refused:
+        osc.explore("instance-1", mu_s=0.01)
+    assert refused.value.field == "mu_s"
+    with socket.create_server(("127.0.0.1", 0)) as busy:
+        port = busy.getsockname()[1]
+        with pytest.raises(InputError, match=f"port {port} is in use on 127.0.0.1; choose another with --port"):
+            check_address("127.0.0.1", port)
+    with pytest.raises(InputError, match="port must be"):
+        check_address("127.0.0.1", 70000)
+    assert is_loopback("127.0.0.1") and is_loopback("::1") and is_loopback("localhost")
+    assert not is_loopback("0.0.0.0") and not is_loopback("192.168.1.7")
+
+
+def test_an_explorer_redraws_on_a_change_and_keeps_the_last_motion_on_an_impossible_one():
+    """The object a notebook displays: a slider's change runs the case on screen; mu_s below mu_k
+    is said in the status line and the motion stays."""
+    explorer = osc.explore("instance-3", periods=5)
+    first = explorer.scene
+    assert first is not None and explorer.revision == 1 and "5 periods" in explorer.status.object
+    explorer.widgets["Omega"].value = 2.0
+    explorer.widgets["Omega"].param.trigger("value_throttled")
+    assert explorer.revision == 2 and explorer.scene.case.parameters.Omega == 2.0
+    assert np.allclose(explorer.scene.events.t, scene_of("instance-3", 5, Omega=2.0).events.t, rtol=0, atol=1e-12)
+    explorer.widgets["mu_s"].value = 0.0
+    explorer.widgets["mu_s"].param.trigger("value_throttled")
+    assert "mu_s must be &gt;= mu_k" in explorer.status.object and explorer.scene.case.parameters.Omega == 2.0
+    assert "mimebundle" not in explorer.status.object
+    bundle = explorer._repr_mimebundle_()
+    assert any("html" in kind or "holoviews" in kind for kind in bundle[0]), list(bundle[0])
+
+
+def test_the_case_file_saved_is_the_case_on_screen():
+    from oscillator.io.cases import load_case
+
+    explorer = osc.explore("instance-3", periods=2)
+    explorer.widgets["K3"].value = 1.75
+    text = explorer._case_file().getvalue()
+    path = Path(os.environ.get("TMPDIR", "/tmp")) / f"explored-{os.getpid()}.toml"
+    try:
+        path.write_text(text, encoding="utf-8")
+        assert load_case(path).parameters == resolve_case("instance-3", K3=1.75).parameters
+    finally:
+        path.unlink(missing_ok=True)
+    assert explorer.download.filename == "instance-3-explored.toml"
+
+
+def _command(*args: str, **options) -> subprocess.CompletedProcess:
+    return subprocess.run([COMMAND, "explore", *args], capture_output=True, text=True, timeout=120, **options)
+
+
+@pytest.mark.slow
+def test_the_command_refuses_a_port_in_use_and_a_folder_it_cannot_read(tmp_path):
+    with socket.create_server(("127.0.0.1", 0)) as busy:
+        port = busy.getsockname()[1]
+        done = _command("instance-3", "--port", str(port), cwd=tmp_path)
+    assert (
+        done.returncode == 2
+        and done.stderr.strip() == f"error: port {port} is in use on 127.0.0.1; choose another with --port"
+    )
+    damaged = tmp_path / "atlas"
+    damaged.mkdir()
+    (damaged / "atlas.json").write_text("{not json", encoding="utf-8")
+    done = _command(str(damaged), "--port", "0", cwd=tmp_path)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "atlas holds no finished atlas" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and sorted(p.name for p in tmp_path.iterdir()) == ["atlas"]
+
+
+@pytest.mark.slow
+def test_the_command_serves_until_ctrl_c_and_warns_on_another_address(tmp_path):
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    server = subprocess.Popen(
+        [COMMAND, "explore", "instance-3", "--port", str(port), "--address", "0.0.0.0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
+    )
+    try:
+        line = server.stdout.readline()
+        assert line.strip() == f"explorer of instance-3 at http://0.0.0.0:{port}/ (Ctrl-C stops it)", line
+        time.sleep(0.5)
+        server.send_signal(signal.SIGINT)
+        out, err = server.communicate(timeout=30)
+    finally:
+        server.kill()
+    assert server.returncode == 0 and out.strip() == "stopped", (server.returncode, out, err)
+    assert err.startswith("warning: serving on 0.0.0.0: anyone who can reach this machine") and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
