@@ -27,26 +27,6 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def pytest_sessionstart(session):
-    """Compile the kernels once, in the controller, before the workers start.
-
-    In a fresh install numba's cache is empty: each of the two workers, and each command a test
-    starts before a cache file is written, would compile the same kernels again (about 25 s
-    each).  One short run of each path here (the CVODE run, the compiled landing of the
-    attractors, an orbit with its sensitivities and multipliers) writes them all once.
-    """
-    if hasattr(session.config, "workerinput") or os.environ.get("OSCILLATOR_NO_WARMUP"):
-        return
-    import oscillator as osc
-
-    osc.simulate("instance-3")
-    orbit = osc.find_orbit("instance-1", Omega=1.85)
-    assert not orbit.sensitivities("Omega").multipliers.empty
-    osc.find_attractors(
-        "instance-1", Omega=1.85, states=[[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, -1.0, 0.0]], transient=2, record=2
-    )
-
-
 #: A system with every nonlinear and contact term off; stops far away.
 LINEAR = dict(
     m1=1.0, m2=2.0, C1=0.0, C2=0.0, C3=0.0, C4=0.0, C5=0.0,
