@@ -37,7 +37,7 @@ COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 COMMANDS = (
     "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue",
-    "basins", "attractors", "lyapunov", "frc", "atlas", "curve", "design",
+    "basins", "attractors", "lyapunov", "frc", "atlas", "curve", "design", "explore",
 )  # fmt: skip
 
 
@@ -121,6 +121,8 @@ def shrunk(arguments: list[str]) -> list[str]:
         arguments = (
             [*arguments, "--no-plots"] if "--no-plots" not in arguments else arguments
         )  # tests/test_design.py draws
+    elif command == "explore":  # served on a free port (tests run side by side)
+        arguments = _set(arguments, "--port", "0")
     elif command == "curve":  # a coarse curve: the same command, fewer points
         arguments = _set(arguments, "--step", "0.5")
     elif command == "lyapunov":
@@ -148,6 +150,22 @@ def _fixtures(folder: Path) -> None:
     (folder / "chatter.toml").write_text(case_to_toml(chatter_case()), encoding="utf-8")
 
 
+def _serve_once(shown: Shown, arguments: list[str], folder: Path) -> None:
+    """``oscillator explore``, which serves until Ctrl-C, started as a user starts it (on a free
+    port): it prints its address, the page is there, and Ctrl-C stops it with exit code 0."""
+    from urllib.request import urlopen
+
+    from oscillator.exploring.driving import Served
+
+    served = Served(*arguments[1:], cwd=folder)
+    try:
+        with urlopen(served.url, timeout=60) as page:
+            assert page.status == 200 and b"bokeh" in page.read().lower(), shown.source
+    finally:
+        code, out, err = served.stop()
+    assert code == 0 and out.strip() == "stopped" and "Traceback" not in err, (shown.source, code, out, err)
+
+
 def _matches(expected: str, printed: str) -> bool:
     pattern = ".*".join(re.escape(part) for part in expected.split("..."))
     return re.fullmatch(pattern, printed, re.S) is not None
@@ -161,6 +179,9 @@ def _run_in_order(commands: list[Shown], folder: Path, monkeypatch) -> None:
     runner = CliRunner()
     for shown in commands:
         arguments = shrunk(shlex.split(shown.line, comments=True)[1:])
+        if arguments[0] == "explore":
+            _serve_once(shown, arguments, folder)
+            continue
         done = runner.invoke(app, arguments)
         assert done.exception is None or isinstance(done.exception, SystemExit), (shown.source, done.exception)
         if shown.output:
@@ -185,7 +206,7 @@ def test_every_command_of_a_page_runs_as_shown(tmp_path, monkeypatch, page):
 #: folder that ``run``'s example writes); the groups run side by side.
 HELP_GROUPS = {"runs": ("list", "show", "check", "run", "report"), "sweeps": ("sweep", "locate"),
                "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov"),
-               "atlas": ("atlas", "curve"), "frc": ("frc",), "design": ("design",)}  # fmt: skip
+               "atlas": ("atlas", "curve", "explore"), "frc": ("frc",), "design": ("design",)}  # fmt: skip
 
 
 def test_every_command_has_a_help_example_in_a_group():

@@ -139,7 +139,8 @@ def test_the_command_refuses_a_port_in_use_and_a_folder_it_cannot_read(tmp_path)
     damaged.mkdir()
     (damaged / "atlas.json").write_text("{not json", encoding="utf-8")
     done = _command(str(damaged), "--port", "0", cwd=tmp_path)
-    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "atlas holds no finished atlas" in done.stderr, done.stderr
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "atlas holds no finished atlas" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr and sorted(p.name for p in tmp_path.iterdir()) == ["atlas"]
 
 
@@ -166,3 +167,30 @@ def test_the_command_serves_until_ctrl_c_and_warns_on_another_address(tmp_path):
     assert server.returncode == 0 and out.strip() == "stopped", (server.returncode, out, err)
     assert err.startswith("warning: serving on 0.0.0.0: anyone who can reach this machine") and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_a_notebook_displays_the_explorer(tmp_path):
+    """In a Jupyter kernel, the explorer as a cell's value displays as Panel's interactive output
+    (its model and the comms that carry a slider's change to the kernel)."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [nbformat.v4.new_code_cell('import oscillator as osc\nosc.explore("instance-3", periods=5)')]
+    nbclient.NotebookClient(notebook, timeout=300, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()  # fmt: skip
+    outputs = notebook.cells[0].outputs
+    assert not [out for out in outputs if out.output_type == "error"], outputs
+    kinds = {kind for out in outputs for kind in out.get("data", {})}
+    assert "application/vnd.holoviews_exec.v0+json" in kinds and "text/html" in kinds, kinds
+
+
+def test_the_python_example_of_the_page_runs():
+    """docs/explore.md's Python block: the explorer of instance-3 at Omega = 2.2, its events."""
+    page = (Path(__file__).parents[1] / "docs" / "explore.md").read_text(encoding="utf-8")
+    code = page.split("```python\n", 1)[1].split("```", 1)[0]
+    space: dict = {}
+    exec(compile(code, "docs/explore.md", "exec"), space)
+    explorer = space["explorer"]
+    assert explorer.scene.periods == 20 and explorer.scene.case.parameters.Omega == 2.2
+    assert len(explorer.scene.events) > 0

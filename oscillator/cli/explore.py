@@ -20,7 +20,7 @@ def explore(
         str,
         typer.Argument(
             metavar="CASE|FOLDER",
-            help="A named case, a case file (.toml), or a folder of oscillator atlas or basins.",
+            help="A named case, a case file (.toml), or a folder the atlas or basins command wrote.",
         ),
     ],
     set_: SetOption = None,
@@ -44,7 +44,6 @@ def explore(
 
     \b
     Examples:
-      oscillator explore instance-1
       oscillator explore instance-3 --set Omega=2.2 --periods 20
       oscillator explore runs/atlas --port 5007
     """

@@ -178,7 +178,6 @@ def curve(
 
     \b
     Examples:
-      oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.1577416 --x Omega 1.59 1.62 --y Q2 70.9 71.3
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --out c1
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --also c1
     """

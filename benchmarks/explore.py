@@ -1,0 +1,84 @@
+"""The explorer's latency in a real browser (Debian's Chromium through Playwright): from a slider's
+change to the page redrawn with the new motion (50 forcing periods of Instance 1, the trajectory on
+a grid of 64 points a period), and from a click on an atlas cell to its attractors shown.
+
+Each change is a key press on the ``K3`` slider's handle (alternately right and left, so the
+value moves back and forth by one step); the time runs, in the page, from the key press until the
+frame is painted in which the status line shows the new revision (the figures and the table come in
+the same message).  A click is timed from outside, from the click until its attractors are shown.
+Served by ``oscillator explore`` in its own process, as a user runs it.
+
+Usage: python benchmarks/explore.py [--changes N] [--clicks N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from oscillator.exploring.driving import Served, browser_page, wait_revision
+
+
+def slider(changes: int) -> list[float]:
+    with Served("instance-1") as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        handle = page.locator(".control-K3 .noUi-handle")
+        handle.focus()
+        times = []
+        for k in range(changes):
+            page.keyboard.press("ArrowRight" if k % 2 == 0 else "ArrowLeft")
+            times.append(wait_revision(page, k + 2) / 1e3)  # timed in the page, from the key press
+        assert not elsewhere, elsewhere
+    return times
+
+
+def clicks(count: int) -> list[float]:
+    import subprocess
+    import sys
+
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(scratch) / "atlas"
+        command = str(Path(sys.executable).with_name("oscillator"))
+        subprocess.run(
+            [command, "atlas", "instance-1", "--x", "Omega", "1.5", "1.7", "6", "--y", "Q2", "70", "71.5", "4",
+             "--out", str(folder), "--no-plots", "--quiet"],
+            check=True, capture_output=True,
+        )  # fmt: skip
+        with Served(str(folder)) as served, browser_page() as (page, _):
+            page.goto(served.url)
+            wait_revision(page, 1)
+            box = page.locator(".bk-Canvas").first.bounding_box()
+            times = []
+            rng = np.random.default_rng(1)
+            for k in range(count):
+                x, y = rng.uniform(0.15, 0.7), rng.uniform(0.15, 0.85)
+                started = time.perf_counter()
+                page.mouse.click(box["x"] + x * box["width"], box["y"] + y * box["height"])
+                page.locator(f".oscillator-picked-found[data-click='{k + 1}']").wait_for(timeout=60e3)
+                times.append(time.perf_counter() - started)
+                wait_revision(page, k + 2)
+    return times
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--changes", type=int, default=40)
+    parser.add_argument("--clicks", type=int, default=10)
+    arguments = parser.parse_args()
+    for name, times in (
+        ("slider change -> page redrawn", slider(arguments.changes)),
+        ("atlas click -> attractors shown", clicks(arguments.clicks)),
+    ):
+        ms = 1e3 * np.array(times)
+        median, p95 = statistics.median(ms), np.percentile(ms, 95)
+        print(f"{name}: {len(ms)} times, median {median:.0f} ms, 95th percentile {p95:.0f} ms, max {ms.max():.0f} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,154 @@
+"""Driving the explorer in a real browser: for its tests, its latency benchmark and the docs' screenshots.
+
+:class:`Served` runs ``oscillator explore`` as a user does (a separate process on a free port of
+127.0.0.1) and stops it with Ctrl-C; :func:`browser_page` opens a page in the system's Chromium
+through Playwright (``pip install playwright``; no browser is downloaded: Debian's ``chromium``,
+or the one ``$CHROMIUM`` names), and records every request the page makes to another host, which
+it refuses (the page must work offline).  :func:`wait_revision` waits until the page shows the
+motion of a given revision, painted, and says how long after the last key press or click (timed in
+the page itself, so that the driver's own round trips do not count).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Served", "browser_page", "chromium", "wait_revision"]
+
+_LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:", "about:")
+
+
+def chromium() -> str | None:
+    """The Chromium to drive: ``$CHROMIUM``, else ``chromium`` on the path, else None."""
+    given = os.environ.get("CHROMIUM")
+    return given if given else shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+class Served:
+    """``oscillator explore ARGS --port 0`` in its own process, until :meth:`stop` (Ctrl-C)."""
+
+    def __init__(self, *args: str, cwd: Path | None = None) -> None:
+        command = str(Path(sys.executable).with_name("oscillator"))
+        self.process = subprocess.Popen(
+            [command, "explore", *args, "--port", "0"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=cwd,
+        )
+        assert self.process.stdout is not None
+        line = self.process.stdout.readline()
+        if " at http://" not in line:
+            self.process.kill()
+            _, err = self.process.communicate()
+            raise RuntimeError(f"oscillator explore did not start: {line!r} {err!r}")
+        self.url = line.split(" at ", 1)[1].split(" ", 1)[0]
+
+    def stop(self) -> tuple[int, str, str]:
+        """Ctrl-C, and what the command printed after it: ``(exit code, stdout, stderr)``."""
+        self.process.send_signal(signal.SIGINT)
+        try:
+            out, err = self.process.communicate(timeout=60)
+        finally:
+            self.process.kill()
+        return self.process.returncode, out, err
+
+    def __enter__(self) -> Served:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        if self.process.poll() is None:
+            self.stop()
+
+
+@contextmanager
+def browser_page(width: int = 1400, height: int = 1300) -> Iterator[tuple[Any, list[str]]]:
+    """A page of headless Chromium and the list of the other hosts' addresses it asked for
+    (each refused)."""
+    from playwright.sync_api import sync_playwright
+
+    executable = chromium()
+    if executable is None:
+        raise RuntimeError("no Chromium: install Debian's chromium (apt install chromium) or set $CHROMIUM")
+    elsewhere: list[str] = []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=executable, args=["--no-sandbox"])
+        try:
+            page = browser.new_page(viewport={"width": width, "height": height})
+
+            def route(route: Any) -> None:
+                if route.request.url.startswith(_LOCAL):
+                    route.continue_()
+                else:
+                    elsewhere.append(route.request.url)
+                    route.abort()
+
+            page.route("**/*", route)
+            page.add_init_script(_WATCH)
+            yield page, elsewhere
+        finally:
+            browser.close()
+
+
+#: In the page: ``__revision(n)`` resolves once the frame is painted in which the status line first shows
+#: revision ``n`` (searched through the page's shadow roots on every frame), with the time since
+#: the last key press or click (``performance.now()``, ms).
+_WATCH = """
+(() => {
+  window.__input = performance.now();
+  for (const kind of ['keydown', 'mousedown']) {
+    document.addEventListener(kind, () => { window.__input = performance.now(); }, true);
+  }
+  const find = (root, selector) => {
+    const found = root.querySelector(selector);
+    if (found) return found;
+    for (const element of root.querySelectorAll('*')) {
+      if (element.shadowRoot) {
+        const inner = find(element.shadowRoot, selector);
+        if (inner) return inner;
+      }
+    }
+    return null;
+  };
+  window.__find = find;
+  let holder = null;  // the element whose content the status line is: found once, then read
+  const shown = () => {
+    if (holder === null || !holder.isConnected) {
+      const span = find(document, 'span[data-revision]');
+      holder = span ? span.parentNode : null;
+    }
+    return holder ? holder.querySelector('span[data-revision]') : null;
+  };
+  window.__revision = (n) => new Promise(done => {
+    const look = () => {
+      const span = shown();
+      if (span && Number(span.dataset.revision) >= n) {
+        // the frame that shows it: a task posted from its animation callback runs after its paint
+        requestAnimationFrame(() => {
+          const channel = new MessageChannel();
+          channel.port1.onmessage = () => done(performance.now() - window.__input);
+          channel.port2.postMessage(null);
+        });
+      } else {
+        requestAnimationFrame(look);
+      }
+    };
+    look();
+  });
+})();
+"""
+
+
+def wait_revision(page: Any, revision: int, timeout: float = 60.0) -> float:
+    """Wait until the page's status line shows ``revision`` (or a later one) and the browser has
+    painted it; the milliseconds since the last key press or click, measured in the page."""
+    page.set_default_timeout(timeout * 1e3)
+    return float(page.evaluate("n => window.__revision(n)", revision))

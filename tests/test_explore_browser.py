@@ -1,0 +1,131 @@
+"""The explorer in a real browser (issue 40): Debian's Chromium driven by Playwright, the page served
+by ``oscillator explore`` as a user runs it.  The page loads with nothing fetched from elsewhere; a
+slider's key press changes the event table to what ``simulate`` gives for the new value; a click on
+an atlas cell shows the attractor ``find_attractors`` finds there; a case file's ``<script>`` title
+shows as text.
+
+Without Chromium or Playwright these tests are skipped, unless ``OSCILLATOR_REQUIRE_BROWSER`` is set
+(CI sets it: there a missing browser fails the run)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import oscillator as osc
+from oscillator.exploring.driving import Served, browser_page, chromium, wait_revision
+from oscillator.exploring.maps import picture_of
+from oscillator.io.cases import resolve_case
+
+pytestmark = pytest.mark.slow
+
+try:
+    import playwright.sync_api  # noqa: F401
+
+    MISSING = None if chromium() else "no Chromium (apt install chromium)"
+except ImportError:
+    MISSING = "no Playwright (pip install playwright)"
+if MISSING and not os.environ.get("OSCILLATOR_REQUIRE_BROWSER"):
+    pytest.skip(MISSING, allow_module_level=True)
+
+COMMAND = str(Path(sys.executable).with_name("oscillator"))
+
+
+def rows(page) -> list[list[str]]:
+    """The event table's rows on screen (SlickGrid draws the visible ones), cells as shown."""
+    page.locator(".slick-row").first.wait_for()
+    return [row.locator(".slick-cell").all_inner_texts() for row in page.locator(".slick-row").all()]
+
+
+def model_value(page, name: str) -> float:
+    return float(page.evaluate("n => Bokeh.documents[0].get_model_by_name(n).value", name))
+
+
+def test_a_slider_moves_the_event_table_to_what_simulate_gives(tmp_path):
+    with Served("instance-1", cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        assert "#1: 50 periods" in page.locator("span[data-revision='1']").inner_text()
+        page.locator(".control-K3 .noUi-handle").focus()
+        page.keyboard.press("ArrowRight")
+        wait_revision(page, 2)
+        value = model_value(page, "K3")
+        assert value == pytest.approx(2.0 + 0.02)  # one step of the slider (4 / 200)
+        case = resolve_case("instance-1", K3=value)
+        direct = osc.simulate(resolve_case(case, t_end=case.initial.t0 + 50 * case.parameters.period))
+        status = page.locator("span[data-revision='2']").inner_text()
+        assert f"{len(direct.events)} events" in status, status
+        shown = rows(page)
+        assert len(shown) >= 8
+        for cells, (_, event) in zip(shown, direct.events.iterrows(), strict=False):
+            t, mass, kind, *_, theorem, equation, _boundary = cells
+            assert float(t) == pytest.approx(event.t, abs=1e-6) and int(mass) == event.mass, (cells, event)
+            assert (kind, theorem, equation) == (event.kind, event.theorem, event.equation), cells
+        page.screenshot(path=tmp_path / "explore.png", full_page=True)
+        assert not elsewhere, elsewhere
+    assert served.process.returncode == 0
+
+
+@pytest.fixture(scope="module")
+def atlas(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("explore") / "atlas"
+    subprocess.run(
+        [COMMAND, "atlas", "instance-1", "--x", "Omega", "1.5", "1.7", "4", "--y", "Q2", "70", "71.5", "3",
+         "--out", str(folder), "--no-plots", "--quiet"],
+        check=True, capture_output=True, timeout=300,
+    )  # fmt: skip
+    return folder
+
+
+def test_a_click_on_an_atlas_cell_shows_the_attractors_find_attractors_finds_there(atlas, tmp_path):
+    with Served(str(atlas), cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        box = page.locator(".bk-Canvas").first.bounding_box()
+        page.mouse.click(box["x"] + 0.45 * box["width"], box["y"] + 0.5 * box["height"])
+        found = page.locator(".oscillator-picked-found[data-click='1']")
+        found.wait_for()
+        text, count = found.inner_text(), int(found.get_attribute("data-count") or 0)
+        wait_revision(page, 2)  # the first attractor's motion follows
+        shown = (float(v) for v in re.match(r"Omega = ([\d.]+), Q2 = ([\d.]+)", text).groups())
+        omega, q2 = model_value(page, "Omega"), model_value(page, "Q2")  # the cell's, put on the sliders
+        assert (omega, q2) == pytest.approx(tuple(shown), rel=1e-5)
+        assert not elsewhere, elsewhere
+    picture = picture_of(atlas)
+    index = picture.nearest(omega, q2)
+    case, starts = picture.starts_at(index)
+    expected = osc.find_attractors(case, states=starts)
+    assert f"{len(expected.attractors)} attractor(s)" in text, text
+    for attractor in expected.attractors:
+        point = ", ".join(f"{v:.6g}" for v in attractor.points[0])
+        assert f"{attractor.name}: section point ({point})" in text, (text, point)
+    assert count == len(expected.attractors) >= 1
+
+
+def test_a_case_text_with_a_script_shows_as_text(tmp_path):
+    import tomllib
+
+    import tomli_w
+
+    from oscillator.io.cases import case_to_toml
+
+    hostile = '<script>window.__pwned = 1</script><img src=x onerror="window.__pwned = 2">'
+    data = tomllib.loads(case_to_toml(resolve_case("instance-3")))
+    data |= {"title": hostile, "description": f"{hostile} & more"}
+    path = tmp_path / "hostile.toml"
+    path.write_text(tomli_w.dumps(data), encoding="utf-8")
+    with Served(str(path), cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        heading = page.locator(".oscillator-title").inner_text()
+        assert hostile in heading, heading
+        assert page.get_by_text(f"{hostile} & more").count() == 1
+        assert page.evaluate("() => window.__pwned === undefined")
+        assert not elsewhere, elsewhere  # the <img> was never fetched either
+    assert np.isfinite(served.process.returncode)
