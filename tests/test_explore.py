@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import html
 import os
 import signal
 import socket
@@ -90,28 +91,35 @@ def test_bad_input_is_refused_naming_the_field():
 
 
 def test_an_explorer_redraws_on_a_change_and_keeps_the_last_motion_on_an_impossible_one():
-    """The object a notebook displays: a slider's change runs the case on screen; mu_s below mu_k
-    is said in the status line and the motion stays."""
+    """The object a notebook displays: a slider let go runs the case on screen; a value typed in
+    the box too; mu_s below mu_k is said in the status line, escaped, and the motion stays."""
+
+    def let_go(name: str, value: float) -> None:  # what the page sends when a drag ends
+        slider = explorer.widgets[name]
+        slider.value = value
+        slider.trigger("value_throttled", None, value)
+
     explorer = osc.explore("instance-3", periods=5)
-    first = explorer.scene
-    assert first is not None and explorer.revision == 1 and "5 periods" in explorer.status.object
-    explorer.widgets["Omega"].value = 2.0
-    explorer.widgets["Omega"].param.trigger("value_throttled")
+    assert explorer.scene is not None and explorer.revision == 1 and "5 periods" in explorer.status.text
+    let_go("Omega", 2.0)
     assert explorer.revision == 2 and explorer.scene.case.parameters.Omega == 2.0
     assert np.allclose(explorer.scene.events.t, scene_of("instance-3", 5, Omega=2.0).events.t, rtol=0, atol=1e-12)
-    explorer.widgets["mu_s"].value = 0.0
-    explorer.widgets["mu_s"].param.trigger("value_throttled")
-    assert "mu_s must be &gt;= mu_k" in explorer.status.object and explorer.scene.case.parameters.Omega == 2.0
-    assert "mimebundle" not in explorer.status.object
+    explorer.set_box.value = "K3=12.5"  # beyond the slider's end: the slider widens
+    assert explorer.widgets["K3"].value == explorer.widgets["K3"].end == 12.5
+    assert explorer.scene.case.parameters.K3 == 12.5 and explorer.revision == 3
+    let_go("mu_s", 0.0)
+    assert "mu_s must be &gt;= mu_k" in explorer.status.text and explorer.scene.case.parameters.Omega == 2.0
+    explorer.set_box.value = "nothing=1"
+    assert "'nothing' is not a parameter or start value" in html.unescape(explorer.status.text)
     bundle = explorer._repr_mimebundle_()
-    assert any("html" in kind or "holoviews" in kind for kind in bundle[0]), list(bundle[0])
+    assert "application/vnd.holoviews_exec.v0+json" in bundle[0], list(bundle[0])
 
 
 def test_the_case_file_saved_is_the_case_on_screen():
     from oscillator.io.cases import load_case
 
     explorer = osc.explore("instance-3", periods=2)
-    explorer.widgets["K3"].value = 1.75
+    explorer._put({"K3": 1.75})
     text = explorer._case_file().getvalue()
     path = Path(os.environ.get("TMPDIR", "/tmp")) / f"explored-{os.getpid()}.toml"
     try:
