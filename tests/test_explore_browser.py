@@ -76,8 +76,8 @@ def test_a_slider_moves_the_event_table_to_what_simulate_gives(tmp_path):
 def atlas(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("explore") / "atlas"
     subprocess.run(
-        [COMMAND, "atlas", "instance-1", "--x", "Omega", "1.5", "1.7", "4", "--y", "Q2", "70", "71.5", "3",
-         "--out", str(folder), "--no-plots", "--quiet"],
+        [COMMAND, "atlas", "instance-1", "--x", "Omega", "1.5", "1.7", "3", "--y", "Q2", "70", "71.5", "2",
+         "--transient", "30", "--record", "8", "--out", str(folder), "--no-plots", "--quiet"],
         check=True, capture_output=True, timeout=300,
     )  # fmt: skip
     return folder
