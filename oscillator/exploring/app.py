@@ -35,6 +35,7 @@ from bokeh.palettes import Category10
 from bokeh.plotting import figure
 from bokeh.transform import factor_cmap
 
+from oscillator.analysis.axes import STATE
 from oscillator.errors import InputError, OscillatorError
 from oscillator.exploring.controls import START, Control, controls_of
 from oscillator.exploring.maps import Picture
@@ -62,7 +63,6 @@ MEASURES = (
 _SHADE = 0.15
 _FAR = 1e9
 _TOOLS = "pan,wheel_zoom,box_zoom,reset"
-_STATE = ("x1", "v1", "x2", "v2")
 
 
 def _plain(text: str) -> str:
@@ -107,10 +107,10 @@ class Explorer:
         self.clicks = 0
         self.scene: Scene | None = None
         self.sources = {
-            "line": ColumnDataSource({name: [] for name in ("t", *_STATE)}),
-            "strobe": ColumnDataSource({name: [] for name in ("k", *_STATE)}),
+            "line": ColumnDataSource({name: [] for name in ("t", *STATE)}),
+            "strobe": ColumnDataSource({name: [] for name in ("k", *STATE)}),
             "events": ColumnDataSource({name: [] for name in (*EVENT_COLUMNS, "x")}),
-            "orbit": ColumnDataSource({name: [] for name in _STATE}),
+            "orbit": ColumnDataSource({name: [] for name in STATE}),
             **{f"rest{mass}": _quads() for mass in (1, 2)},
             **{f"contact_{side}": _quads() for side in CONTACT},
         }
@@ -303,15 +303,15 @@ class Explorer:
         x = np.where(events["mass"].to_numpy() == 1, events["x1"].to_numpy(), events["x2"].to_numpy())
         table = {name: events[name].astype(str).to_numpy() for name in EVENT_COLUMNS[1:]}
         with pn.io.hold():
-            self.sources["line"].data = {name: scene.trajectory[name].to_numpy() for name in ("t", *_STATE)}
-            self.sources["strobe"].data = {name: scene.strobe[name].to_numpy() for name in ("k", *_STATE)}
+            self.sources["line"].data = {name: scene.trajectory[name].to_numpy() for name in ("t", *STATE)}
+            self.sources["strobe"].data = {name: scene.strobe[name].to_numpy() for name in ("k", *STATE)}
             self.sources["events"].data = {"t": events["t"].to_numpy(), **table, "x": x}
             for mass in (1, 2):
                 self.sources[f"rest{mass}"].data = _spans(scene.rests[mass])
             for side in CONTACT:
                 self.sources[f"contact_{side}"].data = _spans(scene.contacts[side])
             if len(self.sources["orbit"].data["x1"]):
-                self.sources["orbit"].data = {name: [] for name in _STATE}
+                self.sources["orbit"].data = {name: [] for name in STATE}
                 self.orbit_text.text = ""
             self.status.text = status
 
@@ -346,15 +346,15 @@ class Explorer:
         if self.scene is None:
             return
         try:
-            end = self.scene.trajectory.iloc[-1][list(_STATE)].to_numpy(float)
+            end = self.scene.trajectory.iloc[-1][list(STATE)].to_numpy(float)
             orbit = find_orbit(self.current_case(), guess=end, section=self.scene.t_end)
-            one = scene_of(orbit.case, orbit.period, t0=orbit.section, **dict(zip(_STATE, orbit.state, strict=True)))
+            one = scene_of(orbit.case, orbit.period, t0=orbit.section, **dict(zip(STATE, orbit.state, strict=True)))
         except OscillatorError as error:
             self.orbit_text.text = f"<span class='oscillator-error'>no orbit: {_plain(str(error))}</span>"
             return
         with pn.io.hold():
             self.orbit_text.text = _orbit_html(orbit)
-            self.sources["orbit"].data = {name: one.trajectory[name].to_numpy() for name in _STATE}
+            self.sources["orbit"].data = {name: one.trajectory[name].to_numpy() for name in STATE}
 
     def _tap(self, event: Any) -> None:
         """A click on the map: the attractors there now; the first one's motion on the next tick."""

@@ -11,13 +11,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from oscillator.analysis.axes import STATE
 from oscillator.io.cases import Case
 from oscillator.model.parameters import Parameters
 
 __all__ = ["START", "Control", "controls_of"]
 
 #: The start values the page has a control for.
-START = ("x1", "v1", "x2", "v2")
+START = STATE
 _POSITIVE = ("m1", "m2", "Omega", "g")
 _SIGNED = ("phi1", "phi2", "d", "d1")
 #: Steps per slider.

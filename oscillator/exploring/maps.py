@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from oscillator.analysis.axes import STATE
 from oscillator.attractors.atlas import Atlas
 from oscillator.attractors.basins import Basins
 from oscillator.attractors.finding import Attractors, find_attractors
@@ -25,8 +26,6 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.text import printable
 
 __all__ = ["Picture", "picture_of"]
-
-_STATE = ("x1", "v1", "x2", "v2")
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,10 +70,10 @@ class Picture:
             case = resolve_case(self.case, **{self.x: float(row.x), self.y: float(row.y)})
             table = self.source.table
             held = table[(table[self.x] == row.x) & (table[self.y] == row.y) & (table.status == "ok")]
-            starts = [np.array(case.initial.y, dtype=float), *held[list(_STATE)].to_numpy(float)]
+            starts = [np.array(case.initial.y, dtype=float), *held[list(STATE)].to_numpy(float)]
             return case, np.unique(np.array(starts), axis=0)
         start = np.array(self.case.initial.y, dtype=float)
-        start[_STATE.index(self.x)], start[_STATE.index(self.y)] = float(row.x), float(row.y)
+        start[STATE.index(self.x)], start[STATE.index(self.y)] = float(row.x), float(row.y)
         return self.case, start[None, :]
 
     def attractors_at(self, index: int) -> Attractors:

@@ -77,8 +77,8 @@ def serve(
         verbose=False,
     )
     server.start()
-    if ready is not None:
-        ready(f"http://{host}:{port}/")
+    if ready is not None:  # said from inside the loop: a Ctrl-C as soon as it is read stops the loop
+        server.io_loop.add_callback(ready, f"http://{host}:{port}/")
     try:
         server.io_loop.start()
     except KeyboardInterrupt:

@@ -37,7 +37,7 @@ from oscillator.model.kernels import field_jacobian
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import rest_projection
-from oscillator.orbits.sensitivity import Crossing, crossings, selector_of
+from oscillator.orbits.sensitivity import Crossing, columns_of, crossings, mode_flags, selector_of
 from oscillator.orbits.tangent import field_gradient, jacobian_gradient, monodromy_rates
 
 __all__ = ["SIMPLE", "monodromy_derivative", "multiplier_derivatives"]
@@ -46,11 +46,6 @@ __all__ = ["SIMPLE", "monodromy_derivative", "multiplier_derivatives"]
 #: which each is simple and has a derivative.
 SIMPLE = 1e-6
 _TOLERANCE = 1e-12
-_POSITION = {name: k for k, name in enumerate(Parameters.names())}
-
-
-def _flags(mode: Mode) -> tuple[int, int, bool, bool]:
-    return mode.sign(1), mode.sign(2), mode.left, mode.right
 
 
 def _piece(
@@ -58,7 +53,7 @@ def _piece(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(y, sigma, Phi, Psi)`` at the end of ``segment``, integrated from its start."""
     k = len(columns)
-    flags = _flags(segment.mode)
+    flags = mode_flags(segment.mode)
 
     def rates(t: float, state: np.ndarray) -> np.ndarray:
         out = np.empty_like(state)
@@ -95,7 +90,7 @@ def _field_change(
     """``df`` (4 x k) of ``mode``'s field at the switch point, which moves by ``moved`` (4 x k) and ``tau``."""
     c = coefficients(p)
     gradient = np.empty((4, len(c)))
-    field_gradient(t, y, c, *_flags(mode), gradient)
+    field_gradient(t, y, c, *mode_flags(mode), gradient)
     change: np.ndarray = field_jacobian(y, p, mode) @ moved + np.outer(_time_rate(t, p, mode), tau)
     return change + gradient[:, columns]
 
@@ -122,7 +117,7 @@ def _barrier_change(
     }
     names = Parameters.names()
     for j, column in enumerate(columns):
-        jacobian_gradient(y, c, np.ascontiguousarray(moved[:, j]), int(column), *_flags(moving), bent)
+        jacobian_gradient(y, c, np.ascontiguousarray(moved[:, j]), int(column), *mode_flags(moving), bent)
         dn[j] = bent[4 * (2 * mass - 1) : 4 * (2 * mass)]
         drate[j] = -amplitude * p.Omega**2 * sine / weight * crossing.tau[j] + partial.get(names[column], 0.0)
     return dn, drate
@@ -159,7 +154,7 @@ def monodromy_derivative(
     moves by ``dt_end``), the start moving by ``sigma0`` (4 x k): the module docstring's pass."""
     c = coefficients(p)
     selector = selector_of(params)
-    columns = np.array([_POSITION[name] for name in params], dtype=np.int64)
+    columns = columns_of(params)
     k = len(params)
     projection = rest_projection(segments[0].mode)
     sigma, phi, psi = projection @ np.asarray(sigma0, dtype=float).reshape(4, k), projection, np.zeros((k, 4, 4))

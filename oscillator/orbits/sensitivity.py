@@ -57,7 +57,9 @@ __all__ = [
     "Sensitivities",
     "Switch",
     "check_params",
+    "columns_of",
     "crossings",
+    "mode_flags",
     "selector_of",
     "sensitivities",
     "tangent_pass",
@@ -132,6 +134,11 @@ class Pass:
     marks: list[np.ndarray]
 
 
+def columns_of(params: tuple[str, ...]) -> np.ndarray:
+    """The parameters' positions in the parameter vector, for the compiled kernels."""
+    return np.array([_POSITION[name] for name in params], dtype=np.int64)
+
+
 def selector_of(params: tuple[str, ...]) -> np.ndarray:
     """``dc/dparams`` (25 x k): column ``j`` is the unit vector of parameter ``j``."""
     selector = np.zeros((len(Parameters.names()), len(params)))
@@ -140,13 +147,14 @@ def selector_of(params: tuple[str, ...]) -> np.ndarray:
     return selector
 
 
-def _flags(mode: Mode) -> tuple[int, int, bool, bool]:
+def mode_flags(mode: Mode) -> tuple[int, int, bool, bool]:
+    """The compiled kernels' description of a mode: each mass's velocity sign and the contacts."""
     return mode.sign(1), mode.sign(2), mode.left, mode.right
 
 
 def _rates(t: float, state: np.ndarray, c: np.ndarray, columns: np.ndarray, mode: Mode) -> np.ndarray:
     out = np.empty_like(state)
-    tangent_rates(t, state, c, columns, *_flags(mode), out)
+    tangent_rates(t, state, c, columns, *mode_flags(mode), out)
     return out
 
 
@@ -234,7 +242,7 @@ def _piece(
 
     k = len(columns)
     mode = segment.mode
-    flags = _flags(mode)
+    flags = mode_flags(mode)
     events = [velocity_extremum(1, c, flags), velocity_extremum(2, c, flags), force_extremum(c, flags)]
     start = _pack(segment.y0, sigma, k)
     solved = solve_ivp(
@@ -290,7 +298,7 @@ def tangent_pass(
     time moves by ``dt_end``), from ``sigma0`` (4 x k) at the start; see the module docstring."""
     selector = selector_of(params)
     c = coefficients(p)
-    columns = np.array([_POSITION[name] for name in params], dtype=np.int64)
+    columns = columns_of(params)
     k = len(params)
     sigma = rest_projection(segments[0].mode) @ np.asarray(sigma0, dtype=float).reshape(4, k)
     tau = np.zeros(k)
