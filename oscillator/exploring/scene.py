@@ -11,17 +11,21 @@ compare them with :func:`~oscillator.simulate` directly.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pandas as pd
 
 from oscillator.analysis.intervals import spans
 from oscillator.errors import InputError
+from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.parameters import Parameters
+from oscillator.model.phase_space import Mode
 
 __all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "Scene", "scene_of"]
 
@@ -110,10 +114,8 @@ def scene_of(case: Case | str, periods: int = PERIODS, **overrides: float) -> Sc
         trajectory=_with_switches(trajectory, result.events),
         events=result.events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
         strobe=_strobe(trajectory, marks),
-        rests={mass: _intervals(result.segments, lambda mode, m=mass: mode.sign(m) == 0) for mass in (1, 2)},
-        contacts={
-            side: _intervals(result.segments, lambda mode, s=side: getattr(mode, s)) for side in ("left", "right")
-        },
+        rests={mass: _intervals(result.segments, partial(_rests, mass=mass)) for mass in (1, 2)},
+        contacts={side: _intervals(result.segments, partial(_touches, side=side)) for side in ("left", "right")},
         seconds=seconds,
         status=result.status.value if not result.message else result.message,
     )
@@ -136,7 +138,15 @@ def _strobe(trajectory: pd.DataFrame, marks: np.ndarray) -> pd.DataFrame:
     return strobe
 
 
-def _intervals(segments: tuple, holds) -> list[tuple[float, float]]:  # type: ignore[type-arg,no-untyped-def]
+def _rests(mode: Mode, mass: int) -> bool:
+    return mode.sign(mass) == 0
+
+
+def _touches(mode: Mode, side: str) -> bool:
+    return bool(getattr(mode, side))
+
+
+def _intervals(segments: Sequence[Segment], holds: Callable[[Mode], bool]) -> list[tuple[float, float]]:
     """The maximal intervals over which ``holds(mode)`` is true, from the run's smooth pieces."""
     if not segments:
         return []
