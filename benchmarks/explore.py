@@ -2,6 +2,12 @@
 change to the page redrawn with the new motion (50 forcing periods of Instance 1, the trajectory on
 a grid of 64 points a period), and from a click on an atlas cell to its attractors shown.
 
+Two paths for the slider: the explorer's default, each change drawn with the compiled DOP853 and
+checked by CVODE once the controls rest (changes follow each other here as soon as the page is
+redrawn, so the checks are cancelled: the figure is the redraw alone), and ``--engine cvode``,
+each change drawn with the reference itself.  Then, on the default path, the time from a change to
+CVODE's verdict shown, the controls left at rest after each change.
+
 Each change is a key press on the ``K3`` slider's handle (alternately right and left, so the
 value moves back and forth by one step); the time runs, in the page, from the key press until the
 frame is painted in which the status line shows the new revision (the figures and the table come in
@@ -24,16 +30,16 @@ import numpy as np
 from oscillator.exploring.driving import Served, browser_page, wait_revision
 
 
-def slider(changes: int) -> list[float]:
-    with Served("instance-1") as served, browser_page() as (page, elsewhere):
+def slider(changes: int, *options: str, checked: bool = False) -> list[float]:
+    with Served("instance-1", *options) as served, browser_page() as (page, elsewhere):
         page.goto(served.url)
-        wait_revision(page, 1)
+        wait_revision(page, 1, checked=checked)
         handle = page.locator(".control-K3 .noUi-handle")
         handle.focus()
         times = []
         for k in range(changes):
             page.keyboard.press("ArrowRight" if k % 2 == 0 else "ArrowLeft")
-            times.append(wait_revision(page, k + 2) / 1e3)  # timed in the page, from the key press
+            times.append(wait_revision(page, k + 2, checked=checked) / 1e3)  # timed in the page, from the key press
         assert not elsewhere, elsewhere
     return times
 
@@ -72,7 +78,9 @@ def main() -> None:
     parser.add_argument("--clicks", type=int, default=10)
     arguments = parser.parse_args()
     for name, times in (
-        ("slider change -> page redrawn", slider(arguments.changes)),
+        ("slider change -> page redrawn (dop853, the default)", slider(arguments.changes)),
+        ("slider change -> page redrawn (--engine cvode)", slider(arguments.changes, "--engine", "cvode")),
+        ("slider change -> CVODE's verdict shown (default)", slider(arguments.changes // 4, checked=True)),
         ("atlas click -> attractors shown", clicks(arguments.clicks)),
     ):
         ms = 1e3 * np.array(times)

@@ -115,6 +115,24 @@ def test_the_engine_returns_roots_targets_and_steps_as_the_supervisor_asks():
     assert abs(every.energy.residual) < 1e-7 * (abs(every.energy.forcing) + every.energy.E0 + 1)
 
 
+def test_the_grid_is_recorded_in_compiled_code_as_cvode_records_it():
+    """A grid of 64 points a period with ten switches a period between them (the explorer's run):
+    the same times, the states to the solutions' accuracy, the switches' states kept; a failure
+    after some of the grid's rows keeps them and says why."""
+    case = resolve_case("instance-1", t_end=20 * resolve_case("instance-1").parameters.period)
+    grid = np.linspace(case.initial.t0, case.t_end, 20 * 64 + 1)
+    ours = simulate(case, engine="dop853", save=SaveAt(ts=grid, segments=True))
+    reference = simulate(case, save=SaveAt(ts=grid, segments=True), rtol=1e-12, atol=1e-12)
+    assert ours.trajectory.t.tolist() == reference.trajectory.t.tolist() == grid.tolist()
+    columns = ["x1", "v1", "x2", "v2"]
+    np.testing.assert_allclose(ours.trajectory[columns], reference.trajectory[columns], atol=1e-7)
+    assert len(ours.events) == len(reference.events) > 150 and len(ours.segments) == len(reference.segments)
+    close_then_far = np.append(case.initial.t0 + 1e-2 * np.arange(6), case.t_end)  # a step or two, then 20 periods
+    with pytest.raises(SimulationFailed, match="more than max_num_steps steps") as failed:
+        simulate(case, engine="dop853", save=SaveAt(ts=close_then_far), max_num_steps=10)
+    assert failed.value.result.trajectory.t.tolist() == close_then_far[:6].tolist()
+
+
 @pytest.mark.parametrize("settle", [True, False])
 def test_compiled_landings_are_the_reference_engines(settle):
     """Each start landed whole in compiled code and through simulate with CVODE: the same period,

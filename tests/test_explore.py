@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import os
 import signal
@@ -17,7 +18,7 @@ import pytest
 import oscillator as osc
 from oscillator.errors import InputError
 from oscillator.exploring.controls import START, controls_of
-from oscillator.exploring.scene import GRID, scene_of
+from oscillator.exploring.scene import GRID, TIME_AGREEMENT, differences, scene_of
 from oscillator.exploring.serving import check_address, is_loopback
 from oscillator.hybrid.recording import SaveAt
 from oscillator.io.cases import resolve_case, section_times
@@ -99,19 +100,53 @@ def test_an_explorer_redraws_on_a_change_and_keeps_the_last_motion_on_an_impossi
         slider.trigger("value_throttled", None, value)
 
     explorer = osc.explore("instance-3", periods=5)
-    assert explorer.scene is not None and explorer.revision == 1 and "5 periods" in explorer.status.text
+    assert explorer.scene is not None and explorer.revision == 1 and "5 periods" in explorer.status.object
     let_go("Omega", 2.0)
     assert explorer.revision == 2 and explorer.scene.case.parameters.Omega == 2.0
-    assert np.allclose(explorer.scene.events.t, scene_of("instance-3", 5, Omega=2.0).events.t, rtol=0, atol=1e-12)
+    drawn, reference = scene_of("instance-3", 5, engine="dop853", Omega=2.0), scene_of("instance-3", 5, Omega=2.0)
+    assert explorer.scene.engine == "dop853"  # drawn with the compiled engine, then checked (at once here)
+    assert np.allclose(explorer.scene.events.t, drawn.events.t, rtol=0, atol=1e-12)
+    assert np.abs(explorer.scene.events.t - reference.events.t).max() < TIME_AGREEMENT
+    assert "CVODE agrees, event by event" in explorer.status.object and "data-checked" in explorer.status.object
     explorer.set_box.value = "K3=12.5"  # beyond the slider's end: the slider widens
     assert explorer.widgets["K3"].value == explorer.widgets["K3"].end == 12.5
     assert explorer.scene.case.parameters.K3 == 12.5 and explorer.revision == 3
     let_go("mu_s", 0.0)
-    assert "mu_s must be &gt;= mu_k" in explorer.status.text and explorer.scene.case.parameters.Omega == 2.0
+    assert "mu_s must be &gt;= mu_k" in explorer.status.object and explorer.scene.case.parameters.Omega == 2.0
     explorer.set_box.value = "nothing=1"
-    assert "'nothing' is not a parameter or start value" in html.unescape(explorer.status.text)
+    assert "'nothing' is not a parameter or start value" in html.unescape(explorer.status.object)
     bundle = explorer._repr_mimebundle_()
     assert "application/vnd.holoviews_exec.v0+json" in bundle[0], list(bundle[0])
+
+
+def test_differences_are_told_event_by_event_to_the_tables_precision():
+    scene = scene_of("instance-3", 5, Omega=2.0)
+    assert differences(scene, scene)[0] is None and differences(scene, scene)[1] == 0.0
+    events = scene.events.copy()
+    events.loc[7, "t"] += 2 * TIME_AGREEMENT  # a time beyond the table's precision
+    later = dataclasses.replace(scene, events=events)
+    said, largest = differences(later, scene)
+    assert said is not None and said.startswith("event 8 differs") and largest == pytest.approx(2e-6, rel=1e-6)
+    events = scene.events.copy()
+    events.loc[3, "theorem"] = "5.9"  # another rule at the same time
+    assert differences(dataclasses.replace(scene, events=events), scene)[0].startswith("event 4 differs")
+    fewer = dataclasses.replace(scene, events=scene.events.iloc[:-2])
+    assert differences(fewer, scene)[0] == f"{len(scene.events) - 2} events against {len(scene.events)}"
+    stopped = dataclasses.replace(scene, status="failed")
+    assert differences(stopped, scene)[0] == "the run ended 'failed' against 'complete'"
+
+
+def test_cvodes_motion_replaces_one_that_differs_and_the_reference_is_not_checked(monkeypatch):
+    import oscillator.exploring.app as app
+
+    monkeypatch.setattr(app, "differences", lambda shown, reference: ("event 3 differs (made up)", 1.0))
+    explorer = osc.explore("instance-3", periods=3)
+    assert explorer.scene.engine == "cvode" and "oscillator-differs" in explorer.status.object
+    assert "drawn instead of dop853's: event 3 differs (made up)" in explorer.status.object
+    reference = osc.explore("instance-3", periods=3, engine="cvode")
+    assert reference.scene.engine == "cvode" and "CVODE" not in reference.status.object
+    with pytest.raises(InputError, match=r"engine must be one of cvode, .*, got 'euler'"):
+        osc.explore("instance-3", engine="euler")
 
 
 def test_the_case_file_saved_is_the_case_on_screen():

@@ -3,15 +3,26 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, say, warn
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import case_from, check_engine
 from oscillator.cli.options import SetOption
 from oscillator.errors import InputError, OscillatorError
+
+#: ``--engine`` of the explorer: which integrator draws each change.
+DrawingEngineOption = Annotated[
+    str,
+    typer.Option(
+        "--engine",
+        metavar="NAME",
+        help="The integrator that draws each change: dop853 (compiled; CVODE checks each motion once the "
+        "controls rest, and replaces it if an event differs) or cvode (the reference, slower to redraw).",
+    ),
+]
 
 
 @command(150, "Explore a case in the browser: move a parameter, see the motion; click a map, see its attractor.")
@@ -36,11 +47,13 @@ def explore(
             help="The address to serve on: this machine only (127.0.0.1) unless another is given, with a warning.",
         ),
     ] = "127.0.0.1",
+    engine: DrawingEngineOption = "dop853",
 ) -> None:
     """Serve the explorer of CASE, or of an atlas or basins FOLDER, on this machine and print its
     address; open it in a browser.  Every parameter and the start have a slider; on each change the
-    motion is simulated again and the time series, phase portraits, stroboscopic points and event
-    table redraw.  On a folder's map, a click on a cell shows the attractors there.  Ctrl-C stops.
+    motion is simulated again (drawn with the compiled DOP853, then checked by CVODE) and the time
+    series, phase portraits, stroboscopic points and event table redraw.  On a folder's map, a
+    click on a cell shows the attractors there.  Ctrl-C stops.
 
     \b
     Examples:
@@ -50,16 +63,13 @@ def explore(
     try:
         load("oscillator.exploring.app", notice=True)
         from oscillator.exploring.app import Explorer
-        from oscillator.exploring.maps import picture_of
         from oscillator.exploring.scene import check_periods
         from oscillator.exploring.serving import check_address, is_loopback, serve
 
         check_periods(periods)
+        check_engine(engine)
         check_address(address, port)
-        picture = picture_of(target) if Path(target).is_dir() else None
-        if picture is not None and set_:
-            raise InputError("--set applies to a case, not to a folder (its map has its own values)", field="--set")
-        case = picture.case if picture is not None else case_from(target, None, set_)
+        case, picture = _opened(target, set_)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:
@@ -71,7 +81,7 @@ def explore(
         )
 
     def page() -> object:  # one explorer per browser tab, on the folder read once above
-        return Explorer(case, periods, picture=picture).layout
+        return Explorer(case, periods, picture=picture, engine=engine).layout
 
     def ready(url: str) -> None:
         say(f"explorer of {target} at {url} (Ctrl-C stops it)")
@@ -81,3 +91,13 @@ def explore(
     except OscillatorError as error:
         raise fail(message(error)) from None
     say("stopped")
+
+
+def _opened(target: str, set_: list[str] | None) -> tuple[Any, Any]:
+    """The case to explore and the folder's map (None for a case), read once."""
+    from oscillator.exploring.maps import picture_of
+
+    picture = picture_of(target) if Path(target).is_dir() else None
+    if picture is not None and set_:
+        raise InputError("--set applies to a case, not to a folder (its map has its own values)", field="--set")
+    return (picture.case if picture is not None else case_from(target, None, set_)), picture

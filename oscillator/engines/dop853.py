@@ -35,7 +35,7 @@ from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions, root_values_at
 from oscillator.model.types import Vector
 
-__all__ = ["FAILURES", "Dop853Engine", "advance", "new_work", "restart"]
+__all__ = ["FAILURES", "Dop853Engine", "advance", "grid_returns", "new_work", "restart"]
 
 _STAGES = int(_coefficients.N_STAGES)  # 12
 _A = np.ascontiguousarray(_coefficients.A[:_STAGES, :_STAGES])
@@ -443,6 +443,34 @@ def advance(
             return STEPPED_ONE, 0
 
 
+@hot
+def grid_returns(
+    w: Vector, modes: np.ndarray, c: Vector, grid: Vector, t_stop: float, rows: np.ndarray, last: Vector
+) -> tuple[int, int, int, float]:  # pragma: no cover - compiled
+    """:func:`advance` to each time of ``grid`` in turn, until a root, ``t_stop`` or a failure,
+    at most ``len(rows)`` times: each grid time reached written as a row ``(t, x1, v1, x2, v2)``
+    and its whole state into ``last``.  Returns the last return's kind and roots, the number of
+    rows written and the time reached (the grid's own time for a row)."""
+    most = min(rows.shape[0], grid.shape[0])
+    n, kind, fired, t = 0, TARGET, 0, w[T_REF] + w[T_CUR]
+    while n < most:
+        kind, fired = advance(w, modes, c, grid[n], t_stop, False)
+        if kind != TARGET:
+            if kind == ROOT:
+                t = w[T_REF] + w[T_CUR]
+            break
+        t = min(grid[n], t_stop)
+        if t != grid[n]:  # the stop time, before the grid's next time
+            break
+        rows[n, 0] = t
+        for k in range(4):
+            rows[n, 1 + k] = w[Y_OUT + k]
+        for k in range(N):
+            last[k] = w[Y_OUT + k]
+        n += 1
+    return kind, fired, n, t
+
+
 _KINDS = {ROOT: StepKind.ROOT, TARGET: StepKind.TARGET, STEPPED_ONE: StepKind.STEP}
 
 
@@ -458,6 +486,8 @@ class Dop853Engine:
         self._modes: dict[Mode, np.ndarray] = {}
         self._mode = np.zeros(_DIRECTIONS + R, np.int64)
         self._restarts = 0
+        self._last = np.zeros(N)
+        self._pending: EngineFailure | None = None  # met by the grid loop after some rows: raised next
 
     def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
         vector = self._modes.get(mode)
@@ -469,6 +499,7 @@ class Dop853Engine:
 
     def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
         w = self._w
+        self._raise_pending()
         kind, fired = advance(w, self._mode, self._c, float(target), float(t_stop), one_step)
         if kind < 0:
             raise EngineFailure(FAILURES[kind], kind)
@@ -476,6 +507,28 @@ class Dop853Engine:
         # a target is returned at its own time, as CVODE's engines do (t_ref + tau may differ by an ulp)
         t = min(float(target), float(t_stop)) if kind == TARGET else float(w[T_REF] + w[T_CUR])
         return Step(t, w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots)
+
+    def advance_grid(self, grid: np.ndarray, *, t_stop: float, rows: np.ndarray) -> tuple[Step, int]:
+        """:meth:`advance` to each time of ``grid`` in turn, in compiled code (:func:`grid_returns`),
+        until a root or ``t_stop``, at most ``len(rows)`` times: each time reached written as a
+        row ``(t, x1, v1, x2, v2)``.  The last return as a :class:`Step`, and how many rows were
+        written (a failure after some rows is raised at the next call, as CVODE's engine does)."""
+        self._raise_pending()
+        w = self._w
+        kind, fired, n, t = grid_returns(w, self._mode, self._c, grid, float(t_stop), rows, self._last)
+        if kind < 0:
+            failure = EngineFailure(FAILURES[kind], kind)
+            if n == 0:
+                raise failure
+            self._pending = failure
+            return Step(float(rows[n - 1, 0]), self._last.copy(), StepKind.TARGET, ()), n
+        roots = tuple(i for i in range(R) if fired >> i & 1)
+        return Step(float(t), w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots), n
+
+    def _raise_pending(self) -> None:
+        failure, self._pending = self._pending, None
+        if failure is not None:
+            raise failure
 
     @property
     def rhs_evaluations(self) -> int:

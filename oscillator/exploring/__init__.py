@@ -14,10 +14,13 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["explore"]
 
 
-def explore(case_or_folder: Case | str | Path, periods: int = 50, **overrides: float) -> Explorer:
+def explore(
+    case_or_folder: Case | str | Path, periods: int = 50, *, engine: str = "dop853", **overrides: float
+) -> Explorer:
     """The explorer of a case (a name, a case file or a :class:`~oscillator.Case`, with
     ``overrides`` of its parameters and start) or of an atlas or basins folder: displayed by a
-    notebook, served by ``oscillator explore``."""
+    notebook, served by ``oscillator explore``.  ``engine`` draws each change (see
+    :class:`~oscillator.exploring.app.Explorer`)."""
     from oscillator.exploring.app import Explorer
     from oscillator.exploring.maps import picture_of
     from oscillator.exploring.scene import check_periods
@@ -26,5 +29,5 @@ def explore(case_or_folder: Case | str | Path, periods: int = 50, **overrides: f
     periods = check_periods(periods)
     if isinstance(case_or_folder, str | Path) and Path(case_or_folder).is_dir():
         picture = picture_of(case_or_folder)
-        return Explorer(resolve_case(picture.case, **overrides), periods, picture=picture)
-    return Explorer(resolve_case(case_or_folder, **overrides), periods)
+        return Explorer(resolve_case(picture.case, **overrides), periods, picture=picture, engine=engine)
+    return Explorer(resolve_case(case_or_folder, **overrides), periods, engine=engine)

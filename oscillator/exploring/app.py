@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import html
 import io
+import math
 import re
 import time
 from typing import Any
 
 import numpy as np
 import panel as pn
-from bokeh.events import Tap
+from bokeh.events import DoubleTap, Tap
 from bokeh.layouts import column
 from bokeh.models import ColumnDataSource, DataRange1d
 from bokeh.models.widgets.buttons import Button
@@ -39,7 +40,16 @@ from oscillator.analysis.axes import STATE
 from oscillator.errors import InputError, OscillatorError
 from oscillator.exploring.controls import START, Control, controls_of
 from oscillator.exploring.maps import Picture
-from oscillator.exploring.scene import EVENT_COLUMNS, PERIODS, Scene, check_periods, scene_of, with_changes
+from oscillator.exploring.scene import (
+    EVENT_COLUMNS,
+    PERIODS,
+    TIME_AGREEMENT,
+    Scene,
+    check_periods,
+    differences,
+    scene_of,
+    with_changes,
+)
 from oscillator.io.cases import Case, case_to_toml, resolve_case
 from oscillator.io.expressions import parse_value
 
@@ -60,6 +70,11 @@ MEASURES = (
     "impact_max_right",
     "impact_max_left",
 )
+#: The integrator that draws each change: the compiled one, checked against CVODE after it.
+DRAWING_ENGINE = "dop853"
+#: How long the controls rest before CVODE's check starts (ms): a change sooner cancels it (a
+#: change during the check waits for it: 60-100 ms for 50 periods of Instance 1).
+CHECK_DELAY_MS = 400
 _SHADE = 0.15
 _FAR = 1e9
 _TOOLS = "pan,wheel_zoom,box_zoom,reset"
@@ -74,6 +89,18 @@ def _quads() -> ColumnDataSource:
     return ColumnDataSource({"left": [], "right": [], "bottom": [], "top": []})
 
 
+def _keyed(fig: Any, glyph: str, label: str, *fields: str, source: ColumnDataSource, **style: Any) -> Any:
+    """``fig.<glyph>(*fields, source=source, **style)``, keyed in the legend by the same glyph
+    drawn from a point that is not a number (nothing on the plot; the figure's ranges follow the
+    drawn renderers only): a legend whose items hold the drawn renderers builds its entries again
+    at every change of their data (10 ms a change for the page's four legends, measured), one of
+    renderers that never change draws them once."""
+    draw = getattr(fig, glyph)
+    nowhere = ColumnDataSource({name: [math.nan] for name in fields or ("left", "right", "bottom", "top")})
+    draw(*fields, source=nowhere, legend_label=label, **style)
+    return draw(*fields, source=source, **style)
+
+
 def _spans(intervals: list[tuple[float, float]]) -> dict[str, list[float]]:
     return {
         "left": [a for a, _ in intervals],
@@ -81,6 +108,24 @@ def _spans(intervals: list[tuple[float, float]]) -> dict[str, list[float]]:
         "bottom": [-_FAR] * len(intervals),
         "top": [_FAR] * len(intervals),
     }
+
+
+class _Text(pn.pane.HTML):
+    """A line of HTML whose change replaces its content only: Bokeh's ``Div`` lays out the whole
+    page again at each new text, and Panel's pane sends its style sheets again with it, which does
+    the same (30 ms a change, measured); this pane sends the text alone."""
+
+    def _update(self, ref: str, model: Any) -> None:
+        model.update(text=self._get_properties(model.document)["text"])
+
+    def __init__(self, text: str, **params: Any) -> None:
+        super().__init__(text, **params)  # type: ignore[no-untyped-call]  # Panel's is not annotated
+
+    def set_text(self, text: str) -> None:
+        """Show ``text`` (HTML) now: in a batch, which Panel sends at its end; outside one, from a
+        Bokeh event's callback (a click on the map), the change waited for the page's next event."""
+        with pn.io.hold():
+            self.object = text
 
 
 class Explorer:
@@ -97,9 +142,27 @@ class Explorer:
     picture : Picture, optional
         A folder's map (:func:`~oscillator.exploring.maps.picture_of`): a click on it shows the
         attractors there.
+    engine : str
+        The integrator that draws each change (:mod:`oscillator.engines`): the compiled DOP853 by
+        default, whose motion CVODE runs again once the controls rest (:data:`CHECK_DELAY_MS`) and
+        either confirms, event by event, or replaces; ``"cvode"`` draws with the reference
+        itself.
     """
 
-    def __init__(self, case: Case | str, periods: int = PERIODS, *, picture: Picture | None = None) -> None:
+    def __init__(
+        self,
+        case: Case | str,
+        periods: int = PERIODS,
+        *,
+        picture: Picture | None = None,
+        engine: str = DRAWING_ENGINE,
+    ) -> None:
+        from oscillator.engines import ENGINES
+
+        if engine not in ENGINES:
+            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}", field="engine")
+        self.engine = engine
+        self._check_handle: Any = None
         self.case = resolve_case(case)
         self.picture = picture
         self.periods = check_periods(periods)
@@ -114,9 +177,9 @@ class Explorer:
             **{f"rest{mass}": _quads() for mass in (1, 2)},
             **{f"contact_{side}": _quads() for side in CONTACT},
         }
-        self.status = Div(text="", width=900, height=24, name="status")
-        self.orbit_text = Div(text="", width=900, name="orbit")
-        self.picked = Div(text="", width=900, name="picked")
+        self.status = _Text("", width=900, height=24)
+        self.orbit_text = _Text("", width=900)
+        self.picked = _Text("", width=900)
         self.widgets = {control.name: self._slider(control) for control in controls_of(self.case)}
         self.set_box = TextInput(title="set NAME=VALUE (any value)", placeholder="e.g. K3=2.5", width=230)
         self.set_box.on_change("value", lambda attr, old, new: self._set(new))
@@ -178,17 +241,18 @@ class Explorer:
 
     def _figures(self) -> dict[str, Any]:
         found = {}
+        line = self.sources["line"]
         for key, label, title in (("x", "displacement (m)", "displacements"), ("v", "velocity (m/s)", "velocities")):
             fig = figure(title=title, height=300, width=760, x_axis_label="t (s)", y_axis_label=label, tools=_TOOLS)
             self._shade(fig)
-            lines: list[Any] = [
-                fig.line("t", f"{key}{mass}", source=self.sources["line"], color=COLOURS[mass], legend_label=f"m{mass}")
+            lines = [
+                _keyed(fig, "line", f"m{mass}", "t", f"{key}{mass}", source=line, color=COLOURS[mass])
                 for mass in (1, 2)
             ]
+            fig.x_range = DataRange1d(renderers=lines)
             fig.y_range = DataRange1d(renderers=lines)  # the shading spans any height: not in the range
             if key == "x":
-                fig.scatter("t", "x", source=self.sources["events"], size=3, color="#444444", legend_label="events")
-            fig.legend.click_policy = "hide"
+                _keyed(fig, "scatter", "events", "t", "x", source=self.sources["events"], size=3, color="#444444")
             fig.add_layout(fig.legend[0], "right")
             found[key] = fig
         for mass in (1, 2):
@@ -201,31 +265,22 @@ class Explorer:
                 tools=_TOOLS,
             )
             x, v = f"x{mass}", f"v{mass}"
-            fig.line(x, v, source=self.sources["line"], color=COLOURS[mass], alpha=0.5)
-            fig.line(x, v, source=self.sources["orbit"], color="orange", line_width=3, legend_label="orbit")
-            fig.scatter(x, v, source=self.sources["strobe"], size=6, color="black", legend_label="t0 + kT")
+            drawn = [
+                fig.line(x, v, source=line, color=COLOURS[mass], alpha=0.5),
+                _keyed(fig, "line", "orbit", x, v, source=self.sources["orbit"], color="orange", line_width=3),
+                _keyed(fig, "scatter", "t0 + kT", x, v, source=self.sources["strobe"], size=6, color="black"),
+            ]
+            fig.x_range, fig.y_range = DataRange1d(renderers=drawn), DataRange1d(renderers=drawn)
             fig.legend.location = "top_left"
             fig.legend.background_fill_alpha = 0.6
             found[f"p{mass}"] = fig
         return found
 
     def _shade(self, fig: Any) -> None:
-        for mass in (1, 2):
-            fig.quad(
-                source=self.sources[f"rest{mass}"],
-                color=COLOURS[mass],
-                alpha=_SHADE,
-                line_width=0,
-                legend_label=f"m{mass} at rest",
-            )
-        for side, colour in CONTACT.items():
-            fig.quad(
-                source=self.sources[f"contact_{side}"],
-                color=colour,
-                alpha=2 * _SHADE,
-                line_width=0,
-                legend_label=f"{side} contact",
-            )
+        sides = [(f"rest{mass}", f"m{mass} at rest", COLOURS[mass], _SHADE) for mass in (1, 2)]
+        sides += [(f"contact_{side}", f"{side} contact", colour, 2 * _SHADE) for side, colour in CONTACT.items()]
+        for name, label, colour, alpha in sides:
+            _keyed(fig, "quad", label, source=self.sources[name], color=colour, alpha=alpha, line_width=0)
 
     def _event_table(self) -> DataTable:
         text = StringFormatter()
@@ -234,7 +289,13 @@ class Explorer:
             TableColumn(field=name, title=titles.get(name, name), formatter=text) for name in EVENT_COLUMNS[1:]
         ]
         return DataTable(
-            source=self.sources["events"], columns=columns, width=900, height=300, index_position=None, name="events"
+            source=self.sources["events"],
+            columns=columns,
+            width=900,
+            height=300,
+            index_position=None,
+            name="events",
+            styles={"will-change": "transform"},  # its own layer: its rows' change recomposites the page 40 ms less
         )
 
     def _map(self, picture: Picture) -> Any:
@@ -247,8 +308,7 @@ class Explorer:
             width=760,
             x_axis_label=picture.x,
             y_axis_label=picture.y,
-            tools="tap,hover,pan,wheel_zoom,reset",
-            tooltips=[("", "@label")],
+            tools="tap,pan,wheel_zoom,reset",  # no hover: its label under the pointer took clicks meant for the map
             name="map",
         )
         fig.rect(
@@ -264,6 +324,7 @@ class Explorer:
         )
         fig.add_layout(fig.legend[0], "right")
         fig.on_event(Tap, self._tap)
+        fig.on_event(DoubleTap, self._tap)  # a click within 0.3 s of the one before is a double tap to Bokeh
         return fig
 
     # -- computing ----------------------------------------------------------------------------
@@ -279,24 +340,76 @@ class Explorer:
         """Simulate the case on screen and redraw, the status line with it (one message to the
         page); an impossible value or a failed run is said in the status line and the last
         motion stays."""
+        self._cancel_check()
         try:
             periods = check_periods(self.periods_box.value)
-            scene = scene_of(self.current_case(), periods)
+            scene = scene_of(self.current_case(), periods, engine=self.engine)
         except OscillatorError as error:
             self._say(str(error), error=True)
             return
         self.scene = scene
         self.revision += 1
-        status = (
-            f"<span data-revision='{self.revision}'>#{self.revision}: {scene.periods} periods, "
-            f"{len(scene.events)} events; simulated in {1e3 * scene.seconds:.0f} ms ({_plain(scene.status)})</span>"
+        checking = "; CVODE checks it" if scene.engine != "cvode" else ""
+        self._draw(scene, f"<span data-revision='{self.revision}'>{self._summary(scene)}{checking}</span>")
+        if scene.engine != "cvode":
+            self._schedule_check()
+
+    def _summary(self, scene: Scene) -> str:
+        return (
+            f"#{self.revision}: {scene.periods} periods, {len(scene.events)} events; {scene.engine} in "
+            f"{1e3 * scene.seconds:.0f} ms ({_plain(scene.status)})"
         )
-        self._draw(scene, status)
+
+    def _schedule_check(self) -> None:
+        """CVODE's check of the motion drawn, once the controls rest: at once outside a server."""
+        document = pn.state.curdoc
+        if document is None or document.session_context is None:
+            self.check()
+            return
+        self._check_handle = document.add_timeout_callback(self.check, CHECK_DELAY_MS)
+
+    def _cancel_check(self) -> None:
+        handle, self._check_handle = self._check_handle, None
+        document = pn.state.curdoc
+        if handle is not None and document is not None:
+            try:
+                document.remove_timeout_callback(handle)
+            except ValueError:  # it has run
+                pass
+
+    def check(self) -> None:
+        """Run the motion on screen again with CVODE, the reference: the status line says that the
+        two agree event by event (times within :data:`TIME_AGREEMENT`), or CVODE's motion replaces
+        the one drawn and the status line says where they parted."""
+        self._check_handle = None
+        shown = self.scene
+        if shown is None or shown.engine == "cvode":
+            return
+        try:
+            reference = scene_of(shown.case, shown.periods, engine="cvode")
+        except OscillatorError as error:
+            self._say(f"CVODE could not check the motion: {error}", error=True)
+            return
+        differ, largest = differences(shown, reference)
+        mark = f"data-revision='{self.revision}' data-checked='1'"
+        if differ is None:
+            gap = f"; largest time difference {largest:.1e} s" if largest == largest else ""
+            self.status.set_text(
+                f"<span {mark}>{self._summary(shown)}; CVODE agrees, event by event "
+                f"(in {1e3 * reference.seconds:.0f} ms{gap})</span>"
+            )
+            return
+        self.scene = reference
+        self._draw(
+            reference,
+            f"<span class='oscillator-differs' {mark}>{self._summary(reference)}: CVODE's motion, drawn "
+            f"instead of {_plain(shown.engine)}'s: {_plain(differ)} (times compared to {TIME_AGREEMENT:g} s)</span>",
+        )
 
     def _say(self, text: str, *, error: bool = False) -> None:
         self.revision += 1
         kind = " class='oscillator-error'" if error else ""
-        self.status.text = f"<span{kind} data-revision='{self.revision}'>{_plain(text)}</span>"
+        self.status.set_text(f"<span{kind} data-revision='{self.revision}'>{_plain(text)}</span>")
 
     def _draw(self, scene: Scene, status: str) -> None:
         events = scene.events
@@ -304,7 +417,8 @@ class Explorer:
         table = {name: events[name].astype(str).to_numpy() for name in EVENT_COLUMNS[1:]}
         with pn.io.hold():
             self.sources["line"].data = {name: scene.trajectory[name].to_numpy() for name in ("t", *STATE)}
-            self.sources["strobe"].data = {name: scene.strobe[name].to_numpy() for name in ("k", *STATE)}
+            # lists, not arrays: a few points each, sent in the message's text instead of one frame each
+            self.sources["strobe"].data = {name: scene.strobe[name].tolist() for name in ("k", *STATE)}
             self.sources["events"].data = {"t": events["t"].to_numpy(), **table, "x": x}
             for mass in (1, 2):
                 self.sources[f"rest{mass}"].data = _spans(scene.rests[mass])
@@ -312,8 +426,8 @@ class Explorer:
                 self.sources[f"contact_{side}"].data = _spans(scene.contacts[side])
             if len(self.sources["orbit"].data["x1"]):
                 self.sources["orbit"].data = {name: [] for name in STATE}
-                self.orbit_text.text = ""
-            self.status.text = status
+                self.orbit_text.set_text("")
+            self.status.set_text(status)
 
     def _set(self, text: str) -> None:
         """``NAME=VALUE`` typed in the box: the control set to it (its slider widened to hold it)."""
@@ -350,10 +464,10 @@ class Explorer:
             orbit = find_orbit(self.current_case(), guess=end, section=self.scene.t_end)
             one = scene_of(orbit.case, orbit.period, t0=orbit.section, **dict(zip(STATE, orbit.state, strict=True)))
         except OscillatorError as error:
-            self.orbit_text.text = f"<span class='oscillator-error'>no orbit: {_plain(str(error))}</span>"
+            self.orbit_text.set_text(f"<span class='oscillator-error'>no orbit: {_plain(str(error))}</span>")
             return
         with pn.io.hold():
-            self.orbit_text.text = _orbit_html(orbit)
+            self.orbit_text.set_text(_orbit_html(orbit))
             self.sources["orbit"].data = {name: one.trajectory[name].to_numpy() for name in STATE}
 
     def _tap(self, event: Any) -> None:
@@ -364,10 +478,11 @@ class Explorer:
         try:
             found = self.picture.attractors_at(index)
         except OscillatorError as error:
-            self.picked.text = f"<span class='oscillator-error'>{_plain(str(error))}</span>"
+            self.picked.set_text(f"<span class='oscillator-error'>{_plain(str(error))}</span>")
             return
         self.clicks += 1
-        self.picked.text = _picked_html(self.picture.label_at(index), found, time.perf_counter() - started, self.clicks)
+        seconds = time.perf_counter() - started
+        self.picked.set_text(_picked_html(self.picture.label_at(index), found, seconds, self.clicks))
         if found.attractors:
             case, point = found.case, found.attractors[0].points[0]
             values = {name: float(getattr(case.parameters, name)) for name in self.widgets if name not in START}

@@ -98,9 +98,10 @@ def browser_page(width: int = 1400, height: int = 1300) -> Iterator[tuple[Any, l
             browser.close()
 
 
-#: In the page: ``__revision(n)`` resolves once the frame is painted in which the status line first shows
-#: revision ``n`` (searched through the page's shadow roots on every frame), with the time since
-#: the last key press or click (``performance.now()``, ms).
+#: In the page: ``__revision(n, checked)`` resolves once the frame is painted in which the status
+#: line first shows revision ``n`` (and, with ``checked``, CVODE's verdict on it), with the time
+#: since the last key press or click (``performance.now()``, ms).  The status line is found through
+#: the page's shadow roots and watched for changes.
 _WATCH = """
 (() => {
   window.__input = performance.now();
@@ -127,28 +128,44 @@ _WATCH = """
     }
     return holder ? holder.querySelector('span[data-revision]') : null;
   };
-  window.__revision = (n) => new Promise(done => {
-    const look = () => {
+  // waits on the status line's changes, not on every animation frame: a frame requested at each
+  // vsync keeps the browser drawing, and takes the processor the server simulates on
+  window.__revision = (n, checked) => new Promise(done => {
+    const ok = () => {
       const span = shown();
-      if (span && Number(span.dataset.revision) >= n) {
-        // the frame that shows it: a task posted from its animation callback runs after its paint
-        requestAnimationFrame(() => {
-          const channel = new MessageChannel();
-          channel.port1.onmessage = () => done(performance.now() - window.__input);
-          channel.port2.postMessage(null);
-        });
-      } else {
-        requestAnimationFrame(look);
-      }
+      return span !== null && Number(span.dataset.revision) >= n && (!checked || span.dataset.checked !== undefined);
     };
-    look();
+    const finish = () => {
+      // the frame that shows it: a task posted from its animation callback runs after its paint
+      requestAnimationFrame(() => {
+        const channel = new MessageChannel();
+        channel.port1.onmessage = () => done(performance.now() - window.__input);
+        channel.port2.postMessage(null);
+      });
+    };
+    const watch = () => {
+      if (ok()) return finish();
+      if (holder === null) return setTimeout(watch, 20);  // the page is not built yet
+      let timer = null;
+      const seen = () => {
+        if (!ok()) return;
+        observer.disconnect();
+        clearInterval(timer);
+        finish();
+      };
+      const observer = new MutationObserver(seen);
+      observer.observe(holder, {childList: true, subtree: true, attributes: true, characterData: true});
+      timer = setInterval(seen, 100);  // should the status line be built again elsewhere
+    };
+    watch();
   });
 })();
 """
 
 
-def wait_revision(page: Any, revision: int, timeout: float = 60.0) -> float:
-    """Wait until the page's status line shows ``revision`` (or a later one) and the browser has
-    painted it; the milliseconds since the last key press or click, measured in the page."""
+def wait_revision(page: Any, revision: int, timeout: float = 60.0, *, checked: bool = False) -> float:
+    """Wait until the page's status line shows ``revision`` (or a later one) - with ``checked``,
+    CVODE's verdict on it - and the browser has painted it; the milliseconds since the last key
+    press or click, measured in the page."""
     page.set_default_timeout(timeout * 1e3)
-    return float(page.evaluate("n => window.__revision(n)", revision))
+    return float(page.evaluate("([n, checked]) => window.__revision(n, checked)", [revision, checked]))

@@ -27,12 +27,14 @@ from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 
-__all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "Scene", "scene_of"]
+__all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "TIME_AGREEMENT", "Scene", "differences", "scene_of"]
 
 #: The forcing periods a scene spans unless asked otherwise.
 PERIODS = 50
 #: Trajectory points per forcing period (the events are exact whatever the grid).
 GRID = 64
+#: How far two engines' event times may lie apart and still show the same table (s): its precision.
+TIME_AGREEMENT = 1e-6
 #: The event table's columns, in the page's order.
 EVENT_COLUMNS = ("t", "mass", "kind", "from_domain", "to_domain", "theorem", "equation", "boundary")
 
@@ -62,6 +64,8 @@ class Scene:
         The simulation's wall time.
     status : str
         How the run ended (``"complete"``; a failure's message otherwise).
+    engine : str
+        The integrator that ran it (:mod:`oscillator.engines`).
     """
 
     case: Case
@@ -73,6 +77,7 @@ class Scene:
     contacts: dict[str, list[tuple[float, float]]]
     seconds: float
     status: str
+    engine: str
 
     @property
     def t0(self) -> float:
@@ -90,9 +95,10 @@ def check_periods(periods: object) -> int:
     return int(periods)
 
 
-def scene_of(case: Case | str, periods: int = PERIODS, **overrides: float) -> Scene:
+def scene_of(case: Case | str, periods: int = PERIODS, *, engine: str = "cvode", **overrides: float) -> Scene:
     """The motion of ``case`` (with ``overrides`` of its parameters and start) over ``periods``
-    forcing periods from its start: one :func:`~oscillator.simulate` run with the CVODE engine.
+    forcing periods from its start: one :func:`~oscillator.simulate` run with ``engine`` (CVODE,
+    the reference, unless another is named).
 
     Raises
     ------
@@ -105,7 +111,7 @@ def scene_of(case: Case | str, periods: int = PERIODS, **overrides: float) -> Sc
     run_case = resolve_case(base, t_end=float(marks[-1]))
     grid = np.linspace(marks[0], marks[-1], periods * GRID + 1)
     started = time.perf_counter()
-    result = simulate(run_case, save=SaveAt(ts=grid, segments=True))
+    result = simulate(run_case, engine=engine, save=SaveAt(ts=grid, segments=True))
     seconds = time.perf_counter() - started
     trajectory = result.trajectory[["t", "x1", "v1", "x2", "v2"]]
     return Scene(
@@ -118,7 +124,31 @@ def scene_of(case: Case | str, periods: int = PERIODS, **overrides: float) -> Sc
         contacts={side: _intervals(result.segments, partial(_touches, side=side)) for side in ("left", "right")},
         seconds=seconds,
         status=result.status.value if not result.message else result.message,
+        engine=engine,
     )
+
+
+def differences(scene: Scene, reference: Scene) -> tuple[str | None, float]:
+    """How ``scene``'s switching events differ from ``reference``'s, as the event table shows
+    them: None when both hold the same events (mass, kind, domains, theorem, equation, boundary)
+    at times within :data:`TIME_AGREEMENT`, a sentence otherwise; and the largest time difference
+    of the events both hold (nan when there are none)."""
+    shown, ruled = scene.events, reference.events
+    both = min(len(shown), len(ruled))
+    gaps = np.abs(shown.t.to_numpy(float)[:both] - ruled.t.to_numpy(float)[:both])
+    largest = float(gaps.max()) if both else float("nan")
+    columns = list(EVENT_COLUMNS[1:])
+    same = shown[columns].iloc[:both].astype(str).to_numpy() == ruled[columns].iloc[:both].astype(str).to_numpy()
+    unlike = np.flatnonzero(~same.all(axis=1) | (gaps > TIME_AGREEMENT))
+    if len(unlike):
+        k = int(unlike[0])
+        said = f"event {k + 1} differs (t = {float(shown.t.iloc[k]):.9g} s against {float(ruled.t.iloc[k]):.9g} s)"
+        return said, largest
+    if len(shown) != len(ruled):
+        return f"{len(shown)} events against {len(ruled)}", largest
+    if scene.status != reference.status:
+        return f"the run ended {scene.status!r} against {reference.status!r}", largest
+    return None, largest
 
 
 def _with_switches(trajectory: pd.DataFrame, events: pd.DataFrame) -> pd.DataFrame:
