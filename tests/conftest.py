@@ -74,6 +74,29 @@ def build():
     return make_case
 
 
+@pytest.fixture(scope="session")
+def once(tmp_path_factory, worker_id):
+    """``once(name, compute)``: ``compute()`` run by one of the test workers only, the others
+    reading its pickled result (pytest-xdist's recipe: a module's fixture is otherwise computed by
+    every worker that runs one of its tests, 12 to 18 s each for the frequency responses)."""
+    import pickle
+
+    from filelock import FileLock
+
+    def computed(name, compute):
+        if worker_id == "master":  # no workers
+            return compute()
+        path = tmp_path_factory.getbasetemp().parent / f"once-{name}.pickle"
+        with FileLock(f"{path}.lock"):
+            if path.is_file():
+                return pickle.loads(path.read_bytes())
+            value = compute()
+            path.write_bytes(pickle.dumps(value))
+            return value
+
+    return computed
+
+
 @pytest.fixture
 def work(tmp_path):
     """An empty working folder for one command (a case file can be written beside it)."""

@@ -102,9 +102,11 @@ def test_a_period_doubling_gives_the_period_2_branch_that_the_sweep_meets():
 
 
 @pytest.fixture(scope="module")
-def window():
+def window(once):
     case = resolve_case("instance-1", Q2=71.165)
-    return frequency_response(case, "Omega", (1.5999, 1.6001), states=fresh_starts(case, 16), sweep=41)
+    return once(
+        "window", lambda: frequency_response(case, "Omega", (1.5999, 1.6001), states=fresh_starts(case, 16), sweep=41)
+    )
 
 
 def test_the_coexistence_at_omega_1_6_is_a_hysteresis_window(window):
@@ -214,12 +216,17 @@ def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
 
 
 @pytest.fixture(scope="module")
-def small_folder(tmp_path_factory):
-    """A small frequency response's folder (2 seeds, 3 sweep values), computed once."""
-    folder = tmp_path_factory.mktemp("small") / "frc"
-    command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
-    assert CliRunner().invoke(app, command).exit_code == 0
-    return folder
+def small_folder(tmp_path_factory, once):
+    """A small frequency response's folder (2 seeds, 3 sweep values), computed by one test worker
+    (the others copy it before they change it)."""
+
+    def computed():
+        folder = tmp_path_factory.mktemp("small") / "frc"
+        command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
+        assert CliRunner().invoke(app, command).exit_code == 0
+        return folder
+
+    return once("small-frc", computed)
 
 
 @pytest.mark.parametrize("damage", ["bytes", "metadata", "measures"])

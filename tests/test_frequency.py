@@ -16,9 +16,13 @@ DUFFING = dict(
 
 
 @pytest.fixture(scope="module")
-def duffing():
+def duffing(once):
     """The Duffing example of docs/frequency.md, run as the page shows it (and checked to be the
-    system of :data:`DUFFING`)."""
+    system of :data:`DUFFING`), by one test worker."""
+    return once("duffing", _duffing)
+
+
+def _duffing():
     from pathlib import Path
 
     import oscillator as osc
