@@ -157,10 +157,9 @@ class Explorer:
         picture: Picture | None = None,
         engine: str = DRAWING_ENGINE,
     ) -> None:
-        from oscillator.engines import ENGINES
+        from oscillator.engines import engine_factory
 
-        if engine not in ENGINES:
-            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}", field="engine")
+        engine_factory(engine)  # an unknown name refused, naming the engines
         self.engine = engine
         self._check_handle: Any = None
         self.case = resolve_case(case)
@@ -349,9 +348,10 @@ class Explorer:
             return
         self.scene = scene
         self.revision += 1
-        checking = "; CVODE checks it" if scene.engine != "cvode" else ""
+        checked = scene.engine != "cvode"
+        checking = "; CVODE checks it" if checked else ""
         self._draw(scene, f"<span data-revision='{self.revision}'>{self._summary(scene)}{checking}</span>")
-        if scene.engine != "cvode":
+        if checked:
             self._schedule_check()
 
     def _summary(self, scene: Scene) -> str:
@@ -393,7 +393,7 @@ class Explorer:
         differ, largest = differences(shown, reference)
         mark = f"data-revision='{self.revision}' data-checked='1'"
         if differ is None:
-            gap = f"; largest time difference {largest:.1e} s" if largest == largest else ""
+            gap = f"; largest time difference {largest:.1e} s" if not math.isnan(largest) else ""
             self.status.set_text(
                 f"<span {mark}>{self._summary(shown)}; CVODE agrees, event by event "
                 f"(in {1e3 * reference.seconds:.0f} ms{gap})</span>"
