@@ -6,6 +6,7 @@ property instead of the default fixed 100.
 
 import os
 import signal
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -95,6 +96,55 @@ def once(tmp_path_factory, worker_id):
             return value
 
     return computed
+
+
+#: Mass 1 a hardening Duffing oscillator (K2 > 0, a light damper, no friction, the stops far);
+#: mass 2 a linear one beside it, uncoupled.
+DUFFING = dict(
+    m1=1.0, K1=1.0, K2=0.05, C1=0.05, C2=0.0, K3=0.0, C3=0.0, m2=1.5, K4=1.0, K5=0.0, C4=0.2, C5=0.0, K6=1.0,
+    mu_k=0.0, mu_s=0.0, P1=0.0, P2=0.0, d=1000.0, d1=1000.0, Q1=0.2, Q2=0.1, Omega=0.8, phi1=0.0, phi2=0.0,
+    x1=0.0, v1=0.0, x2=0.0, v2=0.1,
+)  # fmt: skip
+
+
+@pytest.fixture(scope="session")
+def duffing(once):
+    """The Duffing example of docs/frequency.md, run as the page shows it (and checked to be the
+    system of :data:`DUFFING`), by one test worker."""
+    return once("duffing", _duffing)
+
+
+def _duffing():
+    import oscillator as osc
+    from oscillator import resolve_case
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "frequency.md").read_text(encoding="utf-8")
+    block = page.split("A hardening Duffing oscillator", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    scope = {"osc": osc}
+    exec(compile("\n".join(line[2:] for line in block.splitlines()), "docs/frequency.md", "exec"), scope)
+    assert scope["case"] == resolve_case("instance-1", **DUFFING)
+    return scope["found"]
+
+
+#: The frequency response of the window where two orbits coexist (docs/frequency.md).
+FRC_WINDOW = ["frc", "instance-1", "--set", "Q2=71.165", "--param", "Omega", "1.5999", "1.6001", "--starts", "16"]
+
+
+@pytest.fixture(scope="session")
+def small_frc(tmp_path_factory, once):
+    """A small frequency response's folder (the window's, 2 seeds, 3 sweep values), computed by
+    one test worker (tests that change it copy it first)."""
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    def computed():
+        folder = tmp_path_factory.mktemp("small") / "frc"
+        command = [*FRC_WINDOW, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
+        assert CliRunner().invoke(app, command).exit_code == 0
+        return folder
+
+    return once("small-frc", computed)
 
 
 @pytest.fixture

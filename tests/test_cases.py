@@ -88,3 +88,28 @@ def test_unknown_run_setting_suggests(tmp_path):
 def test_missing_file_is_a_clear_error(tmp_path):
     with pytest.raises(OscillatorError, match="cannot read case file"):
         load_case(tmp_path / "nowhere.toml")
+
+
+@pytest.mark.parametrize("title", ["A short title", "", "T" * 300])
+def test_a_case_with_many_overrides_is_written_as_a_file_that_reads_back(tmp_path, title):
+    """Every parameter overridden (what the explorer's "Save as case file" writes after every
+    slider moved, or a command with many --set): the title that lists the changes stays within a
+    case file's 300 characters, counting those that do not fit, and the file loads."""
+    import dataclasses
+
+    from oscillator.io.cases import case_to_toml, resolve_case
+    from oscillator.model.parameters import Parameters
+
+    base = dataclasses.replace(INSTANCE_1, title=title)
+    changes = {name: float(getattr(base.parameters, name)) * 1.01 + 0.001 for name in Parameters.names()}
+    case = resolve_case(base, **changes)
+    assert len(case.modified) == len(changes) > 20
+    assert len(case.full_title) <= 300
+    assert case.full_title.startswith(title[:200])
+    listed = case.full_title.split("modified: ", 1)[1]
+    assert listed.endswith(("more)", "more", "values)")), listed
+    path = tmp_path / "saved.toml"
+    path.write_text(case_to_toml(case), encoding="utf-8")
+    loaded = load_case(path)
+    assert loaded.title == case.full_title
+    assert loaded.parameters == case.parameters

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from conftest import FRC_WINDOW
 from oscillator import frequency_response, resolve_case, response
 from oscillator.attractors.atlas import fresh_starts
 from oscillator.attractors.frequency import FrequencyStore
@@ -190,7 +191,7 @@ def test_jumps_need_a_move_out_of_scale_and_a_change():
     assert not jumps(np.ones(6, int), growing, ["a"] * 6).any()
 
 
-ARGS = ["frc", "instance-1", "--set", "Q2=71.165", "--param", "Omega", "1.5999", "1.6001", "--starts", "16"]
+ARGS = FRC_WINDOW
 
 
 def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
@@ -215,29 +216,15 @@ def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
     assert pd.read_parquet(folder / "sweeps.parquet").jump.sum() == 2
 
 
-@pytest.fixture(scope="module")
-def small_folder(tmp_path_factory, once):
-    """A small frequency response's folder (2 seeds, 3 sweep values), computed by one test worker
-    (the others copy it before they change it)."""
-
-    def computed():
-        folder = tmp_path_factory.mktemp("small") / "frc"
-        command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
-        assert CliRunner().invoke(app, command).exit_code == 0
-        return folder
-
-    return once("small-frc", computed)
-
-
 @pytest.mark.parametrize("damage", ["bytes", "metadata", "measures"])
-def test_a_damaged_part_is_refused_by_name(tmp_path, small_folder, damage):
+def test_a_damaged_part_is_refused_by_name(tmp_path, small_frc, damage):
     """A part that cannot be read, a seed's part whose metadata is not its branches, a branch's
     measures of another length: each refused in one line naming the part, exit 2."""
     import shutil
 
     runner = CliRunner()
     folder = tmp_path / "frc"
-    shutil.copytree(small_folder, folder)
+    shutil.copytree(small_frc, folder)
     command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
     parts = folder / "parts"
     name = "measures-0000" if damage == "measures" else "seed-0000"

@@ -4,35 +4,7 @@ sweeps up and down with their jumps, against a hardening Duffing oscillator's fo
 import numpy as np
 import pytest
 
-from oscillator import InputError, frequency_response, resolve_case
-
-#: Mass 1 a hardening Duffing oscillator (K2 > 0, a light damper, no friction, the stops far);
-#: mass 2 a linear one beside it, uncoupled.
-DUFFING = dict(
-    m1=1.0, K1=1.0, K2=0.05, C1=0.05, C2=0.0, K3=0.0, C3=0.0, m2=1.5, K4=1.0, K5=0.0, C4=0.2, C5=0.0, K6=1.0,
-    mu_k=0.0, mu_s=0.0, P1=0.0, P2=0.0, d=1000.0, d1=1000.0, Q1=0.2, Q2=0.1, Omega=0.8, phi1=0.0, phi2=0.0,
-    x1=0.0, v1=0.0, x2=0.0, v2=0.1,
-)  # fmt: skip
-
-
-@pytest.fixture(scope="module")
-def duffing(once):
-    """The Duffing example of docs/frequency.md, run as the page shows it (and checked to be the
-    system of :data:`DUFFING`), by one test worker."""
-    return once("duffing", _duffing)
-
-
-def _duffing():
-    from pathlib import Path
-
-    import oscillator as osc
-
-    page = (Path(__file__).resolve().parents[1] / "docs" / "frequency.md").read_text(encoding="utf-8")
-    block = page.split("A hardening Duffing oscillator", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
-    scope = {"osc": osc}
-    exec(compile("\n".join(line[2:] for line in block.splitlines()), "docs/frequency.md", "exec"), scope)
-    assert scope["case"] == resolve_case("instance-1", **DUFFING)
-    return scope["found"]
+from oscillator import InputError, frequency_response
 
 
 def test_the_branch_folds_twice_and_is_measured_at_every_point(duffing):

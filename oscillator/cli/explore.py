@@ -31,7 +31,7 @@ def explore(
         str,
         typer.Argument(
             metavar="CASE|FOLDER",
-            help="A named case, a case file (.toml), or a folder the atlas or basins command wrote.",
+            help="A named case, a case file (.toml), or a folder the atlas, basins, sweep or frc command wrote.",
         ),
     ],
     set_: SetOption = None,
@@ -49,11 +49,11 @@ def explore(
     ] = "127.0.0.1",
     engine: DrawingEngineOption = "dop853",
 ) -> None:
-    """Serve the explorer of CASE, or of an atlas or basins FOLDER, on this machine and print its
-    address; open it in a browser.  Every parameter and the start have a slider; on each change the
-    motion is simulated again (drawn with the compiled DOP853, then checked by CVODE) and the time
-    series, phase portraits, stroboscopic points and event table redraw.  On a folder's map, a
-    click on a cell shows the attractors there.  Ctrl-C stops.
+    """Serve the explorer of CASE, or of an atlas, basins, sweep or frc FOLDER, on this machine
+    and print its address; open it in a browser.  Every parameter and the start have a slider; on
+    each change the motion is simulated again (drawn with the compiled DOP853, then checked by
+    CVODE) and the time series, phase portraits, stroboscopic points and event table redraw.  On
+    a folder's picture, a click on a cell or point shows the attractors there.  Ctrl-C stops.
 
     \b
     Examples:

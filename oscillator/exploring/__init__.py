@@ -18,7 +18,8 @@ def explore(
     case_or_folder: Case | str | Path, periods: int = 50, *, engine: str = "dop853", **overrides: float
 ) -> Explorer:
     """The explorer of a case (a name, a case file or a :class:`~oscillator.Case`, with
-    ``overrides`` of its parameters and start) or of an atlas or basins folder: displayed by a
+    ``overrides`` of its parameters and start) or of an atlas, basins, sweep or frequency-response
+    folder: displayed by a
     notebook, served by ``oscillator explore``.  ``engine`` draws each change (see
     :class:`~oscillator.exploring.app.Explorer`)."""
     from oscillator.exploring.app import Explorer

@@ -39,7 +39,7 @@ from bokeh.transform import factor_cmap
 from oscillator.analysis.axes import STATE
 from oscillator.errors import InputError, OscillatorError
 from oscillator.exploring.controls import START, Control, controls_of
-from oscillator.exploring.maps import Picture
+from oscillator.exploring.maps import WHAT, Picture
 from oscillator.exploring.scene import (
     EVENT_COLUMNS,
     PERIODS,
@@ -302,7 +302,8 @@ class Explorer:
         palette = (list(Category10[10]) * (len(labels) // 10 + 1))[: max(len(labels), 3)]
         source = ColumnDataSource({"x": picture.points.x, "y": picture.points.y, "label": picture.points.label})
         fig = figure(
-            title=f"{picture.kind} of {picture.case.name}: click a cell for its attractors",
+            title=f"{WHAT[picture.kind]} of {picture.case.name}: click a {'cell' if picture.cells else 'point'} "
+            "for its attractors",
             height=380,
             width=760,
             x_axis_label=picture.x,
@@ -310,17 +311,21 @@ class Explorer:
             tools="tap,pan,wheel_zoom,reset",  # no hover: its label under the pointer took clicks meant for the map
             name="map",
         )
-        fig.rect(
-            "x",
-            "y",
-            width=picture.width,
-            height=picture.height,
-            source=source,
-            line_width=0,
-            fill_color=factor_cmap("label", palette=palette, factors=labels),
-            nonselection_fill_alpha=0.5,
-            legend_field="label",
-        )
+        colour = factor_cmap("label", palette=palette, factors=labels)
+        if picture.cells:
+            fig.rect(
+                "x",
+                "y",
+                width=picture.width,
+                height=picture.height,
+                source=source,
+                line_width=0,
+                fill_color=colour,
+                nonselection_fill_alpha=0.5,
+                legend_field="label",
+            )
+        else:
+            fig.scatter("x", "y", source=source, size=4, color=colour, nonselection_alpha=0.4, legend_field="label")
         fig.add_layout(fig.legend[0], "right")
         fig.on_event(Tap, self._tap)
         fig.on_event(DoubleTap, self._tap)  # a click within 0.3 s of the one before is a double tap to Bokeh
@@ -471,27 +476,31 @@ class Explorer:
             self.sources["orbit"].data = {name: one.trajectory[name].to_numpy() for name in STATE}
 
     def _tap(self, event: Any) -> None:
-        """A click on the map: the attractors there now; the first one's motion on the next tick."""
+        """A click on the map: the attractors there now; the motion from the site's orbit (a
+        branch point's) or the first attractor's point on the next tick."""
         assert self.picture is not None
         index = self.picture.nearest(float(event.x), float(event.y))
         started = time.perf_counter()
         try:
-            found = self.picture.attractors_at(index)
+            site = self.picture.site(index)
+            found = self.picture.attractors(site)
         except OscillatorError as error:
             self.picked.set_text(f"<span class='oscillator-error'>{_plain(str(error))}</span>")
             return
         self.clicks += 1
         seconds = time.perf_counter() - started
-        self.picked.set_text(_picked_html(self.picture.label_at(index), found, seconds, self.clicks))
-        if found.attractors:
-            case, point = found.case, found.attractors[0].points[0]
-            values = {name: float(getattr(case.parameters, name)) for name in self.widgets if name not in START}
-            self._put(values | dict(zip(START, (float(v) for v in point), strict=True)))
-            document = pn.state.curdoc
-            if document is not None and document.session_context is not None:
-                document.add_next_tick_callback(self.update)  # the attractors reach the page first
-            else:
-                self.update()
+        self.picked.set_text(_picked_html(self.picture.label_at(index), site.held, found, seconds, self.clicks))
+        state = site.state if site.state is not None else (found.attractors[0].points[0] if found.attractors else None)
+        if state is None:
+            return
+        case = site.case
+        values = {name: float(getattr(case.parameters, name)) for name in self.widgets if name not in START}
+        self._put(values | dict(zip(START, (float(v) for v in state), strict=True)))
+        document = pn.state.curdoc
+        if document is not None and document.session_context is not None:
+            document.add_next_tick_callback(self.update)  # the attractors reach the page first
+        else:
+            self.update()
 
     def _case_file(self) -> io.StringIO:
         return io.StringIO(case_to_toml(self.current_case()))
@@ -513,7 +522,7 @@ def _multipliers(values: Any) -> str:
     return ", ".join(f"{abs(mu):.4g}" for mu in values)
 
 
-def _picked_html(where: str, found: Any, seconds: float, click: int) -> str:
+def _picked_html(where: str, held: str, found: Any, seconds: float, click: int) -> str:
     items = []
     for attractor in found.attractors:
         point = ", ".join(f"{v:.6g}" for v in attractor.points[0])
@@ -526,7 +535,8 @@ def _picked_html(where: str, found: Any, seconds: float, click: int) -> str:
     return (
         f"<div class='oscillator-picked-found' data-click='{click}' data-count='{len(found.attractors)}'>"
         f"{_plain(where)}: {len(found.attractors)} attractor(s), found in {seconds:.2f} s"
-        f"<ul>{''.join(items)}</ul></div>"
+        + (f"<p class='oscillator-held'>{_plain(held)}</p>" if held else "")
+        + f"<ul>{''.join(items)}</ul></div>"
     )
 
 

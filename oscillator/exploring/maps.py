@@ -1,15 +1,24 @@
 """A folder's picture for the explorer, and what a click on it computes.
 
-``oscillator explore FOLDER`` opens an atlas (a plane of two parameters, each cell coloured by the
-regime of its attractors) or the basins of a slice of starts (each cell coloured by the attractor
-its start reaches).  A click on a cell asks :func:`~oscillator.find_attractors` for the
-attractor(s) there: at an atlas cell, from the case's start and from each attractor the folder
-holds at that cell; at a basins cell, from the cell's start.  The folder's own values are read
-once, checked (:func:`~oscillator.report.global_results.read_global`), and nothing else is read.
+``oscillator explore FOLDER`` opens the folder an analysis wrote, drawn as its command draws it:
+
+- an **atlas** (a plane of two parameters, each cell coloured by the regime of its attractors);
+- **basins** (a slice of starts, each cell coloured by the attractor its start reaches);
+- a **sweep** (its bifurcation diagram: the Poincaré points of the swept mass against the
+  parameter, coloured by the period the sweep recorded);
+- a **frequency response** (``oscillator frc``: every branch point's peak-to-peak amplitude of
+  each mass against the parameter, stable and unstable apart).
+
+A click on a cell or a point is a :class:`Site`: the case there, the starts that
+:func:`~oscillator.find_attractors` runs from (the case's start and what the folder holds there:
+an atlas cell's attractors, a sweep value's end state, a branch point's orbit; a basins cell's own
+start), and what the folder says of it.  The folder's own files are read once, checked, and nothing
+else is read.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,29 +32,65 @@ from oscillator.attractors.basins import Basins
 from oscillator.attractors.finding import Attractors, find_attractors
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.parameters import Parameters
 from oscillator.text import printable
 
-__all__ = ["Picture", "picture_of"]
+__all__ = ["Picture", "Site", "picture_of"]
+
+#: The folders the explorer opens, by the kind their marker file names.
+KINDS = ("atlas", "basins", "sweep", "frc")
+#: How far from an unstable branch point the starts of a click there are, relative to its state.
+NUDGE = 1e-3
+#: What each folder's points are, in the explorer's words.
+WHAT = {"atlas": "atlas", "basins": "basins", "sweep": "sweep", "frc": "frequency response"}
+
+
+@dataclass(frozen=True, eq=False)
+class Site:
+    """What a click on one cell or point asks, and what the folder holds there.
+
+    Attributes
+    ----------
+    case : Case
+        The case there (the folder's, with the cell's or point's parameter values).
+    starts : ndarray of shape (N, 4)
+        The starts :func:`~oscillator.find_attractors` runs from, at the case's ``t0``.
+    held : str
+        What the folder says of the site (plain text; empty if nothing beyond its label).
+    state : ndarray of shape (4,), optional
+        The start put on the explorer's controls (a branch point's orbit); the first attractor
+        found when None.
+    """
+
+    case: Case
+    starts: np.ndarray
+    held: str = ""
+    state: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
 class Picture:
-    """A folder's picture: one point per cell, with its label, and what a click there asks.
+    """A folder's picture: one point per cell (or per point drawn), with its label, and what a
+    click there asks.
 
     Attributes
     ----------
     kind : str
-        ``"atlas"`` or ``"basins"``.
+        One of :data:`KINDS`.
     case : Case
         The folder's case.
     x, y : str
-        The axes' names (parameters for an atlas, start coordinates for basins).
+        The axes' names.
     points : DataFrame
-        ``x, y, label``: one row per cell, in the folder's order.
+        ``x, y, label, at``: one row per cell or point drawn, in the folder's order; ``at`` is the
+        site (a row of ``source``) a click there asks for.
     width, height : float
-        A cell's size along each axis.
-    source : Atlas or Basins
-        What the folder holds.
+        A cell's size along each axis; 0 for a picture of points.
+    source : Any
+        What the folder holds: an :class:`~oscillator.Atlas`, a :class:`~oscillator.Basins`, a
+        sweep's summary or a frequency response's branch points (one row per site).
+    site_of : callable
+        ``site_of(picture, at)``: the :class:`Site` of a row of ``source``.
     """
 
     kind: str
@@ -56,31 +101,39 @@ class Picture:
     width: float
     height: float
     source: Any
+    site_of: Callable[[Picture, int], Site]
+
+    @property
+    def cells(self) -> bool:
+        """Whether the picture is of cells (an atlas, basins), not of points."""
+        return self.width > 0
 
     def nearest(self, x: float, y: float) -> int:
-        """The cell nearest ``(x, y)``, measured in cells."""
-        dx = (self.points.x.to_numpy() - x) / (self.width or 1.0)
-        dy = (self.points.y.to_numpy() - y) / (self.height or 1.0)
+        """The cell or point nearest ``(x, y)``, measured in cells (in the axes' spans for points)."""
+        xs, ys = self.points.x.to_numpy(float), self.points.y.to_numpy(float)
+        width = self.width or float(np.ptp(xs)) or 1.0
+        height = self.height or float(np.ptp(ys)) or 1.0
+        dx, dy = (xs - x) / width, (ys - y) / height
         return int(np.argmin(dx * dx + dy * dy))
 
+    def site(self, index: int) -> Site:
+        """What a click on point ``index`` asks, and what the folder holds there."""
+        return self.site_of(self, int(self.points.at[index, "at"]))
+
     def starts_at(self, index: int) -> tuple[Case, np.ndarray]:
-        """The case at cell ``index`` and the starts a click there runs from."""
-        row = self.points.iloc[index]
-        if self.kind == "atlas":
-            case = resolve_case(self.case, **{self.x: float(row.x), self.y: float(row.y)})
-            table = self.source.table
-            held = table[(table[self.x] == row.x) & (table[self.y] == row.y) & (table.status == "ok")]
-            starts = [np.array(case.initial.y, dtype=float), *held[list(STATE)].to_numpy(float)]
-            return case, np.unique(np.array(starts), axis=0)
-        start = np.array(self.case.initial.y, dtype=float)
-        start[STATE.index(self.x)], start[STATE.index(self.y)] = float(row.x), float(row.y)
-        return self.case, start[None, :]
+        """The case at point ``index`` and the starts a click there runs from."""
+        site = self.site(index)
+        return site.case, site.starts
 
     def attractors_at(self, index: int) -> Attractors:
-        """What :func:`~oscillator.find_attractors` finds from the starts of cell ``index``."""
-        case, starts = self.starts_at(index)
+        """What :func:`~oscillator.find_attractors` finds from the starts of point ``index``."""
+        return self.attractors(self.site(index))
+
+    def attractors(self, site: Site) -> Attractors:
+        """What :func:`~oscillator.find_attractors` finds from the starts of ``site`` (with the
+        folder's settings for basins, the defaults elsewhere)."""
         settings = self.source.found.settings if self.kind == "basins" else None
-        return find_attractors(case, states=starts, settings=settings)
+        return find_attractors(site.case, states=site.starts, settings=settings)
 
     def label_at(self, index: int) -> str:
         row = self.points.iloc[index]
@@ -92,6 +145,13 @@ def _step(values: np.ndarray) -> float:
     return float(np.min(np.diff(unique))) if len(unique) > 1 else 1.0
 
 
+def _starts(case: Case, *held: np.ndarray) -> np.ndarray:
+    """The case's start and the finite states held, each once."""
+    starts = [np.array(case.initial.y, dtype=float), *(s for s in held if np.isfinite(s).all())]
+    return np.unique(np.array(starts), axis=0)
+
+
+# -- atlas and basins ---------------------------------------------------------------------------
 def _atlas(atlas: Atlas) -> Picture:
     x, y = atlas.x.name, atlas.y.name
     table = atlas.table
@@ -102,7 +162,16 @@ def _atlas(atlas: Atlas) -> Picture:
         for regime, n in zip(first.regime, counts.loc[list(zip(first.row, first.column, strict=True))], strict=True)
     ]
     points = pd.DataFrame({"x": first[x].to_numpy(float), "y": first[y].to_numpy(float), "label": labels})
-    return Picture("atlas", atlas.case, x, y, points, _step(points.x), _step(points.y), atlas)
+    points["at"] = np.arange(len(points))
+    return Picture("atlas", atlas.case, x, y, points, _step(points.x), _step(points.y), atlas, _atlas_site)
+
+
+def _atlas_site(picture: Picture, at: int) -> Site:
+    row = picture.points.iloc[at]
+    case = resolve_case(picture.case, **{picture.x: float(row.x), picture.y: float(row.y)})
+    table = picture.source.table
+    held = table[(table[picture.x] == row.x) & (table[picture.y] == row.y) & (table.status == "ok")]
+    return Site(case, _starts(case, *held[list(STATE)].to_numpy(float)))
 
 
 def _basins(basins: Basins) -> Picture:
@@ -111,11 +180,129 @@ def _basins(basins: Basins) -> Picture:
     names = {a.id: a.name for a in basins.found.attractors}
     text = [names.get(int(k), "failed") for k in labels.attractor]
     points = pd.DataFrame({"x": labels[x].to_numpy(float), "y": labels[y].to_numpy(float), "label": text})
-    return Picture("basins", basins.found.case, x, y, points, _step(points.x), _step(points.y), basins)
+    points["at"] = np.arange(len(points))
+    case = basins.found.case
+    return Picture("basins", case, x, y, points, _step(points.x), _step(points.y), basins, _basins_site)
+
+
+def _basins_site(picture: Picture, at: int) -> Site:
+    row = picture.points.iloc[at]
+    start = np.array(picture.case.initial.y, dtype=float)
+    start[STATE.index(picture.x)], start[STATE.index(picture.y)] = float(row.x), float(row.y)
+    return Site(picture.case, start[None, :])
+
+
+# -- sweep and frequency response ---------------------------------------------------------------
+def _identity(folder: Path, marker: str) -> tuple[dict[str, Any], Case]:
+    """A folder's identity (its marker file's) and its case, or refused naming the folder."""
+    from oscillator.report.global_results import marker_identity
+    from oscillator.report.outputs import folder_case
+
+    return marker_identity(folder / marker), folder_case(folder, marker)
+
+
+def _parameter(name: object, folder: Path, marker: str) -> str:
+    """The parameter a folder's marker names, or refused naming the marker (a damaged folder)."""
+    return Parameters.check_name(name, "case", label=f"{printable(str(folder / marker))} is damaged: its parameter")
+
+
+def _sweep(folder: Path) -> Picture:
+    from oscillator.report.orbit_folders import checked_table, read_sweep_points
+
+    identity, case = _identity(folder, "sweep.json")
+    settings = identity.get("settings")
+    settings = settings if isinstance(settings, dict) else {}
+    param = _parameter(settings.get("param"), folder, "sweep.json")
+    mass = settings.get("mass") if settings.get("mass") in (1, 2) else 2
+    coordinate = f"x{mass}"
+    columns = {param: "number", "status": "text", "period": "number"}
+    columns |= {f"end_{name}": "number" for name in STATE}
+    summary = checked_table(
+        folder / "summary.parquet", columns, folder="sweep folder", remake="run the sweep again into a new folder"
+    ).reset_index(drop=True)
+    poincare = read_sweep_points(folder, param, coordinate)
+    rows = {float(value): k for k, value in enumerate(summary[param])}
+    at = np.array([rows.get(float(value), -1) for value in poincare[param]], dtype=int)
+    keep = at >= 0
+    labels = [_sweep_label(summary.iloc[k]) for k in at[keep]]
+    points = pd.DataFrame(
+        {"x": poincare[param].to_numpy(float)[keep], "y": poincare[coordinate].to_numpy(float)[keep], "label": labels}
+    )
+    points["at"] = at[keep]
+    return Picture("sweep", case, param, coordinate, points, 0.0, 0.0, summary, _sweep_site)
+
+
+def _sweep_label(row: pd.Series) -> str:
+    if row.status != "ok":
+        return "failed"
+    return f"period-{int(row.period)}" if row.period > 0 else "no period found"
+
+
+def _sweep_site(picture: Picture, at: int) -> Site:
+    row = picture.source.iloc[at]
+    case = resolve_case(picture.case, **{picture.x: float(row[picture.x])})
+    end = row[[f"end_{name}" for name in STATE]].to_numpy(float)
+    state = ", ".join(f"{v:.6g}" for v in end)
+    return Site(case, _starts(case, end), f"the sweep recorded {_sweep_label(row)}, ending at ({state})")
+
+
+def _frc(folder: Path) -> Picture:
+    from oscillator.orbits.branch import MULTIPLIERS, points_from_disk
+    from oscillator.report.orbit_folders import checked_table
+
+    identity, case = _identity(folder, "frc.json")
+    param = _parameter(identity.get("param"), folder, "frc.json")
+    columns = {param: "number", "branch": "number", "period": "number", "stable": "flag"}
+    columns |= dict.fromkeys((*STATE, "x_pp_m1", "x_pp_m2"), "number")
+    columns |= {f"{name}_{part}": "number" for name in MULTIPLIERS for part in ("re", "im")}
+    table = checked_table(
+        folder / "points.parquet", columns, folder="frequency-response folder", remake="run oscillator frc again"
+    )
+    branch = points_from_disk(table).reset_index(drop=True)
+    stable = np.where(branch.stable.to_numpy(bool), "stable", "unstable")
+    points = pd.concat(
+        [
+            pd.DataFrame(
+                {
+                    "x": branch[param].to_numpy(float),
+                    "y": branch[f"x_pp_m{mass}"].to_numpy(float),
+                    "label": [f"m{mass} {kind}" for kind in stable],
+                    "at": np.arange(len(branch)),
+                }
+            )
+            for mass in (1, 2)
+        ],
+        ignore_index=True,
+    )
+    return Picture("frc", case, param, "x_pp", points, 0.0, 0.0, branch, _frc_site)
+
+
+def _frc_site(picture: Picture, at: int) -> Site:
+    from oscillator.orbits.branch import MULTIPLIERS
+
+    row = picture.source.iloc[at]
+    case = resolve_case(picture.case, **{picture.x: float(row[picture.x])})
+    state = row[list(STATE)].to_numpy(float)
+    moduli = ", ".join(f"{abs(complex(row[name])):.4g}" for name in MULTIPLIERS)
+    held = (
+        f"branch {int(row.branch)}: {'a stable' if row.stable else 'an unstable'} period-{int(row.period)} orbit "
+        f"through ({', '.join(f'{v:.6g}' for v in state)}); |multipliers| {moduli}; "
+        f"x_pp_m1 = {row.x_pp_m1:.5g}, x_pp_m2 = {row.x_pp_m2:.5g}"
+    )
+    if row.stable:
+        return Site(case, _starts(case, state), held, state)
+    # a start on an unstable orbit stays on it as long as a run takes to settle: started on either
+    # side of it instead, the motion leaves it for the attractors between which it lies
+    nudge = NUDGE * (1.0 + np.abs(state))
+    held += f"; find_attractors starts on either side of it ({NUDGE:g} relative)"
+    return Site(case, _starts(case, state + nudge, state - nudge), held, state)
+
+
+_READERS = {"sweep.json": _sweep, "frc.json": _frc}
 
 
 def picture_of(folder: str | Path) -> Picture:
-    """The picture of an atlas or basins folder (read and checked once).
+    """The picture of an atlas, basins, sweep or frequency-response folder (read and checked once).
 
     Raises
     ------
@@ -125,9 +312,14 @@ def picture_of(folder: str | Path) -> Picture:
     from oscillator.report.global_results import global_kind, read_global
 
     path = Path(folder)
+    if path.is_dir():
+        marker = next((name for name in _READERS if (path / name).is_file()), None)
+        if marker is not None:
+            return _READERS[marker](path)
     if not path.is_dir() or global_kind(path) is None:
         raise InputError(
-            f"{printable(str(folder))} is not a folder of oscillator atlas or basins; give one, or a case",
+            f"{printable(str(folder))} is not a folder of an oscillator atlas, basins, sweep or frequency response; "
+            "give one, or a case",
             field="case",
         )
     found = read_global(path)
@@ -136,7 +328,7 @@ def picture_of(folder: str | Path) -> Picture:
     if isinstance(found, Basins):
         return _basins(found)
     raise InputError(
-        f"{printable(str(folder))} holds a {type(found).__name__}, not an atlas or basins; the explorer opens a case "
-        "or one of those",
+        f"{printable(str(folder))} holds a {type(found).__name__}, not an atlas, basins, sweep or frequency "
+        "response; the explorer opens a case or one of those",
         field="case",
     )

@@ -106,11 +106,20 @@ class Case:
 
     @property
     def full_title(self) -> str:
-        """The title, and what overrides changed, if anything."""
+        """The title, and what overrides changed, if anything: at most ``MAX_TEXT["title"]``
+        characters, a case file's limit (the changes that do not fit are counted, and a title too
+        long to leave room for them is cut), so that the case written reads back."""
         if not self.modified:
             return self.title
-        changes = f"modified: {', '.join(self.modified)}"
-        return f"{self.title} ({changes})" if self.title else changes
+        limit, count = MAX_TEXT["title"], len(self.modified)
+        for kept in range(count, -1, -1):
+            listed = [*self.modified[:kept], *([f"and {count - kept} more"] if kept < count else [])]
+            changes = f"modified: {', '.join(listed)}"
+            full = f"{self.title} ({changes})" if self.title else changes
+            if len(full) <= limit:
+                return full
+        changes = f"modified: {count} values"
+        return f"{self.title[: limit - len(changes) - 4]}… ({changes})"
 
     def __post_init__(self) -> None:
         t_end = real_argument(self.t_end, "run.t_end")

@@ -38,6 +38,7 @@ from oscillator.text import printable, shown
 
 __all__ = [
     "BranchFolder",
+    "checked_table",
     "finish_branch",
     "orbit_info",
     "orbit_of",
@@ -114,27 +115,35 @@ class BranchFolder:
     sweep_points: pd.DataFrame | None
 
 
-def _damaged(path: Path, what: str) -> InputError:
-    return InputError(
-        f"{printable(str(path))} is damaged: {what}; continue the case again to remake the folder", field=path.name
-    )
+#: How a damaged branch folder is made again.
+_REMAKE = "continue the case again to remake the folder"
+#: How a damaged sweep folder is made again.
+_RESWEEP = "run the sweep again into a new folder"
 
 
-def _table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
-    """A Parquet table with these columns, of these kinds (``"number"``, ``"text"``, ``"flag"``)."""
+def _damaged(path: Path, what: str, remake: str = _REMAKE) -> InputError:
+    return InputError(f"{printable(str(path))} is damaged: {what}; {remake}", field=path.name)
+
+
+def checked_table(
+    path: Path, columns: dict[str, str], *, folder: str = "branch folder", remake: str = _REMAKE
+) -> pd.DataFrame:
+    """A Parquet table of a ``folder`` (its kind, for the messages) with these columns, of these
+    kinds (``"number"``, ``"text"``, ``"flag"``); refused naming the file, what is wrong and
+    ``remake`` (how to make it again)."""
     if not path.is_file():
         raise InputError(
-            f"{printable(str(path.parent))} is not a complete branch folder: {path.name} is missing", field=path.name
+            f"{printable(str(path.parent))} is not a complete {folder}: {path.name} is missing", field=path.name
         )
     try:
         frame = pd.read_parquet(path)
     except Exception as exc:  # pyarrow raises many types for a damaged file
         if isinstance(exc, MemoryError):
             raise
-        raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})") from exc
+        raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})", remake) from exc
     for name, kind in columns.items():
         if name not in frame.columns:
-            raise _damaged(path, f"it has no column {shown(name)}")
+            raise _damaged(path, f"it has no column {shown(name)}", remake)
         column = frame[name]
         types = pd.api.types
         fits = {
@@ -143,7 +152,7 @@ def _table(path: Path, columns: dict[str, str]) -> pd.DataFrame:
             "text": all(isinstance(value, str) for value in column),
         }[kind]
         if not fits:
-            raise _damaged(path, f"its column {shown(name)} is not {kind}s")
+            raise _damaged(path, f"its column {shown(name)} is not {kind}s", remake)
     return frame
 
 
@@ -167,10 +176,10 @@ def read_sweep_points(folder: Path, param: str, coordinate: str) -> pd.DataFrame
             "written by 'oscillator sweep'",
             field="over",
         )
-    frame = _table(path, {})
+    frame = checked_table(path, {}, folder="sweep folder", remake=_RESWEEP)
     if param not in frame.columns:
         raise InputError(f"the sweep in {printable(str(folder))} is not a sweep of {shown(param)}", field="over")
-    frame = _table(path, {param: "number", coordinate: "number"})
+    frame = checked_table(path, {param: "number", coordinate: "number"}, folder="sweep folder", remake=_RESWEEP)
     return frame[[param, coordinate]].reset_index(drop=True)
 
 
@@ -221,10 +230,10 @@ def read_branch(folder: Path) -> BranchFolder:
     param = info["param"]
     moduli = {f"{name}_{part}": "number" for name in MULTIPLIERS for part in ("re", "im")}
     numbers = {param: "number", **dict.fromkeys(STATE, "number")}
-    points = _table(
+    points = checked_table(
         folder / "branch.parquet", {**numbers, **moduli, "stable": "flag", "signature": "text", "piece": "number"}
     )
-    rows = _table(
+    rows = checked_table(
         folder / "bifurcations.parquet",
         {**numbers, "kind": "text", "jump": "number", "before": "text", "after": "text"},
     )
@@ -235,7 +244,7 @@ def read_branch(folder: Path) -> BranchFolder:
     points = points_from_disk(points)
     sweep = None
     if (folder / "sweep_points.parquet").exists():
-        sweep = _table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})
+        sweep = checked_table(folder / "sweep_points.parquet", {param: "number", info["coordinate"]: "number"})
     case = load_case(folder / "case.toml")
     case = dataclasses.replace(case, name=info.get("case") or folder.name, modified=tuple(info.get("modified", ())))
     reason = None if info.get("reason") is None else Reason(info["reason"])
