@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 
 import oscillator as osc
+from conftest import random_case
 from oscillator.errors import InputError
 from oscillator.exploring.controls import START, controls_of
-from oscillator.exploring.scene import GRID, TIME_AGREEMENT, differences, scene_of
+from oscillator.exploring.scene import EVENT_COLUMNS, GRID, TIME_AGREEMENT, differences, scene_of
 from oscillator.exploring.serving import check_address, is_loopback
 from oscillator.hybrid.recording import SaveAt
 from oscillator.io.cases import resolve_case, section_times
@@ -117,6 +118,64 @@ def test_an_explorer_redraws_on_a_change_and_keeps_the_last_motion_on_an_impossi
     assert "'nothing' is not a parameter or start value" in html.unescape(explorer.status.object)
     bundle = explorer._repr_mimebundle_()
     assert "application/vnd.holoviews_exec.v0+json" in bundle[0], list(bundle[0])
+
+
+def _same_scene(fast, slow) -> None:
+    """Two scenes of one motion: the same events (times to 1e-9 s), trajectory, strobe points,
+    rests, contacts and ending."""
+    assert len(fast.events) == len(slow.events)
+    columns = list(EVENT_COLUMNS[1:])
+    assert (fast.events[columns].astype(str).to_numpy() == slow.events[columns].astype(str).to_numpy()).all()
+    np.testing.assert_allclose(fast.events.t, slow.events.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.trajectory.to_numpy(), slow.trajectory.to_numpy(), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(fast.strobe.to_numpy(), slow.strobe.to_numpy(), rtol=0, atol=1e-8)
+    assert (fast.rests, fast.contacts, fast.status) == (slow.rests, slow.contacts, slow.status)
+
+
+def _python_supervisor(case, periods):
+    """The scene with the compiled run refused: simulate's supervisor, in Python, with DOP853."""
+    import oscillator.exploring.scene as scene
+
+    compiled = scene._compiled_run
+    scene._compiled_run = lambda case, grid: None
+    try:
+        return scene_of(case, periods, engine="dop853")
+    finally:
+        scene._compiled_run = compiled
+
+
+@pytest.mark.parametrize(
+    "case",
+    [*(f"instance-{k}" for k in range(1, 6)), "impacts", *(f"random-{seed}" for seed in range(24))],
+)
+def test_the_compiled_run_draws_what_simulates_supervisor_draws(case):
+    """The explorer's DOP853 scenes come from the supervisor compiled whole
+    (hybrid.batch.run_compiled): event for event what simulate's supervisor gives with the same
+    engine, on the instances (rest at the start, leaving it at t0), the impacting system and
+    random systems with stops close by (contacts, rest, re-sticking); every one of them runs
+    compiled (none falls back)."""
+    import oscillator.exploring.scene as scene
+
+    if case == "impacts":
+        case = resolve_case("instance-1", d=1, d1=3.5, Omega=1.5)
+    elif case.startswith("random"):
+        case = random_case(int(case.split("-")[1]))
+    marks = section_times(resolve_case(case), 0, 20)
+    grid = np.linspace(marks[0], marks[-1], 20 * GRID + 1)
+    assert scene._compiled_run(resolve_case(case, t_end=float(marks[-1])), grid) is not None
+    _same_scene(scene_of(case, 20, engine="dop853"), _python_supervisor(case, 20))
+
+
+def test_a_run_outgrowing_the_compiled_buffers_goes_through_simulate(monkeypatch):
+    import oscillator.exploring.scene as scene
+
+    expected = _python_supervisor("instance-3", 10)
+    monkeypatch.setattr(scene, "EVENT_ROWS", 0)  # room for no event: the compiled run gives up
+    calls = []
+    simulated = scene._simulated_run
+    monkeypatch.setattr(scene, "_simulated_run", lambda *args: calls.append(args) or simulated(*args))
+    _same_scene(scene_of("instance-3", 10, engine="dop853"), expected)
+    assert len(calls) == 1
 
 
 def test_differences_are_told_event_by_event_to_the_tables_precision():

@@ -11,21 +11,17 @@ compare them with :func:`~oscillator.simulate` directly.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 import pandas as pd
 
 from oscillator.analysis.intervals import spans
 from oscillator.errors import InputError
-from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.parameters import Parameters
-from oscillator.model.phase_space import Mode
 
 __all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "TIME_AGREEMENT", "Scene", "differences", "scene_of"]
 
@@ -35,6 +31,9 @@ PERIODS = 50
 GRID = 64
 #: How far two engines' event times may lie apart and still show the same table (s): its precision.
 TIME_AGREEMENT = 1e-6
+#: Event rows a forcing period the compiled run has room for, beyond which the run goes through
+#: :func:`~oscillator.simulate` (a chattering motion).
+EVENT_ROWS = 64
 #: The event table's columns, in the page's order.
 EVENT_COLUMNS = ("t", "mass", "kind", "from_domain", "to_domain", "theorem", "equation", "boundary")
 
@@ -111,21 +110,66 @@ def scene_of(case: Case | str, periods: int = PERIODS, *, engine: str = "cvode",
     run_case = resolve_case(base, t_end=float(marks[-1]))
     grid = np.linspace(marks[0], marks[-1], periods * GRID + 1)
     started = time.perf_counter()
-    result = simulate(run_case, engine=engine, save=SaveAt(ts=grid, segments=True))
+    run = _compiled_run(run_case, grid) if engine == "dop853" else None
+    if run is None:  # another engine, or a run the compiled supervisor could not finish: in words
+        run = _simulated_run(run_case, grid, engine)
     seconds = time.perf_counter() - started
-    trajectory = result.trajectory[["t", "x1", "v1", "x2", "v2"]]
+    trajectory, events, modes, status = run
+    times, end = modes[:, 0], float(run_case.t_end)
     return Scene(
         case=run_case,
         periods=periods,
-        trajectory=_with_switches(trajectory, result.events),
-        events=result.events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
+        trajectory=_with_switches(trajectory, events),
+        events=events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
         strobe=_strobe(trajectory, marks),
-        rests={mass: _intervals(result.segments, partial(_rests, mass=mass)) for mass in (1, 2)},
-        contacts={side: _intervals(result.segments, partial(_touches, side=side)) for side in ("left", "right")},
+        rests={mass: _intervals(times, modes[:, mass] == 0, end) for mass in (1, 2)},
+        contacts={side: _intervals(times, modes[:, k] != 0, end) for k, side in ((3, "left"), (4, "right"))},
         seconds=seconds,
-        status=result.status.value if not result.message else result.message,
+        status=status,
         engine=engine,
     )
+
+
+#: A run as a scene needs it: the trajectory on the grid, the events, each mode from the time it
+#: holds (rows ``t, s1, s2, left, right``), and how the run ended.
+_Run = tuple[pd.DataFrame, pd.DataFrame, np.ndarray, str]
+
+
+def _simulated_run(case: Case, grid: np.ndarray, engine: str) -> _Run:
+    """The run through :func:`~oscillator.simulate` (its supervisor in Python, any engine)."""
+    result = simulate(case, engine=engine, save=SaveAt(ts=grid, segments=True))
+    modes = np.array(
+        [(s.t0, s.mode.sign(1), s.mode.sign(2), s.mode.left, s.mode.right) for s in result.segments], dtype=float
+    ).reshape(-1, 5)
+    status = result.status.value if not result.message else result.message
+    return result.trajectory[["t", "x1", "v1", "x2", "v2"]], result.events, modes, status
+
+
+def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
+    """The same run with the supervisor compiled (:func:`~oscillator.hybrid.batch.run_compiled`,
+    the DOP853 engine: nothing in Python per event), or None where it failed or outgrew its
+    buffers (:func:`_simulated_run` then runs it, and says why)."""
+    from oscillator.engines.dop853 import new_work
+    from oscillator.hybrid.batch import OK, options_vector, run_compiled
+    from oscillator.hybrid.guards import ARITHMETIC_ERRORS
+    from oscillator.io.tables import events_frame
+    from oscillator.model.events import WIDTH
+    from oscillator.model.fields import coefficients
+
+    p, o = case.parameters, case.options
+    rows = EVENT_ROWS * len(grid) // GRID + 2 * EVENT_ROWS
+    buffers = (np.empty((len(grid), 5)), np.empty((rows, WIDTH)), np.empty((rows + 1, 5)))
+    start = np.array(case.initial.y, dtype=float)
+    try:
+        status, done, kept, changes = run_compiled(
+            coefficients(p), case.initial.t0, p.period, start, new_work(p, o), options_vector(o), grid, buffers
+        )
+    except ARITHMETIC_ERRORS:
+        return None
+    if status != OK or done != len(grid):
+        return None
+    trajectory = pd.DataFrame(buffers[0], columns=["t", "x1", "v1", "x2", "v2"])
+    return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], "complete"
 
 
 def differences(scene: Scene, reference: Scene) -> tuple[str | None, float]:
@@ -168,21 +212,9 @@ def _strobe(trajectory: pd.DataFrame, marks: np.ndarray) -> pd.DataFrame:
     return strobe
 
 
-def _rests(mode: Mode, mass: int) -> bool:
-    return mode.sign(mass) == 0
-
-
-def _touches(mode: Mode, side: str) -> bool:
-    return bool(getattr(mode, side))
-
-
-def _intervals(segments: Sequence[Segment], holds: Callable[[Mode], bool]) -> list[tuple[float, float]]:
-    """The maximal intervals over which ``holds(mode)`` is true, from the run's smooth pieces."""
-    if not segments:
-        return []
-    times = [segment.t0 for segment in segments]
-    states = [bool(holds(segment.mode)) for segment in segments]
-    return [(a, b) for state, a, b in spans(times, states, segments[-1].t1) if state and b > a]
+def _intervals(times: np.ndarray, holds: np.ndarray, end: float) -> list[tuple[float, float]]:
+    """The maximal intervals over which ``holds`` is true: ``holds[i]`` from ``times[i]`` on."""
+    return [(a, b) for state, a, b in spans(times.tolist(), holds.tolist(), end) if state and b > a]
 
 
 def with_changes(case: Case, values: dict[str, float]) -> Case:

@@ -24,14 +24,23 @@ import math
 import numpy as np
 
 from oscillator.compiled import njit
-from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, restart
+from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, grid_returns, restart
 from oscillator.hybrid.guards import CONSISTENCY
 from oscillator.model.parameters import SolverOptions
 from oscillator.model.roots import directions_into, violation_code
 from oscillator.model.switching import MAX_ROWS, initial_compiled, resolve_compiled
 from oscillator.model.types import Vector
 
-__all__ = ["FAILED", "OK", "OPTIONS", "WINDOW_FULL", "land_compiled", "options_vector", "settled_compiled"]
+__all__ = [
+    "FAILED",
+    "OK",
+    "OPTIONS",
+    "WINDOW_FULL",
+    "land_compiled",
+    "options_vector",
+    "run_compiled",
+    "settled_compiled",
+]
 
 #: What :func:`land_compiled` returns as its status: landed; a failure (an engine's failure, a
 #: guard, a crossing unseen, numbers that left floating point); more events in the window than
@@ -268,3 +277,76 @@ def land_compiled(
             points[k - ran, 4], points[k - ran, 5] = modes[0], modes[1]
             if k == ran + record:
                 return OK, ran, int(tally[_KEPT])
+
+
+@njit(cache=True, error_model="numpy")
+def _changed(changes: np.ndarray, count: int, t: float, modes: np.ndarray) -> int:  # pragma: no cover - compiled
+    """The mode from ``t`` on as the next row ``(t, s1, s2, left, right)`` of ``changes``; how many
+    rows (-1: no room)."""
+    if count >= changes.shape[0]:
+        return -1
+    changes[count, 0] = t
+    for k in range(4):
+        changes[count, 1 + k] = modes[k]
+    return count + 1
+
+
+@njit(cache=True, error_model="numpy")
+def run_compiled(
+    c: Vector,
+    t0: float,
+    period: float,
+    start: Vector,
+    w: Vector,
+    options: Vector,
+    grid: Vector,
+    buffers: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[int, int, int, int]:  # pragma: no cover - compiled
+    """One run from ``t0`` to ``grid[-1]`` as the supervisor makes it with the ``"dop853"``
+    engine, recorded (for the explorer: :func:`oscillator.exploring.scene.scene_of`): the
+    trajectory at each time of ``grid`` (rows ``t, x1, v1, x2, v2``; ``grid[0]`` is ``t0``), every event row from the
+    start's on, and each mode from the time it holds (rows ``t, s1, s2, left, right``), into
+    ``buffers = (trajectory, events, modes)``.  The status (:data:`OK`, :data:`FAILED`, or
+    :data:`WINDOW_FULL` where the events or modes outgrew their buffers) and the rows written of
+    each."""
+    trajectory, events, changes = buffers
+    t_end = grid[grid.shape[0] - 1]
+    modes = np.zeros(4 + R, np.int64)
+    rows = np.empty((2 * MAX_ROWS, events.shape[1]))
+    recent = np.empty(int(options[_STORM_EVENTS]) + 1)
+    y = np.zeros(N)
+    y[:4] = start
+    w[STARTED] = 0.0
+    mode, n, ok = initial_compiled(t0, start.copy(), c, period, rows)  # the start as given, as simulate's
+    filled, stormy = _storm(recent, 0, t0, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
+    if not ok or stormy or n > events.shape[0]:
+        return FAILED, 0, 0, 0
+    events[:n, :] = rows[:n, :]
+    _set_mode(modes, mode[0], mode[1], mode[2], mode[3])
+    restart(w, modes, c, t0, y)
+    tally = np.zeros(6)
+    tally[_FILLED], tally[_TOTAL], tally[_KEPT] = filled, n, n
+    tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, -math.inf  # every event kept
+    count = _changed(changes, 0, t0, modes)
+    last = np.zeros(N)
+    trajectory[0, 0] = t0  # the grid's first time, the start's (as given)
+    trajectory[0, 1:] = start
+    done = 1
+    while done < grid.shape[0]:
+        kind, fired, n, t = grid_returns(w, modes, c, grid[done:], t_end, trajectory[done:], last)
+        done += n
+        if kind < 0 or not _finite(last):
+            return FAILED, done, int(tally[_KEPT]), count
+        if kind != ROOT:
+            if t >= t_end:
+                break
+            continue
+        before = (modes[0], modes[1], modes[2], modes[3])
+        status = _through_root(w, modes, c, period, options, fired, (rows, recent, events), tally)
+        if status != OK:
+            return status, done, int(tally[_KEPT]), count
+        if (modes[0], modes[1], modes[2], modes[3]) != before:
+            count = _changed(changes, count, t, modes)
+            if count < 0:
+                return WINDOW_FULL, done, int(tally[_KEPT]), 0
+    return OK, done, int(tally[_KEPT]), count
