@@ -1,8 +1,8 @@
 """The explorer in a real browser (issue 40): Debian's Chromium driven by Playwright, the page served
 by ``oscillator explore`` as a user runs it.  The page loads with nothing fetched from elsewhere; a
 slider's key press changes the event table to what ``simulate`` gives for the new value; a click on
-an atlas cell shows the attractor ``find_attractors`` finds there; a case file's ``<script>`` title
-shows as text.
+an atlas cell shows the attractor ``find_attractors`` finds there, one on a frequency response's
+picture the orbit its folder holds; a case file's ``<script>`` title shows as text.
 
 Without Chromium or Playwright these tests are skipped, unless ``OSCILLATOR_REQUIRE_BROWSER`` is set
 (CI sets it: there a missing browser fails the run)."""
@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import oscillator as osc
@@ -106,6 +107,26 @@ def test_a_click_on_an_atlas_cell_shows_the_attractors_find_attractors_finds_the
         point = ", ".join(f"{v:.6g}" for v in attractor.points[0])
         assert f"{attractor.name}: section point ({point})" in text, (text, point)
     assert count == len(expected.attractors) >= 1
+
+
+def test_a_click_on_a_frequency_response_shows_the_orbit_the_folder_holds_there(small_frc, tmp_path):
+    """A picture of points (no cells): a click anywhere picks the nearest branch point, whose orbit
+    the folder holds: it is shown and put on the sliders."""
+    points = pd.read_parquet(small_frc / "points.parquet")
+    with Served(str(small_frc), "--periods", "5", cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        box = page.locator(".bk-Canvas").first.bounding_box()
+        page.mouse.click(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
+        found = page.locator(".oscillator-picked-found[data-click='1']")
+        found.wait_for()
+        held = page.locator(".oscillator-held").inner_text()
+        wait_revision(page, 2)  # the motion from the orbit follows
+        shown = {name: model_value(page, name) for name in ("Omega", "x1", "v1", "x2", "v2")}
+        assert not elsewhere, elsewhere
+    row = points.iloc[int(np.argmin(np.abs(points.Omega - shown["Omega"])))]
+    assert shown == pytest.approx({name: row[name] for name in shown}, abs=1e-12)
+    assert held.startswith(f"branch {row.branch}: a stable period-{row.period} orbit through ("), held
 
 
 def test_a_case_text_with_a_script_shows_as_text(tmp_path):
