@@ -302,13 +302,13 @@ def run_compiled(
     grid: Vector,
     buffers: tuple[np.ndarray, np.ndarray, np.ndarray],
 ) -> tuple[int, int, int, int]:  # pragma: no cover - compiled
-    """One run from ``t0`` to ``grid[-1]`` as the supervisor makes it with the ``"dop853"``
-    engine, recorded (for the explorer: :func:`oscillator.exploring.scene.scene_of`): the
-    trajectory at each time of ``grid`` (rows ``t, x1, v1, x2, v2``; ``grid[0]`` is ``t0``), every event row from the
+    """One run from ``t0`` (``grid[0]``) to ``grid[-1]`` as the supervisor makes it with the
+    ``"dop853"`` engine, recorded (for the explorer: :func:`oscillator.exploring.scene.scene_of`):
+    the trajectory at each time of ``grid`` (rows ``t, x1, v1, x2, v2``), every event row from the
     start's on, and each mode from the time it holds (rows ``t, s1, s2, left, right``), into
     ``buffers = (trajectory, events, modes)``.  The status (:data:`OK`, :data:`FAILED`, or
     :data:`WINDOW_FULL` where the events or modes outgrew their buffers) and the rows written of
-    each."""
+    each: a run stopped short of the grid's end writes fewer rows than the grid's times."""
     trajectory, events, changes = buffers
     t_end = grid[grid.shape[0] - 1]
     modes = np.zeros(4 + R, np.int64)
@@ -329,7 +329,7 @@ def run_compiled(
     tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, -math.inf  # every event kept
     count = _changed(changes, 0, t0, modes)
     last = np.zeros(N)
-    trajectory[0, 0] = t0  # the grid's first time, the start's (as given)
+    trajectory[0, 0] = t0  # the grid's first time: the start, as given (the engine is not advanced to it)
     trajectory[0, 1:] = start
     done = 1
     while done < grid.shape[0]:
@@ -338,7 +338,7 @@ def run_compiled(
         if kind < 0 or not _finite(last):
             return FAILED, done, int(tally[_KEPT]), count
         if kind != ROOT:
-            if t >= t_end:
+            if t >= t_end or n == 0:  # the end, or no grid time reached (the caller sees the rows short)
                 break
             continue
         before = (modes[0], modes[1], modes[2], modes[3])
