@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from oscillator.exploring.driving import Served, browser_page, wait_revision
+from oscillator.exploring.driving import Served, browser_page, click_map, wait_revision
 
 
 def slider(changes: int, *options: str, checked: bool = False) -> list[float]:
@@ -59,14 +59,12 @@ def clicks(count: int) -> list[float]:
         with Served(str(folder)) as served, browser_page() as (page, _):
             page.goto(served.url)
             wait_revision(page, 1)
-            box = page.locator(".bk-Canvas").first.bounding_box()
             times = []
             rng = np.random.default_rng(1)
             for k in range(count):
                 x, y = rng.uniform(0.15, 0.7), rng.uniform(0.15, 0.85)
                 started = time.perf_counter()
-                page.mouse.click(box["x"] + x * box["width"], box["y"] + y * box["height"])
-                page.locator(f".oscillator-picked-found[data-click='{k + 1}']").wait_for(timeout=60e3)
+                click_map(page, x, y, k + 1)
                 times.append(time.perf_counter() - started)
                 wait_revision(page, k + 2)
     return times

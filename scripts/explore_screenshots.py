@@ -10,7 +10,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from oscillator.exploring.driving import Served, browser_page, wait_revision
+from oscillator.exploring.driving import Served, browser_page, click_map, wait_revision
 
 IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 COMMAND = str(Path(sys.executable).with_name("oscillator"))
@@ -69,9 +69,7 @@ def clicked(image: str, command: list[str], at: tuple[float, float]) -> None:
         with Served(str(folder), "--periods", "20") as served, browser_page(1300, 1100) as (page, _):
             page.goto(served.url)
             wait_revision(page, 1)
-            box = page.locator(".bk-Canvas").first.bounding_box()
-            page.mouse.click(box["x"] + at[0] * box["width"], box["y"] + at[1] * box["height"])
-            page.locator(".oscillator-picked-found[data-click='1']").wait_for(timeout=60e3)
+            click_map(page, *at)
             wait_revision(page, 2)
             page.wait_for_timeout(500)
             page.screenshot(path=IMAGES / image, full_page=False)

@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 
 import oscillator as osc
-from oscillator.exploring.driving import Served, browser_page, chromium, wait_revision
+from oscillator.exploring.driving import Served, browser_page, chromium, click_map, wait_revision
 from oscillator.exploring.maps import picture_of
 from oscillator.io.cases import resolve_case
 
@@ -88,10 +88,7 @@ def test_a_click_on_an_atlas_cell_shows_the_attractors_find_attractors_finds_the
     with Served(str(atlas), cwd=tmp_path) as served, browser_page() as (page, elsewhere):
         page.goto(served.url)
         wait_revision(page, 1)
-        box = page.locator(".bk-Canvas").first.bounding_box()
-        page.mouse.click(box["x"] + 0.45 * box["width"], box["y"] + 0.5 * box["height"])
-        found = page.locator(".oscillator-picked-found[data-click='1']")
-        found.wait_for()
+        found = click_map(page, 0.45, 0.5)
         text, count = found.inner_text(), int(found.get_attribute("data-count") or 0)
         wait_revision(page, 2)  # the first attractor's motion follows
         shown = (float(v) for v in re.match(r"Omega = ([\d.]+), Q2 = ([\d.]+)", text).groups())
@@ -116,10 +113,7 @@ def test_a_click_on_a_frequency_response_shows_the_orbit_the_folder_holds_there(
     with Served(str(small_frc), "--periods", "5", cwd=tmp_path) as served, browser_page() as (page, elsewhere):
         page.goto(served.url)
         wait_revision(page, 1)
-        box = page.locator(".bk-Canvas").first.bounding_box()
-        page.mouse.click(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
-        found = page.locator(".oscillator-picked-found[data-click='1']")
-        found.wait_for()
+        click_map(page, 0.5, 0.5)
         held = page.locator(".oscillator-held").inner_text()
         wait_revision(page, 2)  # the motion from the orbit follows
         shown = {name: model_value(page, name) for name in ("Omega", "x1", "v1", "x2", "v2")}

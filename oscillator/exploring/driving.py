@@ -6,7 +6,8 @@ through Playwright (``pip install playwright``; no browser is downloaded: Debian
 or the one ``$CHROMIUM`` names), and records every request the page makes to another host, which
 it refuses (the page must work offline).  :func:`wait_revision` waits until the page shows the
 motion of a given revision, painted, and says how long after the last key press or click (timed in
-the page itself, so that the driver's own round trips do not count).
+the page itself, so that the driver's own round trips do not count).  :func:`click_map` clicks a
+folder's picture and waits for what the click found.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Served", "browser_page", "chromium", "wait_revision"]
+__all__ = ["Served", "browser_page", "chromium", "click_map", "wait_revision"]
 
 _LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:", "about:")
 
@@ -169,3 +170,14 @@ def wait_revision(page: Any, revision: int, timeout: float = 60.0, *, checked: b
     press or click, measured in the page."""
     page.set_default_timeout(timeout * 1e3)
     return float(page.evaluate("([n, checked]) => window.__revision(n, checked)", [revision, checked]))
+
+
+def click_map(page: Any, x: float, y: float, click: int = 1, timeout: float = 60.0) -> Any:
+    """Click the folder's picture (the page's first canvas) at ``(x, y)``, fractions of its width
+    and height from its top left corner, and wait for what click number ``click`` found: its
+    ``.oscillator-picked-found`` element (Playwright's locator)."""
+    box = page.locator(".bk-Canvas").first.bounding_box()
+    page.mouse.click(box["x"] + x * box["width"], box["y"] + y * box["height"])
+    found = page.locator(f".oscillator-picked-found[data-click='{click}']")
+    found.wait_for(timeout=timeout * 1e3)
+    return found
