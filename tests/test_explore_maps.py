@@ -146,3 +146,24 @@ def test_a_click_on_an_unstable_branch_point_finds_the_attractors_on_either_side
         expected.append(np.interp(row.Omega, stretch.Omega, stretch.x_pp_m1))
     assert amplitudes == pytest.approx(expected, rel=1e-3)  # the small and the large motion there
     assert all(max(abs(m) for m in a.orbit.multipliers) < 1 for a in found.attractors)
+
+
+def test_points_that_are_not_numbers_are_not_picked_and_a_folder_without_any_is_refused(
+    tmp_path, sweep_folder, small_frc
+):
+    frc = tmp_path / "frc"
+    shutil.copytree(small_frc, frc)
+    points = pd.read_parquet(frc / "points.parquet")
+    points.loc[points.index[:-1], ["x_pp_m1", "x_pp_m2"]] = np.nan  # one branch point left measured
+    points.to_parquet(frc / "points.parquet", index=False)
+    picture = picture_of(frc)
+    kept = points.index[-1]
+    for x, y in ((points.Omega.iloc[0], 0.0), (1.6, 1e3)):
+        assert picture.points.at[picture.nearest(x, y), "at"] == kept
+
+    sweep = tmp_path / "sweep"
+    shutil.copytree(sweep_folder, sweep)
+    poincare = pd.read_parquet(sweep / "poincare.parquet")
+    poincare.iloc[:0].to_parquet(sweep / "poincare.parquet", index=False)  # every value failed: no point
+    with pytest.raises(InputError, match=r"holds no point to show \(its sweep has no finite value\)"):
+        picture_of(sweep)

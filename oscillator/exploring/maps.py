@@ -109,12 +109,15 @@ class Picture:
         return self.width > 0
 
     def nearest(self, x: float, y: float) -> int:
-        """The cell or point nearest ``(x, y)``, measured in cells (in the axes' spans for points)."""
+        """The cell or point nearest ``(x, y)``, measured in cells (in the axes' spans for points);
+        points whose coordinates are not numbers are not drawn, and not picked."""
         xs, ys = self.points.x.to_numpy(float), self.points.y.to_numpy(float)
-        width = self.width or float(np.ptp(xs)) or 1.0
-        height = self.height or float(np.ptp(ys)) or 1.0
+        width = self.width or float(np.nanmax(xs) - np.nanmin(xs)) or 1.0
+        height = self.height or float(np.nanmax(ys) - np.nanmin(ys)) or 1.0
         dx, dy = (xs - x) / width, (ys - y) / height
-        return int(np.argmin(dx * dx + dy * dy))
+        distance = dx * dx + dy * dy
+        distance[~np.isfinite(distance)] = np.inf  # a point not drawn (a measure not a number) is not picked
+        return int(np.argmin(distance))
 
     def site(self, index: int) -> Site:
         """What a click on point ``index`` asks, and what the folder holds there."""
@@ -307,18 +310,30 @@ def picture_of(folder: str | Path) -> Picture:
     Raises
     ------
     InputError
-        Not a readable folder, a damaged file in it, or a folder of another kind (named).
+        Not a readable folder, a damaged file in it, a folder of another kind (named), or one with
+        no point to show.
     """
+    picture = _read(Path(folder))
+    finite = np.isfinite(picture.points.x.to_numpy(float)) & np.isfinite(picture.points.y.to_numpy(float))
+    if not finite.any():
+        raise InputError(
+            f"{printable(str(folder))} holds no point to show (its {WHAT[picture.kind]} has no finite value); "
+            "compute it again, or give another folder",
+            field="case",
+        )
+    return picture
+
+
+def _read(path: Path) -> Picture:
     from oscillator.report.global_results import global_kind, read_global
 
-    path = Path(folder)
     if path.is_dir():
         marker = next((name for name in _READERS if (path / name).is_file()), None)
         if marker is not None:
             return _READERS[marker](path)
     if not path.is_dir() or global_kind(path) is None:
         raise InputError(
-            f"{printable(str(folder))} is not a folder of an oscillator atlas, basins, sweep or frequency response; "
+            f"{printable(str(path))} is not a folder of an oscillator atlas, basins, sweep or frequency response; "
             "give one, or a case",
             field="case",
         )
@@ -328,7 +343,7 @@ def picture_of(folder: str | Path) -> Picture:
     if isinstance(found, Basins):
         return _basins(found)
     raise InputError(
-        f"{printable(str(folder))} holds a {type(found).__name__}, not an atlas, basins, sweep or frequency "
+        f"{printable(str(path))} holds a {type(found).__name__}, not an atlas, basins, sweep or frequency "
         "response; the explorer opens a case or one of those",
         field="case",
     )
