@@ -26,7 +26,7 @@ from oscillator.exploring.maps import picture_of
 def sweep_folder(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweep") / "sweep"
     command = ["sweep", "instance-1", "--param", "Omega", "--from", "1.55", "--to", "1.65", "--steps", "5"]
-    command += ["--transient", "20", "--record", "10", "--out", str(folder), "--no-plots", "--quiet"]
+    command += ["--transient", "20", "--record", "10", "--both-ways", "--out", str(folder), "--no-plots", "--quiet"]
     assert CliRunner().invoke(app, command).exit_code == 0
     return folder
 
@@ -42,31 +42,35 @@ def _near(points: np.ndarray, state: np.ndarray, tolerance: float) -> bool:
 
 
 def test_a_sweeps_picture_is_its_bifurcation_diagram_and_a_click_finds_the_attractor_it_recorded(sweep_folder):
+    """A sweep up and down (each value run twice): every Poincaré point drawn with the period
+    recorded at its run; a click shows the run it belongs to and finds the attractor recorded."""
     tables = read_sweep(sweep_folder)
     poincare, summary = tables["poincare"], tables["summary"]
+    assert list(summary.direction) == ["up"] * 5 + ["down"] * 5
     picture = picture_of(sweep_folder)
     assert (picture.kind, picture.x, picture.y, picture.cells) == ("sweep", "Omega", "x2", False)
     np.testing.assert_array_equal(picture.points.x, poincare.Omega)
     np.testing.assert_array_equal(picture.points.y, poincare.x2)
-    period = dict(zip(summary.Omega, summary.period, strict=True))
-    assert list(picture.points.label) == [f"period-{period[value]}" for value in poincare.Omega]
+    period = dict(zip(summary["index"], summary.period, strict=True))
+    assert list(picture.points.label) == [f"period-{period[k]}" for k in poincare["index"]]
 
-    value = float(summary.Omega[2])
-    recorded = poincare[poincare.Omega == value]
-    explorer = _click(picture, value, float(recorded.x2.iloc[0]))
-    assert explorer.values()["Omega"] == value
-    case = osc.resolve_case(picture.case, Omega=value)
-    end = summary.loc[2, [f"end_{name}" for name in STATE]].to_numpy(float)
+    last = poincare[poincare["index"] == 7].iloc[-1]  # a point of the sweep down, at its third value
+    explorer = _click(picture, float(last.Omega), float(last.x2))
+    run = summary.iloc[int(picture.points.at[picture.nearest(last.Omega, last.x2), "at"])]
+    assert run.Omega == last.Omega and explorer.values()["Omega"] == last.Omega
+    recorded = poincare[poincare["index"] == run["index"]]
+    case = osc.resolve_case(picture.case, Omega=float(run.Omega))
+    end = run[[f"end_{name}" for name in STATE]].to_numpy(float)
     found = osc.find_attractors(case, states=[case.initial.y, end])
     assert found.attractors
     for attractor in found.attractors:  # each attractor met is the one the sweep recorded there
-        assert attractor.period == period[value]
+        assert attractor.period == run.period
         for point in attractor.points:
             assert _near(recorded[list(STATE)].to_numpy(float), point, 1e-6), point
         assert attractor.name in explorer.picked.object
     start = [explorer.values()[name] for name in STATE]
     assert start == pytest.approx(found.attractors[0].points[0], abs=1e-9)
-    assert f"the sweep recorded period-{period[value]}, ending at (" in explorer.picked.object
+    assert f"the sweep {run.direction} recorded period-{run.period}, ending at (" in explorer.picked.object
 
 
 def test_a_frequency_responses_picture_is_its_branch_points_and_a_click_draws_the_orbit_held(small_frc):

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -210,29 +211,31 @@ def _parameter(name: object, folder: Path, marker: str) -> str:
 
 
 def _sweep(folder: Path) -> Picture:
-    from oscillator.report.orbit_folders import checked_table, read_sweep_points
+    from oscillator.report.orbit_folders import checked_table
 
     identity, case = _identity(folder, "sweep.json")
     settings = identity.get("settings")
     settings = settings if isinstance(settings, dict) else {}
     param = _parameter(settings.get("param"), folder, "sweep.json")
-    mass = settings.get("mass") if settings.get("mass") in (1, 2) else 2
-    coordinate = f"x{mass}"
-    columns = {param: "number", "status": "text", "period": "number"}
+    coordinate = f"x{settings.get('mass') if settings.get('mass') in (1, 2) else 2}"
+    columns = {param: "number", "index": "number", "status": "text", "period": "number", "direction": "text"}
     columns |= {f"end_{name}": "number" for name in STATE}
-    summary = checked_table(
-        folder / "summary.parquet", columns, folder="sweep folder", remake="run the sweep again into a new folder"
-    ).reset_index(drop=True)
-    poincare = read_sweep_points(folder, param, coordinate)
-    rows = {float(value): k for k, value in enumerate(summary[param])}
-    at = np.array([rows.get(float(value), -1) for value in poincare[param]], dtype=int)
+    read = partial(checked_table, folder="sweep folder", remake="run the sweep again into a new folder")
+    summary = read(folder / "summary.parquet", columns).reset_index(drop=True)
+    poincare = read(folder / "poincare.parquet", {param: "number", "index": "number", coordinate: "number"})
+    rows = {int(index): k for k, index in enumerate(summary["index"])}  # a both-ways sweep's values twice
+    at = np.array([rows.get(int(index), -1) for index in poincare["index"]], dtype=int)
     keep = at >= 0
-    labels = [_sweep_label(summary.iloc[k]) for k in at[keep]]
     points = pd.DataFrame(
-        {"x": poincare[param].to_numpy(float)[keep], "y": poincare[coordinate].to_numpy(float)[keep], "label": labels}
+        {
+            "x": poincare[param].to_numpy(float)[keep],
+            "y": poincare[coordinate].to_numpy(float)[keep],
+            "label": [_sweep_label(summary.iloc[k]) for k in at[keep]],
+            "at": at[keep],
+        }
     )
-    points["at"] = at[keep]
-    return Picture("sweep", case, param, coordinate, points, 0.0, 0.0, summary, _sweep_site)
+    source = summary.assign(both_ways=bool(settings.get("both_ways")))
+    return Picture("sweep", case, param, coordinate, points, 0.0, 0.0, source, _sweep_site)
 
 
 def _sweep_label(row: pd.Series) -> str:
@@ -246,7 +249,8 @@ def _sweep_site(picture: Picture, at: int) -> Site:
     case = resolve_case(picture.case, **{picture.x: float(row[picture.x])})
     end = row[[f"end_{name}" for name in STATE]].to_numpy(float)
     state = ", ".join(f"{v:.6g}" for v in end)
-    return Site(case, _starts(case, end), f"the sweep recorded {_sweep_label(row)}, ending at ({state})")
+    sweep = f"the sweep {row.direction}" if row.both_ways else "the sweep"
+    return Site(case, _starts(case, end), f"{sweep} recorded {_sweep_label(row)}, ending at ({state})")
 
 
 def _frc(folder: Path) -> Picture:
