@@ -129,10 +129,6 @@ class Picture:
         site = self.site(index)
         return site.case, site.starts
 
-    def attractors_at(self, index: int) -> Attractors:
-        """What :func:`~oscillator.find_attractors` finds from the starts of point ``index``."""
-        return self.attractors(self.site(index))
-
     def attractors(self, site: Site) -> Attractors:
         """What :func:`~oscillator.find_attractors` finds from the starts of ``site`` (with the
         folder's settings for basins, the defaults elsewhere)."""

@@ -96,8 +96,10 @@ def check_periods(periods: object) -> int:
 
 def scene_of(case: Case | str, periods: int = PERIODS, *, engine: str = "cvode", **overrides: float) -> Scene:
     """The motion of ``case`` (with ``overrides`` of its parameters and start) over ``periods``
-    forcing periods from its start: one :func:`~oscillator.simulate` run with ``engine`` (CVODE,
-    the reference, unless another is named).
+    forcing periods from its start: one run with ``engine`` (CVODE, the reference, unless another
+    is named), through :func:`~oscillator.simulate`; with ``"dop853"``, the same run with the
+    supervisor compiled (:func:`~oscillator.hybrid.batch.run_compiled`), and through ``simulate``
+    where that one cannot finish.
 
     Raises
     ------
@@ -152,6 +154,7 @@ def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
     from oscillator.engines.dop853 import new_work
     from oscillator.hybrid.batch import OK, options_vector, run_compiled
     from oscillator.hybrid.guards import ARITHMETIC_ERRORS
+    from oscillator.hybrid.result import Status
     from oscillator.io.tables import events_frame
     from oscillator.model.events import WIDTH
     from oscillator.model.fields import coefficients
@@ -169,7 +172,7 @@ def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
     if status != OK or done != len(grid):
         return None
     trajectory = pd.DataFrame(buffers[0], columns=["t", "x1", "v1", "x2", "v2"])
-    return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], "complete"
+    return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], Status.COMPLETE.value
 
 
 def differences(scene: Scene, reference: Scene) -> tuple[str | None, float]:
