@@ -187,3 +187,66 @@ def test_the_package_says_what_a_run_keeps_with_save_at_only():
         and old & {keyword.arg for keyword in node.keywords}
     ]
     assert found == []
+
+
+ROOT = PACKAGE.parent
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+
+
+def documented_layers() -> list[tuple[str, ...]]:
+    """The layer table of docs/architecture.md, lowest first: each row's units (``errors``, ``model``)."""
+    import re
+
+    rows = []
+    for line in ARCHITECTURE.read_text(encoding="utf-8").splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if line.startswith("| ") and len(cells) == 3 and cells[1].startswith("`"):
+            rows.append(tuple(name.rstrip("/") for name in re.findall(r"`([^`]+)`", cells[1])))
+    return rows
+
+
+def documented_modules() -> set[str]:
+    """The modules docs/architecture.md's tree lists, as paths inside the package (``model/fields.py``)."""
+    import re
+
+    tree = ARCHITECTURE.read_text(encoding="utf-8").split("```\noscillator/\n", 1)[1].split("```", 1)[0]
+    listed, folder = set(), ""
+    for line in tree.splitlines():
+        found = re.match(r"^([│ ]*)[├└]── (\S+)", line)
+        if found is None:
+            continue
+        name = found.group(2)
+        if len(found.group(1)) == 0:
+            folder = name.rstrip("/") if name.endswith("/") else ""
+            listed.add(f"{folder}/__init__.py" if folder else name)
+        else:
+            listed.add(f"{folder}/{name}")
+    return listed
+
+
+def test_the_documented_layers_are_the_tested_ones():
+    """The layer table of docs/architecture.md lists the units in the order this file checks."""
+    assert documented_layers() == [tuple(units) for units in LAYERS]
+
+
+def test_the_documented_tree_lists_every_module():
+    actual = {str(path.relative_to(PACKAGE)) for path in PACKAGE.rglob("*.py")}
+    listed = documented_modules()
+    assert sorted(actual - listed) == [] and sorted(listed - actual) == []
+
+
+def test_the_repository_holds_no_stray_files():
+    """What the root of a checkout holds in git: a process's ``pid`` or a ``runs/`` folder is not
+    the project's (skipped outside a git checkout, e.g. from an sdist)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        import pytest
+
+        pytest.skip("not a git checkout")
+    listed = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    top = {name.split("/", 1)[0] for name in listed}
+    expected = {".ci", ".gitignore", "README.md", "benchmarks", "cases", "docs", "oscillator", "pyproject.toml"}
+    expected |= {"scripts", "tests"}
+    assert top <= expected, sorted(top - expected)
