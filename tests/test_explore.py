@@ -294,3 +294,63 @@ def test_the_python_example_of_the_page_runs():
     explorer = space["explorer"]
     assert explorer.scene.periods == 20 and explorer.scene.case.parameters.Omega == 2.2
     assert len(explorer.scene.events) > 0
+
+
+def _request(path: str = "/", method: str = "GET", **headers: str):
+    from tornado.httputil import HTTPHeaders, HTTPServerRequest, RequestStartLine
+
+    fields = {"Host": "127.0.0.1:5006"} | {name.replace("_", "-"): value for name, value in headers.items()}
+    return HTTPServerRequest(start_line=RequestStartLine(method, path, "HTTP/1.1"), headers=HTTPHeaders(fields))
+
+
+@pytest.mark.parametrize(
+    ("request_", "status"),
+    [
+        (_request("/"), None),
+        (_request("/ws", Origin="http://127.0.0.1:5006", Sec_Fetch_Site="same-origin"), None),
+        (_request("/static/js/bokeh.min.js?v=1", Sec_Fetch_Site="same-origin"), None),
+        (_request("/static/extensions/panel/panel.min.js"), None),
+        (_request("/", Host="localhost:5006", Sec_Fetch_Site="none"), None),
+        # Panel's route that imports the module its URL names, and Bokeh's that the page never asks for
+        (_request("/components/this/x/y/z"), 404),
+        (_request("/components/venv.__main__/x/y/z"), 404),
+        (_request("/autoload.js"), 404),
+        (_request("/metadata"), 404),
+        (_request("/static/../../etc/passwd"), 404),
+        (_request("/", method="POST"), 405),
+        # DNS rebinding: a name of the attacker's, pointed at this machine
+        (_request("/", Host="evil.example:5006"), 403),
+        (_request("/", Host="127.0.0.1:5007"), 403),
+        (_request("/ws", Origin="http://evil.example"), 403),
+        (_request("/ws", Origin="null"), 403),
+        # an <img>, a link or a frame on another site: no Origin, but the browser says where it came from
+        (_request("/static/js/bokeh.min.js", Sec_Fetch_Site="cross-site"), 403),
+        (_request("/", Sec_Fetch_Site="same-site"), 403),
+    ],
+)
+def test_the_server_passes_only_its_own_pages_requests(request_, status):
+    from oscillator.exploring.serving import Guard, hosts_of
+
+    guard = Guard(None, hosts_of("127.0.0.1", 5006), lambda: 0)
+    refused = guard.refusal(request_)
+    assert (refused and refused[0]) == status, refused
+
+
+def test_the_server_bounds_the_pages_open_at_once():
+    from oscillator.exploring.serving import MAX_PAGES, Guard, hosts_of
+
+    hosts = hosts_of("127.0.0.1", 5006)
+    assert Guard(None, hosts, lambda: MAX_PAGES - 1).refusal(_request("/")) is None
+    full = Guard(None, hosts, lambda: MAX_PAGES)
+    assert full.refusal(_request("/"))[0] == 503
+    assert full.refusal(_request("/ws", Origin="http://127.0.0.1:5006")) is None  # an open page keeps working
+
+
+def test_the_hosts_a_browser_may_name():
+    from oscillator.exploring.serving import hosts_of
+
+    assert hosts_of("127.0.0.1", 80) == ("127.0.0.1:80", "localhost:80")
+    assert hosts_of("::1", 80) == ("[::1]:80", "localhost:80")
+    everywhere = hosts_of("0.0.0.0", 80)
+    assert {"0.0.0.0:80", "127.0.0.1:80", "localhost:80", "[::1]:80"} <= set(everywhere)
+    assert "evil.example:80" not in everywhere

@@ -144,3 +144,106 @@ def test_a_case_text_with_a_script_shows_as_text(tmp_path):
         assert page.evaluate("() => window.__pwned === undefined")
         assert not elsewhere, elsewhere  # the <img> was never fetched either
     assert np.isfinite(served.process.returncode)
+
+
+HOSTILE = """<!doctype html><html><body>
+<img src="{url}components/this/x/y/z"><img src="{url}components/venv.__main__/x/y/z">
+<img src="{url}autoload.js?bokeh-autoload-element=x"><iframe src="{url}"></iframe>
+<iframe name="sink"></iframe><form id="post" method="post" action="{url}" target="sink"></form>
+<script>
+window.__done = (async () => {{
+  const tries = ["components/this/x/y/z", "components/venv.__main__/x/y/z", "metadata", ""];
+  const said = [];
+  for (const path of tries) {{
+    try {{ await fetch("{url}" + path, {{mode: "no-cors"}}); said.push("sent"); }} catch (e) {{ said.push("refused"); }}
+    try {{ const r = await fetch("{url}" + path); said.push("read " + r.status); }} catch (e) {{ said.push("unread"); }}
+  }}
+  document.getElementById("post").submit();
+  said.push(await new Promise(done => {{
+    const socket = new WebSocket("{url}".replace("http", "ws") + "ws");
+    socket.onopen = () => done("websocket opened");
+    socket.onerror = () => done("websocket refused");
+  }}));
+  return said;
+}})();
+</script></body></html>"""
+
+
+@pytest.fixture
+def elsewhere_page(tmp_path):
+    """A web page of another site (``http://localhost:PORT``, not the explorer's 127.0.0.1), served
+    from a folder of its own; yields a function that writes its ``index.html`` and its address."""
+    import functools
+    import http.server
+    import threading
+
+    root = tmp_path / "elsewhere"
+    root.mkdir()
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(root))
+    handler.log_message = lambda *args: None
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+
+    def page(text: str) -> str:
+        (root / "index.html").write_text(text, encoding="utf-8")
+        return f"http://localhost:{server.server_address[1]}/index.html"
+
+    yield page
+    server.shutdown()
+
+
+def test_a_page_of_another_site_can_make_the_explorer_import_write_or_stop_nothing(tmp_path, elsewhere_page):
+    """Panel's ``/components/<module>/...`` imported the module its URL named: ``this`` printed the
+    Zen of Python on the server, ``venv.__main__`` made virtual environments in its folder and stopped
+    it.  From another site's page (images, frames, fetches, a form, a websocket) nothing reaches it."""
+    served_in = tmp_path / "served"
+    served_in.mkdir()
+    with Served("instance-1", cwd=served_in) as served, browser_page(also=("http://localhost",)) as (page, _):
+        page.goto(elsewhere_page(HOSTILE.format(url=served.url)))
+        said = page.evaluate("() => window.__done")
+        assert said.count("refused") + said.count("sent") == 4 and "websocket refused" in said, said
+        assert not [s for s in said if s.startswith("read")] or all(s == "read 403" for s in said if "read" in s)
+        assert served.process.poll() is None  # still serving
+        page.goto(served.url)  # and its own page works
+        wait_revision(page, 1)
+        code, out, err = served.stop()
+    assert code == 0 and out.strip().endswith("stopped"), (code, out, err)
+    assert "Beautiful is better than ugly" not in out + err and "Traceback" not in err, err
+    assert list(served_in.iterdir()) == []
+
+
+def test_the_explorer_answers_on_ipv6_loopback(tmp_path):
+    """``--address ::1``: the page is served (Bokeh's own address check could not read it) and works."""
+    with Served("instance-3", "--address", "::1", cwd=tmp_path) as served, browser_page() as (page, _):
+        assert served.url.startswith("http://[::1]:")
+        page.goto(served.url)
+        assert wait_revision(page, 1) >= 0
+        assert "events" in page.locator("span[data-revision='1']").inner_text()
+
+
+def test_many_requests_at_once_leave_the_explorer_answering(tmp_path):
+    """200 requests for the page at once (they made 200 explorers, kept the server busy for 6
+    minutes and grew it by 565 MB): at most MAX_PAGES explorers at a time, the rest told to close a
+    page (a 503, or that line on the page); every request answered (within the timeout, which only
+    catches a hang), and a page served again once the unused sessions are let go."""
+    import concurrent.futures
+    import time
+    import urllib.error
+    import urllib.request
+
+    def status(url: str) -> int:
+        try:
+            with urllib.request.urlopen(url, timeout=120) as answer:
+                return 503 if b"explorer pages are open" in answer.read() else int(answer.status)
+        except urllib.error.HTTPError as error:
+            return int(error.code)
+
+    with Served("instance-1", cwd=tmp_path) as served:
+        with concurrent.futures.ThreadPoolExecutor(50) as pool:
+            codes = list(pool.map(status, [served.url] * 200))
+        assert set(codes) == {200, 503}, codes  # some made, the rest refused: the bound held
+        deadline = time.monotonic() + 120  # the unused sessions are let go after a few seconds
+        while status(served.url) != 200:
+            assert time.monotonic() < deadline, "the explorer never served a page again"
+            time.sleep(0.5)

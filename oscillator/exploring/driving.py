@@ -24,7 +24,7 @@ from typing import Any
 
 __all__ = ["Served", "browser_page", "chromium", "click_map", "wait_revision"]
 
-_LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:", "about:")
+_LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "http://[::1]", "ws://[::1]", "data:", "blob:", "about:")
 
 
 def chromium() -> str | None:
@@ -71,9 +71,11 @@ class Served:
 
 
 @contextmanager
-def browser_page(width: int = 1400, height: int = 1300) -> Iterator[tuple[Any, list[str]]]:
+def browser_page(
+    width: int = 1400, height: int = 1300, *, also: tuple[str, ...] = ()
+) -> Iterator[tuple[Any, list[str]]]:
     """A page of headless Chromium and the list of the other hosts' addresses it asked for
-    (each refused)."""
+    (each refused); ``also`` names more address prefixes it may reach (a test's page elsewhere)."""
     from playwright.sync_api import sync_playwright
 
     executable = chromium()
@@ -86,7 +88,7 @@ def browser_page(width: int = 1400, height: int = 1300) -> Iterator[tuple[Any, l
             page = browser.new_page(viewport={"width": width, "height": height})
 
             def route(route: Any) -> None:
-                if route.request.url.startswith(_LOCAL):
+                if route.request.url.startswith(_LOCAL + also):
                     route.continue_()
                 else:
                     elsewhere.append(route.request.url)
