@@ -254,3 +254,25 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, extra, said):
     done = CliRunner().invoke(app, ["frc", "instance-1", *extra, "--out", str(folder)])
     assert done.exit_code == 2 and done.stderr.startswith(f"error: {said}") and len(done.stderr.splitlines()) == 1
     assert not folder.exists()
+
+
+@pytest.mark.parametrize("extra", [["--transient", "10", "--record", "4"], ["--set", "max_num_steps=5"]])
+def test_a_span_without_a_periodic_orbit_writes_empty_tables_and_says_so(tmp_path, extra):
+    """Where no periodic orbit is found (too short a transient; every landing failing), the command
+    writes the tables with their columns and no row, a report that says so, and exits 1 (it gave a
+    traceback, and every resume repeated it); run again, it resumes to the same."""
+    folder = tmp_path / "frc"
+    command = ["frc", "instance-1", "--param", "Omega", "1.5", "1.6", "--seeds", "2", "--sweep", "3"]
+    command += [*extra, "--workers", "1", "--out", str(folder)]
+    for attempt in range(2):
+        done = CliRunner().invoke(app, command)
+        assert done.exit_code == 1, done.output
+        assert done.stderr.startswith("error: no periodic orbit of period 1 was found over Omega's span")
+        assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.output
+        points = pd.read_parquet(folder / "points.parquet")
+        assert len(points) == 0 and {"Omega", "x1", "mu1_re", "stable", "x_pp_m1", "impact_max_left"} <= set(points)
+        sweeps = pd.read_parquet(folder / "sweeps.parquet")
+        assert len(sweeps) == 6 and "x_pp_m1" in sweeps
+        assert "No periodic orbit of period 1 was found" in (folder / "report.md").read_text(encoding="utf-8")
+        assert (folder / "figures" / "frequency-x-pp.png").exists()
+        assert ("resumed:" in done.stdout) == (attempt == 1)

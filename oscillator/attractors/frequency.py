@@ -38,13 +38,21 @@ from oscillator.attractors.responding import continued, doubled, measured, on_br
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count
-from oscillator.orbits.branch import Bifurcation, Branch, points_from_disk, points_on_disk
+from oscillator.orbits.branch import Bifurcation, Branch, point_columns, points_from_disk, points_on_disk
+from oscillator.orbits.response import COLUMNS as RESPONSE_COLUMNS
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["FrequencyResponse", "FrequencyStore", "check_frequency", "frequency_response", "frequency_store"]
+__all__ = [
+    "FrequencyResponse",
+    "FrequencyStore",
+    "check_frequency",
+    "frequency_response",
+    "frequency_store",
+    "no_points",
+]
 
 T = TypeVar("T")
 
@@ -82,6 +90,15 @@ class FrequencyResponse:
     points: pd.DataFrame
     sweeps: pd.DataFrame
     case: Case = field(repr=False, compare=False)  #: the case, as given
+    period: int = 1  #: forcing periods per return of the branches sought
+
+    def nothing_found(self) -> str:
+        """What was found where no branch was: the sentence the report and the command say."""
+        met = int((self.sweeps["period"] > 0).sum()) if len(self.sweeps) else 0
+        return (
+            f"no periodic orbit of period {self.period} was found over {self.param}'s span: the seeds' attractors "
+            f"hold none, and the sweeps met a periodic motion at {met} of their {len(self.sweeps)} values"
+        )
 
     def plot(self, measure: str = "x_pp") -> Figure:
         """``measure`` against the parameter, in the engineers' style
@@ -144,7 +161,7 @@ def frequency_response(
         branches = job.branches(np.linspace(low, high, seeds), starts)
         points = job.measures(branches)
         sweeps = job.sweeps(sweep)
-    return FrequencyResponse(param, tuple(branches), points, sweeps, base)
+    return FrequencyResponse(param, tuple(branches), points, sweeps, base, period)
 
 
 def check_frequency(
@@ -275,7 +292,7 @@ class _Job:
                 frames[b] = pd.concat(chunks[b]).sort_index().reset_index(drop=True)
                 self._write(f"measures-{b:04d}", frames[b])
         parts = [_joined(b, branch, frames[b]) for b, branch in enumerate(branches) if len(frames[b])]
-        return pd.concat(parts or [pd.DataFrame(columns=["branch", self.param])], ignore_index=True)
+        return pd.concat(parts, ignore_index=True) if parts else no_points(self.param)
 
     def sweeps(self, count: int) -> pd.DataFrame:
         """The sweeps up and down, in parallel."""
@@ -311,6 +328,12 @@ class _Job:
     def _write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
         if self.store is not None:
             self.store.write(name, frame, meta)
+
+
+def no_points(param: str) -> pd.DataFrame:
+    """The points table of a frequency response without a branch: its columns, no row."""
+    columns = ["branch", "period", *point_columns(param), *RESPONSE_COLUMNS]
+    return pd.DataFrame({name: pd.Series(dtype=object if name == "signature" else float) for name in columns})
 
 
 def _measures_of(branch: Branch, frame: pd.DataFrame) -> pd.DataFrame:

@@ -18,6 +18,7 @@ is traced twice.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -29,7 +30,7 @@ from oscillator.errors import OscillatorError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Branch
 from oscillator.orbits.continuation import continue_orbit
-from oscillator.orbits.response import REFINE, branch_responses, response
+from oscillator.orbits.response import COLUMNS, REFINE, branch_responses, response
 from oscillator.orbits.shooting import STATE, find_orbit, period_map
 
 __all__ = [
@@ -262,6 +263,7 @@ def sweep(case: Case, param: str, values: np.ndarray, settings: AttractorSetting
         state = orbit_state(at, period, start) if period else None
         row: dict[str, object] = {"direction": direction, param: float(value), "period": period}
         row["signature"] = landing.signature
+        row |= dict.fromkeys(COLUMNS, math.nan)  # where no orbit is met: the columns, not a number
         if state is not None:
             begin = dict(zip(STATE, (float(v) for v in state), strict=True))
             row |= response(resolve_case(at, **begin), period).columns()

@@ -144,14 +144,17 @@ def _finish(found: Any, store: Any, measure: str, no_plots: bool, quiet: bool) -
     from oscillator.report.frequency import write_frequency
 
     problems = outputs(folder, "parts", lambda: write_frequency(found, folder, measure, plots=not no_plots))
-    if not quiet:
+    if not quiet and found.branches:
         points = found.points
         out.print(Text(f"  {len(found.branches)} branches, {len(points)} points, {points.stable.mean():.0%} stable"))
+    if not quiet:
         for direction in ("up", "down"):
             jumps = ", ".join(f"{value:g}" for value in found.jumps(direction)) or "none"
             out.print(Text(f"  sweep {direction}: jumps at {jumps}"))
         for _, row in found.bifurcations.iterrows():
             out.print(Text(f"  branch {int(row.branch)}: {str(row.kind).replace('_', ' ')} at {row[found.param]:.8g}"))
     say(f"written to {printable(str(folder))}")
+    if not found.branches:
+        problems.insert(0, found.nothing_found())
     if problems:
-        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
+        raise fail("; ".join(problems) + f"; the tables are in {printable(str(folder))}", 1)

@@ -28,6 +28,7 @@ __all__ = [
     "Branch",
     "Skipped",
     "check_coordinate",
+    "point_columns",
     "points_from_disk",
     "points_on_disk",
     "skipped",
@@ -184,6 +185,11 @@ def check_coordinate(name: str) -> str:
 
 #: The multipliers' columns of a branch's points.
 MULTIPLIERS = tuple(f"mu{k}" for k in range(1, 5))
+
+
+def point_columns(param: str) -> list[str]:
+    """The columns of a branch's points (:attr:`Branch.points`), in order."""
+    return [param, *STATE, *MULTIPLIERS, "stable", "signature", "piece", "iterations"]
 
 
 def points_on_disk(points: pd.DataFrame) -> pd.DataFrame:

@@ -31,7 +31,7 @@ import pandas as pd
 from oscillator.errors import InputError, Interrupted, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count, real_argument
-from oscillator.orbits.branch import Branch, Skipped
+from oscillator.orbits.branch import Branch, Skipped, point_columns
 from oscillator.orbits.corrector import Continuer, Located, OrbitPoint
 from oscillator.orbits.locating import between, end_point, own_kind
 from oscillator.orbits.shooting import MAX_TRANSIENT, STATE, check_guess, check_orbit_settings, orbit_case, start_of
@@ -328,7 +328,7 @@ class _Trace:
                     "iterations": p.iterations,
                 }
             )
-        return pd.DataFrame(rows)
+        return pd.DataFrame(rows, columns=point_columns(param))
 
     def bifurcations_frame(self, param: str) -> pd.DataFrame:
         numbers = dict.fromkeys([param, *STATE, "jump"], float)

@@ -187,6 +187,8 @@ def frequency_blocks(found: FrequencyResponse, measures: list[str]) -> list[mk.B
         f"{len(points)} points, {stable:.0%} of them stable. The slow sweep up jumps at "
         f"{_values(found.jumps('up'))}; the slow sweep down at {_values(found.jumps('down'))}."
     )
+    if not found.branches:
+        summary = f"{found.nothing_found()[0].upper()}{found.nothing_found()[1:]}."
     blocks: list[mk.Block] = [mk.Heading(1, (f"{found.case.name}: frequency response over {param}",))]
     blocks += [mk.Paragraph((summary,))]
     blocks += modified_blocks(found.case)
@@ -197,8 +199,10 @@ def frequency_blocks(found: FrequencyResponse, measures: list[str]) -> list[mk.B
             (str(int(r.branch)), f"{float(r[param]):.8g}", str(r.kind).replace("_", " ")) for _, r in rows.iterrows()
         )
         blocks += [mk.Table(("branch", param, "kind"), table)]
-    blocks += [mk.Heading(2, ("Branches",))]
-    blocks += [mk.Table(("branch", "period", f"{param} from", "to", "points", "stable", "ended"), _branch_rows(found))]
+    if found.branches:
+        blocks += [mk.Heading(2, ("Branches",))]
+        header = ("branch", "period", f"{param} from", "to", "points", "stable", "ended")
+        blocks += [mk.Table(header, _branch_rows(found))]
     blocks += [mk.Figure(frequency_figure_name(m), f"{m} against {param}") for m in measures]
     return blocks
 
