@@ -155,18 +155,45 @@ def test_the_command_writes_its_folder_with_an_escaped_report_and_resumes(tmp_pa
         (["--vary", "d1=4,3"], "--vary: d1's range (4, 3) is empty"),
         (["--vary", "d1=2.5,4.5", "--constraint", "x_max_m1 < 3"], "--constraint: 'x_max_m1 < 3' is not a bound"),
         (["--vary", "d1=2.5,4.5", "--candidates", "0"], "--candidates"),
+        # a bound that is not a number (a traceback); ranges the model refuses (a folder left
+        # marked running, and a generated candidate named instead of the option)
+        (["--vary", "d1=2.5,4.5", "--constraint", "x_max_m1 <= e"], "--constraint: 'x_max_m1 <= e': 'e' is not a"),
+        (["--vary", "m1=-1,2"], "--vary: the model refuses m1 = -1"),
+        (["--vary", "mu_k=0.1,0.3"], "--vary: the model refuses mu_k = 0.3 (parameters.mu_s must be >= mu_k"),
+        (["--vary", "d1=2.5,4.5", "--over", "Omega", "0", "1"], "--over: the model refuses Omega = 0"),
     ],
 )
 def test_the_command_refuses_bad_input_with_the_flag(tmp_path, capsys, flags, words):
     from oscillator.cli.app import main
 
-    base = ["design", "instance-1", "--over", "Omega", "1.4", "1.6", "--out", str(tmp_path / "d")]
+    base = ["design", "instance-1", "--out", str(tmp_path / "d")]
+    if "--over" not in flags:
+        flags = [*flags, "--over", "Omega", "1.4", "1.6"]
     if "--objective" not in flags:
         flags = [*flags, "--objective", "x_max_m1"]
     with pytest.raises(SystemExit) as done:
         main([*base, *flags])
     assert done.value.code == 2 and words in capsys.readouterr().err
     assert not (tmp_path / "d").exists()
+
+
+def test_a_band_value_where_every_start_fails_is_the_worst_case():
+    """It added nothing to the worst case (a design judged on the values it could run); now it is
+    the worst, and a design where every start fails everywhere is an error naming the failures,
+    not a design with no objective called feasible."""
+    from oscillator.designing.judging import Seen, survey_task
+    from oscillator.designing.problem import Problem
+    from oscillator.errors import SimulationFailed
+
+    problem = Problem.of(osc.resolve_case("instance-1", max_num_steps=5), VARY, OVER, "x_max_m1", band=2, starts=1)
+    (failed,), runs = survey_task(problem, QUICK, (3.5, 20.0), 1.5)
+    assert failed.period == 0 and "max_num_steps" in failed.failure and runs >= 1
+    fine = Seen(1.4, 1, np.zeros(4), {"x_max_m1": 3.0})
+    judged = Judged.of(problem, np.array([3.5, 20.0]), [fine, failed], 2, "survey")
+    assert judged.objective == np.inf and judged.key() > Judged.of(problem, judged.design, [fine], 1, "survey").key()
+    with pytest.raises(SimulationFailed, match=r"every start failed at every band value of all 2 candidates") as error:
+        osc.design(problem.case, VARY, OVER, "x_max_m1", band=2, starts=1, candidates=2, settings=QUICK)
+    assert "max_num_steps" in str(error.value)
 
 
 def test_the_documented_example_finds_the_documented_design(worked):

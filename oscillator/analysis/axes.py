@@ -11,8 +11,10 @@ round trip.  Each refusal is one :class:`~oscillator.errors.InputError` naming t
 
 from __future__ import annotations
 
+import itertools
 import math
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +24,7 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import InitialState, Parameters
 from oscillator.text import shown
 
-__all__ = ["MAX_COUNT", "STATE", "Axis", "parameter_plane", "state_plane"]
+__all__ = ["MAX_COUNT", "STATE", "Axis", "admitted_box", "parameter_plane", "state_plane"]
 
 #: The state components, in the order of a state vector.
 STATE: tuple[str, ...] = tuple(name for name in InitialState.names() if name != "t0")
@@ -95,15 +97,30 @@ def parameter_plane(case: Case, x: object, y: object) -> tuple[Axis, Axis]:
         if isinstance(axis, Axis):
             Parameters.check_name(axis.name, field, label=f"{field}: axis")
     x, y = _check_pair(x, y)
-    corners = [(("x", x.name, a), ("y", y.name, b)) for a in (x.low, x.high) for b in (y.low, y.high)]
-    for pair in [((f, n, v),) for f, n, v in sorted({c for corner in corners for c in corner})] + corners:
-        try:
-            resolve_case(case, **{name: float(value) for _, name, value in pair})
-        except OscillatorError as error:
-            where = ", ".join(f"{name} = {value:g}" for _, name, value in pair)
-            field = pair[-1][0]
-            raise InputError(
-                f"{field}: the model refuses {where} ({error}); give an axis inside the parameter's range",
-                field=field,
-            ) from None
+    ranges = {x.name: (x.low, x.high), y.name: (y.low, y.high)}
+    admitted_box(case, ranges, {x.name: "x", y.name: "y"}, "give an axis inside the parameter's range")
     return x, y
+
+
+#: Beyond this many parameters, a box's ends are checked one parameter at a time, not at every corner.
+CORNERS_UP_TO = 10
+
+
+def admitted_box(case: Case, ranges: Mapping[str, tuple[float, ...]], fields: Mapping[str, str], fix: str) -> None:
+    """Every corner of the box of parameter ``ranges`` admitted by the model (``case`` with those
+    values): each end alone, then every corner (the model's constraints are intervals or orderings
+    of two parameters, so the whole box is then admitted).  A refusal is an
+    :class:`~oscillator.errors.InputError` naming the values, with ``fields`` of the refused
+    corner's last parameter (``"x"``, ``"vary"``) and ``fix``."""
+    names = list(ranges)
+    ends = [[(name, float(end)) for end in ranges[name]] for name in names]
+    trials: list[tuple[tuple[str, float], ...]] = [(end,) for each in ends for end in each]
+    if 1 < len(names) <= CORNERS_UP_TO:
+        trials += list(itertools.product(*ends))
+    for trial in trials:
+        try:
+            resolve_case(case, **dict(trial))
+        except OscillatorError as error:
+            where = ", ".join(f"{name} = {value:g}" for name, value in trial)
+            field = fields[trial[-1][0]]
+            raise InputError(f"{field}: the model refuses {where} ({error}); {fix}", field=field) from None

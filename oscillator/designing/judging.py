@@ -34,13 +34,16 @@ __all__ = ["Judged", "Seen", "follow", "seen_from_table", "seen_table", "survey"
 class Seen:
     """One attractor at one band value: the band value, the attractor's period and section point
     (for Newton to continue it), its measures (``nan`` where unmeasured) and, when followed, their
-    derivatives in the design's parameters."""
+    derivatives in the design's parameters.  A band value where every start failed is one ``Seen``
+    too, of period 0, unmeasured (the worst: a design is not judged good where it cannot be run),
+    ``failure`` saying why."""
 
     band: float
     period: int
     state: np.ndarray = field(repr=False)
     measures: Mapping[str, float] = field(repr=False)
     gradients: Mapping[str, np.ndarray] = field(default_factory=dict, repr=False)
+    failure: str = ""
 
     def value(self, measure: str) -> float:
         value = self.measures.get(measure, math.nan)
@@ -55,20 +58,22 @@ def seen_table(seen: list[Seen]) -> pd.DataFrame:
     rows = [
         {"band": s.band, "period": s.period, **dict(zip(_STATE, s.state, strict=True))}
         | {name: float(s.measures.get(name, math.nan)) for name in COLUMNS}
+        | {"failure": s.failure}
         for s in seen
     ]
-    return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS])
+    return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS, "failure"])
 
 
 def seen_from_table(table: pd.DataFrame) -> list[Seen]:
     """:func:`seen_table` read back."""
-    measures = [column for column in table.columns if column not in ("band", "period", *_STATE)]
+    measures = [column for column in table.columns if column not in ("band", "period", *_STATE, "failure")]
     return [
         Seen(
             float(row["band"]),
             int(row["period"]),
             row[list(_STATE)].to_numpy(float),
             row[measures].astype(float).to_dict(),
+            failure=str(row["failure"]),
         )
         for _, row in table.iterrows()
     ]
@@ -122,6 +127,10 @@ def survey_task(
         Seen(float(band), attractor.period, np.array(attractor.points[0], dtype=float), dict(attractor.measures))
         for attractor in found.attractors
     ]
+    if not seen:  # every start failed: the worst case, and why
+        messages = found.labels["message"].astype(str)
+        why = messages.mode().iloc[0] if len(messages) else "no start was run"
+        seen = [Seen(float(band), 0, np.full(len(_STATE), math.nan), {}, failure=why)]
     return seen, runs() - before
 
 

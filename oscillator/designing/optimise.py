@@ -34,7 +34,7 @@ from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.front import pareto_front
 from oscillator.designing.judging import Judged, Seen, follow, seen_from_table, seen_table, survey, survey_task
 from oscillator.designing.problem import Constraint, Problem
-from oscillator.errors import OscillatorError
+from oscillator.errors import OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count
 
@@ -105,7 +105,7 @@ class DesignStore(TableFolder):
     :func:`~oscillator.designing.judging.seen_table` and its simulations in the metadata.  The
     refinement and the check are computed again on resuming (a few percent of the work)."""
 
-    FORMAT = 1
+    FORMAT = 2  # 2: a survey's table has a failure column
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "design.json", identity, name=name)
@@ -164,6 +164,20 @@ def _global(
         seen = [s for _, part, _ in parts for s in part]
         judged.append(Judged.of(problem, x, seen, sum(cost for _, _, cost in parts), "survey"))
     return judged
+
+
+def _check_any_ran(problem: Problem, judged: list[Judged]) -> None:
+    """Refuse a global search in which every start of every survey failed: no design was judged
+    (each would be the worst), and the failures are said, the commonest first."""
+    failures = pd.Series([s.failure for j in judged for s in j.seen])
+    if len(failures) and (failures != "").all():
+        common = failures.value_counts()
+        said = "; ".join(f"{count} x {why}" for why, count in common.head(3).items())
+        raise SimulationFailed(
+            f"every start failed at every band value of all {len(judged)} candidates, so no design could be judged "
+            f"({said}); check the case's settings (e.g. max_num_steps) and the ranges of `vary` and `over`",
+            reason=Reason.SOLVER_FAILURE,
+        )
 
 
 class _Epigraph:
@@ -322,6 +336,7 @@ def design(
             store.check()
             store.open()
         judged = _global(problem, settings, candidates, executor, progress, store)
+    _check_any_ran(problem, judged)
     start = min(judged, key=Judged.key)
     spent = {"global": sum(j.runs for j in judged), "refine": 0, "check": 0}
     if start.feasible:

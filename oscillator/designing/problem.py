@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from oscillator.analysis.axes import admitted_box
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count, is_finite_number
@@ -61,7 +62,15 @@ def check_constraint(text: object) -> Constraint:
             "rests) or 'onsets_right <= 0' (no contact with the right stop)",
             field="constraints",
         )
-    return Constraint(check_measure(match.group(1), "constraints"), _finite(float(match.group(2)), "constraints"))
+    try:
+        bound = float(match.group(2))
+    except ValueError:
+        raise InputError(
+            f"constraints: {shown(text)}: {match.group(2)!r} is not a number; write 'measure <= value', e.g. "
+            "'x_max_m1 <= 3.9'",
+            field="constraints",
+        ) from None
+    return Constraint(check_measure(match.group(1), "constraints"), _finite(bound, "constraints"))
 
 
 def _finite(value: object, field: str) -> float:
@@ -121,6 +130,12 @@ class Problem:
             raise InputError(
                 f"over: {band_span[0]} is varied too; the band is a parameter the design does not choose", field="over"
             )
+        base = resolve_case(case)
+        box = {name: (low, high) for name, low, high in ranges}
+        fields = dict.fromkeys(box, "vary")
+        admitted_box(base, box, fields, "give a range the model admits")
+        fields[band_span[0]] = "over"
+        admitted_box(base, box | {band_span[0]: band_span[1:]}, fields, "give a range the model admits")
         if isinstance(constraints, str):
             constraints = [constraints]
         objectives = [objective] if isinstance(objective, str) else list(objective)
@@ -131,7 +146,7 @@ class Problem:
                 field="objective",
             )
         return cls(
-            case=resolve_case(case),
+            case=base,
             vary=ranges,
             over=band_span,
             objective=check_measure(objectives[0], "objective"),
