@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from oscillator.errors import InputError
-from oscillator.io.files import atomic_folder, check_name, read_untrusted, replace_file
+from oscillator.io.files import atomic_folder, check_name, read_untrusted, refuse_link, replace_file
 from oscillator.text import printable
 
 __all__ = ["ResumableFolder", "TableFolder", "identity"]
@@ -69,6 +69,7 @@ class ResumableFolder:
         name must be writable; an existing folder must hold this very computation (it resumes)."""
         text = printable(str(self.folder))
         check_name(self.folder, option="folder")
+        refuse_link(self.folder)
         if not os.path.lexists(self.folder):
             return
         if not self.folder.is_dir():

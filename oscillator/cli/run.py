@@ -348,8 +348,12 @@ def report(
             load("oscillator.report.attractors")
             from oscillator.report.rebuilding import rebuild
 
-            what = rebuild(folder)
+            rebuilt = rebuild(folder)
+            assert rebuilt is not None  # a global analysis's folder: its marker is there
+            what, problems = rebuilt
             say(f"report rebuilt ({what}): {folder / 'report.md'}, {folder / 'report.html'}")
+            if problems:
+                raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
             return
         if folder_kind(folder) == "branch":
             if window is not None:

@@ -42,8 +42,10 @@ __all__ = [
     "atomic_path",
     "claim_folder",
     "default_name",
+    "inner_folder",
     "lock_name",
     "read_untrusted",
+    "refuse_link",
     "replace_file",
 ]
 
@@ -125,6 +127,23 @@ def atomic_path(target: Path) -> Iterator[Path]:
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise
+
+
+def inner_folder(folder: Path) -> Path:
+    """``folder``, a folder inside an output folder (``figures/``), made if it is missing; refused
+    if it is a link or not a folder: nothing is written through a link inside an output folder
+    (a link there would send the files wherever it points)."""
+    folder = Path(folder)
+    with contextlib.suppress(FileExistsError):
+        folder.mkdir(exist_ok=True)
+    if folder.is_symlink() or not folder.is_dir():
+        kind = "a link" if folder.is_symlink() else "not a folder"
+        raise InputError(
+            f"{printable(str(folder))} is {kind}; an output folder holds plain folders only, and nothing is written "
+            "through a link: remove it and run the command again",
+            field="folder",
+        )
+    return folder
 
 
 def replace_file(path: Path, text: str) -> None:
@@ -357,10 +376,22 @@ def _make_parents(folder: Path) -> list[Path]:
     return missing
 
 
+def refuse_link(target: Path, *, option: str = "folder") -> None:
+    """Refuse an output folder's name that is a link (to a folder or anything else): an output is
+    written in a folder of its own, never through a link."""
+    if Path(target).is_symlink():
+        raise InputError(
+            f"{option} {printable(str(target))} is a link; give the name of a folder of its own (outputs are never "
+            "written through a link)",
+            field=option,
+        )
+
+
 def check_new(target: Path, *, option: str = "folder") -> None:
     """Refuse a folder name that cannot be written (:func:`check_name`) or that exists already:
     the check a command makes before it loads anything, and :func:`claim_folder` again."""
     check_name(target, option=option)
+    refuse_link(target, option=option)
     if os.path.lexists(target):
         raise FolderTaken(
             f"{option} {printable(str(target))} exists already; give a new folder (runs are never overwritten)",

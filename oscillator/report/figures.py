@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.errors import InputError
-from oscillator.io.files import atomic_path
+from oscillator.io.files import atomic_path, inner_folder
 from oscillator.model.events import EventKind
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
 from oscillator.model.parameters import Parameters
@@ -547,7 +547,8 @@ def write_figures(
     window: Window | None = None,
 ) -> list[Path]:
     """Write the four panels as PNG and SVG into ``directory``; return the files written."""
-    directory.mkdir(parents=True, exist_ok=True)
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    inner_folder(directory)
     written = []
     for name, fig in draw_figures(trajectory, events, p, start, title=title, window=window).items():
         written += save_figure(fig, directory, name)

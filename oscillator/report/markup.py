@@ -208,6 +208,8 @@ def _html_inline(content: Sequence[Inline]) -> str:
 def _figure_data(folder: Path, name: str) -> str | None:
     """The PNG ``folder/figures/<name>.png`` as base64, if it is a regular file of ours."""
     path = folder / "figures" / f"{name}.png"
+    if path.parent.is_symlink():  # a folder of figures elsewhere: none is ours
+        return None
     try:
         info = os.lstat(path)
     except OSError:

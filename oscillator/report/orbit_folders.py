@@ -29,7 +29,7 @@ import pandas as pd
 
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
-from oscillator.io.files import FolderClaim, read_untrusted, replace_file
+from oscillator.io.files import FolderClaim, inner_folder, read_untrusted, replace_file
 from oscillator.orbits.branch import BIFURCATION_KINDS, MULTIPLIERS, Branch, points_from_disk, points_on_disk
 from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
@@ -274,7 +274,7 @@ def finish_branch(folder: Path) -> BranchFolder:
     info, figures = found.run, folder / "figures"
     names = ("branch", "multipliers")
     if "figures" in info["pending"] or any(not _drawn(figures / f"{name}.png") for name in names):
-        figures.mkdir(exist_ok=True)
+        inner_folder(figures)
         draw_branch(found.branch, figures / "branch.png", info["coordinate"], found.sweep_points)
         draw_multipliers(found.branch, figures / "multipliers.png")
         info["pending"] = [item for item in info["pending"] if item != "figures"]

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
-from oscillator.io.files import atomic_path
+from oscillator.io.files import atomic_path, inner_folder
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title, save_figure
 from oscillator.text import printable
@@ -70,8 +70,7 @@ def wrapped_title(case: Any, what: str) -> str:
 
 def save_into(fig: Figure, folder: Path, name: str) -> None:
     """Save a figure as PNG and SVG into ``folder`` (created), uncropped."""
-    folder.mkdir(exist_ok=True)
-    save_figure(fig, folder, name, tight=False)
+    save_figure(fig, inner_folder(folder), name, tight=False)
 
 
 def write_folder(
@@ -88,6 +87,12 @@ def write_folder(
         with atomic_path(folder / f"{name}.parquet") as temporary:
             frame.to_parquet(temporary, index=False)
     drawn = set()
+    try:
+        if figures:
+            inner_folder(folder / "figures")
+    except OscillatorError as error:
+        problems.append(f"figures not drawn: {error}")
+        figures = ()
     for name, draw in figures:
         try:
             save_into(draw(), folder / "figures", name)

@@ -19,14 +19,13 @@ from oscillator.text import printable
 __all__ = ["rebuild"]
 
 
-def rebuild(folder: Path) -> str | None:
+def rebuild(folder: Path) -> tuple[str, list[str]] | None:
     """Rebuild the tables, figures and report of a finished basins, atlas or curve folder from
-    what it keeps (for ``oscillator report``); what was rebuilt, or None for a folder of another
-    kind.  The landings and rows are read back, never computed: an unfinished folder is refused
-    (the command that made it resumes it)."""
+    what it keeps (for ``oscillator report``): what was rebuilt and what could not be drawn (the
+    tables stay), or None for a folder of another kind.  The landings and rows are read back,
+    never computed: an unfinished folder is refused (the command that made it resumes it)."""
     if (folder / "curve.json").exists():
-        write_curve(read_curve(folder), folder)
-        return "the curve (drawn without an atlas)"
+        return "the curve (drawn without an atlas)", write_curve(read_curve(folder), folder)
     if (folder / "attractors.json").exists():
         raise InputError(
             f"{printable(str(folder))}: an attractors folder is rebuilt by running the command that made it again with "
@@ -39,12 +38,9 @@ def rebuild(folder: Path) -> str | None:
             "command with a new --out (it takes seconds)",
             field="folder",
         )
-    if (folder / "basins.json").exists():
-        _rebuild_basins(folder, marker_identity(folder / "basins.json"), folder_case(folder, "basins.json"))
-        return "the basins"
-    if (folder / "atlas.json").exists():
-        _rebuild_atlas(folder, marker_identity(folder / "atlas.json"), folder_case(folder, "atlas.json"))
-        return "the atlas"
+    for marker, what, again in (("basins.json", "the basins", _rebuild_basins), ("atlas.json", "the atlas", _rebuild_atlas)):
+        if (folder / marker).exists():
+            return what, again(folder, marker_identity(folder / marker), folder_case(folder, marker))
     return None
 
 
@@ -59,7 +55,7 @@ def _plane(folder: Path, identity: dict[str, Any], settings_type: Any, marker: s
         raise InputError(f"{printable(str(folder))}/{marker} is damaged ({error})", field="folder") from None
 
 
-def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
+def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> list[str]:
     from oscillator.attractors.basins import basin_store, find_basins, grid_starts
     from oscillator.attractors.mapping import AttractorSettings
 
@@ -67,7 +63,7 @@ def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> None:
     store = basin_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, len(grid_starts(case, x, y)), "starts")
-    write_basins(find_basins(case, x, y, store, settings=settings), folder)
+    return write_basins(find_basins(case, x, y, store, settings=settings), folder)
 
 
 def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> None:
@@ -82,11 +78,11 @@ def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> No
         )
 
 
-def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> None:
+def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> list[str]:
     from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
 
     x, y, settings = _plane(folder, identity, AtlasSettings, "atlas.json")
     store = atlas_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, y.count, "rows", batches=True)
-    write_atlas(regime_atlas(case, x, y, settings=settings, store=store), folder)
+    return write_atlas(regime_atlas(case, x, y, settings=settings, store=store), folder)

@@ -11,6 +11,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from oscillator.io.files import inner_folder
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import labelled
 from oscillator.report.figures import KIND_STYLE, MASS_COLOR, event_marker, outside_legend, save_figure
@@ -125,7 +126,8 @@ def write_sweep_figures(
     tables: dict[str, Any], param: str, mass: int, directory: Path, *, title: str = ""
 ) -> list[Path]:
     """Write the Fig. 14-style diagrams of a sweep as PNG and SVG (see :func:`draw_sweep_figures`)."""
-    directory.mkdir(parents=True, exist_ok=True)
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    inner_folder(directory)
     written = []
     for name, fig in draw_sweep_figures(tables, param, mass, title=title).items():
         written += save_figure(fig, directory, name)
