@@ -38,7 +38,8 @@ def rebuild(folder: Path) -> tuple[str, list[str]] | None:
             "command with a new --out (it takes seconds)",
             field="folder",
         )
-    for marker, what, again in (("basins.json", "the basins", _rebuild_basins), ("atlas.json", "the atlas", _rebuild_atlas)):
+    kinds = (("basins.json", "the basins", _rebuild_basins), ("atlas.json", "the atlas", _rebuild_atlas))
+    for marker, what, again in kinds:
         if (folder / marker).exists():
             return what, again(folder, marker_identity(folder / marker), folder_case(folder, marker))
     return None
