@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import contextlib
+import re
 import subprocess
 import sys
 import textwrap
@@ -95,29 +96,56 @@ def test_the_same_script_with_the_guard_runs_on_two_workers(tmp_path):
 
 
 def test_a_scheduler_address_where_no_dask_scheduler_listens_is_refused_without_hanging():
+    """A web server (says nothing first), an SSH server (a banner Dask would read as a frame size of
+    exabytes), a server that sends a size and then nothing (Dask waited forever) and one whose
+    message is shorter than Dask's framing (a ``struct.error``): each refused in one line, within
+    the greeting's 10 s (the four are tried at once)."""
+    import concurrent.futures
     import http.server
     import socket
+    import struct
     import threading
 
     from oscillator.analysis.execution import connect
 
     web = http.server.HTTPServer(("127.0.0.1", 0), http.server.SimpleHTTPRequestHandler)  # says nothing first
     threading.Thread(target=web.serve_forever, daemon=True).start()
-    ssh = socket.create_server(("127.0.0.1", 0))  # greets with a banner that Dask would read as a frame size
+    greetings = {
+        "ssh": b"SSH-2.0-OpenSSH_9.2\r\n",
+        "silent after its size": struct.pack("<Q", 100),
+        "short": struct.pack("<Q", 4) + b"abcd",
+    }
+    servers = {name: socket.create_server(("127.0.0.1", 0)) for name in greetings}
 
-    def banner():
-        peer, _ = ssh.accept()
-        with peer, contextlib.suppress(OSError):  # the probe hangs up after the banner
-            peer.sendall(b"SSH-2.0-OpenSSH_9.2\r\n")
+    def greet(name: str) -> None:
+        peer, _ = servers[name].accept()
+        with peer, contextlib.suppress(OSError):  # the probe hangs up after the greeting
+            peer.sendall(greetings[name])
             peer.recv(1)
 
-    threading.Thread(target=banner, daemon=True).start()
+    for name in greetings:
+        threading.Thread(target=greet, args=(name,), daemon=True).start()
+    addresses = {name: f"tcp://127.0.0.1:{server.getsockname()[1]}" for name, server in servers.items()}
+    addresses["web"] = f"tcp://127.0.0.1:{web.server_address[1]}"
+    expected = {
+        "ssh": r"is not a Dask scheduler \(it sent b.SSH-2\.0-",
+        "web": r"is not a Dask scheduler \(it said nothing within 10 s",
+        "silent after its size": r"is not a Dask scheduler \(it announced a message of 100 bytes and sent 0 within",
+        "short": r"is not a Dask scheduler \(it sent .*, a message of 4 bytes",
+    }
+
+    def refusal(name: str) -> str:
+        with pytest.raises(InputError) as refused:
+            connect(addresses[name])
+        return str(refused.value)
+
     try:
-        with pytest.raises(InputError, match=r"is not a Dask scheduler \(it sent b.SSH-2\.0-"):
-            connect(f"tcp://127.0.0.1:{ssh.getsockname()[1]}")
-        with pytest.raises(InputError, match=r"is not a Dask scheduler \(it said nothing within 10 s"):
-            connect(f"tcp://127.0.0.1:{web.server_address[1]}")
+        with concurrent.futures.ThreadPoolExecutor(len(addresses)) as pool:
+            said = dict(zip(addresses, pool.map(refusal, addresses), strict=True))
     finally:
         web.shutdown()
         web.server_close()
-        ssh.close()
+        for server in servers.values():
+            server.close()
+    for name, pattern in expected.items():
+        assert re.search(pattern, said[name]), (name, said[name])

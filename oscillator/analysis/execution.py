@@ -22,6 +22,7 @@ import contextlib
 import multiprocessing
 import numbers
 import os
+import time
 import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures.process import BrokenProcessPool
@@ -305,31 +306,73 @@ _GREETING_MOST = 1 << 20
 
 
 def _probe(scheduler: str, host: str, port: int, *, greets: bool) -> None:
-    """Connect to the scheduler's port and, over plain TCP, read the start of its greeting: a Dask
-    scheduler sends its handshake at once, framed by its size as 8 bytes (little-endian).  A
-    server that sends nothing (a web server waiting for a request) or something else (an SSH
-    banner, read as a frame size of exabytes) is not one, and Dask would wait on it or try to
-    allocate that much."""
+    """Connect to the scheduler's port and, over plain TCP, read its whole greeting within
+    :data:`_GREETING_TIMEOUT`: a Dask scheduler sends its handshake at once, one message framed by
+    its size as 8 bytes (little-endian), then its frames' count and sizes, then the frames
+    (:func:`_greeting`).  A server that sends nothing (a web server waiting for a request),
+    something else (an SSH banner, read as a frame size of exabytes), a size and then nothing, or a
+    message Dask cannot read is not one: Dask would wait on it, try to allocate that much, or fail
+    with a ``struct.error``."""
     import socket
-    import struct
 
     with socket.create_connection((host, port), timeout=_GREETING_TIMEOUT) as probe:
         if not greets:
             return
-        received = b""
-        try:
-            while len(received) < 8 and (chunk := probe.recv(8 - len(received))):
-                received += chunk
-        except TimeoutError:
-            pass
-    size = struct.unpack("<Q", received)[0] if len(received) == 8 else 0
-    if not 0 < size <= _GREETING_MOST:
-        said = "said nothing" if not received else f"sent {received!r}"
+        problem = _greeting(probe, time.monotonic() + _GREETING_TIMEOUT)
+    if problem is not None:
         raise InputError(
-            f"scheduler {shown(scheduler)} is not a Dask scheduler (it {said} within {_GREETING_TIMEOUT:g} s of "
-            "connecting, where a Dask scheduler greets at once); check the address and port",
+            f"scheduler {shown(scheduler)} is not a Dask scheduler ({problem}, where a Dask scheduler greets at once "
+            "with its handshake); check the address and port",
             field="scheduler",
         )
+
+
+def _greeting(probe: Any, deadline: float) -> str | None:
+    """What is wrong with the first message read from ``probe`` as a Dask handshake (None: it is
+    one: a mapping that Dask's own protocol decodes), every read bounded by ``deadline``."""
+    import struct
+
+    def exactly(count: int) -> bytes:
+        received = b""
+        while len(received) < count:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            probe.settimeout(left)
+            try:
+                chunk = probe.recv(min(count - len(received), 1 << 16))
+            except (TimeoutError, OSError):
+                break
+            if not chunk:
+                break
+            received += chunk
+        return received
+
+    prefix = exactly(8)
+    if len(prefix) < 8:
+        return f"it said {'nothing' if not prefix else repr(prefix)} within {_GREETING_TIMEOUT:g} s of connecting"
+    (size,) = struct.unpack("<Q", prefix)
+    if not 8 <= size <= _GREETING_MOST:
+        return f"it sent {prefix!r}, a message of {size} bytes"
+    body = exactly(size)
+    if len(body) < size:
+        return f"it announced a message of {size} bytes and sent {len(body)} within {_GREETING_TIMEOUT:g} s"
+    try:
+        from distributed.protocol.core import loads
+        from distributed.protocol.utils import unpack_frames
+
+        frames, missing = unpack_frames(body, partial=True)
+        if sum(missing) > _GREETING_MOST:
+            return f"its message announced {sum(missing)} bytes more"
+        for count in missing:
+            frame = exactly(count)
+            if len(frame) < count:
+                return f"its message stopped short within {_GREETING_TIMEOUT:g} s"
+            frames.append(memoryview(frame))
+        message = loads(frames, deserialize=False)
+    except Exception as error:  # whatever Dask's protocol raises on bytes that are not its own
+        return f"its first message is not Dask's ({type(error).__name__})"
+    return None if isinstance(message, dict) else "its first message is not a handshake"
 
 
 def connect(scheduler: str) -> Any:
