@@ -160,8 +160,8 @@ def test_an_interrupted_frequency_response_keeps_its_parts_and_resumes_to_the_sa
     seen = []
     found = frequency_response(case, *arguments, store=again, progress=lambda d, t: seen.append(d), **options)
     assert 45 in np.diff(seen) and again.reused == len(kept)  # the kept branch's points counted at once
-    pd.testing.assert_frame_equal(found.points, window.points)
-    pd.testing.assert_frame_equal(found.sweeps, window.sweeps)
+    pd.testing.assert_frame_equal(found.points, window.points, check_exact=True)
+    pd.testing.assert_frame_equal(found.sweeps, window.sweeps, check_exact=True)
 
 
 @pytest.mark.slow
@@ -212,7 +212,7 @@ def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
     (folder / "parts" / "sweep-down.parquet").unlink()
     third = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
     assert f"resumed: {len(parts) - 2} parts read" in third.stdout
-    pd.testing.assert_frame_equal(pd.read_parquet(folder / "points.parquet"), points)
+    pd.testing.assert_frame_equal(pd.read_parquet(folder / "points.parquet"), points, check_exact=True)
     assert pd.read_parquet(folder / "sweeps.parquet").jump.sum() == 2
 
 

@@ -36,6 +36,12 @@ MISUSES = [
     (lambda: oscillator.read_run(None), "folder"),
     (lambda: oscillator.read_run(123), "folder"),
     (lambda: oscillator.read_run(b"runs/x"), "folder"),
+    # wrong exception types once (TypeError, AttributeError)
+    (lambda: oscillator.design("instance-1", {"d1": (3, 4)}, {"Omega": (1.4, 1.6)}, None), "objective"),
+    (lambda: oscillator.design("instance-1", {"d1": (3, 4)}, {"Omega": (1.4, 1.6)}, "x_max_m1", store="x"), "store"),
+    (lambda: oscillator.sensitivities(None, ["d1"]), "orbit"),
+    (lambda: oscillator.frequency_response("instance-1", store="/tmp/x"), "store"),
+    (lambda: find_attractors("instance-1", settings=oscillator.AttractorSettings(engine="cvodes")), "engine"),
 ]
 
 
@@ -149,3 +155,37 @@ def test_a_scheduler_address_where_no_dask_scheduler_listens_is_refused_without_
             server.close()
     for name, pattern in expected.items():
         assert re.search(pattern, said[name]), (name, said[name])
+
+
+COMMANDS_WITH_A_PARAMETER = [
+    (["frc", "instance-1", "--param", "Omega", "1.5", "1.6", "--set", "Omega=9"], "Omega is given by --param"),
+    (["atlas", "instance-1", "--x", "Omega", "1", "2", "3", "--y", "Q2", "70", "71", "3", "--set", "Q2=1"],
+     "Q2 is given by --y"),
+    (["sweep", "bifurcation-omega", "--set", "Omega=2"], "Omega is given by --param (or the case's [sweep])"),
+    (["design", "instance-1", "--vary", "d1=3,4", "--over", "Omega", "1.4", "1.6", "--objective", "x_max_m1",
+      "--set", "Omega=1.5"], "Omega is given by --over"),
+    (["basins", "instance-1", "--x", "x1", "-1", "1", "3", "--y", "v1", "-1", "1", "3", "--set", "v1=2"],
+     "v1 is given by --y"),
+    (["attractors", "instance-1", "--param", "Q2", "--from", "71", "--to", "72", "--set", "Q2=3"],
+     "Q2 is given by --param"),
+    # the landing engines are those --help names
+    (["frc", "instance-1", "--param", "Omega", "1.5", "1.6", "--engine", "scipy"],
+     "--engine must be one of dop853, cvode, got 'scipy'"),
+    (["atlas", "instance-1", "--x", "Omega", "1", "2", "3", "--y", "Q2", "70", "71", "3", "--engine", "sksundae"],
+     "--engine must be one of dop853, cvode"),
+    (["explore", "instance-1", "--engine", "scipy"], "--engine must be one of dop853, cvode"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("args", "said"), COMMANDS_WITH_A_PARAMETER)
+def test_a_value_another_option_gives_or_an_engine_the_command_does_not_run_is_refused(tmp_path, capsys, args, said):
+    """``--set Omega=9`` beside ``--param Omega`` was silently ignored (continue refused it); an
+    engine --help does not list was run."""
+    from oscillator.cli.app import main
+
+    out = [] if args[0] == "explore" else ["--out", str(tmp_path / "out")]
+    with pytest.raises(SystemExit) as done:
+        main([*args, *out])
+    error = capsys.readouterr().err
+    assert done.value.code == 2 and error.startswith("error: ") and said in error, error
+    assert list(tmp_path.iterdir()) == []

@@ -230,6 +230,36 @@ def test_a_repeated_multiplier_has_no_derivative():
     assert np.isnan(moved[:2]).all() and np.allclose(moved[2:, 0], [3.0, 4.0])
 
 
+def test_a_parameter_named_twice_is_computed_once(capsys):
+    """3000 copies of d1 made 3000 columns (131 s): each parameter once, in the order first named;
+    the command's table the same."""
+    from oscillator.cli.app import main
+
+    orbit = find_orbit("instance-1", Omega=1.85)
+    assert orbit.sensitivities(["d1", "Omega", "d1"] * 1000).params == ("d1", "Omega")
+    with pytest.raises(SystemExit) as done:
+        main(["orbit", "instance-1", "--set", "Omega=1.85", "--sensitivities", ",".join(["d1"] * 3000)])
+    assert done.value.code == 0
+    header = next(line for line in capsys.readouterr().out.splitlines() if "multiplier" in line and "d/d" in line)
+    assert header.split() == ["multiplier", "d/dd1"]
+
+
+def test_the_command_says_why_a_repeated_multiplier_has_no_derivative(capsys):
+    """The period-2 orbit of Instance 1, in which both masses rest: two multipliers are zero to
+    rounding, repeated; the table says ``none`` and why (it printed ``nan``)."""
+    from oscillator.cli.app import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["orbit", "instance-1", "--period", "2", "--sensitivities", "Omega"])
+    shown = capsys.readouterr().out
+    assert done.value.code == 0 and "nan" not in shown
+    rows = [line.split() for line in shown.split("Sensitivities of the Floquet multipliers")[1].splitlines()]
+    assert sum(1 for row in rows if len(row) == 2 and row[1] == "none") == 2
+    assert "none: a repeated multiplier" in shown and "zero ones come from the rests" in shown
+    table = find_orbit("instance-1", period=2).sensitivities("Omega").multipliers
+    assert table.simple.tolist() == [True, True, False, False] and table.loc[~table.simple, "d/dOmega"].isna().all()
+
+
 def test_bad_parameters_are_refused_with_the_field():
     orbit = find_orbit("instance-1", Omega=1.85)
     with pytest.raises(InputError, match="params") as bad:

@@ -36,9 +36,10 @@ from oscillator.analysis.store import identity
 from oscillator.attractors.continuing import Continued, Mapper, continue_attractors, plane_points
 from oscillator.attractors.features import MEASURES, Measured
 from oscillator.attractors.grouping import regime_of
-from oscillator.attractors.mapping import AttractorSettings, check_engine
+from oscillator.attractors.mapping import AttractorSettings
 from oscillator.attractors.seeding import OnePerRegime
 from oscillator.attractors.store import LandingStore
+from oscillator.engines import check_engine
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count

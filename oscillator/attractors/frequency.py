@@ -40,7 +40,9 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch, point_columns, points_from_disk, points_on_disk
 from oscillator.orbits.response import COLUMNS as RESPONSE_COLUMNS
+from oscillator.orbits.shooting import orbit_case
 from oscillator.presenting import presenter
+from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -152,6 +154,10 @@ def frequency_response(
     each task, in seeds, branch points and sweep values (the total grows as the branches are
     found)."""
     base = resolve_case(case) if isinstance(case, str) else case
+    if store is not None and not isinstance(store, FrequencyStore):
+        raise InputError(
+            f"store must be a FrequencyStore (frequency_store(folder, ...)), got {shown(store)}", field="store"
+        )
     low, high = check_frequency(base, param, span, period=period, seeds=seeds, sweep=sweep, max_points=max_points)
     settings = check_settings(settings)
     starts = None if states is None else check_states(states)
@@ -385,7 +391,9 @@ def _branches_from_disk(case: Case, param: str, frame: pd.DataFrame, meta: Any) 
         reason = None if info["reason"] is None else Reason(info["reason"])
         points = points_from_disk(rows)
         ending = bool(info["complete"]), str(info["message"]), reason
-        branches.append(Branch(param, points, bifurcations, float(info["section"]), int(info["period"]), *ending, case))
+        # the case continue_orbit gave the branch (its tolerances tightened): its measures, the same
+        at = orbit_case(case, {param: float(points[param].iloc[0])}) if len(points) else case
+        branches.append(Branch(param, points, bifurcations, float(info["section"]), int(info["period"]), *ending, at))
     return branches
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from oscillator.analysis.axes import STATE
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.analysis.periods import detect_period
-from oscillator.engines import ENGINES
+from oscillator.engines import check_engine
 from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.batch import OK, land_compiled, options_vector
@@ -45,7 +45,6 @@ __all__ = [
     "STATE",
     "AttractorSettings",
     "Landing",
-    "check_engine",
     "check_settings",
     "check_states",
     "land",
@@ -99,8 +98,7 @@ class AttractorSettings:
 
     def __post_init__(self) -> None:
         check_count(self.transient, "transient", 1, 1_000_000)
-        if not isinstance(self.engine, str) or self.engine not in ENGINES:
-            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(self.engine)}", field="engine")
+        check_engine(self.engine)
         check_count(self.record, "record", 2, 100_000)
         check_count(self.max_period, "max_period", 1, 1000)
         check_count(self.lyapunov_periods, "lyapunov_periods", 0, 10_000_000)
@@ -310,13 +308,6 @@ def _read(
         rest_time=(float(rest_time[0]), float(rest_time[1])),
         transient=window.ran,
     )
-
-
-def check_engine(engine: object) -> str:
-    """``engine`` if it names an engine of :data:`oscillator.engines.ENGINES`, else refused."""
-    if not isinstance(engine, str) or engine not in ENGINES:
-        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(engine)}", field="engine")
-    return engine
 
 
 def check_settings(settings: object) -> AttractorSettings:

@@ -16,8 +16,9 @@ from rich.text import Text
 from oscillator.analysis.execution import check_workers
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say, warn
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import case_from, check_engine, refuse_taken
 from oscillator.cli.options import (
+    LANDING_ENGINES,
     AxisOption,
     CaseArgument,
     FullTransientOption,
@@ -68,6 +69,7 @@ def landing_settings(**given: int | bool | str | None) -> AttractorSettings:
     """The settings the options give, the others :class:`AttractorSettings`' defaults."""
     from oscillator.attractors.mapping import AttractorSettings
 
+    check_engine(given.get("engine"), LANDING_ENGINES)  # type: ignore[arg-type]  # a str or None
     try:
         chosen: dict[str, Any] = {name: value for name, value in given.items() if value is not None}
         return AttractorSettings(**chosen)
@@ -114,6 +116,7 @@ def basins(
     with refusing():
         resolved = case_from(case, None, set_)
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
+        refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         chosen = {"transient": transient, "record": record, "max_period": max_period, "engine": engine}
         settings = landing_settings(**chosen, settle=not full_transient)
         store, lock, client, count = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
@@ -288,6 +291,7 @@ def attractors(
     """
     with refusing():
         resolved = case_from(case, None, set_)
+        refuse_taken(set_, {param: "--param"} | {axis[0]: option for axis, option in ((x, "--x"), (y, "--y")) if axis})
         given = {"transient": transient, "record": record, "settle": not full_transient, "engine": engine}
         plan = _open_following(resolved, param, start, stop, steps, x, y, tol, given, coordinate, out_dir)
         values, states, settings, store = plan

@@ -13,7 +13,7 @@ from oscillator.analysis.execution import check_workers
 from oscillator.cli.attractors import landing_settings
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, out, say
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import case_from, refuse_taken
 from oscillator.cli.options import (
     CaseArgument,
     FullTransientOption,
@@ -116,6 +116,7 @@ def design(
 
         name, low, high = over
         ranges = _ranges(vary)
+        refuse_taken(set_, dict.fromkeys(ranges, "--vary") | {name: "--over"})
         problem = Problem.of(resolved, ranges, {name: (low, high)}, objective, constraint or [], band, starts)
         from oscillator.model.parameters import check_count
 

@@ -10,7 +10,7 @@ import typer
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, say, warn
 from oscillator.cli.inputs import case_from, check_engine
-from oscillator.cli.options import SetOption
+from oscillator.cli.options import LANDING_ENGINES, SetOption
 from oscillator.errors import InputError, OscillatorError
 
 #: ``--engine`` of the explorer: which integrator draws each change.
@@ -67,7 +67,7 @@ def explore(
         from oscillator.exploring.serving import check_address, is_loopback, serve
 
         check_periods(periods)
-        check_engine(engine)
+        check_engine(engine, LANDING_ENGINES)
         check_address(address, port)
         case, picture = _opened(target, set_)
     except OscillatorError as error:

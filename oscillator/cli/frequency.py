@@ -13,7 +13,7 @@ from oscillator.analysis.execution import check_workers
 from oscillator.cli.attractors import landing_settings
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, out, say
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import case_from, refuse_taken
 from oscillator.cli.options import (
     CaseArgument,
     FullTransientOption,
@@ -83,6 +83,7 @@ def frc(
     with refusing():
         resolved = case_from(case, None, set_)
         name, low, high = param
+        refuse_taken(set_, {name: "--param"})
         settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
         options: dict[str, Any] = {"period": period, "seeds": seeds, "sweep": sweep, "max_points": max_points}
         store = _opened(resolved, (name, low, high), measure, starts, settings, options, out_dir)

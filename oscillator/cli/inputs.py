@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from oscillator.errors import InputError
@@ -15,15 +16,16 @@ from oscillator.text import printable, shown
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
-__all__ = ["case_from", "check_engine", "overrides", "sample_grid", "sweep_settings"]
+__all__ = ["case_from", "check_engine", "overrides", "refuse_taken", "sample_grid", "sweep_settings"]
 
 
-def check_engine(engine: str | None) -> None:
-    """Refuse an unknown ``--engine`` before anything is created."""
-    from oscillator.engines import ENGINES
+def check_engine(engine: str | None, among: tuple[str, ...] | None = None) -> None:
+    """Refuse an ``--engine`` that is not an engine (or not one of the command's, ``among``)
+    before anything is created."""
+    from oscillator.engines import check_engine as checked
 
-    if engine is not None and engine not in ENGINES:
-        raise InputError(f"--engine must be one of {', '.join(ENGINES)}, got {shown(engine)}", field="--engine")
+    if engine is not None:
+        checked(engine, among=among, field="--engine")
 
 
 INTEGER_OPTIONS = {f.name for f in SolverOptions.__dataclass_fields__.values() if f.type in ("int", int)}
@@ -51,6 +53,19 @@ def case_from(
     case: str, t_end: float | None = None, assignments: list[str] | None = None, keep_events_from: float | None = None
 ) -> Case:
     return resolve_case(load_case(case), t_end=t_end, keep_events_from=keep_events_from, **overrides(assignments or []))
+
+
+def refuse_taken(assignments: list[str] | None, taken: Mapping[str, str]) -> None:
+    """Refuse ``--set NAME=...`` of a parameter or start value that another option gives (the
+    swept or continued parameter, a varied one, an axis: ``taken`` maps it to that option): the
+    value set would be ignored."""
+    for name in overrides(assignments or []):
+        if name in taken:
+            raise InputError(
+                f"--set {printable(name)}=...: {printable(name)} is given by {taken[name]}, which would override it; "
+                f"give its values with {taken[name]} only",
+                field="--set",
+            )
 
 
 def sample_grid(case: Case, sample: float | None) -> np.ndarray | None:

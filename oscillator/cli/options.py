@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 __all__ = [
+    "LANDING_ENGINES",
     "AxisOption",
     "CaseArgument",
     "EngineOption",
@@ -72,6 +73,8 @@ EngineOption = Annotated[
     ),
 ]
 #: ``--engine`` of the many-start analyses: which integrator lands the starts.
+#: The engines ``--engine`` of the many-start analyses and of the explorer names.
+LANDING_ENGINES = ("dop853", "cvode")
 LandingEngineOption = Annotated[
     str,
     typer.Option(

@@ -23,7 +23,7 @@ from rich.text import Text
 
 from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from, overrides
+from oscillator.cli.inputs import case_from, refuse_taken
 from oscillator.cli.options import CaseArgument, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
@@ -158,7 +158,9 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
         derivatives = found.sensitivities(names)
     except OscillatorError as error:
         raise fail(message(error), code=_code(error)) from None
-    columns = [f"d/d{name}" for name in names]
+    from oscillator.orbits.monodromy_derivative import SIMPLE
+
+    columns = [f"d/d{name}" for name in derivatives.params]  # each parameter once
     table = Table(title="Sensitivities of the section point", title_justify="left", box=box.SIMPLE_HEAD)
     table.add_column("")
     for column in columns:
@@ -176,9 +178,18 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
     table = Table(title="Sensitivities of the Floquet multipliers", title_justify="left", box=box.SIMPLE_HEAD)
     for column in ("multiplier", *columns):
         table.add_column(column, justify="right", no_wrap=True)
-    for _, row in derivatives.multipliers.iterrows():
-        table.add_row(*(_compact(row[column]) for column in ("value", *columns)))
+    rows = derivatives.multipliers
+    for _, row in rows.iterrows():
+        table.add_row(_compact(row["value"]), *(_compact(row[c]) if row["simple"] else "none" for c in columns))
     out.print(table)
+    if not rows["simple"].all():
+        repeated = ", ".join(f"{abs(value):.3g}" for value in rows.loc[~rows["simple"], "value"])
+        out.print(
+            Text(
+                f"none: a repeated multiplier (moduli {repeated}: each within {SIMPLE:g} of another) has no "
+                "derivative; zero ones come from the rests (a resting mass's velocity is projected to zero)"
+            )
+        )
     nearest = (
         f"{derivatives.margins.what[0]}, relative distance {derivatives.margin:.3g}"
         if len(derivatives.margins)
@@ -317,12 +328,7 @@ def _prepare_continue(
             f"--coordinate must be one of {', '.join(COORDINATES)}, got {shown(coordinate)}", field="--coordinate"
         )
     param = settings["param"]
-    if param in overrides(set_ or []):
-        raise InputError(
-            f"--set {printable(param)}=...: {printable(param)} is the continued parameter; give its "
-            "range with --from and --to",
-            field="--set",
-        )
+    refuse_taken(set_, {param: "--param (the continued parameter), with --from and --to"})
     resolved = case_from(case, None, set_)
     from oscillator.io.files import check_new
 

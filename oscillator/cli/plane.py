@@ -14,8 +14,9 @@ from oscillator.analysis.execution import check_workers
 from oscillator.cli.attractors import axis_of
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say
-from oscillator.cli.inputs import case_from
+from oscillator.cli.inputs import case_from, check_engine, refuse_taken
 from oscillator.cli.options import (
+    LANDING_ENGINES,
     AxisOption,
     CaseArgument,
     FullTransientOption,
@@ -103,11 +104,13 @@ def atlas(
         from oscillator.analysis.axes import parameter_plane
 
         x_axis, y_axis = parameter_plane(resolved, axis_of(x, "--x"), axis_of(y, "--y"))
+        refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         from oscillator.attractors.atlas import AtlasSettings, atlas_store, check_measures
 
         count = check_workers(workers)
         given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
         chosen = {name: value for name, value in given.items() if value is not None}
+        check_engine(engine, LANDING_ENGINES)
         settings = AtlasSettings(**chosen, settle=not full_transient, engine=engine)
         folder = out_dir if out_dir is not None else new_folder(resolved, "atlas")
         responses = check_measures([] if measures is None else [n.strip() for n in measures.split(",") if n.strip()])
@@ -185,6 +188,7 @@ def curve(
 
     with refusing():
         resolved = case_from(case, None, set_)
+        refuse_taken(set_, {x[0]: "--x and --at", y[0]: "--y and --at"})
         point = _at(at, x[0], y[0])
         folder = out_dir if out_dir is not None else new_folder(resolved, "curve")
         check_new(folder, option="--out")

@@ -12,7 +12,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
-from oscillator.cli.inputs import case_from, sweep_settings
+from oscillator.cli.inputs import case_from, refuse_taken, sweep_settings
 from oscillator.cli.options import (
     NoPlotsOption,
     QuietOption,
@@ -87,6 +87,7 @@ def sweep(
     try:
         resolved = case_from(case, None, set_)
         settings = sweep_settings(resolved, param, start, stop, steps, transient, record, both_ways)
+        refuse_taken(set_, {settings.param: "--param (or the case's [sweep])"})
         plan = _open_sweep(resolved, settings, out_dir, workers, scheduler)
     except OscillatorError as error:
         raise fail(message(error)) from None
@@ -287,6 +288,7 @@ def locate(
         load("oscillator.analysis.locate", notice=True)
         lo, hi = between
         settings = sweep_settings(resolved, param, lo, hi, None, transient, record)
+        refuse_taken(set_, {settings.param: "--param (or the case's [sweep])"})
         found = _locate_with_progress(resolved, settings, what, (lo, hi), tolerance)
     except OscillatorError as error:
         raise fail(message(error)) from None

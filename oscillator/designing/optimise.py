@@ -34,9 +34,10 @@ from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.front import pareto_front
 from oscillator.designing.judging import Judged, Seen, follow, seen_from_table, seen_table, survey, survey_task
 from oscillator.designing.problem import Constraint, Problem
-from oscillator.errors import OscillatorError, Reason, SimulationFailed
+from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count
+from oscillator.text import shown
 
 __all__ = ["ROUNDS", "Design", "DesignStore", "design", "design_store", "refine"]
 
@@ -328,6 +329,8 @@ def design(
     from oscillator.attractors.mapping import check_settings
 
     problem = Problem.of(case, vary, over, objective, constraints, band=band, starts=starts)
+    if store is not None and not isinstance(store, DesignStore):
+        raise InputError(f"store must be a DesignStore (design_store(folder, ...)), got {shown(store)}", field="store")
     settings = check_settings(settings)
     candidates = check_count(candidates, "candidates", 1, 100_000)
     front = check_count(front, "front", 1, 100)

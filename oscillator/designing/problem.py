@@ -138,7 +138,9 @@ class Problem:
         admitted_box(base, box | {band_span[0]: band_span[1:]}, fields, "give a range the model admits")
         if isinstance(constraints, str):
             constraints = [constraints]
-        objectives = [objective] if isinstance(objective, str) else list(objective)
+        objectives = (
+            [objective] if isinstance(objective, str) else list(objective) if isinstance(objective, Sequence) else []
+        )
         if not 1 <= len(objectives) <= 2 or len(set(map(str, objectives))) != len(objectives):
             raise InputError(
                 "objective must be one response measure, or two different ones for a Pareto front; "

@@ -29,7 +29,7 @@ from __future__ import annotations
 import enum
 import importlib
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -51,6 +51,7 @@ __all__ = [
     "Step",
     "StepKind",
     "build_engine",
+    "check_engine",
     "default_engine",
     "describe",
     "engine_factory",
@@ -174,12 +175,19 @@ def describe(name: str) -> EngineInfo:
     return ENGINES.get(name, EngineInfo(name, "", name, f"the engine {name!r}"))
 
 
+def check_engine(name: object, *, among: Sequence[str] | None = None, field: str = "engine") -> str:
+    """``name`` if it names an engine of :data:`ENGINES` (of ``among`` where given: a command's
+    choices), else refused naming ``field`` and the engines it may name."""
+    names = tuple(ENGINES) if among is None else tuple(among)
+    if not isinstance(name, str) or name not in names:
+        raise InputError(f"{field} must be one of {', '.join(names)}, got {shown(name)}", field=field)
+    return name
+
+
 def engine_factory(name: str) -> type:
     """The engine class called ``name`` (see :data:`ENGINES`); its constructor takes
     ``(params: Parameters, options: SolverOptions)``."""
-    if not isinstance(name, str) or name not in ENGINES:
-        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {shown(name)}", field="engine")
-    module, _, cls = ENGINES[name].entry.partition(":")
+    module, _, cls = ENGINES[check_engine(name)].entry.partition(":")
     engine: type = getattr(importlib.import_module(module), cls)
     return engine
 

@@ -157,9 +157,9 @@ class Explorer:
         picture: Picture | None = None,
         engine: str = DRAWING_ENGINE,
     ) -> None:
-        from oscillator.engines import engine_factory
+        from oscillator.engines import check_engine
 
-        engine_factory(engine)  # an unknown name refused, naming the engines
+        check_engine(engine)
         self.engine = engine
         self._check_handle: Any = None
         self.case = resolve_case(case)

@@ -45,6 +45,7 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
 from oscillator.orbits.tangent import INTEGRALS, force_gradient, tangent_rates, threshold_gradient
+from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.shooting import Orbit
@@ -82,7 +83,7 @@ def check_params(params: object) -> tuple[str, ...]:
             f"params must name one or more parameters ({', '.join(Parameters.names())}), got {params!r}",
             field="params",
         )
-    return tuple(Parameters.check_name(name, "params") for name in names)
+    return tuple(dict.fromkeys(Parameters.check_name(name, "params") for name in names))  # each once
 
 
 @dataclass(frozen=True)
@@ -387,8 +388,10 @@ class Sensitivities:
         ``distance``, relative to the terms it compares), nearest first.
     multipliers : DataFrame
         The Floquet multipliers (largest modulus first, as :attr:`Orbit.multipliers`): ``value``
-        (complex), ``modulus``, ``d/d<param>`` (complex) and ``d|mu|/d<param>``; ``nan`` for a
-        multiplier that is not simple.  Computed when first asked (a second-order pass,
+        (complex), ``modulus``, ``simple`` (False for a multiplier within
+        :data:`~oscillator.orbits.monodromy_derivative.SIMPLE` of another: a repeated one, such as
+        the zero multipliers of an orbit whose masses rest), ``d/d<param>`` (complex) and
+        ``d|mu|/d<param>``; ``nan`` where the multiplier is not simple.  Computed when first asked (a second-order pass,
         :mod:`oscillator.orbits.monodromy_derivative`).
     """
 
@@ -411,7 +414,8 @@ class Sensitivities:
         segments, dy, dt_end = self._along
         monodromy, derivative = monodromy_derivative(segments, self.orbit.case.parameters, self.params, dy, dt_end)
         values, moved = multiplier_derivatives(monodromy, derivative)
-        table = pd.DataFrame({"value": values, "modulus": np.abs(values)})
+        simple = ~np.isnan(moved).any(axis=1) if len(self.params) else np.ones(len(values), bool)
+        table = pd.DataFrame({"value": values, "modulus": np.abs(values), "simple": simple})
         for j, name in enumerate(self.params):
             table[f"d/d{name}"] = moved[:, j]
         for j, name in enumerate(self.params):
@@ -448,8 +452,10 @@ def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
         point (:data:`MARGIN`): no derivative exists there.
     """
     from oscillator.orbits.response_derivatives import margins_of, measure_derivatives
-    from oscillator.orbits.shooting import period_map
+    from oscillator.orbits.shooting import Orbit, period_map
 
+    if not isinstance(orbit, Orbit):
+        raise InputError(f"orbit must be an Orbit (find_orbit's), got {shown(orbit)}", field="orbit")
     names = check_params(params)
     case, p = orbit.case, orbit.case.parameters
     image = period_map(case, orbit.section, orbit.state, orbit.period)
