@@ -1227,5 +1227,5 @@ def test_the_engine_option_lands_the_starts_with_the_reference_engine(tmp_path, 
     ]
     assert parts[0].sort_values("index").transient.tolist() == parts[1].sort_values("index").transient.tolist()
     refused = CliRunner().invoke(app, [*base, "--engine", "rk4", "--out", "bad"])
-    assert refused.exit_code == 2 and "--engine: engine must be one of" in refused.stderr
+    assert refused.exit_code == 2 and "--engine must be one of dop853, cvode, got 'rk4'" in refused.stderr
     assert not (tmp_path / "bad").exists()

@@ -145,6 +145,20 @@ def test_the_command_writes_its_folder_with_an_escaped_report_and_resumes(tmp_pa
     assert {p.name for p in (out / "figures").glob("*.png")} == {"design-search.png", "design-response.png"}
     html = (out / "report.html").read_text(encoding="utf-8")
     assert "<img src=x" not in html and "&lt;img src=x onerror=alert(1)&gt;" in html
+    # a survey part replaced by another candidate's gave another "best" design, exit 0; strings
+    # in its numbers a traceback: each refused naming the part, before anything is computed
+    from conftest import rewritten
+
+    parts = out / "parts"
+    original = (parts / "survey-0000-000.parquet").read_bytes()
+    (parts / "survey-0000-000.parquet").write_bytes((parts / "survey-0001-000.parquet").read_bytes())
+    rewritten(parts / "survey-0002-001.parquet", lambda frame: frame.assign(x_max_m1="big"))
+    for name, said in (("survey-0000-000", "it holds another task's result"), ("survey-0002-001", "is not numbers")):
+        with pytest.raises(SystemExit) as done:
+            main([*args, "--no-plots"])
+        error = capsys.readouterr().err
+        assert done.value.code == 2 and f"{name}.parquet is damaged (" in error and said in error, error
+        (parts / "survey-0000-000.parquet").write_bytes(original)
 
 
 @pytest.mark.parametrize(

@@ -9,10 +9,9 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from conftest import FRC_WINDOW
+from conftest import FRC_WINDOW, rewritten
 from oscillator import frequency_response, resolve_case, response
 from oscillator.attractors.atlas import fresh_starts
-from oscillator.attractors.frequency import FrequencyStore
 from oscillator.attractors.responding import RESTART, jumps, orbit_state
 from oscillator.cli.app import app
 from test_orbits import BILINEAR
@@ -216,26 +215,49 @@ def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
     assert pd.read_parquet(folder / "sweeps.parquet").jump.sum() == 2
 
 
-@pytest.mark.parametrize("damage", ["bytes", "metadata", "measures"])
-def test_a_damaged_part_is_refused_by_name(tmp_path, small_frc, damage):
-    """A part that cannot be read, a seed's part whose metadata is not its branches, a branch's
-    measures of another length: each refused in one line naming the part, exit 2."""
+def _strings(frame):
+    return frame.assign(x1=frame["x1"].astype(str))
+
+
+DAMAGES = {
+    # (the part damaged, how, what the refusal says)
+    "bytes": ("seed-0000", lambda p: p.write_bytes(b"not parquet"), "it cannot be read"),
+    "metadata": ("seed-0000", lambda p: rewritten(p, lambda f: f, [{"section": 0.0}]), "not a branch's"),
+    "a row dropped": ("measures-0000", lambda p: rewritten(p, lambda f: f.iloc[:-1]), "rows, where its task has"),
+    "sweep rows twice": ("sweep-up", lambda p: rewritten(p, lambda f: pd.concat([f, f])), "rows, where its task has"),
+    "Omega x1000 in a sweep": (
+        "sweep-up",
+        lambda p: rewritten(p, lambda f: f.assign(Omega=1000 * f.Omega)),
+        "its column 'Omega' is not its task's values",
+    ),
+    "Omega x1000 in a seed": (
+        "seed-0000",
+        lambda p: rewritten(p, lambda f: f.assign(Omega=1000 * f.Omega)),
+        "lies outside the span",
+    ),
+    "up replaced by down": ("sweep-up", lambda p: p.write_bytes(p.with_name("sweep-down.parquet").read_bytes()),
+                            "it holds another task's result"),
+    "a seed swapped": ("seed-0000", lambda p: p.write_bytes(p.with_name("seed-0001.parquet").read_bytes()),
+                       "it holds another task's result"),
+    "strings in a column": ("seed-0000", lambda p: rewritten(p, _strings), "its column 'x1' is not numbers"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("damage", DAMAGES)
+def test_a_damaged_or_foreign_part_is_refused_by_name(tmp_path, small_frc, damage):
+    """A part that cannot be read, holds another task's result (the up sweep replaced by the down,
+    a seed's part by another's: they were merged), the wrong rows (a sweep's rows twice: 15
+    instead of 10), values outside the span (Omega x1000) or strings where numbers belong (a
+    traceback): each refused in one line naming the part, exit 2, before anything is computed."""
     import shutil
 
-    runner = CliRunner()
     folder = tmp_path / "frc"
     shutil.copytree(small_frc, folder)
     command = [*ARGS, "--seeds", "2", "--sweep", "3", "--out", str(folder), "--no-plots"]
-    parts = folder / "parts"
-    name = "measures-0000" if damage == "measures" else "seed-0000"
-    if damage == "bytes":
-        (parts / f"{name}.parquet").write_bytes(b"not parquet")
-    else:
-        frame = pd.read_parquet(parts / f"{name}.parquet")
-        store = FrequencyStore(folder, {})
-        store.write(name, frame.iloc[:-1] if damage == "measures" else frame, [{"section": 0.0}])
-    done = runner.invoke(app, command)
-    assert done.exit_code == 2 and f"{name}.parquet is damaged" in done.stderr, done.stderr
+    name, damage_it, said = DAMAGES[damage]
+    damage_it(folder / "parts" / f"{name}.parquet")
+    done = CliRunner().invoke(app, command)
+    assert done.exit_code == 2 and f"{name}.parquet is damaged (" in done.stderr and said in done.stderr, done.stderr
     assert len(done.stderr.splitlines()) == 1
 
 

@@ -89,6 +89,33 @@ def test_a_folder_of_another_sweep_is_refused(case, tmp_path):
         run_sweep(case, SweepSettings(**{**SMALL, "steps": 1, "record": 4}), tmp_path / "s", workers=1)
 
 
+@pytest.mark.parametrize(
+    ("damage", "said"),
+    [
+        ("another point's summary", "it holds another task's result"),
+        ("the value x1000", "its rows are not point 1's"),
+        ("a row twice", "it has 2 rows, where its task has 1"),
+    ],
+)
+def test_a_part_that_is_not_its_points_is_refused_by_name(case, tmp_path, damage, said):
+    """A point's part replaced by another point's, or its value changed, or its row twice: it was
+    merged into the tables; it is refused naming the part, when the sweep resumes."""
+    from conftest import rewritten
+
+    settings = SweepSettings(**{**SMALL, "steps": 3})
+    run_sweep(case, settings, tmp_path / "s", workers=1)
+    part = tmp_path / "s" / "parts" / "000001.summary.parquet"
+    if damage == "another point's summary":
+        part.write_bytes(part.with_name("000002.summary.parquet").read_bytes())
+    elif damage == "the value x1000":
+        rewritten(part, lambda frame: frame.assign(Omega=1000 * frame.Omega))
+    else:
+        rewritten(part, lambda frame: pd.concat([frame, frame]))
+    with pytest.raises(OscillatorError, match=r"000001\.summary\.parquet is damaged \(") as refused:
+        run_sweep(case, settings, tmp_path / "s", workers=1)
+    assert said in str(refused.value)
+
+
 def test_a_refused_value_is_a_failed_row_not_a_crash(case):
     point = run_point(case, SweepSettings(param="mu_s", start=0.05, stop=0.2, steps=2), 0, 0.05)
     row = point.summary.iloc[0]

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -23,7 +24,7 @@ from oscillator.errors import InputError
 from oscillator.io.files import atomic_folder, check_name, read_untrusted, refuse_link, replace_file
 from oscillator.text import printable
 
-__all__ = ["ResumableFolder", "TableFolder", "identity"]
+__all__ = ["Expected", "ResumableFolder", "TableFolder", "identity"]
 
 #: The largest marker file read.
 MAX_MARKER = 1 << 20
@@ -159,10 +160,48 @@ class ResumableFolder:
         return InputError(f"{printable(str(path))} is damaged ({why}); {fix}", field="folder")
 
 
+@dataclasses.dataclass(frozen=True)
+class Expected:
+    """What a stored part must hold to be read back: what it is of (``key``, a JSON value: the
+    task that made it, kept in the part's metadata), its columns' kinds (``"number"``, ``"flag"``,
+    ``"text"``), and, where the task says, its row count, the exact values of some columns
+    (``equal``: a sweep's parameter values, a branch's points) and a further ``check`` of the
+    table and its metadata (a clause saying what is wrong, or ``""``)."""
+
+    key: Any
+    columns: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    rows: int | None = None
+    equal: Mapping[str, Sequence[Any] | np.ndarray] = dataclasses.field(default_factory=dict)
+    check: Callable[[Any, Any], str] | None = None
+
+    def problem(self, key: Any, frame: Any, meta: Any) -> str:
+        """What is wrong with a part holding ``key``, ``frame`` and ``meta`` (``""``: nothing)."""
+        from oscillator.io.tables import kinds_problem
+
+        if key != json.loads(json.dumps(self.key)):
+            return f"it holds another task's result ({_said(key)}, where {_said(self.key)} belongs)"
+        why = kinds_problem(frame, self.columns)
+        if why is not None:
+            return why
+        if self.rows is not None and len(frame) != self.rows:
+            return f"it has {len(frame)} rows, where its task has {self.rows}"
+        for name, values in self.equal.items():
+            if name not in frame.columns:
+                return f"it has no column {name!r}"
+            if len(frame) != len(values) or not np.array_equal(frame[name].to_numpy(), np.asarray(values)):
+                return f"its column {name!r} is not its task's values"
+        return self.check(frame, meta) if self.check is not None else ""
+
+
+def _said(key: Any) -> str:
+    return printable(json.dumps(key))[:200]
+
+
 class TableFolder(ResumableFolder):
-    """A resumable folder whose parts are tables: each a Parquet file with a JSON value in its
-    metadata (a part's settings or summary), written atomically and read back whole or refused by
-    name.  :attr:`reused` counts the parts read back."""
+    """A resumable folder whose parts are tables: each a Parquet file with what it is of (its
+    task's key) and a JSON value (a part's settings or summary) in its metadata, written atomically
+    and read back only as its task's (:class:`Expected`), else refused by name.  :attr:`reused`
+    counts the parts read back."""
 
     _META = b"oscillator"
 
@@ -171,21 +210,23 @@ class TableFolder(ResumableFolder):
         #: The parts read back from earlier runs.
         self.reused = 0
 
-    def write(self, name: str, frame: Any, meta: Any = None) -> None:
-        """The part ``name``: ``frame`` (a DataFrame), with ``meta`` (JSON) in its metadata."""
+    def write(self, name: str, frame: Any, meta: Any = None, *, key: Any) -> None:
+        """The part ``name``: ``frame`` (a DataFrame), with ``key`` and ``meta`` (JSON) in its
+        metadata."""
         import pyarrow as pa
         import pyarrow.parquet as pq
 
         from oscillator.io.files import atomic_path
 
         table = pa.Table.from_pandas(frame, preserve_index=False)
-        table = table.replace_schema_metadata({**(table.schema.metadata or {}), self._META: json.dumps(meta)})
+        kept = json.dumps({"key": key, "meta": meta})
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), self._META: kept})
         with atomic_path(self.parts / f"{name}.parquet") as temporary:
             pq.write_table(table, temporary)
 
-    def read(self, name: str) -> tuple[Any, Any] | None:
-        """The part ``name`` (a DataFrame) and its metadata, or None if there is none; a damaged
-        part is refused with its name."""
+    def read(self, name: str, expected: Expected) -> tuple[Any, Any] | None:
+        """The part ``name`` (a DataFrame) and its metadata, or None if there is none; a part that
+        cannot be read or does not hold what ``expected`` says is refused with its name."""
         import pyarrow.parquet as pq
 
         path = self.parts / f"{name}.parquet"
@@ -194,11 +235,15 @@ class TableFolder(ResumableFolder):
         self.plain(path)
         try:
             table = pq.read_table(path)
-            meta = json.loads((table.schema.metadata or {})[self._META])
+            kept = json.loads((table.schema.metadata or {})[self._META])
+            key, meta = kept["key"], kept["meta"]
             frame = table.to_pandas()
         except Exception as exc:  # pyarrow raises many types for a damaged file
             if isinstance(exc, MemoryError):
                 raise
             raise self.damaged(path, "it cannot be read") from exc
+        why = expected.problem(key, frame, meta)
+        if why:
+            raise self.damaged(path, why)
         self.reused += 1
         return frame, meta

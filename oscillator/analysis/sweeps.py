@@ -30,7 +30,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from oscillator.analysis.execution import check_workers, connect, run_tasks
-from oscillator.analysis.store import ResumableFolder, identity
+from oscillator.analysis.store import Expected, TableFolder, identity
 from oscillator.analysis.sweep_points import TABLES, PointTables, Tasks, frame_of, point_case, run_point, table_columns
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case
@@ -44,20 +44,26 @@ __all__ = ["Sweep", "SweepOutcome", "open_sweep", "read_sweep", "run_sweep"]
 # --------------------------------------------------------------------------- storage
 
 
-class _Store(ResumableFolder):
-    """A sweep folder: its identity, the finished points, and the consolidated tables."""
+class _Store(TableFolder):
+    """A sweep folder: its identity, the finished points, and the consolidated tables.  Each
+    point's three parts hold its key (the point, the table, the value, the direction) and are read
+    back only as that point's (:meth:`expected`)."""
+
+    FORMAT = 2  # 2: each point's parts keyed by the point
 
     def __init__(self, folder: Path, case: Case, settings: SweepSettings) -> None:
         super().__init__(folder, "sweep.json", identity(case, settings=settings), name=case.name)
         self.settings = settings
 
     def check_parts(self) -> None:
-        """Every part named ``NNNNNN.TABLE.parquet``, a plain file whose footer reads."""
+        """Every part named ``NNNNNN.TABLE.parquet`` for a point of this sweep, a plain file whose
+        footer reads."""
         for part in sorted(self.parts.glob("*.parquet")):
             try:
                 index, name, _ = part.name.split(".")
-                int(index)
-                if name not in TABLES or not stat.S_ISREG(os.stat(part).st_mode):
+                if name not in TABLES or not 0 <= int(index) < len(self.settings.points):
+                    raise ValueError(name)
+                if not stat.S_ISREG(os.lstat(part).st_mode):
                     raise ValueError(name)
                 pq.read_metadata(part)
             except Exception as exc:  # pyarrow raises many types for a damaged file
@@ -75,37 +81,55 @@ class _Store(ResumableFolder):
     def done(self) -> set[int]:
         return {int(p.name.split(".")[0]) for p in self.parts.glob("*.summary.parquet")}
 
+    def expected(self, index: int, name: str) -> Expected:
+        """What point ``index``'s part of table ``name`` must hold: its key, its columns' kinds,
+        every row at its value and its index (the summary one row)."""
+        direction, value = self.settings.points[index]
+        param = self.settings.param
+        kinds = {column: _KINDS[dtype] for column, dtype in table_columns(param)[name].items()}
+
+        def check(frame: pd.DataFrame, meta: Any) -> str:
+            if not ((frame[param] == value) & (frame["index"] == index)).all():
+                return f"its rows are not point {index}'s ({param} = {value:g})"
+            return ""
+
+        key = {"point": index, "table": name, "value": float(value), "direction": direction}
+        return Expected(key, kinds, 1 if name == "summary" else None, check=check)
+
     def end_state(self, index: int) -> tuple[float, ...] | None:
         """The state a stored point ended in, or None (no such point, or it failed)."""
-        path = self.parts / f"{index:06d}.summary.parquet"
-        if not path.is_file():
+        part = self.read(f"{index:06d}.summary", self.expected(index, "summary"))
+        if part is None:
             return None
-        row = pd.read_parquet(path).iloc[0]
+        row = part[0].iloc[0]
         state = tuple(float(row.get(f"end_{name}", math.nan)) for name in ("x1", "v1", "x2", "v2"))
         return state if all(math.isfinite(v) for v in state) else None
 
     def write_point(self, point: PointTables) -> None:
         for name in TABLES:  # the summary last: it marks the point done
-            with atomic_path(self.parts / f"{point.index:06d}.{name}.parquet") as temporary:
-                point.table(name).to_parquet(temporary, index=False)
+            key = self.expected(point.index, name).key
+            self.write(f"{point.index:06d}.{name}", point.table(name), key=key)
 
     def consolidate(self) -> None:
-        """Stream the parts, in parameter order, into one Parquet file per table."""
+        """Stream the parts, in parameter order, each checked as its point's, into one Parquet
+        file per table."""
         for name in TABLES:
-            with atomic_path(self.folder / f"{name}.parquet") as temporary:
-                writer = None
-                try:
-                    for part in sorted(self.parts.glob(f"*.{name}.parquet")):
-                        table = pq.read_table(part)
-                        if writer is None:
-                            writer = pq.ParquetWriter(temporary, table.schema)
-                        writer.write_table(table.cast(writer.schema))
-                    if writer is None:
-                        columns = table_columns(self.settings.param)[name]
-                        pq.write_table(pa.Table.from_pandas(frame_of([], columns), preserve_index=False), temporary)
-                finally:
-                    if writer is not None:
-                        writer.close()
+            columns = table_columns(self.settings.param)[name]
+            schema = pa.Table.from_pandas(frame_of([], columns), preserve_index=False).schema
+            with (
+                atomic_path(self.folder / f"{name}.parquet") as temporary,
+                pq.ParquetWriter(temporary, schema) as writer,
+            ):
+                for part in sorted(self.parts.glob(f"*.{name}.parquet")):
+                    index = int(part.name.split(".")[0])
+                    stored = self.read(f"{index:06d}.{name}", self.expected(index, name))
+                    assert stored is not None  # the part was just listed
+                    frame = stored[0].astype(columns)
+                    writer.write_table(pa.Table.from_pandas(frame, schema=schema, preserve_index=False))
+
+
+#: The kinds of :func:`~oscillator.analysis.sweep_points.table_columns`' dtypes.
+_KINDS = {"float64": "number", "int64": "number", "bool": "flag", "str": "text"}
 
 
 def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:

@@ -23,24 +23,33 @@ kept as they finish, and a run into the same folder reads them back instead of c
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from oscillator.analysis.execution import Executor, keyed
-from oscillator.analysis.store import TableFolder, identity
+from oscillator.analysis.store import Expected
+from oscillator.attractors.frequency_parts import (
+    FrequencyStore,
+    branch_part_columns,
+    branches_from_disk,
+    branches_on_disk,
+    branches_problem,
+    frequency_store,
+    measures_part,
+    no_points,
+    sweep_part,
+)
 from oscillator.attractors.mapping import AttractorSettings, check_settings, check_states
 from oscillator.attractors.responding import continued, doubled, measured, on_branch, seed_orbits, sweep
-from oscillator.errors import InputError, Reason
+from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count
-from oscillator.orbits.branch import Bifurcation, Branch, point_columns, points_from_disk, points_on_disk
-from oscillator.orbits.response import COLUMNS as RESPONSE_COLUMNS
-from oscillator.orbits.shooting import orbit_case
+from oscillator.orbits.branch import Bifurcation, Branch
 from oscillator.presenting import presenter
 from oscillator.text import shown
 
@@ -55,8 +64,6 @@ __all__ = [
     "frequency_store",
     "no_points",
 ]
-
-T = TypeVar("T")
 
 #: The longest period of a branch born at a period doubling.
 MAX_PERIOD = 16
@@ -223,7 +230,8 @@ class _Job:
     def branches(self, values: np.ndarray, starts: np.ndarray | None) -> list[Branch]:
         """Seed after seed, the orbits at the seed not on a branch already traced, each continued
         both ways (the two directions of every new orbit of a seed in parallel)."""
-        kept = {k: self._read(f"seed-{k:04d}") for k in range(len(values))}
+        expected = {k: self._branches_part({"seed": k, "value": float(values[k])}) for k in range(len(values))}
+        kept = {k: self._read(f"seed-{k:04d}", expected[k]) for k in range(len(values))}
         missing = [k for k, part in kept.items() if part is None]
         arguments = (self.case, self.param)
         tasks = [(k, seed_orbits, *arguments, float(values[k]), self.period, starts, self.settings) for k in missing]
@@ -233,9 +241,9 @@ class _Job:
             stored = kept[k]
             if stored is None:
                 branches = self._continue(float(value), orbits[k], found)
-                self._write(f"seed-{k:04d}", *_branches_on_disk(branches))
+                self._write(f"seed-{k:04d}", *branches_on_disk(self.param, branches), key=expected[k].key)
             else:
-                branches = self._stored(f"seed-{k:04d}", _branches_from_disk, self.case, self.param, *stored)
+                branches = branches_from_disk(self.case, self.param, *stored)
             found += branches
             self.tally.add(1)
         return self._doublings(found)
@@ -246,21 +254,24 @@ class _Job:
         level = list(range(len(found)))
         while level:
             kept: dict[str, list[Branch]] = {}
+            keys: dict[str, Expected] = {}
             tasks = []
             for b in level:
                 branch = found[b]
                 rows = np.flatnonzero(branch.bifurcations["kind"] == Bifurcation.PERIOD_DOUBLING)
                 for r in rows if 2 * branch.period <= MAX_PERIOD else []:
                     name = f"doubling-{b:04d}-{r:03d}"
-                    stored = self._read(name)
+                    at = float(branch.bifurcations[self.param].iloc[r])
+                    keys[name] = self._branches_part({"branch": b, "doubling": int(r), "value": at})
+                    stored = self._read(name, keys[name])
                     if stored is not None:
-                        kept[name] = self._stored(name, _branches_from_disk, self.case, self.param, *stored)
+                        kept[name] = branches_from_disk(self.case, self.param, *stored)
                         continue
                     arguments = (self.case, self.param, self.span, branch, int(r), self.max_points, tuple(found))
                     tasks.append((name, doubled, *arguments))
             for name, branches in self.executor.map(keyed, tasks):
                 kept[name] = [branch for branch in branches if len(branch.points) > 1]
-                self._write(name, *_branches_on_disk(kept[name]))
+                self._write(name, *branches_on_disk(self.param, kept[name]), key=keys[name].key)
             level = []
             for name in sorted(kept):
                 level += range(len(found), len(found) + len(kept[name]))
@@ -282,10 +293,11 @@ class _Job:
         """The response measures of every branch point, in chunks of :data:`CHUNK` points."""
         frames: dict[int, pd.DataFrame] = {}
         tasks = []
+        expected = {b: measures_part(b, branch) for b, branch in enumerate(branches)}
         for b, branch in enumerate(branches):
-            part = self._read(f"measures-{b:04d}")
+            part = self._read(f"measures-{b:04d}", expected[b])
             if part is not None:
-                frames[b] = self._stored(f"measures-{b:04d}", _measures_of, branch, part[0])
+                frames[b] = part[0]
                 continue
             count = len(branch.points)
             tasks += [(b, measured, branch, first, min(first + CHUNK, count)) for first in range(0, count, CHUNK)]
@@ -296,7 +308,7 @@ class _Job:
             self.tally.add(len(chunk))
             if sum(len(c) for c in chunks[b]) == len(branches[b].points):
                 frames[b] = pd.concat(chunks[b]).sort_index().reset_index(drop=True)
-                self._write(f"measures-{b:04d}", frames[b])
+                self._write(f"measures-{b:04d}", frames[b], key=expected[b].key)
         parts = [_joined(b, branch, frames[b]) for b, branch in enumerate(branches) if len(frames[b])]
         return pd.concat(parts, ignore_index=True) if parts else no_points(self.param)
 
@@ -306,8 +318,12 @@ class _Job:
         up = np.linspace(low, high, count)
         found = {}
         tasks = []
+        expected = {
+            direction: sweep_part(self.param, direction, values)
+            for direction, values in (("up", up), ("down", up[::-1]))
+        }
         for direction, values in (("up", up), ("down", up[::-1])):
-            part = self._read(f"sweep-{direction}")
+            part = self._read(f"sweep-{direction}", expected[direction])
             if part is None:
                 tasks.append((direction, sweep, self.case, self.param, values, self.settings))
             else:
@@ -315,38 +331,21 @@ class _Job:
                 self.tally.add(count)
         for direction, table in self.executor.map(keyed, tasks):
             found[direction] = table
-            self._write(f"sweep-{direction}", table)
+            self._write(f"sweep-{direction}", table, key=expected[direction].key)
             self.tally.add(count)
         return pd.concat([found["up"], found["down"]], ignore_index=True)
 
-    def _stored(self, name: str, read: Callable[..., T], *arguments: Any) -> T:
-        """``read(*arguments)`` of the stored part ``name``; a part that does not hold what it
-        should is refused by name."""
-        try:
-            return read(*arguments)
-        except (KeyError, TypeError, ValueError) as exc:
-            assert self.store is not None
-            raise self.store.damaged(self.store.parts / f"{name}.parquet", f"it does not hold {exc}") from None
+    def _branches_part(self, key: dict[str, Any]) -> Expected:
+        """What a part of branches (a seed's, a doubling's) must hold (:func:`_branches_problem`)."""
+        check = functools.partial(branches_problem, self.param, self.span)
+        return Expected(key, branch_part_columns(self.param), check=check)
 
-    def _read(self, name: str) -> tuple[pd.DataFrame, Any] | None:
-        return None if self.store is None else self.store.read(name)
+    def _read(self, name: str, expected: Expected) -> tuple[pd.DataFrame, Any] | None:
+        return None if self.store is None else self.store.read(name, expected)
 
-    def _write(self, name: str, frame: pd.DataFrame, meta: Any = None) -> None:
+    def _write(self, name: str, frame: pd.DataFrame, meta: Any = None, *, key: Any) -> None:
         if self.store is not None:
-            self.store.write(name, frame, meta)
-
-
-def no_points(param: str) -> pd.DataFrame:
-    """The points table of a frequency response without a branch: its columns, no row."""
-    columns = ["branch", "period", *point_columns(param), *RESPONSE_COLUMNS]
-    return pd.DataFrame({name: pd.Series(dtype=object if name == "signature" else float) for name in columns})
-
-
-def _measures_of(branch: Branch, frame: pd.DataFrame) -> pd.DataFrame:
-    """A stored branch's measures, one row per point of the branch (a ``ValueError`` otherwise)."""
-    if len(frame) != len(branch.points) or "x_pp_m1" not in frame:
-        raise ValueError(f"the measures of its {len(branch.points)} points")
-    return frame
+            self.store.write(name, frame, meta, key=key)
 
 
 def _joined(index: int, branch: Branch, measures: pd.DataFrame) -> pd.DataFrame:
@@ -355,72 +354,3 @@ def _joined(index: int, branch: Branch, measures: pd.DataFrame) -> pd.DataFrame:
     extra = measures.drop(columns=[c for c in measures.columns if c in points.columns])
     joined = pd.concat([points, extra], axis=1).assign(branch=index, period=branch.period)
     return joined[["branch", "period", *points.columns, *extra.columns]]
-
-
-def _branches_on_disk(branches: list[Branch]) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
-    """A seed's branches as one table (points, ``branch`` their index among the seed's) and the
-    rest of each (section, period, ending, bifurcations) as the part's metadata."""
-    frames = [points_on_disk(branch.points).assign(branch=k) for k, branch in enumerate(branches)]
-    meta = [
-        {
-            "section": branch.section,
-            "period": branch.period,
-            "complete": branch.complete,
-            "message": branch.message,
-            "reason": None if branch.reason is None else branch.reason.value,
-            "bifurcations": branch.bifurcations.to_dict("records"),
-        }
-        for branch in branches
-    ]
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame({"branch": []}), meta
-
-
-def _branches_from_disk(case: Case, param: str, frame: pd.DataFrame, meta: Any) -> list[Branch]:
-    """:func:`_branches_on_disk` read back (a ``KeyError``, ``TypeError`` or ``ValueError`` where
-    the part is damaged)."""
-    if not isinstance(meta, list):
-        raise ValueError("no branches in its metadata")
-    branches = []
-    for k, info in enumerate(meta):
-        rows = frame[frame["branch"] == k].drop(columns="branch").reset_index(drop=True)
-        bifurcations = pd.DataFrame(
-            info["bifurcations"], columns=[param, "kind", "x1", "v1", "x2", "v2", "jump", "before", "after"]
-        )
-        if not bifurcations["kind"].isin([kind.value for kind in Bifurcation]).all():
-            raise ValueError("a bifurcation of an unknown kind")
-        reason = None if info["reason"] is None else Reason(info["reason"])
-        points = points_from_disk(rows)
-        ending = bool(info["complete"]), str(info["message"]), reason
-        # the case continue_orbit gave the branch (its tolerances tightened): its measures, the same
-        at = orbit_case(case, {param: float(points[param].iloc[0])}) if len(points) else case
-        branches.append(Branch(param, points, bifurcations, float(info["section"]), int(info["period"]), *ending, at))
-    return branches
-
-
-class FrequencyStore(TableFolder):
-    """The resumable folder of a frequency response (``frc.json``): one part per seed (its
-    branches), per branch (its measures) and per sweep."""
-
-    FORMAT = 1
-
-    def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
-        super().__init__(folder, "frc.json", identity, name=name)
-
-
-def frequency_store(
-    folder: Path,
-    case: Case,
-    param: str,
-    span: tuple[float, float],
-    *,
-    period: int = 1,
-    seeds: int = 5,
-    states: np.ndarray | None = None,
-    sweep: int = 41,
-    settings: AttractorSettings | None = None,
-    max_points: int = 3000,
-) -> FrequencyStore:
-    """The resumable folder of this frequency response (:class:`FrequencyStore`)."""
-    pieces = {"param": param, "span": list(span), "period": period, "seeds": seeds, "sweep": sweep}
-    pieces |= {"states": states, "settings": check_settings(settings), "max_points": max_points}
-    return FrequencyStore(folder, identity(case, **pieces), name=case.name)

@@ -21,13 +21,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from oscillator.analysis.store import Expected
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.problem import Problem
 from oscillator.hybrid.counting import runs
 
 _STATE = ("x1", "v1", "x2", "v2")
 
-__all__ = ["Judged", "Seen", "follow", "seen_from_table", "seen_table", "survey", "survey_task"]
+__all__ = ["Judged", "Seen", "follow", "seen_from_table", "seen_table", "survey", "survey_part", "survey_task"]
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,27 @@ def seen_table(seen: list[Seen]) -> pd.DataFrame:
         for s in seen
     ]
     return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS, "failure"])
+
+
+def survey_part(candidate: int, band: int, design: np.ndarray, value: float) -> Expected:
+    """What the part of candidate ``candidate``'s survey at band value number ``band`` must hold
+    (a design store's part): :func:`seen_table`'s columns, one row or more, all at ``value``,
+    whole periods, and the runs it took in its metadata."""
+    from oscillator.orbits.response import COLUMNS
+
+    columns = dict.fromkeys(["band", "period", *_STATE, *COLUMNS], "number") | {"failure": "text"}
+
+    def check(frame: pd.DataFrame, meta: Any) -> str:
+        periods = frame["period"].to_numpy(float)
+        if not len(frame) or not (frame["band"] == value).all():
+            return f"its rows are not at the band value {value:g}"
+        if not ((periods >= 0) & (periods == np.round(periods))).all():
+            return "a period is not a whole number"
+        runs = meta.get("runs") if isinstance(meta, dict) else None
+        return "" if isinstance(runs, int) and runs >= 0 else "its metadata holds no count of runs"
+
+    key = {"candidate": candidate, "band": band, "design": [float(v) for v in design], "value": float(value)}
+    return Expected(key, columns, check=check)
 
 
 def seen_from_table(table: pd.DataFrame) -> list[Seen]:

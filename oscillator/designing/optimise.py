@@ -32,7 +32,16 @@ from oscillator.analysis.execution import Executor, keyed
 from oscillator.analysis.store import TableFolder, identity
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.front import pareto_front
-from oscillator.designing.judging import Judged, Seen, follow, seen_from_table, seen_table, survey, survey_task
+from oscillator.designing.judging import (
+    Judged,
+    Seen,
+    follow,
+    seen_from_table,
+    seen_table,
+    survey,
+    survey_part,
+    survey_task,
+)
 from oscillator.designing.problem import Constraint, Problem
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case
@@ -106,7 +115,7 @@ class DesignStore(TableFolder):
     :func:`~oscillator.designing.judging.seen_table` and its simulations in the metadata.  The
     refinement and the check are computed again on resuming (a few percent of the work)."""
 
-    FORMAT = 2  # 2: a survey's table has a failure column
+    FORMAT = 3  # 2: a survey's table has a failure column; 3: each part keyed by its task
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "design.json", identity, name=name)
@@ -143,9 +152,10 @@ def _global(
     bands = problem.band_values()
     found: dict[int, list[tuple[int, list[Seen], int]]] = {k: [] for k in range(count)}
     tasks = []
+    expected = {(k, j): survey_part(k, j, x, float(b)) for k, x in enumerate(designs) for j, b in enumerate(bands)}
     for k, x in enumerate(designs):
         for j, b in enumerate(bands):
-            kept = store.read(f"survey-{k:04d}-{j:03d}") if store is not None else None
+            kept = store.read(f"survey-{k:04d}-{j:03d}", expected[k, j]) if store is not None else None
             if kept is not None:
                 found[k].append((j, seen_from_table(kept[0]), int(kept[1]["runs"])))
             else:
@@ -154,7 +164,7 @@ def _global(
     done = total - len(tasks)
     for (k, j), (seen, cost) in executor.map(keyed, tasks):
         if store is not None:
-            store.write(f"survey-{k:04d}-{j:03d}", seen_table(seen), {"runs": cost})
+            store.write(f"survey-{k:04d}-{j:03d}", seen_table(seen), {"runs": cost}, key=expected[k, j].key)
         found[k].append((j, seen, cost))
         done += 1
         if progress is not None:

@@ -8,7 +8,7 @@ read back from a run folder (which may have been edited or damaged): a table tha
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -16,6 +16,7 @@ import pandas as pd
 from oscillator.errors import InputError
 from oscillator.model.events import COLUMN, Event, EventKind, decode_column
 from oscillator.model.phase_space import Mode, system_state
+from oscillator.text import shown
 
 __all__ = [
     "EVENT_DTYPES",
@@ -23,6 +24,7 @@ __all__ = [
     "check_events",
     "check_trajectory",
     "events_frame",
+    "kinds_problem",
     "trajectory_frame",
 ]
 
@@ -35,6 +37,25 @@ _STATES = {
     for r1 in (False, True)
     for r2 in (False, True)
 }
+
+
+def kinds_problem(frame: pd.DataFrame, columns: Mapping[str, str]) -> str | None:
+    """What is wrong with ``frame`` against ``columns`` (a name -> its kind: ``"number"``, not a
+    flag; ``"flag"``, a bool; ``"text"``, a string in every row), said as a clause (``"it has no
+    column 'x1'"``); None if nothing is.  The one check of a table read back from a folder."""
+    types = pd.api.types
+    for name, kind in columns.items():
+        if name not in frame.columns:
+            return f"it has no column {shown(name)}"
+        column = frame[name]
+        fits = {
+            "number": types.is_numeric_dtype(column) and not types.is_bool_dtype(column),
+            "flag": types.is_bool_dtype(column),
+            "text": all(isinstance(value, str) for value in column),
+        }[kind]
+        if not fits:
+            return f"its column {shown(name)} is not {kind}s"
+    return None
 
 
 #: The dtype of each column of ``Result.events``, from the types of :class:`Event`'s fields

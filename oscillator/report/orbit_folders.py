@@ -30,6 +30,7 @@ import pandas as pd
 from oscillator.errors import InputError, Reason
 from oscillator.io.cases import Case, case_to_toml, load_case
 from oscillator.io.files import FolderClaim, inner_folder, read_untrusted, replace_file
+from oscillator.io.tables import kinds_problem
 from oscillator.orbits.branch import BIFURCATION_KINDS, MULTIPLIERS, Branch, points_from_disk, points_on_disk
 from oscillator.orbits.shooting import STATE, Orbit
 from oscillator.report import markup as mk
@@ -141,18 +142,9 @@ def checked_table(
         if isinstance(exc, MemoryError):
             raise
         raise _damaged(path, f"it cannot be read as a table ({type(exc).__name__})", remake) from exc
-    for name, kind in columns.items():
-        if name not in frame.columns:
-            raise _damaged(path, f"it has no column {shown(name)}", remake)
-        column = frame[name]
-        types = pd.api.types
-        fits = {
-            "number": types.is_numeric_dtype(column) and not types.is_bool_dtype(column),
-            "flag": types.is_bool_dtype(column),
-            "text": all(isinstance(value, str) for value in column),
-        }[kind]
-        if not fits:
-            raise _damaged(path, f"its column {shown(name)} is not {kind}s", remake)
+    problem = kinds_problem(frame, columns)
+    if problem is not None:
+        raise _damaged(path, problem, remake)
     return frame
 
 
