@@ -2,33 +2,55 @@
 [1.3, 1.85] in one chain through the points where the corrector fails, the coexistence window at
 Omega = 1.6 (Q2 = 71.165) with the sweeps' hysteresis, resume, and bad input."""
 
-import itertools
-
 import numpy as np
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from conftest import FRC_WINDOW, rewritten
-from oscillator import frequency_response, resolve_case, response
+from conftest import DUFFING, FRC_WINDOW, rewritten
+from oscillator import frequency_response, resolve_case, response, simulate
 from oscillator.attractors.atlas import fresh_starts
-from oscillator.attractors.responding import RESTART, jumps, orbit_state
+from oscillator.attractors.responding import RESTART, orbit_state
 from oscillator.cli.app import app
 from test_orbits import BILINEAR
 
 
+def discontinuities(found) -> list[float]:
+    """Where the branches of ``found`` are not continuous: a located bifurcation whose sides lie
+    apart (``jump`` above 1e-6, or NaN: a gap's end), and each end of a branch inside the span
+    where the corrector failed or stalled."""
+    rows = found.bifurcations
+    points = list(rows.loc[~(rows.jump <= 1e-6), found.param])
+    for branch in found.branches:
+        if not branch.complete and ("corrector failed" in branch.message or "stalled" in branch.message):
+            points.append(float(branch.points[found.param].iloc[-1]))
+    return sorted(points)
+
+
 @pytest.mark.slow
-def test_instance_1_is_one_chain_of_branches_that_the_sweeps_follow():
-    """Over [1.3, 1.85] the period-1 orbit is one family: the branches follow each other, each
-    started RESTART of the span beyond where the one before failed, without overlap; no fold (the
-    corrector's failures are not folds); the sweeps' orbits lie on the branches."""
+def test_instance_1_is_one_family_whose_sliding_points_the_sweeps_jump_across():
+    """Over [1.3, 1.85] the period-1 orbit is one family of stable orbits, traced as branches that
+    cover the span (restarts RESTART of it beyond each point where the corrector fails: no gap
+    wider); no fold; the sweeps' orbits lie on the branches.  Where a rest interval appears or
+    vanishes with a finite length (the orbit moves by 1e-3 at once: 1.3368, 1.365, 1.5994,
+    1.6097) the orbit the sweep meets is not the continuation of the one before: each sweep jumps
+    in every interval of its values holding such a point, and in no other."""
     found = frequency_response("instance-1", "Omega", (1.3, 1.85), workers=2)
-    ends = sorted((b.points.Omega.min(), b.points.Omega.max()) for b in found.branches)
-    assert ends[0][0] == 1.3 and ends[-1][1] == 1.85
-    for (_, end), (start, _) in itertools.pairwise(ends):
-        assert start == pytest.approx(end + RESTART * 0.55, abs=1e-9)
+    spans = sorted((b.points.Omega.min(), b.points.Omega.max()) for b in found.branches)
+    assert spans[0][0] == 1.3 and max(high for _, high in spans) == 1.85
+    reach = spans[0][1]
+    for low, high in spans[1:]:
+        assert low <= reach + RESTART * 0.55 + 1e-9, (low, reach)
+        reach = max(reach, high)
     assert found.folds.empty and found.points.stable.all()
-    assert not found.jumps("up") and not found.jumps("down")
+    breaks = discontinuities(found)
+    assert len(breaks) >= 4
+    for direction in ("up", "down"):
+        rows = found.sweeps[found.sweeps.direction == direction]
+        values, jumped = rows.Omega.to_numpy(), rows.jump.to_numpy(bool)
+        for k in range(1, len(values)):
+            low, high = sorted((values[k - 1], values[k]))
+            assert jumped[k] == any(low < x < high for x in breaks), (direction, values[k], breaks)
     points = found.points.sort_values("Omega")
     for _, row in found.sweeps.iterrows():
         nearest = points.iloc[int(np.argmin(np.abs(points.Omega.to_numpy() - row.Omega)))]
@@ -37,6 +59,50 @@ def test_instance_1_is_one_chain_of_branches_that_the_sweeps_follow():
     inside = points[(points.Omega > 1.4) & (points.Omega < 1.55)]
     assert (inside.rest_m1 == 0).all() and (inside.rest_m2 == 0).all()
     assert (points[(points.Omega > 1.34) & (points.Omega < 1.36)].rest_m1 > 0).all()  # m1 sticks there
+
+
+def brute_force_rests(case, values, periods: int = 400) -> list[float]:
+    """m2's rest fraction over the last 10 of ``periods`` forcing periods at each value, each run
+    from where the one before ended: a slow sweep by ``simulate`` alone."""
+    from oscillator.hybrid.recording import SaveAt
+
+    state, rests = case.initial.y, []
+    for value in values:
+        at = resolve_case(case, Omega=float(value), **dict(zip(("x1", "v1", "x2", "v2"), state, strict=True)))
+        t_end = at.initial.t0 + periods * at.parameters.period
+        run = simulate(at, t_end=t_end, save=SaveAt(steps=False, segments=True))
+        last = t_end - 10 * at.parameters.period
+        resting = sum(max(0.0, min(s.t1, t_end) - max(s.t0, last)) for s in run.segments if s.mode.sign(2) == 0)
+        rests.append(resting / (t_end - last))
+        state = tuple(float(v) for v in run.final_state[1:])
+    return rests
+
+
+@pytest.mark.slow
+def test_a_family_that_sticks_beside_the_main_one_is_traced_and_its_jumps_placed_where_simulate_puts_them():
+    """Instance 1 with Q1 = 4, Q2 = 2.2, d = d1 = 1.5, K6 = 2 over [1.6, 2.021] (issue 50): a stable
+    family in which m2 sticks coexists with the main one over about [1.9686, 2.0198]; it was traced
+    only over [2.0202, 2.021] (the restart after the sliding point went up only), so the sweep down
+    rode a family on no branch, and neither sweep marked a jump.  Now the restart is continued both
+    ways: a branch of sticking orbits spans [1.97, 2.02], the sweeps' orbits lie on branches, and
+    each sweep jumps where a sweep by simulate alone leaves its family (rest_m2 appears going up at
+    2.021, vanishes going down at 1.968375)."""
+    case = resolve_case("instance-1", Q1=4, Q2=2.2, d=1.5, d1=1.5, K6=2)
+    found = frequency_response(case, "Omega", (1.6, 2.021), seeds=3, sweep=17, workers=2)
+    sticking = found.points[found.points.rest_m2 > 0.05]
+    assert sticking.Omega.min() < 1.97 and sticking.Omega.max() == 2.021 and sticking.stable.all()
+    for direction in ("up", "down"):
+        rows = found.sweeps[found.sweeps.direction == direction].reset_index(drop=True)
+        brute = np.array(brute_force_rests(case, rows.Omega.to_numpy()))
+        np.testing.assert_allclose(rows.rest_m2, brute, atol=0.02)  # the same families, one by one
+        left = np.flatnonzero((brute[1:] > 0.05) != (brute[:-1] > 0.05)) + 1
+        assert rows.Omega[rows.jump].tolist() == rows.Omega[left].tolist(), direction
+    assert found.jumps("up") == [2.021] and found.jumps("down") == [pytest.approx(1.968375)]
+    from oscillator.attractors.responding import on_branch
+
+    for _, row in found.sweeps.iterrows():  # every orbit the sweeps met lies on a branch
+        state = row[["x1", "v1", "x2", "v2"]].to_numpy(float)
+        assert any(on_branch(case, branch, row.Omega, state) for branch in found.branches), row.Omega
 
 
 @pytest.mark.slow
@@ -70,8 +136,7 @@ def test_a_period_doubling_gives_the_period_2_branch_that_the_sweep_meets():
     beyond; the period-2 branch born there starts within 1e-3 of the span beyond it, is stable,
     and is the orbit the sweep up
     lands on (x_pp of m1 to 1e-3 from the branch's points, to 1e-7 from its orbit refined at 2.5);
-    the sweep up jumps at the
-    first value past the doubling."""
+    the sweeps cross the doubling without a jump."""
     from pathlib import Path
 
     import oscillator as osc
@@ -98,7 +163,9 @@ def test_a_period_doubling_gives_the_period_2_branch_that_the_sweep_meets():
     begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in state), strict=True))
     exact = response(resolve_case(at, **begin), 2).columns()["x_pp_m1"]
     assert up[np.isclose(up.Omega, 2.5)].x_pp_m1.iloc[0] == pytest.approx(exact, abs=1e-7)
-    assert found.jumps("up") == [pytest.approx(2.44)]
+    # the doubling is supercritical: the sweep's orbit goes over to the period-2 one continuously
+    # (both are fixed points of the period-2 map, and meet at the doubling): no jump
+    assert found.jumps("up") == [] and found.jumps("down") == []
 
 
 @pytest.fixture(scope="module")
@@ -143,7 +210,7 @@ def test_an_interrupted_frequency_response_keeps_its_parts_and_resumes_to_the_sa
     options = {"states": fresh_starts(case, 16), "sweep": 41}
 
     def stop_in_the_measures(done, total):
-        if done > 5 + 45:  # the 5 seeds, the first branch's 45 points and a chunk more
+        if done > 5 + 2 * 41 + 45:  # the 5 seeds, the sweeps, the first branch's 45 points and a chunk more
             raise KeyboardInterrupt
 
     store = frequency_store(tmp_path / "frc", case, *arguments, **options)
@@ -152,8 +219,9 @@ def test_an_interrupted_frequency_response_keeps_its_parts_and_resumes_to_the_sa
     with pytest.raises(KeyboardInterrupt):
         frequency_response(case, *arguments, store=store, progress=stop_in_the_measures, **options)
     kept = sorted(p.name for p in store.parts.iterdir())
-    assert kept[-5:] == [f"seed-{k:04d}.parquet" for k in range(5)] and "measures-0000.parquet" in kept
-    assert not any(name.startswith("sweep") for name in kept)
+    assert {f"seed-{k:04d}.parquet" for k in range(5)} | {"sweep-up.parquet", "sweep-down.parquet"} <= set(kept)
+    assert "from-sweeps.parquet" in kept and "measures-0000.parquet" in kept
+    assert not all(f"measures-{b:04d}.parquet" in kept for b in range(len(window.branches)))
     again = frequency_store(tmp_path / "frc", case, *arguments, **options)
     again.check()
     seen = []
@@ -177,17 +245,41 @@ def test_the_frequency_response_is_the_same_on_dask(window):
     pd.testing.assert_frame_equal(dask.sweeps, window.sweeps)
 
 
-def test_jumps_need_a_move_out_of_scale_and_a_change():
-    """A move three times its neighbours is a jump where the cycle of switches changes with it (or
-    it is large); steady growth towards a fold is not."""
-    states = [np.array([1.0 + 1e-4 * k, 0, 0, 0]) for k in range(5)]
-    states[3] = states[3] + 0.01
-    states[4] = states[4] + 0.01
-    signatures = ["a", "a", "a", "b", "b"]
-    assert jumps(np.ones(5, int), states, signatures).tolist() == [False, False, False, True, False]
-    assert not jumps(np.ones(5, int), states, ["a"] * 5).any()  # small and the same cycle: a kink
-    growing = [np.array([1.0 + 1e-3 * k**2, 0, 0, 0]) for k in range(6)]
-    assert not jumps(np.ones(6, int), growing, ["a"] * 6).any()
+def test_a_jump_is_a_change_of_attractor_not_of_signature(window):
+    """Between two values of the window's sweep up the orbit met is either the continuation of the
+    one before (its family, through the grazing's kink too) or not: at the sliding onset the rest
+    appears with a finite length (the orbit moves by 3e-3 at once) and the family of the orbit
+    before ends; jumps() recomputed from the sweep's orbits gives the table's column."""
+    from oscillator.attractors.responding import follows, jumps
+
+    case = resolve_case("instance-1", Q2=71.165)
+    up = window.sweeps[window.sweeps.direction == "up"].reset_index(drop=True)
+    states = up[["x1", "v1", "x2", "v2"]].to_numpy(float)
+    onset = int(np.flatnonzero(up.jump)[0])
+    assert up.rest_m2.iloc[onset - 1] == 0 and up.rest_m2.iloc[onset] > 1e-3  # the rest appears there
+    pairs = {onset - 2: True, onset - 1: False, onset: True}  # before, across and after the onset
+    for k, continuous in pairs.items():
+        a, b = (up.Omega.iloc[k], states[k]), (up.Omega.iloc[k + 1], states[k + 1])
+        assert follows(case, "Omega", a, b, 1) is continuous, k
+    met = [(float(v), int(p), s) for v, p, s in zip(up.Omega, up.period, states, strict=True)]
+    assert jumps(case, "Omega", met).tolist() == up.jump.tolist()
+
+
+def test_a_landing_that_has_not_settled_is_told_apart_from_an_aperiodic_one():
+    """Beside the Duffing oscillator's upper fold the large orbit's multiplier is near 1: 30
+    periods do not settle it (period 0, where the sweep called the next value a jump); Newton
+    from its last point finds the stable orbit it converges to, the one a long run reaches."""
+    from oscillator.attractors.mapping import AttractorSettings, land
+    from oscillator.attractors.responding import settled_orbit
+
+    case = resolve_case("instance-1", **{**DUFFING, "Omega": 1.19})
+    settings = AttractorSettings(transient=30, record=8, settle=False)
+    landing = land(case, settings, 0, (1.5, 0.0, 0.0, 0.1))
+    assert landing.ok and landing.period == 0
+    period, state = settled_orbit(case, landing, settings)
+    start = resolve_case(case, x1=1.5, v1=0.0, x2=0.0, v2=0.1)
+    long = simulate(start, t_end=case.initial.t0 + 3000 * case.parameters.period)
+    assert period == 1 and np.allclose(state, long.final_state[1:], atol=1e-6)
 
 
 ARGS = FRC_WINDOW
@@ -278,9 +370,9 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, extra, said):
     assert not folder.exists()
 
 
-@pytest.mark.parametrize("extra", [["--transient", "10", "--record", "4"], ["--set", "max_num_steps=5"]])
+@pytest.mark.parametrize("extra", [["--set", "max_num_steps=5"]])
 def test_a_span_without_a_periodic_orbit_writes_empty_tables_and_says_so(tmp_path, extra):
-    """Where no periodic orbit is found (too short a transient; every landing failing), the command
+    """Where no periodic orbit is found (every landing failing), the command
     writes the tables with their columns and no row, a report that says so, and exits 1 (it gave a
     traceback, and every resume repeated it); run again, it resumes to the same."""
     folder = tmp_path / "frc"
@@ -298,3 +390,43 @@ def test_a_span_without_a_periodic_orbit_writes_empty_tables_and_says_so(tmp_pat
         assert "No periodic orbit of period 1 was found" in (folder / "report.md").read_text(encoding="utf-8")
         assert (folder / "figures" / "frequency-x-pp.png").exists()
         assert ("resumed:" in done.stdout) == (attempt == 1)
+
+
+STICKING = {"Q1": 4, "Q2": 2.2, "d": 1.5, "d1": 1.5, "K6": 2}
+
+
+def test_a_branch_that_stalls_where_a_contact_begins_ends_there():
+    """The orbit at Omega = 2.06 in which m2 rests all period, continued down: where m1 begins to
+    touch m2's stop (2.023714) the corrector's steps went back and forth without advancing, 1234 of
+    1315 points at one value (250 s); the stall is seen within a window of steps and the branch ends
+    there, saying so, with its points before the stall."""
+    from oscillator import continue_orbit
+    from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.attractors.responding import seed_orbits
+    from oscillator.errors import Reason
+    from oscillator.orbits.continuation import STALL_WINDOW
+
+    case = resolve_case("instance-1", **STICKING)
+    (resting,) = [s for s in seed_orbits(case, "Omega", 2.06, 1, None, AttractorSettings()) if s[3] == 0.0]
+    branch = continue_orbit(case, param="Omega", start=2.06, stop=2.022, guess=resting, max_points=3000)
+    assert not branch.complete and branch.reason == Reason.NO_CONVERGENCE and "stalled" in branch.message
+    values = branch.points.Omega.to_numpy()
+    assert len(values) < 10 * STALL_WINDOW and values[-1] == pytest.approx(2.0237143, abs=1e-6)
+    assert np.count_nonzero(np.abs(values - values[-1]) < 1e-7) <= 3  # the back and forth undone
+
+
+@pytest.mark.slow
+def test_the_frequency_response_goes_on_beyond_a_stalled_branch():
+    """Over (2.022, 2.06) the frequency response took 250 s (one branch at max_points): now every
+    branch ends at the span, a failure or a stall in a bounded number of points, and the orbit
+    on the far side of the stall (the family turns back there) is traced too."""
+    case = resolve_case("instance-1", **STICKING)
+    found = frequency_response(case, "Omega", (2.022, 2.06), seeds=3, sweep=5, workers=2)
+    from oscillator.errors import Reason
+
+    assert all(branch.reason != Reason.MAX_POINTS and len(branch.points) < 500 for branch in found.branches)
+    stalled = [b for b in found.branches if "stalled" in b.message]
+    assert stalled
+    end = float(stalled[0].points.Omega.iloc[-1])
+    starts = [float(b.points.Omega.iloc[0]) for b in found.branches]
+    assert any(abs(start - end) == pytest.approx(RESTART * 0.038, abs=1e-9) for start in starts)

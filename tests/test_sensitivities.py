@@ -175,6 +175,31 @@ def test_sensitivities_are_refused_at_a_grazing_and_given_beside_it():
     assert 1e-6 < beside.margin < 1e-2 and np.isfinite(beside.of("impact_max_left")).all()
 
 
+def test_the_margins_see_the_sliding_onset_and_the_grazing_the_continuation_locates():
+    """Instance 1's sliding onset (1.5994) and grazing (1.6071), as continue_orbit locates them:
+    at each, m2 reaches zero velocity with its force on the kinetic threshold, where Theorem 5.1
+    decides between passing and resting; the margins measured the static one (1 % away, so the
+    command gave one side's derivative: of rest_m2, +2.60 or -2.63 at the grazing).  Now the
+    orbit at the grazing is refused; below the onset the margin names it and falls in proportion
+    to the distance to it (refused 1e-8 below it); at it, Newton lands on the orbit beyond the
+    onset's jump, which has derivatives of its own."""
+    branch = osc.continue_orbit("instance-1", param="Omega", start=1.595, stop=1.608)
+    rows = branch.bifurcations.set_index("kind")
+
+    def orbit_at(kind, offset=0.0):
+        value, state = float(rows.loc[kind, "Omega"]), rows.loc[kind, ["x1", "v1", "x2", "v2"]].to_numpy(float)
+        return find_orbit("instance-1", Omega=value + offset, guess=state)
+
+    with pytest.raises(SimulationFailed, match="kinetic threshold") as refused:
+        orbit_at("grazing").sensitivities("Omega")
+    assert refused.value.reason == Reason.NOT_DIFFERENTIABLE
+    with pytest.raises(SimulationFailed, match="kinetic threshold"):
+        orbit_at("sliding_onset", -1e-8).sensitivities("Omega")
+    below = [orbit_at("sliding_onset", -offset).sensitivities("Omega") for offset in (1e-6, 1e-4)]
+    assert all("kinetic threshold" in found.margins.what.iloc[0] for found in below)
+    assert below[1].margin / below[0].margin == pytest.approx(100, rel=0.1)
+
+
 def test_the_largest_of_tied_values_has_a_derivative_only_where_they_move_alike():
     """A symmetric orbit's two velocity peaks tie: Omega keeps the symmetry (a derivative); two tied
     candidates that move apart give the largest a kink (nan, refused rather than one side's)."""

@@ -12,7 +12,7 @@ import oscillator
 from oscillator.model.events import EventKind
 from oscillator.orbits.branch import Bifurcation
 from oscillator.report.figures import KIND_STYLE
-from oscillator.report.orbits import BIFURCATION_MARKERS
+from oscillator.report.orbits import BIFURCATION_MARKERS, BIFURCATION_STYLE
 from oscillator.report.transitions import BOTH_MASSES_SENTENCES, SENTENCES, transition_log
 
 PACKAGE = Path(oscillator.__file__).parent
@@ -47,7 +47,7 @@ def test_every_event_kind_has_every_property_and_every_consumer(kind):
 
 @pytest.mark.parametrize("kind", list(Bifurcation))
 def test_every_bifurcation_kind_has_a_marker_and_a_class(kind):
-    assert BIFURCATION_MARKERS[kind]
+    assert BIFURCATION_MARKERS[kind] and BIFURCATION_STYLE[kind]
     assert isinstance(kind.nonsmooth, bool)
 
 

@@ -1,24 +1,30 @@
 """The frequency response: every branch of periodic orbits over a parameter's span, with the
 response measures at each point, and what slow sweeps up and down meet (issue 38).
 
-:func:`frequency_response` works in three stages, each on the executor's workers
+:func:`frequency_response` works in four stages, each on the executor's workers
 (:mod:`oscillator.attractors.responding` holds the tasks):
 
 1. **branches**: the periodic attractors at ``seeds`` values of the parameter
    (:func:`~oscillator.attractors.finding.find_attractors` from the given starts), and, seed
    after seed, each orbit not on a branch already traced continued both ways to the span's ends
-   through folds and unstable stretches (:func:`~oscillator.orbits.continuation.continue_orbit`,
-   started again just beyond a point where the corrector fails inside the span);
-2. **measures**: every point of every branch measured (:func:`~oscillator.orbits.response.branch_responses`:
-   peaks, RMS values, rests, contacts, impact velocities, contact forces, energies, each orbit
-   refined by Newton first);
-3. **sweeps**: what an experiment turning the knob slowly sees: at each of ``sweep`` values, up
+   through folds and unstable stretches (:func:`~oscillator.orbits.continuation.continue_orbit`;
+   where the corrector fails or stalls inside the span, the orbits on both sides of that point
+   continued both ways too);
+2. **sweeps**: what an experiment turning the knob slowly sees: at each of ``sweep`` values, up
    the span and then down, the motion lands from where it was at the value before
-   (:func:`~oscillator.attractors.mapping.land`), and its attractor is measured; a ``jump``
-   marks a value where the motion left the attractor it followed.
+   (:func:`~oscillator.attractors.mapping.land`; one that has not settled is told apart from an
+   aperiodic one), and its attractor is measured; a ``jump`` marks a value where the attractor
+   met is not the continuation of the one before;
+3. **families the sweeps met**: each orbit of the sweeps on no branch yet continued both ways
+   (nothing a sweep rides is missing from the branches), then the branches born at the period
+   doublings;
+4. **measures**: every point of every branch measured (:func:`~oscillator.orbits.response.branch_responses`:
+   peaks, RMS values, rests, contacts, impact velocities, contact forces, energies, each orbit
+   refined by Newton first).
 
-With a :class:`FrequencyStore`, each seed's branches, each branch's measures and each sweep are
-kept as they finish, and a run into the same folder reads them back instead of computing them.
+With a :class:`~oscillator.attractors.frequency_parts.FrequencyStore`, each stage's parts are
+kept as they finish, and a run into the same folder reads them back, each checked as its task's,
+instead of computing them.
 """
 
 from __future__ import annotations
@@ -44,8 +50,8 @@ from oscillator.attractors.frequency_parts import (
     no_points,
     sweep_part,
 )
-from oscillator.attractors.mapping import AttractorSettings, check_settings, check_states
-from oscillator.attractors.responding import continued, doubled, measured, on_branch, seed_orbits, sweep
+from oscillator.attractors.mapping import STATE, AttractorSettings, check_settings, check_states
+from oscillator.attractors.responding import continued, distinct, doubled, measured, on_branch, seed_orbits, sweep
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count
@@ -90,7 +96,9 @@ class FrequencyResponse:
         response measure (:meth:`oscillator.Response.columns`).
     sweeps : DataFrame
         One row per sweep value: ``direction`` (``"up"``, ``"down"``), the parameter, ``period``
-        (0: aperiodic or failed), ``signature``, ``jump`` and the response measures of the
+        (0: nothing settled, aperiodic or failed), ``signature``, ``x1 v1 x2 v2`` (the orbit met,
+        at the section), ``jump`` (the orbit met is not the continuation of the one met before:
+        :func:`~oscillator.attractors.responding.jumps`) and the response measures of the
         attractor met (NaN where it is not periodic).
     """
 
@@ -172,8 +180,9 @@ def frequency_response(
     with Executor(workers, client, progress) as executor:
         job = _Job(base, param, (low, high), period, settings, max_points, store, tally, executor)
         branches = job.branches(np.linspace(low, high, seeds), starts)
-        points = job.measures(branches)
         sweeps = job.sweeps(sweep)
+        branches = job.doublings(branches + job.from_sweeps(sweeps, branches))
+        points = job.measures(branches)
     return FrequencyResponse(param, tuple(branches), points, sweeps, base, period)
 
 
@@ -246,9 +255,25 @@ class _Job:
                 branches = branches_from_disk(self.case, self.param, *stored)
             found += branches
             self.tally.add(1)
-        return self._doublings(found)
+        return found
 
-    def _doublings(self, found: list[Branch]) -> list[Branch]:
+    def from_sweeps(self, sweeps: pd.DataFrame, found: list[Branch]) -> list[Branch]:
+        """The orbits of period ``period`` the sweeps met that lie on no branch yet (a family no
+        seed reached), each continued both ways (:meth:`_continue`), in the sweeps' order."""
+        rows = sweeps[(sweeps["period"] == self.period) & sweeps[list(STATE)].notna().all(axis=1)]
+        key = {"from": "sweeps", "values": [float(v) for v in rows[self.param]]}
+        expected = self._branches_part(key)
+        stored = self._read("from-sweeps", expected)
+        if stored is not None:
+            return branches_from_disk(self.case, self.param, *stored)
+        new: list[Branch] = []
+        for _, row in rows.iterrows():
+            value, state = float(row[self.param]), row[list(STATE)].to_numpy(float)
+            new += self._continue(value, [state], found + new)
+        self._write("from-sweeps", *branches_on_disk(self.param, new), key=key)
+        return new
+
+    def doublings(self, found: list[Branch]) -> list[Branch]:
         """The period-``2n`` branches born at the branches' period doublings, level after level
         (period 2, then 4, ...; up to :data:`MAX_PERIOD`), each level's doublings in parallel."""
         level = list(range(len(found)))
@@ -287,7 +312,7 @@ class _Job:
             for k, (state, stop) in enumerate((state, stop) for state in new for stop in (high, low) if stop != value)
         ]
         done = sorted(self.executor.map(keyed, tasks), key=lambda item: item[0])
-        return [branch for _, branches in done for branch in branches if len(branch.points) > 1]
+        return distinct(self.case, [branch for _, branches in done for branch in branches], found)
 
     def measures(self, branches: list[Branch]) -> pd.DataFrame:
         """The response measures of every branch point, in chunks of :data:`CHUNK` points."""

@@ -186,7 +186,7 @@ def measures_part(index: int, branch: Branch) -> Expected:
 def sweep_part(param: str, direction: str, values: np.ndarray) -> Expected:
     """What the part of the sweep ``direction`` over ``values`` must hold: one row per value, in
     order, with its direction, period (0 or more), signature, jump and every measure."""
-    columns = dict.fromkeys([param, "period", *RESPONSE_COLUMNS], "number")
+    columns = dict.fromkeys([param, "period", *STATE, *RESPONSE_COLUMNS], "number")
     columns |= {"direction": "text", "signature": "text", "jump": "flag"}
     equal = {param: np.asarray(values, dtype=float), "direction": np.full(len(values), direction, dtype=object)}
 

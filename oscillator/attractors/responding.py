@@ -3,13 +3,15 @@ worker runs (:mod:`oscillator.analysis.execution`), called by
 :func:`~oscillator.attractors.frequency.frequency_response`.
 
 * :func:`seed_orbits`: the periodic attractors at one value of the parameter, as section points;
-* :func:`continued`: one orbit continued towards one end of the span, started again just beyond
-  each point where the corrector fails inside the span (:data:`RESTART`): a sliding or grazing
-  point it cannot step across, or a cluster of them, leaves a gap of ``RESTART`` of the span
-  instead of ending the branch;
+* :func:`continued`: one orbit continued towards one end of the span, and started again on both
+  sides of each point where the corrector fails or stalls inside the span (:data:`RESTART`): a
+  sliding, grazing or contact point it cannot step across leaves a gap of ``RESTART`` of the span
+  instead of ending the family, and a family that turns back there is traced too;
 * :func:`doubled`: the branch of period ``2n`` born at a period-``n`` branch's period doubling;
 * :func:`measured`: the response measures of a run of one branch's points;
-* :func:`sweep`: one slow sweep, up or down, with its jumps (:func:`jumps`).
+* :func:`sweep`: one slow sweep, up or down, each landing settled or told aperiodic
+  (:func:`settled_orbit`), with its jumps (:func:`jumps`): where the attractor met is not the
+  continuation of the one before (:func:`follows`), not where its cycle of switches changes.
 
 :func:`on_branch` tells whether an orbit lies on a branch already continued, so that no branch
 is traced twice.
@@ -25,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.attractors.finding import find_attractors
-from oscillator.attractors.mapping import AttractorSettings, land
+from oscillator.attractors.mapping import AttractorSettings, Landing, land
 from oscillator.errors import OscillatorError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Branch
@@ -34,28 +36,26 @@ from oscillator.orbits.response import COLUMNS, REFINE, branch_responses, respon
 from oscillator.orbits.shooting import STATE, find_orbit, period_map
 
 __all__ = [
-    "JUMP",
-    "JUMP_RATIO",
     "RESTART",
     "SAME_ORBIT",
     "continued",
+    "distinct",
     "doubled",
+    "follows",
     "jumps",
+    "marched",
     "measured",
     "on_branch",
     "seed_orbits",
+    "settled_orbit",
     "trimmed",
 ]
 
-#: A sweep jumps where its orbit's section point moves by more than this fraction of its size and
-#: by more than :data:`JUMP_RATIO` times the moves before and after it (or the period changes).
-JUMP = 0.05
-JUMP_RATIO = 3.0
 #: Two orbits at one parameter value are one where their section points agree to this (times
 #: ``1 + |P|``): a seed on a branch is not continued again.
 SAME_ORBIT = 1e-4
-#: Where the corrector fails inside the span, the branch starts again this fraction of the span
-#: beyond the last point, from Newton's orbit there; at most :data:`MAX_RESTARTS` times a branch.
+#: Where the corrector fails inside the span, orbits are sought this fraction of the span on either
+#: side of the last point, by Newton from its orbit; at most :data:`MAX_RESTARTS` times a task.
 RESTART = 1e-3
 MAX_RESTARTS = 20
 #: A branch is looked at every this many points for where it runs onto a known one.
@@ -84,38 +84,39 @@ def continued(
     max_points: int,
     known: Sequence[Branch] = (),
 ) -> list[Branch]:
-    """The orbit through ``state`` at ``start`` continued to ``stop``: one branch, or several
-    where the corrector failed inside the span and the branch was started again beyond
-    (module docstring); a restart that lands on a ``known`` branch, or on one of these, ends it."""
+    """The orbit through ``state`` at ``start`` continued to ``stop``; and where a branch ends
+    inside the span (the corrector failed or stalled at a sliding, grazing or contact point it
+    cannot step across), the orbits on both sides of that point (:data:`RESTART` of the span away,
+    Newton from its last orbit) that lie on no branch yet, each continued both ways: the family
+    beyond the point, and a family that turns back there.  A branch that runs onto a ``known`` one,
+    or onto one of these, ends there; at most :data:`MAX_RESTARTS` restarts."""
     low, high = span
     found: list[Branch] = []
-    while True:
+    pending = [(start, stop, state)]
+    restarts = 0
+    while pending:
+        start, stop, state = pending.pop(0)
         at = resolve_case(case, **{param: start})
         branch = continue_orbit(
             at, param=param, start=start, stop=stop, period=period, guess=state, max_points=max_points
         )
         whole = len(branch.points)
-        branch = trimmed(case, branch, known)
+        branch = trimmed(case, branch, (*known, *found))
         found.append(branch)
-        if (
-            len(branch.points) < whole
-            or branch.complete
-            or branch.reason in _FINAL
-            or len(found) > MAX_RESTARTS
-            or len(branch.points) < 2
-        ):
-            return found
-        values = branch.points[param].to_numpy(float)
-        heading = 1.0 if values[-1] >= values[-2] else -1.0
-        beyond = float(values[-1] + heading * RESTART * (high - low))
-        if not low < beyond < high:
-            return found
-        restart = orbit_state(
-            resolve_case(case, **{param: beyond}), period, branch.points[list(STATE)].to_numpy(float)[-1]
-        )
-        if restart is None or any(on_branch(case, other, beyond, restart) for other in (*known, *found)):
-            return found
-        start, stop, state = beyond, (high if heading > 0 else low), restart
+        if len(branch.points) < whole or branch.complete or branch.reason in _FINAL or len(branch.points) < 2:
+            continue
+        last = float(branch.points[param].iloc[-1])
+        ending = branch.points[list(STATE)].to_numpy(float)[-1]
+        for side in (1.0, -1.0):
+            beyond = last + side * RESTART * (high - low)
+            if restarts >= MAX_RESTARTS or not low < beyond < high:
+                continue
+            restarts += 1
+            restart = orbit_state(resolve_case(case, **{param: beyond}), period, ending)
+            if restart is None or any(on_branch(case, other, beyond, restart) for other in (*known, *found)):
+                continue
+            pending += [(beyond, end, restart) for end in (high, low)]
+    return [branch for branch in found if len(branch.points) > 1]
 
 
 #: Where a period-``2n`` orbit is sought beside a period doubling: this fraction of the span
@@ -202,6 +203,17 @@ def trimmed(case: Case, branch: Branch, known: Sequence[Branch]) -> Branch:
     )
 
 
+def distinct(case: Case, branches: Sequence[Branch], known: Sequence[Branch]) -> list[Branch]:
+    """``branches`` (traced in parallel, each without the others) each up to where it runs onto a
+    ``known`` one or one before it (:func:`trimmed`); those left with a point or none dropped."""
+    kept: list[Branch] = []
+    for branch in branches:
+        branch = trimmed(case, branch, (*known, *kept))
+        if len(branch.points) > 1:
+            kept.append(branch)
+    return kept
+
+
 def measured(branch: Branch, first: int, last: int) -> pd.DataFrame:
     """The response measures of the branch's points ``first`` to ``last - 1``
     (:func:`~oscillator.orbits.response.branch_responses`), indexed by point."""
@@ -228,12 +240,14 @@ def on_branch(case: Case, branch: Branch, value: float, state: np.ndarray) -> bo
     return False
 
 
-def orbit_state(case: Case, period: int, guess: np.ndarray) -> np.ndarray | None:
+def orbit_state(
+    case: Case, period: int, guess: np.ndarray, tolerances: tuple[float, ...] = (REFINE, 1e-9)
+) -> np.ndarray | None:
     """The period-``period`` orbit Newton reaches from ``guess``: to
     :data:`~oscillator.orbits.response.REFINE`, else (where the map is not smooth enough for
-    that: a sliding or grazing point near) to Newton's default 1e-9; None where it does not
-    converge."""
-    for tol in (REFINE, 1e-9):
+    that: a sliding or grazing point near) to Newton's default 1e-9 (``tolerances``, in turn);
+    None where it does not converge."""
+    for tol in tolerances:
         try:
             return find_orbit(case, period=period, guess=guess, tol=tol).state
         except OscillatorError:
@@ -248,8 +262,9 @@ def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
 
 
 def sweep(case: Case, param: str, values: np.ndarray, settings: AttractorSettings) -> pd.DataFrame:
-    """One slow sweep over ``values``: each landing starts where the one before ended, and the
-    orbit met is refined by Newton and measured; the jumps are marked (:func:`jumps`)."""
+    """One slow sweep over ``values``: each landing starts where the one before ended; a landing
+    that has not settled is told apart from an aperiodic one (:func:`settled_orbit`); the orbit
+    met is refined by Newton and measured; the jumps are marked (:func:`jumps`)."""
     direction = "up" if values[-1] > values[0] else "down"
     start = np.array(case.initial.y, dtype=float)
     rows: list[dict[str, object]] = []
@@ -259,42 +274,161 @@ def sweep(case: Case, param: str, values: np.ndarray, settings: AttractorSetting
         landing = land(at, settings, 0, (float(start[0]), float(start[1]), float(start[2]), float(start[3])))
         if landing.ok and len(landing.points):
             start = landing.points[-1]
-        period = landing.period if landing.ok else 0
-        state = orbit_state(at, period, start) if period else None
+        period, state = settled_orbit(at, landing, settings)
+        if state is not None:
+            start = state
         row: dict[str, object] = {"direction": direction, param: float(value), "period": period}
         row["signature"] = landing.signature
-        row |= dict.fromkeys(COLUMNS, math.nan)  # where no orbit is met: the columns, not a number
+        row |= dict.fromkeys([*STATE, *COLUMNS], math.nan)  # where no orbit is met: the columns, not a number
         if state is not None:
             begin = dict(zip(STATE, (float(v) for v in state), strict=True))
-            row |= response(resolve_case(at, **begin), period).columns()
+            row |= begin | response(resolve_case(at, **begin), period).columns()
         rows.append(row)
         states.append(state)
     table = pd.DataFrame(rows)
-    table["jump"] = jumps(table["period"].to_numpy(), states, table["signature"].tolist())
+    met = [(float(v), int(p), s) for v, p, s in zip(values, table["period"], states, strict=True)]
+    table["jump"] = jumps(case, param, met)
     return table
 
 
-def jumps(periods: np.ndarray, states: list[np.ndarray | None], signatures: Sequence[str] | None = None) -> np.ndarray:
-    """Where a sweep jumps: the period changes, or the orbit's section point moves by more than
-    :data:`JUMP_RATIO` times the moves on either side, and by more than :data:`JUMP` of its size
-    or with its cycle of switches changed (a rest interval that appears with a finite length).
-    An orbit followed towards a fold moves ever faster, but its moves grow step by step; a jump
-    is one move out of scale with its neighbours."""
-    count = len(states)
-    changed = [False] + [signatures[k] != signatures[k - 1] for k in range(1, count)] if signatures else [False] * count
-    moves = np.zeros(count)
-    for k in range(1, count):
-        a, b = states[k - 1], states[k]
-        moves[k] = np.inf if a is None or b is None else float(np.max(np.abs(b - a)))
-    found = np.zeros(count, dtype=bool)
-    for k in range(1, count):
-        if periods[k] != periods[k - 1]:
-            found[k] = True
+#: A landing whose section points do not repeat is looked at again as one converging slowly (a
+#: multiplier near 1, beside a fold): Newton from its last point for an orbit of one of these
+#: periods, kept if stable and within :data:`NEAR` of it; else it runs this many times longer.
+SLOW_PERIODS = (1, 2, 4)
+NEAR = 1e-2
+LONGER = 4
+
+
+def settled_orbit(case: Case, landing: Landing, settings: AttractorSettings) -> tuple[int, np.ndarray | None]:
+    """The period and the orbit's state (Newton's, refined) of the attractor ``landing`` reached:
+    where its section points repeat, that orbit; where they do not, the stable orbit near its last
+    point Newton finds (a landing converging slowly), else the landing run :data:`LONGER` times
+    longer; ``(0, None)`` for a failed landing and a motion that does not settle (aperiodic)."""
+    from oscillator.orbits.shooting import find_orbit
+
+    if not landing.ok or not len(landing.points):
+        return 0, None
+    if landing.period:
+        return landing.period, orbit_state(case, landing.period, landing.points[-1])
+    end = landing.points[-1]
+    for period in SLOW_PERIODS:
+        try:
+            orbit = find_orbit(case, period=period, guess=end, tol=REFINE)
+        except OscillatorError:
             continue
-        state = states[k]
-        if state is None or not np.isfinite(moves[k]):
+        if orbit.stable and float(np.max(np.abs(orbit.state - end))) <= NEAR * (1.0 + float(np.max(np.abs(end)))):
+            return period, orbit.state
+    longer = dataclasses.replace(settings, transient=min(LONGER * settings.transient, 1_000_000))
+    again = land(case, longer, 0, (float(end[0]), float(end[1]), float(end[2]), float(end[3])))
+    if again.ok and again.period:
+        return again.period, orbit_state(case, again.period, again.points[-1])
+    return 0, None
+
+
+#: Two orbits a sweep met lie on one continuous family where the orbit Newton finds halfway
+#: between them lies within :data:`FOLLOW_TOL` (relative to their size) of the cubic through them
+#: with their slopes (one-sided, by differences :data:`FOLLOW_DELTA` of the interval; Newton to
+#: 1e-9 throughout): along a
+#: smooth family its error falls as the interval's fourth power.  Where it does not, each half is
+#: checked in turn: at a kink (a grazing) the misfit halves with the interval; across a jump, a
+#: fold or a gap it stays, and a misfit that fell by less than :data:`FOLLOW_RATIO` at each of
+#: :data:`FOLLOW_LEVELS` halvings in a row (or at :data:`FOLLOW_DEPTH` halvings) is a jump.
+FOLLOW_TOL = 1e-6
+FOLLOW_DELTA = 1e-3
+FOLLOW_RATIO = 0.85
+FOLLOW_LEVELS = 4
+FOLLOW_DEPTH = 40
+
+
+def follows(case: Case, param: str, a: tuple[float, np.ndarray], b: tuple[float, np.ndarray], period: int) -> bool:
+    """Whether the period-``period`` orbits through ``a`` and ``b`` (each ``(value, state)``) lie on
+    one continuous family (:data:`FOLLOW_TOL`).  A period-``period`` orbit reaches one of a period
+    dividing it (a period doubling crossed continuously): both are fixed points of the ``period``
+    map.  False also where Newton finds no orbit between them (a fold, a gap)."""
+    size = 1.0 + max(float(np.max(np.abs(a[1]))), float(np.max(np.abs(b[1]))))
+
+    def slope(value: float, state: np.ndarray, side: float, width: float) -> np.ndarray | None:
+        delta = side * FOLLOW_DELTA * width
+        moved = orbit_state(resolve_case(case, **{param: value + delta}), period, state, (1e-9,))
+        return None if moved is None else (moved - state) / delta
+
+    interval = abs(b[0] - a[0])
+    first = (a, b, slope(*a, 1.0, interval), slope(*b, -1.0, interval), math.inf, 0, 0)
+    pending = [first]
+    while pending:
+        (value_a, state_a), (value_b, state_b), slope_a, slope_b, misfit, slow, depth = pending.pop()
+        if slope_a is None or slope_b is None:
+            return False
+        width = value_b - value_a
+        middle = 0.5 * (value_a + value_b)
+        cubic = 0.5 * (state_a + state_b) + width / 8.0 * (slope_a - slope_b)
+        at = resolve_case(case, **{param: middle})
+        tries = (orbit_state(at, period, guess, (1e-9,)) for guess in (cubic, state_a, state_b))
+        found = next((state for state in tries if state is not None), None)
+        if found is None:
+            return False
+        now = float(np.max(np.abs(found - cubic)))
+        if now <= FOLLOW_TOL * size:
             continue
-        neighbours = max(moves[k - 1] if k > 1 else 0.0, moves[k + 1] if k + 1 < count else 0.0)
-        large = moves[k] > JUMP * (1.0 + float(np.max(np.abs(state)))) or changed[k]
-        found[k] = large and (not np.isfinite(neighbours) or moves[k] > JUMP_RATIO * neighbours)
+        slow = slow + 1 if now > FOLLOW_RATIO * misfit else 0
+        if slow >= FOLLOW_LEVELS or depth >= FOLLOW_DEPTH:
+            return False
+        left, right = slope(middle, found, -1.0, abs(width)), slope(middle, found, 1.0, abs(width))
+        pending.append(((value_a, state_a), (middle, found), slope_a, left, now, slow, depth + 1))
+        pending.append(((middle, found), (value_b, state_b), right, slope_b, now, slow, depth + 1))
+    return True
+
+
+def jumps(case: Case, param: str, met: Sequence[tuple[float, int, np.ndarray | None]]) -> np.ndarray:
+    """Where a sweep jumps: at each value whose attractor (``(value, period, state)``; period 0
+    where none settled) is not the continuation of the attractor met last (:func:`follows`, from
+    the one of the longer period where the periods differ and one divides the other; another
+    period is a jump).  A value where nothing settled is never a jump: the next attractor met is
+    compared with the last one before it."""
+    found = np.zeros(len(met), dtype=bool)
+    last: tuple[float, int, np.ndarray] | None = None
+    for k, (value, period, state) in enumerate(met):
+        if not period or state is None:
+            continue
+        if last is not None:
+            found[k] = not _continues(case, param, last, (value, period, state))
+        last = (value, period, state)
     return found
+
+
+def _continues(case: Case, param: str, a: tuple[float, int, np.ndarray], b: tuple[float, int, np.ndarray]) -> bool:
+    (value_a, period_a, state_a), (value_b, period_b, state_b) = a, b
+    if period_a == period_b:
+        return follows(case, param, (value_a, state_a), (value_b, state_b), period_a)
+    if max(period_a, period_b) % min(period_a, period_b):
+        return False
+    if period_a > period_b:
+        return marched(case, param, (value_a, state_a), (value_b, state_b), period_a)
+    return marched(case, param, (value_b, state_b), (value_a, state_a), period_b)
+
+
+#: :func:`marched` takes steps whose orbit lies within this fraction of the size from the secant's
+#: prediction, halved down to :data:`FOLLOW_DEPTH` halvings of the interval.
+MARCH_TOL = 1e-2
+
+
+def marched(case: Case, param: str, a: tuple[float, np.ndarray], b: tuple[float, np.ndarray], period: int) -> bool:
+    """Whether the period-``period`` orbit through ``a`` reaches the orbit through ``b`` (of a
+    period dividing ``period``: a period doubling between them) by Newton steps along its family,
+    each predicted by the secant of the two before (:data:`MARCH_TOL`): at a period doubling
+    crossed continuously the family merges with the orbit of half its period and goes on as it."""
+    (value, state), (target, goal) = a, b
+    size = 1.0 + max(float(np.max(np.abs(state))), float(np.max(np.abs(goal))))
+    step, least = (target - value) / 16.0, abs(target - value) / 2.0**FOLLOW_DEPTH
+    before: tuple[float, np.ndarray] | None = None
+    while value != target:
+        ahead = target if abs(target - value) <= abs(step) else value + step
+        predicted = state if before is None else state + (state - before[1]) * (ahead - value) / (value - before[0])
+        moved = orbit_state(resolve_case(case, **{param: ahead}), period, predicted, (1e-9,))
+        if moved is not None and float(np.max(np.abs(moved - predicted))) <= MARCH_TOL * size:
+            before, value, state, step = (value, state), ahead, moved, 2.0 * step
+            continue
+        step /= 2.0
+        if abs(step) < least:
+            return False
+    return _same(state, goal)

@@ -47,6 +47,12 @@ __all__ = ["ContinuationSettings", "check_settings", "continue_orbit"]
 DEFAULT_STEP = 1 / 40
 MIN_STEP = 1e-6
 MAX_POINTS = 100_000
+#: The branch has stalled where, over this many steps, the parameter turned back at every other
+#: one or more and the steps' net advance is less than :data:`STALL_NET` of their length: the
+#: corrector goes back and forth at a point it cannot step across (a contact or a rest starting
+#: on an orbit whose mass rests all period: 1234 of 1315 points at one value, measured).
+STALL_WINDOW = 12
+STALL_NET = 0.25
 
 
 def _check_range(
@@ -272,6 +278,12 @@ def _trace_branch(
             trace.reason = Reason.NO_ORBIT
             return False, f"the branch came back to {param} = {start:.10g} after a fold"
         trace.add(between(cont, a, b, ds, locate_tol), b)
+        if trace.stalled(sigma):
+            trace.reason = Reason.NO_CONVERGENCE
+            return False, (
+                f"the continuation stalled at {param} = {trace.points[-1].lam:.10g}: its steps went back and forth "
+                "without advancing (a point the corrector cannot step across)"
+            )
         if progress is not None:
             progress(min(1.0, abs(b.lam - start) / sigma))
         if b.iterations <= 2:
@@ -290,6 +302,8 @@ class _Trace:
         self.param = param
         self.points, self.piece_starts = [first], [0]
         self.rows: list[dict[str, Any]] = []
+        #: How many points and bifurcation rows the branch had before each step (to undo steps).
+        self.steps: list[tuple[int, int, int]] = []
         self.scale = scale
         #: Why the branch ended early (set where it does).
         self.reason: Reason | None = None
@@ -297,6 +311,7 @@ class _Trace:
     def add(self, located: list[Located], b: OrbitPoint) -> None:
         """The bifurcations between the last point and ``b``, the orbits on their sides (so the
         branch reaches each bifurcation), then ``b``; a new piece begins after a jump or a gap."""
+        self.steps.append((len(self.points), len(self.rows), len(self.piece_starts)))
         for found in located:
             self.rows.append(found.row)
             jump = found.row["jump"]
@@ -305,6 +320,24 @@ class _Trace:
                 self.piece_starts.append(len(self.points))  # the orbit beyond the jump starts a piece
             self._append(found.right, b)
         self.points.append(b)
+
+    def stalled(self, sigma: float) -> bool:
+        """Whether the last :data:`STALL_WINDOW` steps went back and forth without advancing; if
+        so they are undone (the branch ends where the stall began)."""
+        if len(self.steps) < STALL_WINDOW:
+            return False
+        first = self.steps[-STALL_WINDOW][0] - 1
+        ends = [self.points[first]] + [self.points[count - 1] for count, _, _ in self.steps[-STALL_WINDOW + 1 :]]
+        ends.append(self.points[-1])
+        u = np.array([np.append(p.y, p.lam / sigma) for p in ends])
+        moves = np.diff(u, axis=0)
+        turns = int(np.sum(np.diff(np.sign(np.diff([p.lam for p in ends]))) != 0))
+        path, net = float(np.sum(np.linalg.norm(moves, axis=1))), float(np.linalg.norm(u[-1] - u[0]))
+        if turns < STALL_WINDOW // 2 or net >= STALL_NET * path:
+            return False
+        points, rows, pieces = self.steps[-STALL_WINDOW]
+        del self.points[points:], self.rows[rows:], self.piece_starts[pieces:], self.steps[-STALL_WINDOW:]
+        return True
 
     def _append(self, side: OrbitPoint | None, b: OrbitPoint) -> None:
         last = self.points[-1]

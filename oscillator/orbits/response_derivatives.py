@@ -20,7 +20,18 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-from oscillator.model.fields import C3, D1, K3, K6, D, coefficients, force_scale, non_friction_force, static_threshold
+from oscillator.model.fields import (
+    C3,
+    D1,
+    K3,
+    K6,
+    D,
+    coefficients,
+    force_scale,
+    kinetic_threshold,
+    non_friction_force,
+    static_threshold,
+)
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES
@@ -239,9 +250,12 @@ def margins_of(along: Pass, p: Parameters) -> pd.DataFrame:
     for s in along.switches:
         for mass in (1, 2):
             if s.before.sign(mass) != 0 and s.after.sign(mass) != s.before.sign(mass):
+                # Theorem 5.1: a mass at zero velocity passes where the force across exceeds the
+                # kinetic threshold (5.12)-(5.13), else it comes to rest: there it is decided
                 forces = non_friction_force(s.t, s.y, p, s.after.left, s.after.right)
-                gap = abs(abs(forces[mass - 1]) - static_threshold(p, mass)) / force_scale(s.t, s.y, p, s.after, mass)
-                rows.append((f"m{mass} at zero velocity with its force on the static threshold", s.t, gap))
+                gap = abs(abs(forces[mass - 1]) - kinetic_threshold(p, mass))
+                gap /= force_scale(s.t, s.y, p, s.after, mass)
+                rows.append((f"m{mass} at zero velocity with its force on the kinetic threshold", s.t, gap))
     for piece in along.pieces:
         rows += _approaches(piece, p, reach)
     table = pd.DataFrame(rows, columns=["what", "t", "distance"])

@@ -12,10 +12,9 @@ import numpy as np
 import pandas as pd
 
 from oscillator.designing.judging import seen_table, survey_task
-from oscillator.orbits.response import unit_of
 from oscillator.report import markup as mk
 from oscillator.report.orbits import modified_blocks
-from oscillator.report.outputs import wrapped_title
+from oscillator.report.outputs import quantity_label, wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -68,15 +67,14 @@ def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
                 ax.axhline(
                     constraint.bound, color="C3", linestyle="--", linewidth=1, label=f"bound {constraint.bound:g}"
                 )
-        unit = unit_of(measure)
-        ax.set_ylabel(f"{measure} ({unit})" if unit else measure)
+        ax.set_ylabel(quantity_label(measure))
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7, loc="best")
-    axes[-1, 0].set_xlabel(name)
+    axes[-1, 0].set_xlabel(quantity_label(name))
     axes[-1, 0].ticklabel_format(useOffset=False, axis="x")
-    fig.suptitle(
-        wrapped_title(problem.case, f"worst {problem.objective} over {name} in [{low:g}, {high:g}]"), fontsize=9
-    )
+    shown = f"{float(responses[name].min()):g} to {float(responses[name].max()):g}" if len(responses) else "-"
+    what = f"the measures judged before and after, {name} from {shown}; the operating band [{low:g}, {high:g}] shaded"
+    fig.suptitle(wrapped_title(problem.case, what), fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -101,21 +99,21 @@ def search_figure(found: Design) -> Figure:
     if len(names) >= 2:
         x, y = names[0], names[1]
         shown = ax.scatter(feasible[x], feasible[y], c=feasible.objective, cmap="viridis", s=40, label="candidates")
-        fig.colorbar(shown, ax=ax, label=f"worst {problem.objective}")
+        fig.colorbar(shown, ax=ax, label=quantity_label(problem.objective, "worst "))
         ax.scatter(infeasible[x], infeasible[y], color="0.6", marker="x", label="breaks a constraint")
         if len(history):
             ax.plot(history[x], history[y], color="C3", linewidth=1, marker=".", label="refinement")
         best = problem.design(found.best.design)
         ax.scatter([best[x]], [best[y]], color="C3", marker="*", s=160, zorder=5, label="design found")
-        ax.set_xlabel(x)
-        ax.set_ylabel(y)
+        ax.set_xlabel(quantity_label(x))
+        ax.set_ylabel(quantity_label(y))
     else:
         x = names[0]
         ax.scatter(feasible[x], feasible.objective, color="C0", label="candidates")
         ax.scatter(infeasible[x], infeasible.objective, color="0.6", marker="x", label="breaks a constraint")
         ax.scatter([found.best.design[0]], [found.best.objective], color="C3", marker="*", s=160, label="design found")
-        ax.set_xlabel(x)
-        ax.set_ylabel(f"worst {problem.objective}")
+        ax.set_xlabel(quantity_label(x))
+        ax.set_ylabel(quantity_label(problem.objective, "worst "))
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax.set_title(wrapped_title(problem.case, "the global search and the refinement"), fontsize=9)
@@ -144,9 +142,8 @@ def front_figure(found: Design) -> Figure:
     for _, row in front.iterrows():
         text = ", ".join(f"{n} = {row[n]:.4g}" for n in problem.names)
         ax.annotate(text, (row.second, row.objective), fontsize=7, xytext=(4, 4), textcoords="offset points")
-    for axis, measure in ((ax.set_xlabel, second), (ax.set_ylabel, problem.objective)):
-        unit = unit_of(measure)
-        axis(f"worst {measure} ({unit})" if unit else f"worst {measure}")
+    ax.set_xlabel(quantity_label(second, "worst "))
+    ax.set_ylabel(quantity_label(problem.objective, "worst "))
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax.set_title(wrapped_title(problem.case, "the Pareto front of the two worst cases"), fontsize=9)

@@ -15,8 +15,8 @@ from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
 from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS
 from oscillator.report import markup as mk
-from oscillator.report.orbits import BIFURCATION_MARKERS, modified_blocks
-from oscillator.report.outputs import color_of, wrapped_title
+from oscillator.report.orbits import bifurcation_style, modified_blocks
+from oscillator.report.outputs import color_of, quantity_label, wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
     from pathlib import Path
@@ -32,18 +32,20 @@ __all__ = ["MEASURES", "figure_measures", "frequency_blocks", "frequency_figure"
 
 #: What the sweeps' values are shaded by: the columns any of which is positive, the colour, the label.
 _CONTACT = (("onsets_right", "onsets_left"), "tab:blue", "contact")
-_STICKS = {mass: ((f"rest_m{mass}",), "tab:orange", f"m{mass} sticks") for mass in (1, 2)}
+_STICKS = {
+    mass: ((f"rest_m{mass}",), colour, f"m{mass} sticks") for mass, colour in ((1, "tab:orange"), (2, "tab:red"))
+}
 #: The panels of a measure of each kind: ``(column suffix, what it is of, what is shaded)``.
 PANELS = {
     **dict.fromkeys(MASS_MEASURES, (("_m1", "m1", (_STICKS[1], _CONTACT)), ("_m2", "m2", (_STICKS[2], _CONTACT)))),
     **dict.fromkeys(
         CONTACT_MEASURES,
         (
-            ("_right", "the right stop", ((("onsets_right",), "tab:blue", "contact with the right stop"),)),
+            ("_right", "the right stop", ((("onsets_right",), "tab:purple", "contact with the right stop"),)),
             (
                 "_left",
                 "the contact between the masses",
-                ((("onsets_left",), "tab:blue", "contact between the masses"),),
+                ((("onsets_left",), "tab:green", "contact between the masses"),),
             ),
         ),
     ),
@@ -58,6 +60,7 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
     (``impact_max``, ``force_peak``, ``onsets``, ...) in one panel per contact, an energy
     (``energy_friction``, ...) in one panel."""
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     if measure not in MEASURES:
         raise InputError(f"measure must be one of {', '.join(MEASURES)}, got {measure!r}", field="measure")
@@ -69,20 +72,21 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
         _shade(ax, found, shades)
         _branches(ax, found, column)
         _sweeps(ax, found, column)
-        unit = UNITS[measure.removeprefix("energy_")]
-        ax.set_ylabel(f"{measure} of {of}" if of else measure, fontsize=9)
-        if unit:
-            ax.set_ylabel(f"{ax.get_ylabel()} ({unit})", fontsize=9)
+        unit = UNITS[measure.removeprefix("energy_")] or "fraction of the period"
+        ax.set_ylabel(f"{measure} of {of} ({unit})" if of else f"{measure} ({unit})", fontsize=9)
         ax.grid(alpha=0.3)
         ax.ticklabel_format(useOffset=False)
-    axes[-1].set_xlabel(found.param)
+    axes[-1].set_xlabel(quantity_label(found.param))
     count = len(found.branches)
     axes[0].set_title(
         wrapped_title(found.case, f"frequency response over {found.param}: {count} branch{'es' if count != 1 else ''}"),
         parse_math=False,
         fontsize=9,
     )
-    unique: dict[str, Artist] = {}
+    unique: dict[str, Artist] = {
+        "stable orbits (each branch its colour)": Line2D([], [], color="0.2", ls="-", lw=1.4),
+        "unstable orbits": Line2D([], [], color="0.2", ls="--", lw=1.4),
+    }
     for ax in axes:
         handles, labels = ax.get_legend_handles_labels()
         unique |= {label: handle for label, handle in zip(labels, handles, strict=True) if label not in unique}
@@ -104,14 +108,7 @@ def _branches(ax: Axes, found: FrequencyResponse, column: str) -> None:
                 # each run reaches the next point, so that the curve has no gap where stability changes
                 span = piece.iloc[run[0] : run[-1] + 2]
                 solid = bool(stable[run[0]])
-                ax.plot(
-                    span[found.param],
-                    span[column],
-                    color=color_of(k),
-                    ls="-" if solid else "--",
-                    lw=1.4,
-                    label="stable orbits" if solid else "unstable orbits",
-                )
+                ax.plot(span[found.param], span[column], color=color_of(k), ls="-" if solid else "--", lw=1.4)
         _bifurcations(ax, found.param, branch.bifurcations, mine, column)
 
 
@@ -125,7 +122,7 @@ def _bifurcations(ax: Axes, param: str, bifurcations: pd.DataFrame, points: pd.D
         nearest = int(np.argmin(np.abs(values - float(row[param]))))
         at = (float(row[param]), float(points[column].iloc[nearest]))
         label = str(kind).replace("_", " ")
-        ax.plot(*at, BIFURCATION_MARKERS[kind], color="C3", mfc="none", ms=7, label=label)
+        ax.plot(*at, **bifurcation_style(kind), label=label)
 
 
 def _sweeps(ax: Axes, found: FrequencyResponse, column: str) -> None:

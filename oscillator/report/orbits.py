@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = [
+    "bifurcation_style",
     "branch_figure",
     "branch_status",
     "draw_branch",
@@ -42,6 +43,22 @@ BIFURCATION_MARKERS = {
     Bifurcation.PERIOD_DOUBLING: "D",
     Bifurcation.TORUS: "*",
 }
+#: Each kind's colour and size: two kinds located close together stay apart (a grazing's small
+#: square inside a sliding onset's larger triangle).
+BIFURCATION_STYLE = {
+    Bifurcation.SLIDING_ONSET: ("tab:red", 9),
+    Bifurcation.SLIDING_VANISH: ("tab:purple", 9),
+    Bifurcation.GRAZING: ("tab:green", 5),
+    Bifurcation.FOLD: ("black", 8),
+    Bifurcation.PERIOD_DOUBLING: ("tab:brown", 7),
+    Bifurcation.TORUS: ("tab:pink", 10),
+}
+
+
+def bifurcation_style(kind: Bifurcation) -> dict[str, Any]:
+    """How a bifurcation of ``kind`` is marked (its marker, colour and size, hollow)."""
+    colour, size = BIFURCATION_STYLE[kind]
+    return {"marker": BIFURCATION_MARKERS[kind], "color": colour, "ms": size, "mfc": "none", "ls": "none", "mew": 1.3}
 
 
 def _pieces(points: pd.DataFrame) -> list[slice]:
@@ -120,13 +137,7 @@ def branch_figure(branch: Branch, coordinate: str, sweep_points: pd.DataFrame | 
         ax.axvspan(lo, hi, color="0.85", zorder=0, label=None if k else f"no period-{branch.period} orbit")
     for kind, rows in branch.bifurcations.groupby("kind"):
         ax.plot(
-            rows[param],
-            rows[coordinate],
-            BIFURCATION_MARKERS[Bifurcation(kind)],
-            color="C3",
-            ms=7,
-            mfc="none",
-            label=str(kind).replace("_", " "),
+            rows[param], rows[coordinate], **bifurcation_style(Bifurcation(kind)), label=str(kind).replace("_", " ")
         )
     _label_values(ax, branch.bifurcations, param, coordinate, span=float(np.ptp(points[param])))
     ax.ticklabel_format(useOffset=False)

@@ -28,6 +28,7 @@ __all__ = [
     "MARKERS",
     "color_of",
     "folder_case",
+    "quantity_label",
     "save_into",
     "state_label",
     "unit_of",
@@ -59,6 +60,24 @@ def unit_of(name: str) -> str:
 def state_label(name: str) -> str:
     """An axis label for a state component, with its unit: ``x2 (m)``."""
     return f"{name} ({unit_of(name)})"
+
+
+def quantity_label(name: str, prefix: str = "") -> str:
+    """An axis label with its unit for any quantity a figure draws: a parameter (``Omega
+    (rad/s)``), a state component (``x2 (m)``) or a response measure's column (``impact_max_right
+    (m/s)``, ``rest_m2 (fraction of the period)``); ``prefix`` before the name (``"worst "``)."""
+    from oscillator.model.parameters import Parameters, labelled
+    from oscillator.orbits.response import COLUMNS
+    from oscillator.orbits.response import unit_of as measure_unit
+
+    if name in Parameters.names():
+        return prefix + labelled(name)
+    if name in ("x1", "v1", "x2", "v2"):
+        return prefix + state_label(name)
+    if name in COLUMNS:
+        unit = measure_unit(name)
+        return f"{prefix}{name} ({unit or 'fraction of the period'})"
+    return prefix + name
 
 
 def wrapped_title(case: Any, what: str) -> str:
