@@ -27,7 +27,7 @@ from oscillator.analysis.periods import detect_period
 from oscillator.engines import check_engine
 from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
-from oscillator.hybrid.batch import OK, land_compiled, options_vector
+from oscillator.hybrid.batch import OK, SETTLE_CHUNK, land_compiled, options_vector
 from oscillator.hybrid.counting import counted
 from oscillator.hybrid.guards import ARITHMETIC_ERRORS
 from oscillator.hybrid.recording import SaveAt
@@ -135,8 +135,6 @@ class Landing:
         return self.status == "ok"
 
 
-#: Forcing periods in the first two runs of a settling transient; the runs after double.
-SETTLE_CHUNK = 8
 #: Event rows the compiled run keeps room for per recorded forcing period (a start with more runs
 #: through ``simulate``).
 WINDOW_ROWS = 64

@@ -25,7 +25,7 @@ import numpy as np
 
 from oscillator.compiled import njit
 from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, grid_returns, restart
-from oscillator.hybrid.guards import CONSISTENCY
+from oscillator.hybrid.guards import CONSISTENCY, MAX_STALLS, SAME_INSTANT
 from oscillator.model.parameters import SolverOptions
 from oscillator.model.roots import directions_into, violation_code
 from oscillator.model.switching import MAX_ROWS, initial_compiled, resolve_compiled
@@ -35,6 +35,7 @@ __all__ = [
     "FAILED",
     "OK",
     "OPTIONS",
+    "SETTLE_CHUNK",
     "WINDOW_FULL",
     "land_compiled",
     "options_vector",
@@ -59,12 +60,9 @@ def options_vector(options: SolverOptions) -> np.ndarray:
     return np.array([values[name] for name in OPTIONS], dtype=float)
 
 
-#: Root returns at one instant without an event before the run is declared stalled, and what is
-#: one instant (:mod:`oscillator.hybrid.guards`' values).
-_MAX_STALLS, _SAME_INSTANT = 100, 1e-12
-#: Forcing periods in the first two runs of a settling transient; the runs after double
-#: (:data:`oscillator.attractors.mapping.SETTLE_CHUNK`).
-_CHUNK = 8
+#: Forcing periods in the first two runs of a settling transient; the runs after double (the
+#: compiled landing's and :func:`oscillator.attractors.mapping.land`'s through ``simulate``).
+SETTLE_CHUNK = 8
 
 
 @njit(cache=True, error_model="numpy")
@@ -189,10 +187,10 @@ def _through_root(
         restart(w, modes, c, t, w[Y_OUT : Y_OUT + N])
         tally[_STALLS], tally[_LAST_ROOT] = 0.0, -math.inf
         return OK
-    same = t - tally[_LAST_ROOT] <= _SAME_INSTANT * (1.0 + abs(t))
+    same = t - tally[_LAST_ROOT] <= SAME_INSTANT * (1.0 + abs(t))
     tally[_STALLS] = tally[_STALLS] + 1.0 if same and n == 0 else 0.0
     tally[_LAST_ROOT] = t
-    return FAILED if tally[_STALLS] > _MAX_STALLS else OK
+    return FAILED if tally[_STALLS] > MAX_STALLS else OK
 
 
 @njit(cache=True, error_model="numpy")
@@ -249,7 +247,7 @@ def land_compiled(
     ring[0, :] = start
     count, k, ran = 1, 0, -1 if settle else transient
     tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, math.inf if settle else t0 + period * transient
-    checkpoint, chunk = min(_CHUNK, transient), _CHUNK
+    checkpoint, chunk = min(SETTLE_CHUNK, transient), SETTLE_CHUNK
     while True:
         kind, fired = advance(w, modes, c, t0 + period * (k + 1), t0 + period * (transient + record), False)
         if kind < 0:
@@ -270,7 +268,7 @@ def land_compiled(
                 if k >= transient or settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period):
                     ran, tally[_WINDOW_FROM] = k, t0 + period * k
                 else:
-                    chunk = chunk if k < 2 * _CHUNK else 2 * chunk
+                    chunk = chunk if k < 2 * SETTLE_CHUNK else 2 * chunk
                     checkpoint = min(k + chunk, transient)
         if ran >= 0 and k >= ran:
             points[k - ran, :4] = y[:4]
