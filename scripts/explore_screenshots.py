@@ -43,7 +43,8 @@ DUFFING = {"m1": 1.0, "K1": 1.0, "K2": 0.05, "C1": 0.05, "C2": 0.0, "K3": 0.0, "
 
 
 def frc() -> None:
-    command = ["frc", "instance-1", *(f"--set={name}={value}" for name, value in DUFFING.items())]
+    given = {name: value for name, value in DUFFING.items() if name != "Omega"}  # Omega is the --param
+    command = ["frc", "instance-1", *(f"--set={name}={value}" for name, value in given.items())]
     command += [
         "--param",
         "Omega",

@@ -71,8 +71,16 @@ def test_every_parameter_and_start_value_has_a_physical_control():
         assert control.start <= control.value <= control.end and control.step > 0, control
         if control.name in ("m1", "m2", "Omega", "g"):
             assert control.start > 0
-        elif control.group == "parameters" and control.name not in ("phi1", "phi2", "d", "d1"):
+        elif control.name not in (*START, "phi1", "phi2", "d", "d1"):
             assert control.start >= 0
+        # the steps count from the case's value: the arrow keys reach it again (they counted from
+        # the lower end: g went 9.8 -> 9.88 -> 9.78)
+        for end in (control.start, control.end):
+            steps = (control.value - end) / control.step
+            assert abs(steps - round(steps)) < 1e-6, (control, steps)
+        assert control.title == (f"{control.name} ({control.unit})" if control.unit else control.name)
+    assert {c.group for c in controls} == {"Forcing", "Mass m1", "Mass m2", "Stops", "Friction", "Start"}
+    assert next(c for c in controls if c.name == "K1").title == "K1 (N/m)"
 
 
 def test_bad_input_is_refused_naming_the_field():
@@ -220,7 +228,14 @@ def test_the_case_file_saved_is_the_case_on_screen():
         assert load_case(path).parameters == resolve_case("instance-3", K3=1.75).parameters
     finally:
         path.unlink(missing_ok=True)
-    assert explorer.download.filename == "instance-3-explored.toml"
+    names = [download.filename for download in explorer.downloads]
+    assert names == ["instance-3-explored.toml", "instance-3-events.csv", "instance-3-trajectory.csv"]
+    import pandas as pd
+
+    events = pd.read_csv(explorer._events_file())
+    assert len(events) == len(explorer.scene.events) and np.allclose(events.t, explorer.scene.events.t)
+    trajectory = pd.read_csv(explorer._trajectory_file())
+    assert np.allclose(trajectory[["t", "x1", "v2"]], explorer.scene.trajectory[["t", "x1", "v2"]])
 
 
 def _command(*args: str, **options) -> subprocess.CompletedProcess:
@@ -354,3 +369,21 @@ def test_the_hosts_a_browser_may_name():
     everywhere = hosts_of("0.0.0.0", 80)
     assert {"0.0.0.0:80", "127.0.0.1:80", "localhost:80", "[::1]:80"} <= set(everywhere)
     assert "evil.example:80" not in everywhere
+
+
+def test_the_page_says_what_changed_keeps_it_in_its_address_and_resets():
+    """The title stays the case's, a line below it says what the page changed; the address holds
+    the changed values only (numbers), the reset gives the case's values back; a case changed by
+    overrides does not show the description of the one it came from."""
+    explorer = osc.explore("instance-1", periods=5)
+    assert "changed here" not in explorer.heading.object and explorer._address() == ""
+    explorer._put({"Omega": 1.54, "x1": 2.5})
+    explorer.periods_box.value = 6
+    assert explorer._address() == "?Omega=1.54&x1=2.5&periods=6"
+    explorer.update()
+    assert "changed here: Omega 1.6 → 1.54, x1 3 → 2.5" in explorer.heading.object
+    assert explorer.url.data["query"] == ["?Omega=1.54&x1=2.5&periods=6"] and explorer.scene.periods == 6
+    explorer._reset()
+    assert explorer.values()["Omega"] == 1.6 and explorer._address() == "" and explorer.scene.periods == 5
+    assert "Both masses start at rest" in explorer.description.text  # the case's own description
+    assert osc.explore(resolve_case("instance-1", K3=2.5), periods=2).description.text == ""

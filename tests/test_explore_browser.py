@@ -191,6 +191,7 @@ def elsewhere_page(tmp_path):
 
     yield page
     server.shutdown()
+    server.server_close()
 
 
 def test_a_page_of_another_site_can_make_the_explorer_import_write_or_stop_nothing(tmp_path, elsewhere_page):
@@ -247,3 +248,93 @@ def test_many_requests_at_once_leave_the_explorer_answering(tmp_path):
         while status(served.url) != 200:
             assert time.monotonic() < deadline, "the explorer never served a page again"
             time.sleep(0.5)
+
+
+def status(page) -> str:
+    return page.locator("span[data-revision]").inner_text()
+
+
+def test_stepping_by_the_keys_shows_each_runs_events_and_returns_to_the_case(tmp_path):
+    """Omega 1.60 -> 1.58 -> 1.56 -> 1.54 by the arrow keys: the event table shows 1.54's rows (it
+    kept 1.58's, the runs having as many events); the page's address says Omega = 1.54, and a reload
+    shows that view; three keys back reach the case's value exactly, and the address is plain again."""
+    with Served("instance-1", cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        page.locator(".control-Omega .noUi-handle").focus()
+        for _ in range(3):
+            page.keyboard.press("ArrowLeft")
+        wait_revision(page, 4)
+        value = model_value(page, "Omega")
+        assert value == pytest.approx(1.54, abs=1e-12)
+        case = resolve_case("instance-1", Omega=value)
+        direct = osc.simulate(resolve_case(case, t_end=case.initial.t0 + 50 * case.parameters.period))
+        shown = [float(cells[0]) for cells in rows(page)]
+        assert shown == pytest.approx(direct.events.t.iloc[: len(shown)].to_list(), abs=1e-6)
+        assert page.url.endswith("/?Omega=1.54")
+        page.reload()
+        wait_revision(page, 1)
+        assert model_value(page, "Omega") == 1.54 and f"{len(direct.events)} events" in status(page)
+        page.locator(".control-Omega .noUi-handle").focus()
+        for _ in range(3):
+            page.keyboard.press("ArrowRight")
+        wait_revision(page, 4)
+        assert model_value(page, "Omega") == pytest.approx(1.6, abs=1e-12) and page.url == served.url
+        assert not elsewhere, elsewhere
+
+
+def test_a_burst_of_key_presses_runs_its_first_and_its_last(tmp_path):
+    """30 key presses 30 ms apart ran 30 simulations (the last drawn 7.6 s later): now a burst of
+    changes runs its first at once and its last once the keys rest, and the page ends on the last
+    value.  The server counts the bursts as it saw them (a press that reached it after the others
+    had rested QUIET s begins one: a loaded machine may deliver a burst in parts), so the verdict
+    does not depend on the machine's speed: at most two runs a burst, and on a quiet machine one
+    burst."""
+    with Served("instance-1", cwd=tmp_path) as served, browser_page() as (page, _):
+        page.goto(served.url)
+        wait_revision(page, 1, checked=True)
+        span = page.locator("span[data-revision]")
+        runs, bursts = int(span.get_attribute("data-runs")), int(span.get_attribute("data-bursts"))
+        handle = page.locator(".control-Omega .noUi-handle").element_handle()
+        page.evaluate(
+            """async (h) => { for (let k = 0; k < 30; k++) {
+                 h.dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowLeft', bubbles: true}));
+                 await new Promise(r => setTimeout(r, 30)); } }""",
+            handle,
+        )
+        wait_revision(page, 31)
+        span = page.locator("span[data-revision]")
+        runs, bursts = int(span.get_attribute("data-runs")) - runs, int(span.get_attribute("data-bursts")) - bursts
+        assert model_value(page, "Omega") == pytest.approx(1.6 - 30 * 0.02, abs=1e-12)
+        assert 1 <= bursts < 30 and runs <= 2 * bursts, (runs, bursts)
+        assert "#31:" in status(page)
+
+
+def test_a_value_that_costs_too_much_is_bounded_said_and_leaves_the_server_answering(tmp_path):
+    """C1 = 1e6 typed: 108,304 grazings in 50 periods, a 5.9 GB message, the server deaf for 20
+    minutes.  Now the run stops at the explorer's bound and says so, while another tab's request
+    is answered; a refused value (K3 = 1e199) is said and never left on its slider."""
+    import urllib.request
+
+    with Served("instance-1", cwd=tmp_path) as served, browser_page() as (page, _):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        box = page.get_by_placeholder("e.g. K3=2.5")
+        box.fill("C1=1e6")
+        box.press("Enter")
+        with urllib.request.urlopen(served.url, timeout=60) as answer:  # another tab, meanwhile
+            assert answer.status == 200 and b"Bokeh" in answer.read()
+        wait_revision(page, 2)
+        assert page.locator(".oscillator-bounded").count() == 1
+        assert "stopped after 10000 events" in status(page) and "the explorer's bound" in status(page)
+        box.fill("K3=1e199")
+        box.press("Enter")
+        wait_revision(page, 3)
+        assert "K3 = 1e+199 is beyond any physical scale" in status(page) and model_value(page, "K3") == 2.0
+        page.locator(".control-K1 .noUi-handle").focus()
+        page.keyboard.press("ArrowRight")
+        wait_revision(page, 4)
+        assert "events" in status(page) and "K3" not in status(page)  # the refused value is not in the way
+        page.get_by_role("button", name="Reset to the case's values").click()
+        wait_revision(page, 5)
+        assert model_value(page, "C1") == 0.05 and page.url == served.url

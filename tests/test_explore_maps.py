@@ -174,3 +174,24 @@ def test_points_that_are_not_numbers_are_not_picked_and_a_folder_without_any_is_
     poincare.iloc[:0].to_parquet(sweep / "poincare.parquet", index=False)  # every value failed: no point
     with pytest.raises(InputError, match=r"holds no point to show \(its sweep has no finite value\)"):
         picture_of(sweep)
+
+
+def test_a_click_on_a_map_of_cells_is_outlined_and_one_outside_them_picks_nothing(tmp_path):
+    """Basins of a 3 x 3 slice: a click on a cell outlines that cell (the picture's picked source)
+    and says the attractors there; a click outside the cells (it picked the nearest cell, which
+    the map did not show) is said and picks nothing."""
+    from oscillator.cli.app import main
+
+    folder = tmp_path / "basins"
+    command = ["basins", "instance-1", "--x", "x1", "2", "4", "3", "--y", "v1", "-1", "1", "3", "--transient", "20"]
+    with pytest.raises(SystemExit) as done:
+        main([*command, "--record", "4", "--workers", "1", "--no-plots", "-q", "--out", str(folder)])
+    assert done.value.code == 0
+    picture = picture_of(folder)
+    assert picture.cells and picture.frame == pytest.approx((1.5, 4.5, -1.5, 1.5))
+    explorer = _click(picture, 3.1, 0.2)
+    assert explorer._picked_source.data == {"x": [3.0], "y": [0.0]}
+    assert explorer.clicks == 1 and "x1 = 3, v1 = 0" in explorer.picked.object
+    explorer._tap(SimpleNamespace(x=5.0, y=0.0))
+    assert "click inside the map" in explorer.picked.object and explorer.clicks == 1
+    assert explorer._picked_source.data == {"x": [3.0], "y": [0.0]}

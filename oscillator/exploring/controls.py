@@ -1,9 +1,13 @@
-"""The explorer's controls: one slider with a box for every parameter and every start value.
+"""The explorer's controls: one slider for every parameter and every start value, in groups.
 
 Each slider spans a range around the case's value that keeps the parameter physical (masses,
 ``Omega`` and ``g`` above zero; springs, dampers and friction not negative; a phase over one
-turn); its box takes any value, beyond the slider's ends too.  A value the model refuses
-(``mu_s < mu_k``, a negative stiffness typed in the box) is reported by the page and not run.
+turn), in steps counted from the case's value: the arrow keys take a slider away from it and back
+to it exactly (steps counted from the range's lower end could not reach it again: ``g`` went 9.8,
+9.88, 9.78).  Any value, beyond a slider's ends too, goes in the page's box.  A value the model
+refuses (``mu_s < mu_k``, a negative stiffness typed in the box) is reported by the page and not
+run.  Each control is titled with its unit and belongs to a group (the forcing, each mass's
+springs, dampers and feedback, the stops, friction, the start).
 """
 
 from __future__ import annotations
@@ -13,21 +17,32 @@ from dataclasses import dataclass
 
 from oscillator.analysis.axes import STATE
 from oscillator.io.cases import Case
-from oscillator.model.parameters import Parameters
+from oscillator.model.parameters import UNITS, Parameters
 
-__all__ = ["START", "Control", "controls_of"]
+__all__ = ["GROUPS", "START", "Control", "controls_of"]
 
 #: The start values the page has a control for.
 START = STATE
 _POSITIVE = ("m1", "m2", "Omega", "g")
 _SIGNED = ("phi1", "phi2", "d", "d1")
-#: Steps per slider.
+#: Steps per slider (about: the step is rounded to one significant figure).
 _STEPS = 200
+#: The groups of controls, in the page's order, each with its members in order.
+GROUPS = {
+    "Forcing": ("Omega", "Q1", "Q2", "phi1", "phi2"),
+    "Mass m1": ("m1", "K1", "K2", "C1", "C2", "P1"),
+    "Mass m2": ("m2", "K4", "K5", "C4", "C5", "P2"),
+    "Stops": ("d", "K3", "C3", "d1", "K6"),
+    "Friction": ("mu_k", "mu_s", "g"),
+    "Start": START,
+}
+_STATE_UNITS = {"x1": "m", "v1": "m/s", "x2": "m", "v2": "m/s"}
 
 
 @dataclass(frozen=True)
 class Control:
-    """One slider: the name (a parameter or a start value), its group, value, ends and step."""
+    """One slider: the name (a parameter or a start value), its group, value, ends and step; the
+    ends lie a whole number of steps from the value."""
 
     name: str
     group: str
@@ -35,6 +50,15 @@ class Control:
     start: float
     end: float
     step: float
+
+    @property
+    def unit(self) -> str:
+        return UNITS.get(self.name, _STATE_UNITS.get(self.name, ""))
+
+    @property
+    def title(self) -> str:
+        """The name with its unit: ``K1 (N/m)``; ``mu_k`` alone (dimensionless)."""
+        return f"{self.name} ({self.unit})" if self.unit else self.name
 
 
 def _range(name: str, value: float) -> tuple[float, float]:
@@ -48,13 +72,22 @@ def _range(name: str, value: float) -> tuple[float, float]:
     return 0.0, 2 * scale if value != 0 else 1.0
 
 
+def _anchored(value: float, low: float, high: float) -> tuple[float, float, float]:
+    """The step (one significant figure of the range's 200th) and the ends, a whole number of
+    steps from ``value`` inside ``[low, high]``: ``(start, end, step)``."""
+    step = float(f"{(high - low) / _STEPS:.1g}")
+    below, above = math.floor((value - low) / step + 1e-9), math.floor((high - value) / step + 1e-9)
+    return value - below * step, value + above * step, step
+
+
 def controls_of(case: Case) -> list[Control]:
-    """The controls of ``case``: its 25 parameters, then its start ``(x1, v1, x2, v2)``."""
+    """The controls of ``case``: its parameters, then its start ``(x1, v1, x2, v2)``, each with
+    its group (:data:`GROUPS`)."""
+    group_of = {name: group for group, names in GROUPS.items() for name in names}
     found = []
-    for group, names, holder in (("parameters", Parameters.names(), case.parameters), ("start", START, case.initial)):
+    for names, holder in ((Parameters.names(), case.parameters), (START, case.initial)):
         for name in names:
             value = float(getattr(holder, name))
-            start, end = _range(name, value)
-            step = float(f"{(end - start) / _STEPS:.1g}")
-            found.append(Control(name, group, value, start, end, step))
+            start, end, step = _anchored(value, *_range(name, value))
+            found.append(Control(name, group_of[name], value, start, end, step))
     return found

@@ -171,7 +171,9 @@ def wait_revision(page: Any, revision: int, timeout: float = 60.0, *, checked: b
     CVODE's verdict on it - and the browser has painted it; the milliseconds since the last key
     press or click, measured in the page."""
     page.set_default_timeout(timeout * 1e3)
-    return float(page.evaluate("([n, checked]) => window.__revision(n, checked)", [revision, checked]))
+    waited = """([n, checked, ms]) => Promise.race([window.__revision(n, checked), new Promise((_, fail) =>
+        setTimeout(() => fail(new Error(`revision ${n} not shown within ${ms} ms`)), ms))])"""
+    return float(page.evaluate(waited, [revision, checked, timeout * 1e3]))
 
 
 def click_map(page: Any, x: float, y: float, click: int = 1, timeout: float = 60.0) -> Any:

@@ -19,7 +19,7 @@ else is read.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -92,6 +92,8 @@ class Picture:
         sweep's summary or a frequency response's branch points (one row per site).
     site_of : callable
         ``site_of(picture, at)``: the :class:`Site` of a row of ``source``.
+    marks : DataFrame
+        ``x, y, label``: points marked on the picture (a frequency response's bifurcations).
     """
 
     kind: str
@@ -103,11 +105,32 @@ class Picture:
     height: float
     source: Any
     site_of: Callable[[Picture, int], Site]
+    marks: pd.DataFrame = field(default_factory=lambda: pd.DataFrame({"x": [], "y": [], "label": []}))
 
     @property
     def cells(self) -> bool:
         """Whether the picture is of cells (an atlas, basins), not of points."""
         return self.width > 0
+
+    @property
+    def frame(self) -> tuple[float, float, float, float]:
+        """The cells' extent, ``(left, right, bottom, top)`` (the points' for a picture of points)."""
+        xs, ys = self.points.x.to_numpy(float), self.points.y.to_numpy(float)
+        drawn = np.isfinite(xs) & np.isfinite(ys)
+        half_x, half_y = self.width / 2, self.height / 2
+        return (
+            float(xs[drawn].min()) - half_x,
+            float(xs[drawn].max()) + half_x,
+            float(ys[drawn].min()) - half_y,
+            float(ys[drawn].max()) + half_y,
+        )
+
+    def inside(self, x: float, y: float) -> bool:
+        """Whether ``(x, y)`` is on the picture's cells (any point, for a picture of points)."""
+        if not self.cells:
+            return True
+        left, right, bottom, top = self.frame
+        return left <= x <= right and bottom <= y <= top
 
     def nearest(self, x: float, y: float) -> int:
         """The cell or point nearest ``(x, y)``, measured in cells (in the axes' spans for points);
@@ -277,7 +300,33 @@ def _frc(folder: Path) -> Picture:
         ],
         ignore_index=True,
     )
-    return Picture("frc", case, param, "x_pp", points, 0.0, 0.0, branch, _frc_site)
+    return Picture("frc", case, param, "x_pp", points, 0.0, 0.0, branch, _frc_site, _frc_marks(folder, param, branch))
+
+
+def _frc_marks(folder: Path, param: str, branch: pd.DataFrame) -> pd.DataFrame:
+    """The frequency response's bifurcations, each at the ``x_pp`` of both masses of its branch's
+    point nearest it (none where the folder keeps no bifurcation table)."""
+    from oscillator.orbits.branch import BIFURCATION_KINDS
+    from oscillator.report.orbit_folders import checked_table
+
+    path = folder / "bifurcations.parquet"
+    if not path.is_file():
+        return pd.DataFrame({"x": [], "y": [], "label": []})
+    rows = checked_table(
+        path,
+        {"branch": "number", param: "number", "kind": "text"},
+        folder="frequency-response folder",
+        remake="run oscillator frc again",
+    )
+    marks = []
+    for row in rows.itertuples(index=False):
+        mine = branch[branch.branch == row.branch]
+        if row.kind not in BIFURCATION_KINDS or mine.empty:
+            continue
+        value = float(getattr(row, param))
+        nearest = mine.iloc[int(np.argmin(np.abs(mine[param].to_numpy(float) - value)))]
+        marks += [(value, float(nearest[f"x_pp_m{mass}"]), str(row.kind).replace("_", " ")) for mass in (1, 2)]
+    return pd.DataFrame(marks, columns=["x", "y", "label"])
 
 
 def _frc_site(picture: Picture, at: int) -> Site:

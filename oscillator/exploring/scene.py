@@ -11,24 +11,41 @@ compare them with :func:`~oscillator.simulate` directly.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from oscillator.analysis.intervals import spans
-from oscillator.errors import InputError
+from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.parameters import Parameters
 
-__all__ = ["EVENT_COLUMNS", "GRID", "PERIODS", "TIME_AGREEMENT", "Scene", "differences", "scene_of"]
+__all__ = [
+    "EVENT_COLUMNS",
+    "GRID",
+    "MAX_EVENTS",
+    "MAX_POINTS",
+    "PERIODS",
+    "TIME_AGREEMENT",
+    "Scene",
+    "Superseded",
+    "differences",
+    "scene_of",
+]
 
 #: The forcing periods a scene spans unless asked otherwise.
 PERIODS = 50
-#: Trajectory points per forcing period (the events are exact whatever the grid).
+#: Trajectory points per forcing period (the events are exact whatever the grid), fewer where the
+#: periods asked would make more than :data:`MAX_POINTS` (at least 4).
 GRID = 64
+#: What one change may cost: at most this many events (the run stops there, and the page says so:
+#: ``C1 = 1e6`` made 108,304 grazings in 50 periods, a 5.9 GB message) and trajectory points.
+MAX_EVENTS = 10_000
+MAX_POINTS = 50_000
 #: How far two engines' event times may lie apart and still show the same table (s): its precision.
 TIME_AGREEMENT = 1e-6
 #: Event rows a forcing period the compiled run has room for, beyond which the run goes through
@@ -65,6 +82,9 @@ class Scene:
         How the run ended (``"complete"``; a failure's message otherwise).
     engine : str
         The integrator that ran it (:mod:`oscillator.engines`).
+    bounded : bool
+        Whether the run stopped at :data:`MAX_EVENTS`, the explorer's bound (``status`` says so);
+        a run another guard or the solver stopped shows its motion up to there too.
     """
 
     case: Case
@@ -77,6 +97,7 @@ class Scene:
     seconds: float
     status: str
     engine: str
+    bounded: bool = False
 
     @property
     def t0(self) -> float:
@@ -94,12 +115,31 @@ def check_periods(periods: object) -> int:
     return int(periods)
 
 
-def scene_of(case: Case | str, periods: int = PERIODS, *, engine: str = "cvode", **overrides: float) -> Scene:
+class Superseded(Exception):
+    """A run stopped because another change came (``scene_of``'s ``stop`` said so)."""
+
+
+def grid_of(periods: int) -> int:
+    """Trajectory points per period for ``periods`` periods (:data:`GRID`, :data:`MAX_POINTS`)."""
+    return max(4, min(GRID, MAX_POINTS // periods))
+
+
+def scene_of(
+    case: Case | str,
+    periods: int = PERIODS,
+    *,
+    engine: str = "cvode",
+    stop: Callable[[], bool] | None = None,
+    **overrides: float,
+) -> Scene:
     """The motion of ``case`` (with ``overrides`` of its parameters and start) over ``periods``
     forcing periods from its start: one run with ``engine`` (CVODE, the reference, unless another
     is named), through :func:`~oscillator.simulate`; with ``"dop853"``, the same run with the
     supervisor compiled (:func:`~oscillator.hybrid.batch.run_compiled`), and through ``simulate``
-    where that one cannot finish.
+    where that one cannot finish.  At most :data:`MAX_EVENTS` events (the run stops there, and the
+    scene says so) and :data:`MAX_POINTS` trajectory points; a run a guard or the solver stops is
+    shown up to there, its ``status`` the reason.  ``stop()``, asked as a run through ``simulate``
+    goes, ends it with :class:`Superseded` where it says so.
 
     Raises
     ------
@@ -109,42 +149,61 @@ def scene_of(case: Case | str, periods: int = PERIODS, *, engine: str = "cvode",
     periods = check_periods(periods)
     base = resolve_case(case, **overrides)
     marks = section_times(base, 0, periods)
-    run_case = resolve_case(base, t_end=float(marks[-1]))
-    grid = np.linspace(marks[0], marks[-1], periods * GRID + 1)
+    bound = min(base.options.max_events, MAX_EVENTS)
+    run_case = resolve_case(base, t_end=float(marks[-1]), max_events=bound)
+    grid = np.linspace(marks[0], marks[-1], periods * grid_of(periods) + 1)
     started = time.perf_counter()
     run = _compiled_run(run_case, grid) if engine == "dop853" else None
     if run is None:  # another engine, or a run the compiled supervisor could not finish: in words
-        run = _simulated_run(run_case, grid, engine)
+        run = _simulated_run(run_case, grid, engine, stop)
     seconds = time.perf_counter() - started
-    trajectory, events, modes, status = run
+    trajectory, events, modes, status, bounded = run
     times, end = modes[:, 0], float(run_case.t_end)
     return Scene(
         case=run_case,
         periods=periods,
         trajectory=_with_switches(trajectory, events),
         events=events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
-        strobe=_strobe(trajectory, marks),
+        strobe=_strobe(trajectory, marks[marks <= float(trajectory.t.iloc[-1]) + 1e-9]),
         rests={mass: _intervals(times, modes[:, mass] == 0, end) for mass in (1, 2)},
         contacts={side: _intervals(times, modes[:, k] != 0, end) for k, side in ((3, "left"), (4, "right"))},
         seconds=seconds,
         status=status,
         engine=engine,
+        bounded=bounded,
     )
 
 
 #: A run as a scene needs it: the trajectory on the grid, the events, each mode from the time it
-#: holds (rows ``t, s1, s2, left, right``), and how the run ended.
-_Run = tuple[pd.DataFrame, pd.DataFrame, np.ndarray, str]
+#: holds (rows ``t, s1, s2, left, right``), how the run ended, and whether the event bound did.
+_Run = tuple[pd.DataFrame, pd.DataFrame, np.ndarray, str, bool]
 
 
-def _simulated_run(case: Case, grid: np.ndarray, engine: str) -> _Run:
-    """The run through :func:`~oscillator.simulate` (its supervisor in Python, any engine)."""
-    result = simulate(case, engine=engine, save=SaveAt(ts=grid, segments=True))
+def _simulated_run(case: Case, grid: np.ndarray, engine: str, stop: Callable[[], bool] | None = None) -> _Run:
+    """The run through :func:`~oscillator.simulate` (its supervisor in Python, any engine); a run
+    the solver or a guard stops, up to there (the bound of :data:`MAX_EVENTS` said as such)."""
+
+    def asked(t: float) -> None:
+        if stop is not None and stop():
+            raise Superseded
+
+    try:
+        result = simulate(case, engine=engine, save=SaveAt(ts=grid, segments=True), progress=asked)
+    except SimulationFailed as failed:
+        if failed.result is None:
+            raise
+        result = failed.result
     modes = np.array(
         [(s.t0, s.mode.sign(1), s.mode.sign(2), s.mode.left, s.mode.right) for s in result.segments], dtype=float
     ).reshape(-1, 5)
+    bounded = result.reason == Reason.MAX_EVENTS and case.options.max_events == MAX_EVENTS
     status = result.status.value if not result.message else result.message
-    return result.trajectory[["t", "x1", "v1", "x2", "v2"]], result.events, modes, status
+    if bounded:
+        status = (
+            f"stopped after {MAX_EVENTS} events at t = {float(result.trajectory.t.iloc[-1]):.6g} s, the explorer's "
+            "bound for one change: fewer periods, or `oscillator run` for the whole motion"
+        )
+    return result.trajectory[["t", "x1", "v1", "x2", "v2"]], result.events, modes, status, bounded
 
 
 def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
@@ -160,7 +219,8 @@ def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
     from oscillator.model.fields import coefficients
 
     p, o = case.parameters, case.options
-    rows = EVENT_ROWS * len(grid) // GRID + 2 * EVENT_ROWS
+    periods = round((grid[-1] - grid[0]) / p.period)
+    rows = min(EVENT_ROWS * periods, MAX_EVENTS) + 2 * EVENT_ROWS
     buffers = (np.empty((len(grid), 5)), np.empty((rows, WIDTH)), np.empty((rows + 1, 5)))
     start = np.array(case.initial.y, dtype=float)
     try:
@@ -172,7 +232,7 @@ def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
     if status != OK or done != len(grid):
         return None
     trajectory = pd.DataFrame(buffers[0], columns=["t", "x1", "v1", "x2", "v2"])
-    return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], Status.COMPLETE.value
+    return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], Status.COMPLETE.value, False
 
 
 def differences(scene: Scene, reference: Scene) -> tuple[str | None, float]:

@@ -185,7 +185,7 @@ def serve(
     server: Any = None
     # Bokeh's own websocket check cannot read an IPv6 address (and warns of the "*" it is given
     # instead): the guard checks every Origin
-    origins = ["*"] if ":" in address else list(hosts)
+    origins = ["*"] if any(host.startswith("[") for host in hosts) else list(hosts)
     quiet = logging.getLogger("bokeh.server.util")
     level = quiet.level
     quiet.setLevel(logging.ERROR)
