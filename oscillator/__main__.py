@@ -13,6 +13,9 @@ from oscillator.process import interrupted_exit
 
 def main() -> None:
     """Run the ``oscillator`` command (see :mod:`oscillator.cli.app`)."""
+    import os
+
+    os.environ.setdefault("OSCILLATOR_COMPILE_NOTICE", "0")  # the command says it its own way
     try:
         from oscillator.cli.app import main as command
 

@@ -27,7 +27,7 @@ from numba.core import caching
 
 from oscillator.folders import private_scratch, writable
 
-__all__ = ["CACHE", "cfunc", "hot", "kernels_cached", "njit"]
+__all__ = ["CACHE", "COMPILING", "cfunc", "hot", "kernels_cached", "njit"]
 
 
 def _cache_location() -> str | None:
@@ -106,6 +106,28 @@ _read_damaged_as_missing()
 
 #: Whether compiled kernels are cached on disk.
 CACHE = _location is not None
+
+#: What a program's first use says while the kernels compile (the command line says it its own way).
+COMPILING = "oscillator: compiling the numerical kernels once (10 to 20 s); later runs load them in about a second"
+#: Set to ``0`` (the command line does) to say nothing here.
+NOTICE_VARIABLE = "OSCILLATOR_COMPILE_NOTICE"
+
+
+def _say_compiling() -> None:
+    """A program's first simulation compiles the kernels (10 to 20 s; it waited in silence): said
+    once on stderr when numba's cache does not hold them, in the main process only (workers load
+    what it compiled)."""
+    import multiprocessing
+    import os
+    import sys
+
+    if os.environ.get(NOTICE_VARIABLE) == "0" or multiprocessing.parent_process() is not None:
+        return
+    if not kernels_cached():
+        print(COMPILING, file=sys.stderr, flush=True)
+
+
+_say_compiling()
 
 
 def _cached(decorator: Callable[..., Any]) -> Callable[..., Any]:

@@ -157,3 +157,18 @@ def test_the_first_run_after_an_install_compiles_says_so_and_the_next_does_not(t
     assert second.returncode == 0 and console.COMPILING not in second.stderr
     a, b = (Path(tmp_path / x / "events.csv").read_text() for x in "ab")
     assert a == b
+
+
+@pytest.mark.slow
+def test_a_python_programs_first_simulation_says_that_it_compiles(tmp_path):
+    """The first simulate of a program on a fresh install compiled for 17 s in silence: it says so
+    once on stderr (not the command, which says it its own way), and the next program says nothing."""
+    from oscillator.compiled import COMPILING
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    env.pop("OSCILLATOR_COMPILE_NOTICE", None)
+    code = "import oscillator; print(len(oscillator.simulate('instance-3').events))"
+    first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert first.returncode == 0 and first.stderr.count(COMPILING) == 1, first.stderr
+    second = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert second.returncode == 0 and second.stderr == "" and second.stdout == first.stdout

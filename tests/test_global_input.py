@@ -75,7 +75,7 @@ def test_a_script_without_a_main_guard_gets_one_error_naming_the_guard(tmp_path)
         ),
         encoding="utf-8",
     )
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr
     assert "REFUSED workers" in done.stdout
     assert 'if __name__ == "__main__":' in done.stdout
@@ -96,7 +96,7 @@ def test_the_same_script_with_the_guard_runs_on_two_workers(tmp_path):
         ),
         encoding="utf-8",
     )
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr
     assert "STARTS 2" in done.stdout
 

@@ -22,6 +22,7 @@ from typing import Literal
 import numpy as np
 
 from oscillator.analysis.axes import STATE
+from oscillator.analysis.execution import before_workers
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.analysis.periods import detect_period
 from oscillator.engines import check_engine
@@ -306,6 +307,18 @@ def _read(
         rest_time=(float(rest_time[0]), float(rest_time[1])),
         transient=window.ran,
     )
+
+
+@before_workers
+def _compile_landing() -> None:
+    """The compiled landing's kernels (:mod:`oscillator.hybrid.batch`, the DOP853 engine) compiled
+    into numba's cache in this process, or loaded from it: one start of Instance 1 landed over a
+    few periods.  Where there is no cache, each worker compiles them anyway: nothing to do."""
+    from oscillator.compiled import CACHE
+
+    if CACHE:
+        case = resolve_case("instance-1")
+        land(case, AttractorSettings(transient=1, record=2, settle=False), 0, tuple(case.initial.y))
 
 
 def check_settings(settings: object) -> AttractorSettings:
