@@ -2,6 +2,8 @@
 [1.3, 1.85] in one chain through the points where the corrector fails, the coexistence window at
 Omega = 1.6 (Q2 = 71.165) with the sweeps' hysteresis, resume, and bad input."""
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -288,10 +290,18 @@ ARGS = FRC_WINDOW
 def test_the_command_writes_its_tables_and_resumes(tmp_path, window):
     """The command writes the tables the library computes; run again, it reads every part back;
     with a part deleted, it computes that part again, to the same tables."""
+    import oscillator.cli.resumable as resumable
+
     runner = CliRunner()
     folder = tmp_path / "frc"
-    done = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
+    every, resumable.PROGRESS_EVERY = resumable.PROGRESS_EVERY, 0.0  # a line at each task (not a terminal)
+    try:
+        done = runner.invoke(app, [*ARGS, "--workers", "1", "--out", str(folder), "--no-plots"])
+    finally:
+        resumable.PROGRESS_EVERY = every
     assert done.exit_code == 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if ": frequency response over Omega:" in line]
+    assert len(lines) > 5 and re.search(r": \d+ of \d+ tasks, \d+ s(, about \d+ s left)?$", lines[-1]), lines[-3:]
     assert "sweep up: jumps at 1.60003" in done.stdout
     points = pd.read_parquet(folder / "points.parquet")
     assert len(points) == len(window.points)

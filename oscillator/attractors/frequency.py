@@ -177,6 +177,7 @@ def frequency_response(
     settings = check_settings(settings)
     starts = None if states is None else check_states(states)
     tally = _Tally(progress, seeds + 2 * sweep)
+    tally.add()  # the total at once: seeds and sweep values (the branch points are added as found)
     with Executor(workers, client, progress) as executor:
         job = _Job(base, param, (low, high), period, settings, max_points, store, tally, executor)
         branches = job.branches(np.linspace(low, high, seeds), starts)

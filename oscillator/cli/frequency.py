@@ -105,7 +105,7 @@ def frc(
             store=store,
             **options,
         )
-        found = with_progress(run, f"{resolved.name}: frequency response over {name}", "steps", quiet)
+        found = with_progress(run, f"{resolved.name}: frequency response over {name}", "tasks", quiet)
         store.write_status("computed", branches=len(found.branches))
     _finish(found, store, measure, no_plots, quiet)
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import typer
+from rich.text import Text
 
 from oscillator.cli.console import err, fail, message, progress_bar, say
 from oscillator.errors import InputError, OscillatorError
@@ -25,6 +26,7 @@ __all__ = [
     "locked",
     "new_folder",
     "outputs",
+    "progress_lines",
     "refusing",
     "say_reused",
     "unwritable",
@@ -47,14 +49,44 @@ def refusing() -> Iterator[None]:
         raise fail("interrupted; nothing was written", 130) from None
 
 
+#: Seconds between the lines that say the progress where stderr is not a terminal (a log, a job).
+PROGRESS_EVERY = 10.0
+
+
 def with_progress(run: Callable[..., T], label: str, unit: str, quiet: bool) -> T:
-    """``run(progress=...)`` with a progress bar on a terminal (``unit`` per second), else
-    ``run()``."""
-    if quiet or not err.is_terminal:
+    """``run(progress=...)`` with a progress bar on a terminal (done of total, ``unit`` per second,
+    time left), a line every :data:`PROGRESS_EVERY` s on stderr elsewhere (a log said nothing for
+    minutes), nothing with ``quiet``."""
+    if quiet:
         return run()
+    if not err.is_terminal:
+        return run(progress=progress_lines(label, unit))
     bar, report = progress_bar(label, unit)
     with bar:
         return run(progress=report)
+
+
+def progress_lines(label: str, unit: str, every: float | None = None) -> Callable[[int, int], None]:
+    """A ``progress(done, total)`` that prints ``label: done of total unit, elapsed, about N s left``
+    on stderr at most every ``every`` s (:data:`PROGRESS_EVERY`; the time left from the rate since
+    the first report)."""
+    every = PROGRESS_EVERY if every is None else every
+    began = time.monotonic()
+    said = [began]
+    first: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        now = time.monotonic()
+        if not first:
+            first.append(done)
+        if now - said[0] < every:
+            return
+        said[0] = now
+        rate = (done - first[0]) / (now - began)
+        left = f", about {max(total - done, 0) / rate:.0f} s left" if rate > 0 and total >= done else ""
+        err.print(Text(f"{printable(label)}: {done} of {total} {unit}, {now - began:.0f} s{left}"), highlight=False)
+
+    return report
 
 
 @contextlib.contextmanager
