@@ -62,12 +62,19 @@ def test_the_figure_draws_the_branch_the_folds_and_the_jumps(duffing):
     panel; an arrow at each sweep's jump; a measure that is not one refused."""
     fig = duffing.plot("x_pp")
     top, bottom = fig.axes
-    styles = {line.get_linestyle() for line in top.lines if line.get_label() in ("stable orbits", "unstable orbits")}
-    assert styles == {"-", "--"}
+    styles = {line.get_linestyle() for line in top.lines if line.get_color() not in ("0.35", "0.55")}
+    assert {"-", "--"} <= styles  # the branch, stable and unstable
+    keys = {
+        text.get_text(): handle
+        for handle, text in zip(fig.legends[0].legend_handles, fig.legends[0].texts, strict=True)
+    }
+    assert keys["stable orbits (each branch its colour)"].get_linestyle() == "-"
+    assert keys["unstable orbits"].get_linestyle() == "--"
+    assert keys["stable orbits (each branch its colour)"].get_color() == "0.2"  # not a branch's own colour
     folds = [line for line in top.lines if line.get_label() == "fold"]
     assert len(folds) == 2 and len([line for line in bottom.lines if line.get_label() == "fold"]) == 2
     assert len(top.texts) == 2  # the jump up and the jump down, as arrows
-    assert top.get_ylabel() == "x_pp of m1 (m)" and bottom.get_xlabel() == "Omega"
+    assert top.get_ylabel() == "x_pp of m1 (m)" and bottom.get_xlabel() == "Omega (rad/s)"
     with pytest.raises(InputError) as caught:
         duffing.plot("x_ppp")
     assert caught.value.field == "measure"
