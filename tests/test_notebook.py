@@ -25,6 +25,7 @@ def _images(notebook) -> list:
     ]
 
 
+@pytest.mark.slow  # end to end: the page run in a Jupyter kernel (20 s)
 def test_the_notebook_runs_and_shows_its_figures_and_tables(tmp_path):
     stored = nbformat.read(NOTEBOOK, as_version=4)
     notebook = nbformat.read(NOTEBOOK, as_version=4)

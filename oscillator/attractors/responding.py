@@ -342,9 +342,11 @@ FOLLOW_DEPTH = 40
 
 def follows(case: Case, param: str, a: tuple[float, np.ndarray], b: tuple[float, np.ndarray], period: int) -> bool:
     """Whether the period-``period`` orbits through ``a`` and ``b`` (each ``(value, state)``) lie on
-    one continuous family (:data:`FOLLOW_TOL`).  A period-``period`` orbit reaches one of a period
-    dividing it (a period doubling crossed continuously): both are fixed points of the ``period``
-    map.  False also where Newton finds no orbit between them (a fold, a gap)."""
+    one continuous family (:data:`FOLLOW_TOL`): the orbit halfway lies near the chord between them
+    (a fine sweep: one Newton), else near the cubic with their slopes, else each half is checked.
+    A period-``period`` orbit reaches one of a period dividing it (a period doubling crossed
+    continuously): both are fixed points of the ``period`` map.  False also where Newton finds no
+    orbit between them (a fold, a gap)."""
     size = 1.0 + max(float(np.max(np.abs(a[1]))), float(np.max(np.abs(b[1]))))
 
     def slope(value: float, state: np.ndarray, side: float, width: float) -> np.ndarray | None:
@@ -352,19 +354,27 @@ def follows(case: Case, param: str, a: tuple[float, np.ndarray], b: tuple[float,
         moved = orbit_state(resolve_case(case, **{param: value + delta}), period, state, (1e-9,))
         return None if moved is None else (moved - state) / delta
 
+    def halfway(value: float, guesses: tuple[np.ndarray, ...]) -> np.ndarray | None:
+        at = resolve_case(case, **{param: value})
+        return next((s for s in (orbit_state(at, period, guess, (1e-9,)) for guess in guesses) if s is not None), None)
+
+    chord = 0.5 * (a[1] + b[1])
+    found = halfway(0.5 * (a[0] + b[0]), (chord, a[1], b[1]))
+    if found is None:
+        return False
+    if float(np.max(np.abs(found - chord))) <= FOLLOW_TOL * size:
+        return True
     interval = abs(b[0] - a[0])
-    first = (a, b, slope(*a, 1.0, interval), slope(*b, -1.0, interval), math.inf, 0, 0)
-    pending = [first]
+    Slope = np.ndarray | None
+    pending: list[tuple[tuple[float, np.ndarray], tuple[float, np.ndarray], Slope, Slope, float, int, int, Slope]]
+    pending = [(a, b, slope(*a, 1.0, interval), slope(*b, -1.0, interval), math.inf, 0, 0, found)]
     while pending:
-        (value_a, state_a), (value_b, state_b), slope_a, slope_b, misfit, slow, depth = pending.pop()
+        (value_a, state_a), (value_b, state_b), slope_a, slope_b, misfit, slow, depth, found = pending.pop()
         if slope_a is None or slope_b is None:
             return False
-        width = value_b - value_a
-        middle = 0.5 * (value_a + value_b)
+        width, middle = value_b - value_a, 0.5 * (value_a + value_b)
         cubic = 0.5 * (state_a + state_b) + width / 8.0 * (slope_a - slope_b)
-        at = resolve_case(case, **{param: middle})
-        tries = (orbit_state(at, period, guess, (1e-9,)) for guess in (cubic, state_a, state_b))
-        found = next((state for state in tries if state is not None), None)
+        found = found if found is not None else halfway(middle, (cubic, state_a, state_b))
         if found is None:
             return False
         now = float(np.max(np.abs(found - cubic)))
@@ -374,8 +384,8 @@ def follows(case: Case, param: str, a: tuple[float, np.ndarray], b: tuple[float,
         if slow >= FOLLOW_LEVELS or depth >= FOLLOW_DEPTH:
             return False
         left, right = slope(middle, found, -1.0, abs(width)), slope(middle, found, 1.0, abs(width))
-        pending.append(((value_a, state_a), (middle, found), slope_a, left, now, slow, depth + 1))
-        pending.append(((middle, found), (value_b, state_b), right, slope_b, now, slow, depth + 1))
+        pending.append(((value_a, state_a), (middle, found), slope_a, left, now, slow, depth + 1, None))
+        pending.append(((middle, found), (value_b, state_b), right, slope_b, now, slow, depth + 1, None))
     return True
 
 
