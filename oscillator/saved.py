@@ -11,7 +11,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.atlas import Atlas
     from oscillator.attractors.basins import Basins
     from oscillator.attractors.following import AttractorsOver
+    from oscillator.attractors.frequency import FrequencyResponse
     from oscillator.attractors.lyapunov import LyapunovSpectrum
+    from oscillator.designing.optimise import Design
     from oscillator.hybrid.result import Result
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.curves import Curve
@@ -22,30 +24,33 @@ __all__ = ["read_run"]
 
 def read_run(
     folder: str | Path,
-) -> Result | Orbit | Branch | Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum:
+) -> Result | Orbit | Branch | Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum | FrequencyResponse | Design:
     """What a folder holds, as the object that was saved.
 
     A folder of ``oscillator run`` or :meth:`Result.save` gives a :class:`~oscillator.Result`
     (its case, tables, status, energy audit and counts); one of :meth:`Orbit.save` an
     :class:`~oscillator.Orbit`; one of ``oscillator continue`` or :meth:`Branch.save` a
     :class:`~oscillator.Branch` (with its case); one of ``oscillator basins``, ``attractors``,
-    ``atlas``, ``curve`` or ``lyapunov`` (or of the ``save`` of their results) the
-    :class:`~oscillator.Basins`, :class:`~oscillator.AttractorsOver`, :class:`~oscillator.Atlas`,
-    :class:`~oscillator.Curve` or :class:`~oscillator.LyapunovSpectrum`, as computed (nothing is
-    computed again).  Every file read is checked.
+    ``atlas``, ``curve``, ``lyapunov``, ``frc`` or ``design`` (finished, or the ``save`` of their
+    results) the :class:`~oscillator.Basins`, :class:`~oscillator.AttractorsOver`,
+    :class:`~oscillator.Atlas`, :class:`~oscillator.Curve`, :class:`~oscillator.LyapunovSpectrum`,
+    :class:`~oscillator.FrequencyResponse` or :class:`~oscillator.Design`, as computed (nothing is
+    computed again: :mod:`oscillator.report.kinds`).  Every file read is checked.
 
     Raises
     ------
     InputError
         Not such a folder, or a file in it missing or damaged (named in the message).
     """
+    from oscillator.report.kinds import folder_kind as analysis_kind
     from oscillator.report.runs import folder_kind, read_run_folder, result_of
 
     folder = as_folder(folder)
-    from oscillator.report.global_results import global_kind, read_global
-
-    if global_kind(folder) is not None:
-        return read_global(folder)
+    kind = analysis_kind(folder)
+    if kind is not None:
+        found: Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum | FrequencyResponse | Design
+        found = kind.at("read")(folder)
+        return found
     if folder_kind(folder) == "branch":
         from oscillator.report.orbit_folders import read_branch
 

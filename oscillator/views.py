@@ -7,7 +7,6 @@ from __future__ import annotations
 TYPE_CHECKING = False
 
 if TYPE_CHECKING:  # pragma: no cover
-    from collections.abc import Callable
     from pathlib import Path
 
     import pandas as pd
@@ -72,34 +71,21 @@ class Views:
         return branch_html(branch)
 
     def plot_global(self, found: object, **options: object) -> Figure:
-        """The figure of a global analysis (basins, Lyapunov spectrum, attractors over a
-        parameter, atlas, curve), as its command draws it."""
-        from oscillator.attractors.atlas import Atlas
-        from oscillator.attractors.basins import Basins
-        from oscillator.attractors.following import AttractorsOver
-        from oscillator.attractors.frequency import FrequencyResponse
-        from oscillator.attractors.lyapunov import LyapunovSpectrum
-        from oscillator.orbits.curves import Curve
-        from oscillator.report import attractors, frequency, plane
+        """The figure of an analysis's result (:mod:`oscillator.report.kinds`), as its command
+        draws it."""
+        from oscillator.report.kinds import kind_of
 
-        draw: dict[type, Callable[..., Figure]] = {
-            Basins: attractors.basins_figure,
-            LyapunovSpectrum: attractors.lyapunov_figure,
-            AttractorsOver: attractors.following_figure,
-            Atlas: plane.atlas_figure,
-            Curve: plane.curve_figure,
-            FrequencyResponse: frequency.frequency_figure,
-        }
-        return draw[type(found)](found, **options)
+        figure: Figure = kind_of(found).at("figure")(found, **options)
+        return figure
 
     def save_global(self, found: object, folder: str | Path) -> Path:
-        """A global analysis's result written as its command writes its folder."""
+        """An analysis's result written as its command writes its folder."""
         from oscillator.io.files import as_folder
-        from oscillator.report.global_results import save_global
+        from oscillator.report.kinds import save
 
-        return save_global(found, as_folder(folder))  # type: ignore[arg-type]
+        return save(found, as_folder(folder))
 
     def global_html(self, found: object) -> str:
-        from oscillator.report.notebook import global_html
+        from oscillator.report.kinds import html
 
-        return global_html(found)
+        return html(found)

@@ -245,3 +245,45 @@ def test_the_pareto_front_keeps_what_no_other_design_beats():
 
     points = np.array([[1.0, 5.0], [2.0, 4.0], [2.0, 4.0], [3.0, 4.5], [4.0, 1.0], [1.0, 6.0]])
     assert non_dominated(points).tolist() == [True, True, False, False, True, False]
+
+
+def test_a_design_saves_reads_back_and_rebuilds_its_report(tmp_path, worked, monkeypatch):
+    """``save`` writes the command's folder; ``read_run`` gives back the same design (the problem,
+    the design found and the global search's best with their attractors, the tables, the runs),
+    computing nothing; ``oscillator report`` writes its tables, figures and report again; in
+    Jupyter the case's name is text."""
+    import dataclasses
+
+    import pandas as pd
+
+    import oscillator.designing.optimise as computing
+    import oscillator.report.design as drawing
+    from oscillator.report.kinds import rebuild
+
+    monkeypatch.setattr(computing, "survey", None)  # reading computes nothing
+    folder = worked.save(tmp_path / "design")
+    back = osc.read_run(folder)
+    assert dataclasses.replace(back.problem, case=worked.problem.case) == worked.problem
+    assert back.problem.case.name == "instance-1" and back.settings == worked.settings
+    assert back.values == worked.values and (back.runs, back.message) == (worked.runs, worked.message)
+    for name in ("candidates", "history"):
+        pd.testing.assert_frame_equal(getattr(back, name), getattr(worked, name), check_exact=True, check_dtype=False)
+    for a, b in ((back.best, worked.best), (back.start, worked.start)):
+        assert np.array_equal(a.design, b.design) and (a.objective, a.violation, a.runs, a.how) == (
+            b.objective, b.violation, b.runs, b.how
+        )  # fmt: skip
+        assert a.worst == b.worst and len(a.seen) == len(b.seen) > 0
+        for x, y in zip(a.seen, b.seen, strict=True):
+            assert (x.band, x.period, x.failure) == (y.band, y.period, y.failure) and np.array_equal(x.state, y.state)
+            assert np.array_equal(list(x.measures.values()), list(y.measures.values()), equal_nan=True)
+    monkeypatch.setattr(drawing, "RESPONSE_VALUES", 2)  # the responses before and after at two values
+    (folder / "report.md").unlink()
+    what, problems = rebuild(folder)
+    assert what == "the design" and problems == [] and (folder / "report.md").is_file()
+    assert (folder / "figures" / "design-response.png").is_file()
+    (folder / "best.json").write_text('{"judged": {}}')
+    with pytest.raises(InputError, match=r"best.json is damaged"):
+        osc.read_run(folder)
+    shown = dataclasses.replace(worked, problem=dataclasses.replace(worked.problem, case=dataclasses.replace(
+        worked.problem.case, name="<script>")))  # fmt: skip
+    assert "<script>" not in shown._repr_html_() and "&lt;script&gt;" in shown._repr_html_()

@@ -440,3 +440,61 @@ def test_the_frequency_response_goes_on_beyond_a_stalled_branch():
     end = float(stalled[0].points.Omega.iloc[-1])
     starts = [float(b.points.Omega.iloc[0]) for b in found.branches]
     assert any(abs(start - end) == pytest.approx(RESTART * 0.038, abs=1e-9) for start in starts)
+
+
+def _same_response(back, found):
+    """Two frequency responses hold the same tables and branches, to the bit."""
+    pd.testing.assert_frame_equal(back.points, found.points, check_exact=True)
+    for name in ("sweeps", "bifurcations"):  # text columns read back as pandas' strings
+        pd.testing.assert_frame_equal(getattr(back, name), getattr(found, name), check_exact=True, check_dtype=False)
+    assert (back.param, back.period, len(back.branches)) == (found.param, found.period, len(found.branches))
+    for a, b in zip(back.branches, found.branches, strict=True):
+        pd.testing.assert_frame_equal(a.points, b.points, check_exact=True)
+        pd.testing.assert_frame_equal(a.bifurcations, b.bifurcations, check_exact=True, check_dtype=False)
+        assert (a.section, a.period, a.complete, a.message, a.reason) == (
+            b.section,
+            b.period,
+            b.complete,
+            b.message,
+            b.reason,
+        )
+
+
+def test_a_frequency_response_saves_reads_back_and_rebuilds_its_report(tmp_path, window, small_frc, monkeypatch):
+    """``save`` writes the command's folder and ``read_run`` gives back the same response (the
+    branches with their endings and bifurcations, the points, the sweeps), computing nothing; a
+    command's finished folder reads back too, and ``oscillator report`` writes its tables, figures
+    and report again; one without ``response.json`` (unfinished) or with it damaged is refused
+    naming it; in Jupyter the case's name is text."""
+    import dataclasses
+    import json
+    import shutil
+
+    import oscillator as osc
+    import oscillator.attractors.frequency as computing
+
+    monkeypatch.setattr(computing, "frequency_response", None)  # reading computes nothing
+    back = osc.read_run(window.save(tmp_path / "saved"))
+    _same_response(back, window)
+    assert back.jumps("up") == window.jumps("up") == [pytest.approx(1.60003, abs=1e-5)]
+    folder = tmp_path / "frc"
+    shutil.copytree(small_frc, folder)
+    command = osc.read_run(folder)
+    assert isinstance(command, osc.FrequencyResponse) and command.case.name == "instance-1"
+    pd.testing.assert_frame_equal(osc.read_run(command.save(tmp_path / "again")).points, command.points)
+    (folder / "report.md").unlink()
+    done = CliRunner().invoke(app, ["report", str(folder)])
+    assert done.exit_code == 0 and "report rebuilt (the frequency response)" in done.output, done.output
+    assert (folder / "report.md").is_file() and (folder / "figures" / "frequency-x-pp.png").is_file()
+    _same_response(osc.read_run(folder), command)
+    kept = json.loads((folder / "response.json").read_text())
+    kept["branches"][0]["section"] = "soon"
+    (folder / "response.json").write_text(json.dumps(kept))
+    with pytest.raises(osc.InputError, match=r"response.json disagree \(a branch's section or period is not a number"):
+        osc.read_run(folder)
+    (folder / "response.json").unlink()
+    done = CliRunner().invoke(app, ["report", str(folder)])
+    assert done.exit_code == 2 and "not a finished frequency response: response.json is missing" in done.stderr
+    assert "same --out" in done.stderr and len(done.stderr.splitlines()) == 1
+    shown = dataclasses.replace(window, case=dataclasses.replace(window.case, name="<script>"))
+    assert "<script>" not in shown._repr_html_() and "&lt;script&gt;" in shown._repr_html_()

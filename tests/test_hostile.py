@@ -223,7 +223,7 @@ def test_markup_in_titles_labels_and_folder_names_is_printed_as_written(tmp_path
         (b"bad\xffname", ["not UTF-8 text"]),
         ("tab\tname", ["control characters"]),
         ("a-file/x", ["cannot write in"]),
-        ("dangling", ["exists already"]),
+        ("dangling", ["is a link", "folder of its own"]),
         ("existing", ["exists already"]),
     ],
     ids=["300-bytes", "240-bytes", "non-utf8", "control", "under-a-file", "dangling-link", "existing"],

@@ -56,7 +56,7 @@ from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch
-from oscillator.presenting import presenter
+from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -78,8 +78,10 @@ CHUNK = 16
 
 
 @dataclass(frozen=True)
-class FrequencyResponse:
-    """What :func:`frequency_response` found.
+class FrequencyResponse(Presented):
+    """What :func:`frequency_response` found: ``save(folder)`` writes it as ``oscillator frc``
+    writes its folder, :func:`oscillator.read_run` reads either back, and it shows itself in
+    Jupyter.
 
     Attributes
     ----------

@@ -147,7 +147,7 @@ def _finish(found: Any, store: Any, settings: Any, no_plots: bool, quiet: bool) 
     say_reused(store, store.reused, "surveys", quiet)
     from oscillator.report.design import write_design
 
-    problems = outputs(folder, "surveys", lambda: write_design(found, folder, settings, plots=not no_plots))
+    problems = outputs(folder, "surveys", lambda: write_design(found, folder, plots=not no_plots))
     if not quiet:
         values = ", ".join(f"{n} = {v:.10g}" for n, v in found.values.items())
         out.print(Text(f"  design: {values}"))

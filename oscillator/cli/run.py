@@ -311,15 +311,13 @@ def _run_summary(case: Case, result: Result) -> list[Text | Table | str]:
     return lines
 
 
-#: The marker files of the global analyses' folders, which ``report`` rebuilds too.
-GLOBAL_MARKERS = ("curve.json", "basins.json", "atlas.json", "attractors.json", "lyapunov.json")
-
-
 @command(50, "Rebuild a run folder's report (and missing figures).")
 def report(
     folder: Annotated[
         Path,
-        typer.Argument(metavar="DIR", help="A folder written by oscillator run, continue, basins, atlas or curve."),
+        typer.Argument(
+            metavar="DIR", help="A folder written by oscillator run, continue, basins, atlas, curve, frc or design."
+        ),
     ],
     window: Annotated[
         tuple[float, float] | None,
@@ -329,9 +327,9 @@ def report(
     """Rebuild the report of a run or branch folder; draw its figures if they are missing.
 
     Finishes a run (or a continued branch) whose figures or report were interrupted. With
-    --window, redraws a run's figures for that time window. A finished basins, atlas or curve
-    folder gets its tables, figures and report again, from what it keeps (nothing computed anew
-    but the basins' orbits refined).
+    --window, redraws a run's figures for that time window. A finished basins, atlas, curve, frc
+    or design folder gets its tables, figures and report again, from what it keeps (nothing
+    computed anew but the basins' orbits refined and the design's responses before and after).
 
     \b
     Examples:
@@ -344,12 +342,11 @@ def report(
 
         if folder.is_dir() and not os.access(folder, os.W_OK):
             raise InputError(f"{folder}: cannot write in it; give a run folder you can write to", field="DIR")
-        if any((folder / marker).is_file() for marker in GLOBAL_MARKERS):
-            load("oscillator.report.attractors")
-            from oscillator.report.rebuilding import rebuild
+        load("oscillator.report.kinds")
+        from oscillator.report.kinds import rebuild
 
-            rebuilt = rebuild(folder)
-            assert rebuilt is not None  # a global analysis's folder: its marker is there
+        rebuilt = rebuild(folder)  # an analysis's folder (its marker names its kind), or None
+        if rebuilt is not None:
             what, problems = rebuilt
             say(f"report rebuilt ({what}): {folder / 'report.md'}, {folder / 'report.html'}")
             if problems:

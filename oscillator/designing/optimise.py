@@ -23,7 +23,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -46,7 +46,11 @@ from oscillator.designing.problem import Constraint, Problem
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.model.parameters import check_count
+from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["ROUNDS", "Design", "DesignStore", "design", "design_store", "refine"]
 
@@ -55,8 +59,9 @@ ROUNDS = 3
 
 
 @dataclass(frozen=True)
-class Design:
-    """What :func:`design` found.
+class Design(Presented):
+    """What :func:`design` found: ``save(folder)`` writes it as ``oscillator design`` writes its
+    folder, :func:`oscillator.read_run` reads either back, and it shows itself in Jupyter.
 
     Attributes
     ----------
@@ -82,6 +87,8 @@ class Design:
         under; ``nan`` for ``best`` and the candidates), ``objective`` and ``second`` (the two
         worst cases), ``refined`` (False for a candidate of the global search that no refined
         design beats), ``violation``, ``runs``; empty with one objective.
+    settings : AttractorSettings
+        The surveys' landings (the figure of the responses before and after lands with them).
     """
 
     problem: Problem
@@ -92,11 +99,18 @@ class Design:
     runs: dict[str, int]
     message: str
     front: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    settings: AttractorSettings = field(default_factory=AttractorSettings, repr=False)
 
     @property
     def values(self) -> dict[str, float]:
         """The best design by parameter name."""
         return self.problem.design(self.best.design)
+
+    def plot(self, figure: str = "search") -> Figure:
+        """One of ``oscillator design``'s figures: ``"search"`` (the candidates, the refinement and
+        the design found), ``"response"`` (the worst objective over the band before and after:
+        it lands at each of 21 band values, a few seconds) or ``"front"`` (with two objectives)."""
+        return presenter().plot_global(self, figure=figure)
 
 
 def _row(problem: Problem, judged: Judged, **extra: object) -> dict[str, object]:
@@ -364,4 +378,4 @@ def design(
     pareto = pd.DataFrame()
     if problem.also and best.feasible:
         pareto = pareto_front(problem, judged, best, lambda sub, s: _refined(sub, settings, s, spent)[0], front)
-    return Design(problem, best, start, candidates_table, pd.DataFrame(rows), spent, message, pareto)
+    return Design(problem, best, start, candidates_table, pd.DataFrame(rows), spent, message, pareto, settings)

@@ -350,7 +350,9 @@ def _frc_site(picture: Picture, at: int) -> Site:
     return Site(case, _starts(case, state + nudge, state - nudge), held, state)
 
 
-_READERS = {"sweep.json": _sweep, "frc.json": _frc}
+#: The pictures of the analyses' folders the explorer opens (:mod:`oscillator.report.kinds`
+#: names a folder's kind; a frequency response's picture reads its points table only).
+_PICTURES: dict[str, Callable[[Any], Picture]] = {"atlas": _atlas, "basins": _basins}
 
 
 def picture_of(folder: str | Path) -> Picture:
@@ -374,25 +376,23 @@ def picture_of(folder: str | Path) -> Picture:
 
 
 def _read(path: Path) -> Picture:
-    from oscillator.report.global_results import global_kind, read_global
+    from oscillator.report.kinds import folder_kind
 
-    if path.is_dir():
-        marker = next((name for name in _READERS if (path / name).is_file()), None)
-        if marker is not None:
-            return _READERS[marker](path)
-    if not path.is_dir() or global_kind(path) is None:
+    if path.is_dir() and (path / "sweep.json").is_file():
+        return _sweep(path)
+    kind = folder_kind(path) if path.is_dir() else None
+    if kind is None:
         raise InputError(
             f"{printable(str(path))} is not a folder of an oscillator atlas, basins, sweep or frequency response; "
             "give one, or a case",
             field="case",
         )
-    found = read_global(path)
-    if isinstance(found, Atlas):
-        return _atlas(found)
-    if isinstance(found, Basins):
-        return _basins(found)
-    raise InputError(
-        f"{printable(str(path))} holds a {type(found).__name__}, not an atlas, basins, sweep or frequency "
-        "response; the explorer opens a case or one of those",
-        field="case",
-    )
+    if kind.name == "frc":
+        return _frc(path)
+    if kind.name not in _PICTURES:
+        raise InputError(
+            f"{printable(str(path))} holds {kind.what}, not an atlas, basins, sweep or frequency response; the "
+            "explorer opens a case or one of those",
+            field="case",
+        )
+    return _PICTURES[kind.name](kind.at("read")(path))

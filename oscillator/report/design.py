@@ -4,14 +4,15 @@ and the report (docs/design.md)."""
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from oscillator.designing.judging import seen_table, survey_task
+from oscillator.designing.judging import Judged, Seen, seen_table, survey_task
 from oscillator.report import markup as mk
 from oscillator.report.orbits import modified_blocks
 from oscillator.report.outputs import quantity_label, wrapped_title
@@ -21,17 +22,20 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.attractors.mapping import AttractorSettings
     from oscillator.designing.optimise import Design
+    from oscillator.designing.problem import Problem
 
-__all__ = ["band_responses", "design_blocks", "design_figure", "write_design"]
+__all__ = ["band_responses", "design_blocks", "design_figure", "design_plot", "read_design", "write_design"]
 
 #: Band values of the responses drawn before and after.
 RESPONSE_VALUES = 21
 
 
-def band_responses(found: Design, settings: AttractorSettings, count: int = RESPONSE_VALUES) -> pd.DataFrame:
-    """Every attractor's measures over ``count`` values across the band (and a little beyond) for
-    the global search's best design (``design = "before"``) and the design found (``"after"``)."""
-    problem = found.problem
+def band_responses(found: Design, count: int | None = None) -> pd.DataFrame:
+    """Every attractor's measures over ``count`` values (default :data:`RESPONSE_VALUES`) across
+    the band (and a little beyond) for the global search's best design (``design = "before"``)
+    and the design found (``"after"``), landed with the design's settings."""
+    problem, settings = found.problem, found.settings
+    count = RESPONSE_VALUES if count is None else count
     name, low, high = problem.over
     margin = 0.25 * (high - low)
     values = np.linspace(low - margin, high + margin, count)
@@ -77,6 +81,24 @@ def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
     fig.suptitle(wrapped_title(problem.case, what), fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def design_plot(found: Design, figure: str = "search") -> Figure:
+    """:meth:`Design.plot`: the figure ``figure`` of ``oscillator design``'s folder."""
+    from oscillator.errors import InputError
+    from oscillator.text import shown
+
+    if figure == "search":
+        return search_figure(found)
+    if figure == "response":
+        return design_figure(found, band_responses(found))
+    if figure == "front" and len(found.front):
+        return front_figure(found)
+    if figure == "front":
+        raise InputError(
+            "figure: a design with one objective has no Pareto front; give 'search' or 'response'", field="figure"
+        )
+    raise InputError(f"figure must be 'search', 'response' or 'front', got {shown(figure)}", field="figure")
 
 
 def _design_text(found: Design, label: str) -> str:
@@ -208,9 +230,26 @@ def _front_blocks(found: Design, plots: bool) -> list[mk.Block]:
     return blocks
 
 
-def write_design(found: Design, folder: Path, settings: AttractorSettings, *, plots: bool = True) -> list[str]:
+#: How a design folder that cannot be read is made again.
+_REMAKE = "run the oscillator design command that made it again with the same --out"
+
+
+def _judged(judged: Judged) -> dict[str, object]:
+    """What ``best.json`` keeps of a judged design besides its attractors (in a table)."""
+    return {
+        "design": [float(v) for v in judged.design],
+        "objective": judged.objective,
+        "violation": judged.violation,
+        "runs": judged.runs,
+        "how": judged.how,
+        "worst": dict(judged.worst),
+    }
+
+
+def write_design(found: Design, folder: Path, *, plots: bool = True) -> list[str]:
     """``candidates.parquet``, ``history.parquet``, ``attractors.parquet`` (the design found's
-    attractors at each band value), ``front.parquet`` (with two objectives), ``best.json``, the
+    attractors at each band value), ``start-attractors.parquet`` (those of the global search's
+    best, where the refinement began), ``front.parquet`` (with two objectives), ``best.json``, the
     figures and the report; what could not be drawn (the tables stay)."""
     from oscillator.io.files import atomic_path
     from oscillator.report.outputs import write_folder
@@ -218,14 +257,16 @@ def write_design(found: Design, folder: Path, settings: AttractorSettings, *, pl
 
     best = {"design": found.values, "objective": found.best.objective, "violation": found.best.violation}
     best |= {"feasible": found.best.feasible, "runs": found.runs, "message": found.message}
+    best |= {"judged": {"best": _judged(found.best), "start": _judged(found.start)}}
     with atomic_path(folder / "best.json") as temporary:
         temporary.write_text(json_text(best), encoding="utf-8")
     tables = {"candidates": found.candidates, "history": found.history, "attractors": seen_table(list(found.best.seen))}
+    tables["start-attractors"] = seen_table(list(found.start.seen))
     figures: list[tuple[str, Callable[[], Figure]]] = []
     if plots:
         figures = [
             ("design-search", functools.partial(search_figure, found)),
-            ("design-response", lambda: design_figure(found, band_responses(found, settings))),
+            ("design-response", lambda: design_figure(found, band_responses(found))),
         ]
         if len(found.front):
             figures.append(("design-front", functools.partial(front_figure, found)))
@@ -233,3 +274,104 @@ def write_design(found: Design, folder: Path, settings: AttractorSettings, *, pl
         tables["front"] = found.front
     title = f"{found.problem.case.name}: design"
     return write_folder(folder, tables, figures, design_blocks(found, plots), title)
+
+
+def read_design(folder: Path) -> Design:
+    """The design a folder holds (``oscillator design``'s, finished, or a
+    :meth:`~oscillator.Design.save`'s): the problem and settings from ``design.json`` and
+    ``case.toml``, the rest from its tables and ``best.json``; every file checked, nothing
+    computed.
+
+    Raises
+    ------
+    InputError
+        A file missing (an unfinished folder: the command resumes it) or damaged, named.
+    """
+    import json
+
+    from oscillator.designing.judging import seen_from_table
+    from oscillator.designing.optimise import Design
+    from oscillator.errors import InputError
+    from oscillator.io.files import read_untrusted
+    from oscillator.orbits.response import COLUMNS
+    from oscillator.report.orbit_folders import checked_table
+    from oscillator.text import printable
+
+    problem, settings = _problem_of(folder)
+    where = folder / "best.json"
+    if not where.is_file():
+        raise InputError(
+            f"{printable(str(folder))} is not a finished design: best.json is missing; {_REMAKE}", field="best.json"
+        )
+    seen_kinds = dict.fromkeys(["band", "period", "x1", "v1", "x2", "v2", *COLUMNS], "number") | {"failure": "text"}
+    tables = {}
+    for table in ("attractors", "start-attractors"):
+        tables[table] = checked_table(folder / f"{table}.parquet", seen_kinds, folder="design folder", remake=_REMAKE)
+    scores = dict.fromkeys([*problem.names, "objective", "violation", "runs"], "number")
+    tables["candidates"] = checked_table(folder / "candidates.parquet", scores, folder="design folder", remake=_REMAKE)
+    history = checked_table(folder / "history.parquet", {}, folder="design folder", remake=_REMAKE)
+    if len(history.columns):  # none where the refinement did not run
+        history = checked_table(folder / "history.parquet", scores, folder="design folder", remake=_REMAKE)
+    front = pd.DataFrame()
+    if (folder / "front.parquet").exists():
+        front = checked_table(folder / "front.parquet", scores, folder="design folder", remake=_REMAKE)
+    try:
+        info = json.loads(read_untrusted(where, what="design file", field="best.json", limit=16 << 20))
+        judged = {
+            which: _judged_from(problem, info["judged"][which], seen_from_table(tables[table]))
+            for which, table in (("best", "attractors"), ("start", "start-attractors"))
+        }
+        runs = {str(stage): int(count) for stage, count in info["runs"].items()}
+        message = str(info["message"])
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError) as error:
+        raise InputError(
+            f"{printable(str(where))} is damaged ({printable(str(error))[:200]}); {_REMAKE}", field="best.json"
+        ) from None
+    return Design(
+        problem, judged["best"], judged["start"], tables["candidates"], history, runs, message, front, settings
+    )
+
+
+def _problem_of(folder: Path) -> tuple[Problem, AttractorSettings]:
+    """The problem and the settings a design folder's ``design.json`` and ``case.toml`` hold."""
+    from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.designing.problem import Problem
+    from oscillator.errors import InputError, OscillatorError
+    from oscillator.report.global_results import marker_identity
+    from oscillator.report.outputs import folder_case
+    from oscillator.text import printable
+
+    known = marker_identity(folder / "design.json")
+    case = folder_case(folder, "design.json")
+    try:
+        vary = {str(name): (float(low), float(high)) for name, low, high in known["vary"]}
+        ((name, low, high),) = [known["over"]]
+        objective = [known["objective"], *known.get("also", [])]
+        problem = Problem.of(
+            case, vary, {name: (low, high)}, objective, known["constraints"], known["band"], known["starts"]
+        )
+        return problem, AttractorSettings(**known["settings"])
+    except (KeyError, TypeError, ValueError, OscillatorError) as error:
+        raise InputError(
+            f"{printable(str(folder))}/design.json is damaged ({printable(str(error))[:200]}); {_REMAKE}",
+            field="folder",
+        ) from None
+
+
+def _judged_from(problem: Problem, info: dict[str, Any], seen: list[Seen]) -> Judged:
+    """:func:`_judged` read back, with its attractors (``None``, JSON's infinity, read as ``inf``)."""
+
+    def number(value: object) -> float:
+        return math.inf if value is None else float(value)  # type: ignore[arg-type]
+
+    design = np.array([float(v) for v in info["design"]], dtype=float)
+    if design.shape != (len(problem.names),) or not np.isfinite(design).all():
+        raise ValueError("a design's parameters are not the problem's")
+    worst = {str(measure): number(value) for measure, value in info["worst"].items()}
+    how = info["how"]
+    if not isinstance(how, str):
+        raise TypeError("a design's 'how' is not text")
+    runs = info["runs"]
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 0:
+        raise ValueError("a design's runs are not a count")
+    return Judged(design, tuple(seen), number(info["objective"]), number(info["violation"]), runs, how, worst)

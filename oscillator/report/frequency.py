@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from oscillator.analysis.axes import STATE as STATE_COLUMNS
 from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
 from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS
@@ -28,7 +29,15 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.attractors.frequency import FrequencyResponse
 
-__all__ = ["MEASURES", "figure_measures", "frequency_blocks", "frequency_figure", "write_frequency"]
+__all__ = [
+    "MEASURES",
+    "RESPONSE",
+    "figure_measures",
+    "frequency_blocks",
+    "frequency_figure",
+    "read_frequency",
+    "write_frequency",
+]
 
 #: What the sweeps' values are shaded by: the columns any of which is positive, the colour, the label.
 _CONTACT = (("onsets_right", "onsets_left"), "tab:blue", "contact")
@@ -220,10 +229,22 @@ def _branch_rows(found: FrequencyResponse) -> tuple[tuple[str, ...], ...]:
     return tuple(rows)
 
 
+#: The file that keeps what the tables do not: the branches' sections, endings and bifurcations,
+#: and the measure drawn (so that ``oscillator report`` draws it again).
+RESPONSE = "response.json"
+#: How a frequency-response folder that cannot be read is made again.
+_REMAKE = "run the oscillator frc command that made it again with the same --out"
+
+
 def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp", *, plots: bool = True) -> list[str]:
     """``points.parquet`` (every branch point with its measures; the multipliers as real and
-    imaginary parts), ``bifurcations.parquet``, ``sweeps.parquet``, the figures of
-    :func:`figure_measures` and the report; what could not be drawn (the tables stay)."""
+    imaginary parts), ``bifurcations.parquet``, ``sweeps.parquet``, ``response.json`` (what
+    :func:`read_frequency` needs besides), the figures of :func:`figure_measures` and the report;
+    what could not be drawn (the tables stay)."""
+    import json
+
+    from oscillator.attractors.frequency_parts import branches_on_disk
+    from oscillator.io.files import atomic_path
     from oscillator.orbits.branch import points_on_disk
     from oscillator.report.outputs import write_folder
 
@@ -232,5 +253,76 @@ def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp
         [(frequency_figure_name(m), functools.partial(frequency_figure, found, m)) for m in measures] if plots else []
     )
     tables = {"points": points_on_disk(found.points), "bifurcations": found.bifurcations, "sweeps": found.sweeps}
+    _, branches = branches_on_disk(found.param, list(found.branches))
+    with atomic_path(folder / RESPONSE) as temporary:  # NaN kept as JSON's NaN, as the parts keep it
+        temporary.write_text(json.dumps({"measure": measure, "branches": branches}, indent=1), encoding="utf-8")
     title = f"{found.case.name}: frequency response"
     return write_folder(folder, tables, figures, frequency_blocks(found, measures if plots else []), title)
+
+
+def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:
+    """The frequency response a folder holds (``oscillator frc``'s, finished, or a
+    :meth:`~oscillator.FrequencyResponse.save`'s) and the measure its figures drew; every file
+    checked, nothing computed.
+
+    Raises
+    ------
+    InputError
+        A file missing (an unfinished folder: the command resumes it) or damaged, named.
+    """
+    import json
+
+    from oscillator.attractors.frequency import FrequencyResponse
+    from oscillator.attractors.frequency_parts import branch_part_columns, branches_from_disk, branches_problem
+    from oscillator.io.files import read_untrusted
+    from oscillator.model.parameters import Parameters
+    from oscillator.orbits.branch import points_from_disk
+    from oscillator.orbits.response import COLUMNS as RESPONSE_COLUMNS
+    from oscillator.report.global_results import marker_identity
+    from oscillator.report.orbit_folders import checked_table
+    from oscillator.report.outputs import folder_case
+    from oscillator.text import printable
+
+    def damaged(why: str) -> InputError:
+        return InputError(f"{printable(str(folder))}/frc.json is damaged ({why}); {_REMAKE}", field="folder")
+
+    known = marker_identity(folder / "frc.json")
+    try:
+        param = Parameters.check_name(known.get("param"), "folder")
+        low, high = (float(value) for value in known["span"])
+    except (KeyError, TypeError, ValueError, InputError) as error:
+        raise damaged(f"its parameter or span: {error}") from None
+    period = known.get("period", 1)
+    if isinstance(period, bool) or not isinstance(period, int) or period < 1:
+        raise damaged("its period is not a whole number of forcing periods")
+    case = folder_case(folder, "frc.json")
+    where = folder / RESPONSE
+    if not where.is_file():
+        raise InputError(
+            f"{printable(str(folder))} is not a finished frequency response: {RESPONSE} is missing; {_REMAKE}",
+            field=RESPONSE,
+        )
+    try:
+        info = json.loads(read_untrusted(where, what="frequency-response file", field=RESPONSE, limit=64 << 20))
+        measure, meta = info["measure"], info["branches"]
+    except (ValueError, KeyError, TypeError, RecursionError) as error:
+        raise InputError(f"{printable(str(where))} is damaged ({error}); {_REMAKE}", field=RESPONSE) from None
+    if measure not in MEASURES:
+        raise InputError(f"{printable(str(where))} is damaged (its measure is none of ours); {_REMAKE}", field=RESPONSE)
+    parts = branch_part_columns(param)
+    kinds = {"period": "number", **parts, **dict.fromkeys(RESPONSE_COLUMNS, "number")}
+    table = checked_table(folder / "points.parquet", kinds, folder="frequency-response folder", remake=_REMAKE)
+    branch_table = table[[column for column in table.columns if column in parts]]  # in the order written
+    why = branches_problem(param, (low, high), branch_table, meta)
+    if why:
+        raise InputError(
+            f"{printable(str(folder))}: points.parquet and {RESPONSE} disagree ({why}); {_REMAKE}", field=RESPONSE
+        )
+    branches = branches_from_disk(case, param, branch_table, meta)
+    sweep_kinds = dict.fromkeys([param, "period", *STATE_COLUMNS, *RESPONSE_COLUMNS], "number")
+    sweep_kinds |= {"direction": "text", "signature": "text", "jump": "flag"}
+    sweeps = checked_table(folder / "sweeps.parquet", sweep_kinds, folder="frequency-response folder", remake=_REMAKE)
+    if not sweeps["direction"].isin(("up", "down")).all():
+        raise InputError(f"{printable(str(folder))}/sweeps.parquet is damaged (a direction); {_REMAKE}", field="folder")
+    found = FrequencyResponse(param, tuple(branches), points_from_disk(table), sweeps, case, period)
+    return found, measure

@@ -1,11 +1,6 @@
-"""The global analyses' results saved whole and read back: what ``save`` writes and
-:func:`oscillator.read_run` reads, for basins, the attractors over a parameter, an atlas, a
-curve and a Lyapunov spectrum.
-
-Each folder is the one the analysis's command writes (its marker file names its kind:
-``basins.json``, ``attractors.json``, ``atlas.json``, ``curve.json``, ``lyapunov.json``), so that
-``read_run`` reads a command's folder and a saved one alike; nothing is computed on reading.
-"""
+"""The global analyses' results read back from their folders: basins, the attractors over a
+parameter and a Lyapunov spectrum (:mod:`oscillator.report.kinds` registers them with the
+others); a command's folder and a saved one alike, nothing computed on reading."""
 
 from __future__ import annotations
 
@@ -16,40 +11,19 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.axes import STATE, Axis
-from oscillator.analysis.store import identity
-from oscillator.attractors.atlas import Atlas
+from oscillator.analysis.axes import Axis
 from oscillator.attractors.basins import Basins
 from oscillator.attractors.following import AttractorsOver, End
 from oscillator.attractors.lyapunov import LyapunovSpectrum
-from oscillator.attractors.store import FORMAT
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import resolve_case
-from oscillator.io.files import atomic_path, claim_folder, read_untrusted
+from oscillator.io.files import read_untrusted
 from oscillator.model.parameters import Parameters
-from oscillator.orbits.curves import Curve
-from oscillator.report.attractors import write_basins, write_following, write_lyapunov
 from oscillator.report.global_folders import read_found
 from oscillator.report.outputs import folder_case
-from oscillator.report.plane import read_atlas, read_curve, write_atlas, write_curve
 from oscillator.text import printable
 
-__all__ = ["GLOBAL_MARKERS", "global_kind", "marker_identity", "read_global", "save_global"]
-
-#: Each global folder's marker file and the kind it names.
-GLOBAL_MARKERS = {
-    "basins.json": "basins",
-    "attractors.json": "attractors",
-    "atlas.json": "atlas",
-    "curve.json": "curve",
-    "lyapunov.json": "lyapunov",
-}
-Global = Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum
-
-
-def global_kind(folder: Path) -> str | None:
-    """The kind of global result a folder holds (by its marker file), or None."""
-    return next((kind for marker, kind in GLOBAL_MARKERS.items() if (folder / marker).is_file()), None)
+__all__ = ["marker_identity", "read_basins", "read_following", "read_lyapunov"]
 
 
 def marker_identity(marker: Path) -> dict[str, Any]:
@@ -61,22 +35,6 @@ def marker_identity(marker: Path) -> dict[str, Any]:
     except (ValueError, KeyError, TypeError, RecursionError) as error:
         raise InputError(f"{printable(str(marker))} is damaged ({error}); give a new folder", field="folder") from None
     return identity
-
-
-def read_global(folder: Path) -> Global:
-    """The result a global analysis's folder holds (its command's, or its ``save``'s)."""
-    kind = global_kind(folder)
-    if kind == "atlas":
-        return read_atlas(folder)
-    if kind == "curve":
-        return read_curve(folder)
-    if kind == "basins":
-        return read_basins(folder)
-    if kind == "attractors":
-        return read_following(folder)
-    if kind == "lyapunov":
-        return read_lyapunov(folder)
-    raise InputError(f"{printable(str(folder))} holds no result of a global analysis", field="folder")
 
 
 def read_basins(folder: Path) -> Basins:
@@ -140,49 +98,3 @@ def read_lyapunov(folder: Path) -> LyapunovSpectrum:
     if exponents.shape != (4,) or start.shape != (4,) or np.isnan(exponents).any() or not np.isfinite(start).all():
         raise InputError(f"{printable(str(where))} is damaged: its exponents or start", field="folder")
     return LyapunovSpectrum(folder_case(folder, "lyapunov.json", key="case"), exponents, periods, start, convergence)
-
-
-def _marker(folder: Path, marker_name: str, known: dict[str, Any], name: str) -> None:
-    """The marker file (the identity, status ``saved``) and ``case.toml``."""
-    marker = json.dumps({"identity": known, "format": FORMAT, "case_name": name, "status": "saved"}, indent=2)
-    for file, text in ((marker_name, marker), ("case.toml", str(known["case"]))):
-        with atomic_path(folder / file) as temporary:
-            temporary.write_text(text, encoding="utf-8")
-
-
-def _write(found: Global, folder: Path) -> list[str]:
-    """The result's folder written into ``folder`` (empty): its marker, case and outputs."""
-    if isinstance(found, Basins):
-        known = identity(found.found.case, x=found.x, y=found.y, settings=found.found.settings)
-        _marker(folder, "basins.json", known, found.found.case.name)
-        return write_basins(found, folder)
-    if isinstance(found, AttractorsOver):
-        fresh = found.found[0].labels[list(STATE)].to_numpy()[: found.fresh]
-        settings = found.found[0].settings
-        known = identity(found.case, param=found.param, values=found.values, states=fresh, settings=settings)
-        _marker(folder, "attractors.json", known, found.case.name)
-        return write_following(found, folder, coordinate="x2", branches=[])
-    if isinstance(found, Atlas):
-        _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y), found.case.name)
-        return write_atlas(found, folder)
-    if isinstance(found, Curve):
-        return write_curve(found, folder)
-    return write_lyapunov(found, folder)
-
-
-def save_global(found: Global, folder: str | Path) -> Path:
-    """Write ``found`` into ``folder`` (new; it appears whole) as its command writes it;
-    :func:`oscillator.read_run` reads it back.  A figure that fails is said in a warning (the
-    tables are written)."""
-    import warnings
-
-    claim = claim_folder(Path(folder))
-    try:
-        problems = _write(found, claim.temporary)
-        written = claim.commit()
-    except BaseException:
-        claim.abandon()
-        raise
-    for problem in problems:
-        warnings.warn(f"{written}: {problem}; the tables are written", stacklevel=3)
-    return written

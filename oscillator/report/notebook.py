@@ -1,4 +1,5 @@
-"""What a result, an orbit or a branch shows of itself in Jupyter (``_repr_html_``).
+"""What a result, an orbit or a branch shows of itself in Jupyter (``_repr_html_``; an
+analysis's result shows its report's text: :func:`oscillator.report.kinds.html`).
 
 Each is built as the report's blocks (:mod:`oscillator.report.markup`) and written as an HTML
 fragment, so that text from a case file (its name, its title) is escaped like everywhere else.
@@ -17,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 
-__all__ = ["branch_html", "global_html", "orbit_html", "result_html"]
+__all__ = ["branch_html", "orbit_html", "result_html"]
 
 #: Events shown in a notebook; the rest are counted.
 SHOWN_EVENTS = 8
@@ -105,33 +106,3 @@ def branch_html(branch: Branch) -> str:
     else:
         blocks.append(mk.Paragraph(("no bifurcation located",)))
     return mk.html_fragment(blocks)
-
-
-def global_html(found: object) -> str:
-    """A global analysis's result as its report tells it (without the figures: ``plot`` draws
-    them), as an HTML fragment."""
-    from oscillator.attractors.atlas import Atlas
-    from oscillator.attractors.basins import Basins
-    from oscillator.attractors.following import AttractorsOver
-    from oscillator.orbits.curves import Curve
-    from oscillator.report.attractors import attractor_table, basins_blocks, following_blocks
-    from oscillator.report.plane import atlas_blocks, curve_blocks
-
-    if isinstance(found, Basins):
-        blocks = basins_blocks(found, attractor_table(found))
-    elif isinstance(found, AttractorsOver):
-        blocks = following_blocks(found, found.table())
-    elif isinstance(found, Atlas):
-        blocks = atlas_blocks(found)
-    elif isinstance(found, Curve):
-        blocks = curve_blocks(found)
-    else:
-        blocks = _spectrum_blocks(found)
-    return mk.html_fragment([block for block in blocks if not isinstance(block, mk.Figure)])
-
-
-def _spectrum_blocks(spectrum: object) -> list[mk.Block]:
-    exponents = getattr(spectrum, "exponents", ())
-    rows = tuple((f"lambda{k}", f"{value:.6g}") for k, value in enumerate(exponents, start=1))
-    title = f"Lyapunov spectrum over {getattr(spectrum, 'periods', 0)} forcing periods (1/s)"
-    return [mk.Paragraph((mk.Span(title, "strong"),)), mk.Table(("exponent", "value"), rows)]

@@ -1,6 +1,6 @@
-"""``oscillator report`` on a global analysis's folder: its tables, figures and report written
-again from what the folder keeps (the landings; nothing is computed that a finished folder does
-not hold), the folder checked as untrusted."""
+"""``oscillator report`` on a basins or atlas folder: its tables, figures and report written again
+from what the folder keeps (the landings; nothing is computed that a finished folder does not
+hold), the folder checked as untrusted (:mod:`oscillator.report.kinds` registers them)."""
 
 from __future__ import annotations
 
@@ -13,36 +13,10 @@ from oscillator.errors import InputError
 from oscillator.report.attractors import write_basins
 from oscillator.report.global_results import marker_identity
 from oscillator.report.outputs import folder_case
-from oscillator.report.plane import read_curve, write_atlas, write_curve
+from oscillator.report.plane import write_atlas
 from oscillator.text import printable
 
-__all__ = ["rebuild"]
-
-
-def rebuild(folder: Path) -> tuple[str, list[str]] | None:
-    """Rebuild the tables, figures and report of a finished basins, atlas or curve folder from
-    what it keeps (for ``oscillator report``): what was rebuilt and what could not be drawn (the
-    tables stay), or None for a folder of another kind.  The landings and rows are read back,
-    never computed: an unfinished folder is refused (the command that made it resumes it)."""
-    if (folder / "curve.json").exists():
-        return "the curve (drawn without an atlas)", write_curve(read_curve(folder), folder)
-    if (folder / "attractors.json").exists():
-        raise InputError(
-            f"{printable(str(folder))}: an attractors folder is rebuilt by running the command that made it again with "
-            "the same --out: it reads its landings back and computes none",
-            field="folder",
-        )
-    if (folder / "lyapunov.json").exists():
-        raise InputError(
-            f"{printable(str(folder))}: a Lyapunov folder keeps no state to redraw from; run the same lyapunov "
-            "command with a new --out (it takes seconds)",
-            field="folder",
-        )
-    kinds = (("basins.json", "the basins", _rebuild_basins), ("atlas.json", "the atlas", _rebuild_atlas))
-    for marker, what, again in kinds:
-        if (folder / marker).exists():
-            return what, again(folder, marker_identity(folder / marker), folder_case(folder, marker))
-    return None
+__all__ = ["rebuild_atlas", "rebuild_basins"]
 
 
 def _plane(folder: Path, identity: dict[str, Any], settings_type: Any, marker: str) -> tuple[Any, Any, Any]:
@@ -56,11 +30,14 @@ def _plane(folder: Path, identity: dict[str, Any], settings_type: Any, marker: s
         raise InputError(f"{printable(str(folder))}/{marker} is damaged ({error})", field="folder") from None
 
 
-def _rebuild_basins(folder: Path, identity: dict[str, Any], case: Any) -> list[str]:
+def rebuild_basins(folder: Path) -> list[str]:
+    """A finished basins folder's tables, figures and report written again (its orbits refined
+    again from the landings it keeps); what could not be drawn."""
     from oscillator.attractors.basins import basin_store, find_basins, grid_starts
     from oscillator.attractors.mapping import AttractorSettings
 
-    x, y, settings = _plane(folder, identity, AttractorSettings, "basins.json")
+    case = folder_case(folder, "basins.json")
+    x, y, settings = _plane(folder, marker_identity(folder / "basins.json"), AttractorSettings, "basins.json")
     store = basin_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, len(grid_starts(case, x, y)), "starts")
@@ -79,10 +56,13 @@ def _finished(store: Any, total: int, what: str, *, batches: bool = False) -> No
         )
 
 
-def _rebuild_atlas(folder: Path, identity: dict[str, Any], case: Any) -> list[str]:
+def rebuild_atlas(folder: Path) -> list[str]:
+    """A finished atlas folder's tables, figures and report written again from its rows; what
+    could not be drawn."""
     from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
 
-    x, y, settings = _plane(folder, identity, AtlasSettings, "atlas.json")
+    case = folder_case(folder, "atlas.json")
+    x, y, settings = _plane(folder, marker_identity(folder / "atlas.json"), AtlasSettings, "atlas.json")
     store = atlas_store(folder, case, x, y, settings)
     store.check()  # this very computation, or refused
     _finished(store, y.count, "rows", batches=True)
