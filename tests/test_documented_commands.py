@@ -111,8 +111,8 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments[arguments.index(option) + 4] = count
         for option, value in (("--workers", "1"), ("--transient", "30"), ("--record", "8")):
             arguments = _set(arguments, option, value)
-    elif command == "frc":  # two seeds, short branches, three sweep values, in this process
-        for option, value in (("--seeds", "2"), ("--sweep", "3"), ("--max-points", "12"), ("--workers", "1")):
+    elif command == "frc":  # two seeds, short branches, the sweeps' two ends, in this process
+        for option, value in (("--seeds", "2"), ("--sweep", "2"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)
     elif command == "design":  # two band values, one start, three candidates, short runs, in this process
         for option, value in (("--band", "2"), ("--starts", "1"), ("--candidates", "3"), ("--transient", "30"),
