@@ -105,12 +105,14 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
         if command == "attractors":
             arguments = _set(_set(arguments, "--steps", "3"), "--tol", "1e-3")
-    elif command == "atlas":  # a 3 x 2 plane, short runs, in this process
+    elif command == "atlas":  # a 3 x 2 plane, short runs, no figures, in this process
         for option, count in (("--x", "3"), ("--y", "2")):
             arguments = list(arguments)
             arguments[arguments.index(option) + 4] = count
         for option, value in (("--workers", "1"), ("--transient", "30"), ("--record", "8")):
             arguments = _set(arguments, option, value)
+        if "--no-plots" not in arguments:  # tests/test_attractors.py draws them; `report` on its folder too
+            arguments = [*arguments, "--no-plots"]
     elif command == "frc":  # two seeds, short branches, the sweeps' two ends, in this process
         for option, value in (("--seeds", "2"), ("--sweep", "2"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)

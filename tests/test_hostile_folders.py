@@ -7,6 +7,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
+from conftest import FRC_WINDOW
 from oscillator.errors import InputError
 from oscillator.io.files import inner_folder, refuse_link
 from test_hostile import oscillator
@@ -45,7 +46,7 @@ def test_nothing_is_written_through_a_link_inside_an_output_folder(tmp_path):
 @pytest.mark.parametrize(
     "command",
     [
-        ["frc", "instance-1", "--param", "Omega", "1.5", "1.7", "--seeds", "2", "--sweep", "3", "--out", "f"],
+        [*FRC_WINDOW, "--seeds", "2", "--sweep", "3", "--out", "f"],  # its folder is small_frc's
         ["atlas", "instance-1", "--x", "Omega", "1.5", "1.7", "3", "--y", "Q2", "70", "71", "2", "--transient", "20",
          "--record", "4", "--out", "f"],
         ["design", "instance-1", "--vary", "d1=3,4", "--over", "Omega", "1.4", "1.6", "--objective", "x_max_m1",
@@ -54,19 +55,23 @@ def test_nothing_is_written_through_a_link_inside_an_output_folder(tmp_path):
     ],
     ids=["frc", "atlas", "design", "run"],
 )  # fmt: skip
-def test_a_resume_or_a_report_into_a_folder_whose_figures_are_a_link_writes_nothing_there(tmp_path, command):
+def test_a_resume_or_a_report_into_a_folder_whose_figures_are_a_link_writes_nothing_there(tmp_path, command, request):
     """frc, the atlas (14 files), design and ``oscillator report RUN`` (8 files) wrote their
     figures into a linked ``figures/``'s target."""
+    import shutil
+
     work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
     work.mkdir()
     elsewhere.mkdir()
     computes = command[0] != "run"
     command = [*command, "--workers", "1"] if computes else command
-    assert oscillator(*command, "-q", cwd=work).returncode == 0
+    if command[0] == "frc":  # the same command's folder, computed once for the tests (without figures)
+        shutil.copytree(request.getfixturevalue("small_frc"), work / "f")
+    else:
+        assert oscillator(*command, "-q", cwd=work).returncode == 0
     figures = work / "f" / "figures"
-    for path in figures.iterdir():
-        path.unlink()
-    figures.rmdir()
+    if figures.exists():
+        shutil.rmtree(figures)
     figures.symlink_to(elsewhere)
     answers = [oscillator(*command, cwd=work)] if computes else []
     if command[0] in ("run", "atlas"):
@@ -92,3 +97,23 @@ def test_an_output_folder_that_is_a_link_is_refused_as_a_link(tmp_path):
             done.stderr
         )
         assert (work / "f").is_symlink() and list(empty.iterdir()) == []
+
+
+def test_commands_without_out_in_the_same_second_get_folders_of_their_own(tmp_path, monkeypatch):
+    """Two atlases without --out started in the same second resumed one folder (the second refused
+    it as another computation): the second default name gets ``-2``, the third ``-3``."""
+    import time
+
+    from oscillator.cli.resumable import new_folder
+    from oscillator.io.cases import resolve_case
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(time, "strftime", lambda pattern: "20261127-120000")
+    case = resolve_case("instance-1")
+    names = []
+    for _ in range(3):
+        folder = new_folder(case, "atlas")
+        folder.mkdir(parents=True)
+        names.append(folder.name)
+    assert names == ["instance-1-atlas-20261127-120000", "instance-1-atlas-20261127-120000-2",
+                     "instance-1-atlas-20261127-120000-3"]  # fmt: skip

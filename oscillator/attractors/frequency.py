@@ -128,8 +128,14 @@ class FrequencyResponse(Presented):
     @property
     def bifurcations(self) -> pd.DataFrame:
         """Every branch's bifurcations, with ``branch`` (its index in ``branches``) first."""
-        frames = [branch.bifurcations.assign(branch=k) for k, branch in enumerate(self.branches)]
-        frame = pd.concat([f for f in frames if len(f)] or [pd.DataFrame(columns=["branch", self.param, "kind"])])
+        frames = [
+            branch.bifurcations.assign(branch=k) for k, branch in enumerate(self.branches) if len(branch.bifurcations)
+        ]
+        if not frames:  # none: the columns, each of its kind (an untyped empty column is refused on reading)
+            kinds = {"branch": int, self.param: float, "kind": object, **dict.fromkeys(STATE, float), "jump": float}
+            kinds |= {"before": object, "after": object}
+            return pd.DataFrame({name: pd.Series(dtype=kind) for name, kind in kinds.items()})
+        frame = pd.concat(frames)
         return frame[["branch", *[c for c in frame.columns if c != "branch"]]].reset_index(drop=True)
 
     @property

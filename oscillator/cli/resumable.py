@@ -5,6 +5,7 @@ one line and what it finished kept, the outputs written with a Ctrl-C held until
 from __future__ import annotations
 
 import contextlib
+import os
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -146,9 +147,18 @@ def say_reused(store: Any, reused: int, what: str, quiet: bool) -> None:
 
 
 def new_folder(case: Case, kind: str) -> Path:
+    """The default output folder of a resumable command (no ``--out``): ``runs/CASE-KIND-TIME``,
+    or with ``-2``, ``-3``, ... where a command of the same second has taken that name (without
+    ``--out`` nothing is resumed: two commands a second apart resumed each other's folder, or
+    refused it as another computation)."""
     from oscillator.io.files import default_name
 
-    return Path("runs") / f"{default_name(case.name)}-{kind}-{time.strftime('%Y%m%d-%H%M%S')}"
+    base = Path("runs") / f"{default_name(case.name)}-{kind}-{time.strftime('%Y%m%d-%H%M%S')}"
+    folder, count = base, 1
+    while os.path.lexists(folder):
+        count += 1
+        folder = base.with_name(f"{base.name}-{count}")
+    return folder
 
 
 def locked(folder: Path, scheduler: str | None) -> tuple[Any, Any]:
