@@ -102,7 +102,7 @@ def warn(message: str) -> None:
 
 
 #: What a command says when numba compiles the kernels (the first run after an install).
-COMPILING = "compiling the numerical kernels once (about 10 s); later runs start in about a second"
+COMPILING = "compiling the numerical kernels once (10 to 20 s); later runs start in a few seconds"
 #: Seconds of loading after which the command says so even if the cache seemed full (stale): loading
 #: takes about a second, a few on a busy machine; compiling about 10 s.
 SLOW_LOAD = 10.0
