@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import unicodedata
 
-__all__ = ["printable", "shown", "unsafe_characters"]
+__all__ = ["did_you_mean", "printable", "shown", "unsafe_characters"]
 
 
 def _unsafe(character: str) -> bool:
@@ -36,3 +36,15 @@ def shown(value: object, limit: int = 60) -> str:
     """``repr(value)`` for a message: printable, and cut to about ``limit`` characters."""
     text = printable(repr(value))
     return text if len(text) <= limit else f"{text[: limit - 1]}…"
+
+
+def did_you_mean(word: object, choices: list[str] | tuple[str, ...]) -> str:
+    """``"; did you mean 'x'?"`` for the choice closest to a misspelt ``word`` (the same letters
+    in another case first, then by :mod:`difflib`), or ``""`` where none is close."""
+    import difflib
+
+    if not isinstance(word, str) or len(word) > 64:
+        return ""
+    same = [choice for choice in choices if choice.lower() == word.lower()]
+    close = same or difflib.get_close_matches(word, list(choices), n=1, cutoff=0.5)
+    return f"; did you mean {close[0]!r}?" if close else ""

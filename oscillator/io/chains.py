@@ -1,0 +1,164 @@
+"""System files: a friction chain declared in TOML (docs/systems.md), read as untrusted text and
+written back.
+
+::
+
+    title = "Blade with a friction damper"
+    [system]
+    Omega = 1.0          # g = 9.8, t0 = 0.0 by default
+    [[mass]]
+    name = "blade"
+    m = 1.0
+    x = 0.0              # x, v: 0 by default
+    v = 0.5
+    [[element]]
+    type = "jenkins"
+    on = "blade"
+    with = "damper"      # left out: the ground
+    kt = 2.0
+    F = 0.3
+
+Numbers may be written as short expressions (``"pi/8"``).  Every key is checked: an unknown one
+is refused naming the mass or element and the keys it may have, with the closest one.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from oscillator.errors import InputError, OscillatorError
+from oscillator.io.expressions import parse_value
+from oscillator.io.files import read_untrusted
+from oscillator.model.chains import ELEMENTS, MAX_ELEMENTS, MAX_MASSES, Element, FrictionChain, Mass
+from oscillator.text import did_you_mean, printable, shown
+
+__all__ = ["MAX_SYSTEM_BYTES", "chain_from_dict", "chain_to_toml", "is_system", "load_system"]
+
+#: The largest system file read.
+MAX_SYSTEM_BYTES = 1 << 20
+_TOP = ("title", "system", "mass", "element")
+_SYSTEM = ("Omega", "g", "t0")
+_MASS = ("name", "m", "x", "v")
+_ENDS = ("type", "on", "with", "name")
+
+
+def is_system(data: dict[str, Any]) -> bool:
+    """Whether parsed TOML declares a friction chain (it has ``[[mass]]`` or ``[system]``)."""
+    return "mass" in data or "system" in data
+
+
+def _unknown(key: object, known: tuple[str, ...] | list[str], where: str) -> InputError:
+    hint = did_you_mean(str(key), list(known))
+    return InputError(f"{where}: unknown key {shown(key)}{hint} (known: {', '.join(known)})", field=str(key))
+
+
+def _list(data: dict[str, Any], key: str, most: int, source: str) -> list[dict[str, Any]]:
+    items = data.get(key, [])
+    if not isinstance(items, list) or not all(isinstance(item, dict) for item in items):
+        raise InputError(f"{source}: {key} must be written as [[{key}]] tables", field=key)
+    if len(items) > most:
+        what = "masses" if key == "mass" else "elements"
+        raise InputError(
+            f"{source}: {len(items)} [[{key}]] tables; at most {most} {what} fit the compiled kernels: split the "
+            "machine, or join masses",
+            field=key,
+        )
+    return items
+
+
+def _value(raw: object, key: str, where: str) -> Any:
+    if key in ("name", "on", "with", "type", "side"):
+        return raw  # text, checked by the model
+    try:
+        return parse_value(raw, field=key)
+    except InputError as error:
+        raise InputError(f"{where}: {error}", field=key) from None
+
+
+def _mass(table: dict[str, Any], number: int, source: str) -> Mass:
+    where = f"{source}: mass {number}"
+    for key in table:
+        if key not in _MASS:
+            raise _unknown(key, _MASS, where)
+    if "name" not in table or "m" not in table:
+        missing = "name" if "name" not in table else "m"
+        raise InputError(f"{where}: a mass needs {missing}; add it", field=missing)
+    return Mass(**{key: _value(raw, key, where) for key, raw in table.items()})
+
+
+def _element(table: dict[str, Any], number: int, source: str) -> Element:
+    """An ``[[element]]`` table: its type, ends and name, and its fields (each checked by
+    :class:`~oscillator.model.chains.Element`, which names an unknown one)."""
+    kind = table.get("type")
+    if not isinstance(kind, str):
+        raise InputError(
+            f"{source}: element {number}: give type = one of {', '.join(ELEMENTS)}, got {shown(kind)}", field="type"
+        )
+    name = table.get("name") or f"{kind}-{number}"
+    if "on" not in table:
+        raise InputError(f"{source}: element {shown(name)}: give on = <the mass it acts on>", field="on")
+    where = f"element {shown(name)}"
+    values = {key: _value(raw, key, where) for key, raw in table.items() if key not in _ENDS}
+    return Element(kind, table["on"], table.get("with"), values, name)
+
+
+def chain_from_dict(data: dict[str, Any], *, source: str = "<system>") -> FrictionChain:
+    """The friction chain parsed TOML declares (module docstring); refused naming the table and
+    key of the first bad value."""
+    for key in data:
+        if key not in _TOP:
+            raise _unknown(key, _TOP, source)
+    system = data.get("system", {})
+    if not isinstance(system, dict):
+        raise InputError(f"{source}: [system] must be a table", field="system")
+    for key in system:
+        if key not in _SYSTEM:
+            raise _unknown(key, _SYSTEM, f"{source}: [system]")
+    title = data.get("title", "")
+    if not isinstance(title, str) or len(title) > 300:
+        raise InputError(f"{source}: title must be text of at most 300 characters", field="title")
+    try:
+        masses = tuple(_mass(t, k + 1, source) for k, t in enumerate(_list(data, "mass", MAX_MASSES, source)))
+        elements = tuple(_element(t, k + 1, source) for k, t in enumerate(_list(data, "element", MAX_ELEMENTS, source)))
+        settings = {key: _value(raw, key, "[system]") for key, raw in system.items()}
+        return FrictionChain(masses, elements, title=title, **settings).checked()
+    except OscillatorError as error:
+        message = str(error)
+        text = message if message.startswith(source) else f"{source}: {message}"
+        raise InputError(text, field=error.field) from None
+
+
+def load_system(path: str | Path) -> FrictionChain:
+    """The friction chain a system file declares, read as untrusted text (at most
+    :data:`MAX_SYSTEM_BYTES`, UTF-8, a regular file)."""
+    path = Path(path)
+    source = printable(str(path))
+    text = read_untrusted(path, what="system file", field="case", limit=MAX_SYSTEM_BYTES).removeprefix("\ufeff")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{source}: malformed TOML: {error}", field="case") from None
+    except (ValueError, RecursionError, MemoryError):
+        raise InputError(f"{source}: malformed TOML: a value too long or nested too deeply", field="case") from None
+    return chain_from_dict(data, source=source)
+
+
+def chain_to_toml(chain: FrictionChain) -> str:
+    """The chain as a system file that :func:`load_system` reads back to an equal chain (every
+    field written, defaults included)."""
+    import tomli_w
+
+    data: dict[str, Any] = {"title": chain.title} if chain.title else {}
+    data["system"] = {"Omega": chain.Omega, "g": chain.g, "t0": chain.t0}
+    data["mass"] = [{"name": m.name, "m": m.m, "x": m.x, "v": m.v} for m in chain.masses]
+    elements = []
+    for element in chain.elements:
+        table: dict[str, Any] = {"type": element.type, "name": element.name, "on": element.on}
+        if element.with_ is not None:
+            table["with"] = element.with_
+        table |= {key: value for key, value in element.values.items() if value is not None}
+        elements.append(table)
+    data["element"] = elements
+    return tomli_w.dumps(data)

@@ -1,0 +1,309 @@
+"""Friction chains: the machines users declare (issue 51, docs/systems.md).
+
+A friction chain is ``N >= 1`` masses on a line and elements between them, each acting ``on`` a
+mass and ``with`` another mass, or with the ground when ``with`` is omitted:
+
+========== =============================== ================================================
+type       fields (default)                 what it is
+========== =============================== ================================================
+spring     k (0), k3 (0)                    ``k u + k3 u^3`` of the stretch ``u``
+damper     c (0), c3 (0)                    ``c w + c3 w^3`` of the stretch's rate ``w``
+force      Q, phi (0)                       ``Q sin(Omega t + phi)`` on the mass
+friction   mu_s, mu_k, N (m g), P (0), w (0) dry friction against the floor or a belt moving
+                                            at ``w``; ``P`` the feedback (the article's P_i)
+stop       side, at, K, C (0)               a compliant one-sided stop to the ground: "right"
+                                            touches when ``x >= at``, "left" when ``x <= at``
+contact    side, gap, K, C (0)              a compliant contact between two masses: "left"
+                                            closes when ``x_on - x_with <= -gap``, "right"
+                                            when ``x_on - x_with >= gap``
+jenkins    kt, F                            a spring ``kt`` in series with a Coulomb slider of
+                                            strength ``F`` (the slider's position a state)
+========== =============================== ================================================
+
+Every value is checked where it is given: a bad one raises one
+:class:`~oscillator.errors.InputError` naming the element (its name, or its type and number), the
+field and the fix.  The values are frozen dataclasses; :class:`FrictionChain`'s builder methods
+return a new chain each.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from oscillator.errors import InputError
+from oscillator.model.parameters import MAX_MAGNITUDE, as_float, is_finite_number
+from oscillator.text import did_you_mean, printable, shown
+
+__all__ = ["ELEMENTS", "MAX_ELEMENTS", "MAX_MASSES", "Element", "FrictionChain", "Mass"]
+
+#: The most masses and elements a chain may have: the compiled kernels hold a chain's state (two
+#: values a mass, one a Jenkins slider) and its modes in fixed-width arrays.
+MAX_MASSES = 32
+MAX_ELEMENTS = 256
+#: The longest name of a mass or an element.
+MAX_NAME = 64
+
+_REQUIRED = object()
+#: Each element type's fields and their defaults (``_REQUIRED``: no default); ``N = None``: the
+#: mass's weight ``m g``.
+ELEMENTS: dict[str, dict[str, Any]] = {
+    "spring": {"k": 0.0, "k3": 0.0},
+    "damper": {"c": 0.0, "c3": 0.0},
+    "force": {"Q": _REQUIRED, "phi": 0.0},
+    "friction": {"mu_s": _REQUIRED, "mu_k": _REQUIRED, "N": None, "P": 0.0, "w": 0.0},
+    "stop": {"side": _REQUIRED, "at": _REQUIRED, "K": _REQUIRED, "C": 0.0},
+    "contact": {"side": _REQUIRED, "gap": _REQUIRED, "K": _REQUIRED, "C": 0.0},
+    "jenkins": {"kt": _REQUIRED, "F": _REQUIRED},
+}
+#: Whether each type acts between two masses: always (``True``), never (``False``) or either.
+_WITH = {"spring": None, "damper": None, "force": False, "friction": False, "stop": False, "contact": True}
+_WITH["jenkins"] = None
+#: Fields that must not be negative, and those that must be positive.
+_NOT_NEGATIVE = {"c", "c3", "C", "gap", "F", "mu_k", "mu_s"}
+_POSITIVE = {"K", "kt", "N"}
+_SIDES = ("left", "right")
+
+
+def _name(value: object, what: str, field: str = "name") -> str:
+    """A name: text of 1 to :data:`MAX_NAME` printable characters."""
+    if not isinstance(value, str) or not value or len(value) > MAX_NAME or printable(value) != value:
+        raise InputError(
+            f"{what} must be a name of 1 to {MAX_NAME} printable characters, got {shown(value)}", field=field
+        )
+    return value
+
+
+def _number(value: object, where: str, name: str) -> float:
+    number = as_float(value)
+    if not is_finite_number(value) or abs(number) > MAX_MAGNITUDE:
+        raise InputError(f"{where}: {name} must be a finite number, got {shown(value)}", field=name)
+    return number
+
+
+@dataclass(frozen=True)
+class Mass:
+    """A mass on the line: its name, ``m`` (kg, > 0) and its initial position and velocity."""
+
+    name: str
+    m: float
+    x: float = 0.0
+    v: float = 0.0
+
+    def __post_init__(self) -> None:
+        _name(self.name, "a mass's name")
+        where = f"mass {printable(self.name)!r}"
+        for key in ("m", "x", "v"):
+            object.__setattr__(self, key, _number(getattr(self, key), where, key))
+        if not self.m > 0:
+            raise InputError(f"{where}: m must be positive (kg), got {self.m:g}", field="m")
+
+
+@dataclass(frozen=True)
+class Element:
+    """An element of a chain: its ``type`` (:data:`ELEMENTS`), the mass it acts ``on``, the mass
+    it acts ``with`` (``None``: the ground), its fields with their defaults filled in, and a name
+    (by default its type and number, given by the chain)."""
+
+    type: str
+    on: str
+    with_: str | None = None
+    values: Mapping[str, Any] = field(default_factory=dict)
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        where = self.where
+        if self.type not in ELEMENTS:
+            hint = did_you_mean(str(self.type), list(ELEMENTS))
+            raise InputError(
+                f"{where}: unknown type {shown(self.type)}{hint} (one of {', '.join(ELEMENTS)})", field="type"
+            )
+        fields = ELEMENTS[self.type]
+        unknown = [key for key in self.values if key not in fields]
+        if unknown:
+            hint = did_you_mean(str(unknown[0]), list(fields))
+            raise InputError(
+                f"{where}: unknown field {shown(unknown[0])}{hint} (a {self.type} has {', '.join(fields)})",
+                field=str(unknown[0]),
+            )
+        missing = [key for key, default in fields.items() if default is _REQUIRED and key not in self.values]
+        if missing:
+            raise InputError(f"{where}: a {self.type} needs {', '.join(missing)}; add it", field=missing[0])
+        object.__setattr__(self, "values", self._checked({**fields, **self.values}))
+        self._check_ends(where)
+
+    @property
+    def where(self) -> str:
+        """How messages name the element."""
+        return f"element {printable(self.name)!r}" if self.name else f"a {printable(str(self.type))} element"
+
+    def _checked(self, values: dict[str, Any]) -> dict[str, Any]:
+        where, checked = self.where, {}
+        for key, value in values.items():
+            if key == "side":
+                if value not in _SIDES:
+                    raise InputError(f"{where}: side must be 'left' or 'right', got {shown(value)}", field="side")
+                checked[key] = value
+                continue
+            if value is None:  # N: the mass's weight
+                checked[key] = None
+                continue
+            number = _number(value, where, key)
+            if key in _NOT_NEGATIVE and number < 0:
+                raise InputError(f"{where}: {key} must not be negative, got {number:g}", field=key)
+            if key in _POSITIVE and not number > 0:
+                raise InputError(f"{where}: {key} must be positive, got {number:g}", field=key)
+            checked[key] = number
+        if self.type == "friction" and checked["mu_s"] < checked["mu_k"]:
+            raise InputError(
+                f"{where}: mu_s ({checked['mu_s']:g}) must be at least mu_k ({checked['mu_k']:g}): static friction "
+                "is not weaker than kinetic",
+                field="mu_s",
+            )
+        return checked
+
+    def _check_ends(self, where: str) -> None:
+        _name(self.on, f"{where}: on", "on")
+        between = _WITH[self.type]
+        if self.with_ is None and between:
+            raise InputError(
+                f"{where}: a {self.type} acts between two masses; give with = <another mass>", field="with"
+            )
+        if self.with_ is not None:
+            _name(self.with_, f"{where}: with", "with")
+            if between is False:
+                raise InputError(
+                    f"{where}: a {self.type} acts on one mass against the ground; leave out with", field="with"
+                )
+            if self.with_ == self.on:
+                raise InputError(f"{where}: with must be another mass than on ({printable(self.on)!r})", field="with")
+
+
+@dataclass(frozen=True)
+class FrictionChain:
+    """A machine of masses and elements (module docstring), with the forcing frequency ``Omega``
+    every ``force`` shares, gravity ``g`` and the start time ``t0``.
+
+    Build it from a case file (:func:`oscillator.io.chains.load_system`) or by its methods, each
+    returning a new chain::
+
+        machine = (
+            FrictionChain(Omega=1.0)
+            .mass("blade", m=1.0, v=0.5)
+            .mass("damper", m=0.1)
+            .spring("blade", k=1.0)
+            .jenkins("blade", "damper", kt=2.0, F=0.3)
+            .force("blade", Q=0.5)
+        )
+    """
+
+    masses: tuple[Mass, ...] = ()
+    elements: tuple[Element, ...] = ()
+    Omega: float = 1.0
+    g: float = 9.8
+    t0: float = 0.0
+    title: str = ""
+
+    def __post_init__(self) -> None:
+        for key in ("Omega", "g", "t0"):
+            object.__setattr__(self, key, _number(getattr(self, key), "the system", key))
+        if not self.Omega > 0:
+            raise InputError(f"the system: Omega must be positive (rad/s), got {self.Omega:g}", field="Omega")
+        if len(self.masses) > MAX_MASSES or len(self.elements) > MAX_ELEMENTS:
+            raise InputError(
+                f"the system has {len(self.masses)} masses and {len(self.elements)} elements; at most {MAX_MASSES} "
+                f"masses and {MAX_ELEMENTS} elements fit the compiled kernels: split the machine, or join masses",
+                field="mass" if len(self.masses) > MAX_MASSES else "element",
+            )
+        names = [mass.name for mass in self.masses]
+        twice = next((name for name in names if names.count(name) > 1), None)
+        if twice is not None:
+            raise InputError(f"two masses are named {printable(twice)!r}; give each its own name", field="name")
+        named = [dataclasses.replace(e, name=e.name or f"{e.type}-{k + 1}") for k, e in enumerate(self.elements)]
+        object.__setattr__(self, "elements", tuple(named))
+        self._check_elements(set(names))
+
+    def _check_elements(self, names: set[str]) -> None:
+        seen: dict[str, str] = {}
+        labels = [element.name for element in self.elements]
+        for element in self.elements:
+            if labels.count(element.name) > 1:
+                raise InputError(f"two elements are named {printable(element.name)!r}; name each once", field="name")
+            for end, field_name in ((element.on, "on"), (element.with_, "with")):
+                if end is not None and end not in names:
+                    hint = did_you_mean(end, sorted(names))
+                    known = ", ".join(repr(n) for n in sorted(names)) or "none yet: declare the masses first"
+                    raise InputError(
+                        f"{element.where}: {field_name} = {printable(end)!r} is no mass of the system{hint} "
+                        f"(masses: {known})",
+                        field=field_name,
+                    )
+            if element.type == "friction":
+                if element.on in seen:
+                    raise InputError(
+                        f"{element.where}: mass {printable(element.on)!r} has a friction element already "
+                        f"({printable(seen[element.on])!r}); give one friction element a mass",
+                        field="on",
+                    )
+                seen[element.on] = element.name
+
+    def checked(self) -> FrictionChain:
+        """The chain, refused unless it has a mass: what a simulation needs."""
+        if not self.masses:
+            raise InputError("the system has no mass; declare one with [[mass]] (name, m)", field="mass")
+        return self
+
+    # -- the builder ----------------------------------------------------------------------------
+
+    def mass(self, name: str, m: float, x: float = 0.0, v: float = 0.0) -> FrictionChain:
+        """This chain with one more mass."""
+        return dataclasses.replace(self, masses=(*self.masses, Mass(name, m, x, v)))
+
+    def element(self, type: str, on: str, with_: str | None = None, *, name: str = "", **values: Any) -> FrictionChain:
+        """This chain with one more element of ``type`` (:data:`ELEMENTS`)."""
+        return dataclasses.replace(self, elements=(*self.elements, Element(type, on, with_, values, name)))
+
+    def spring(
+        self, on: str, with_: str | None = None, *, name: str = "", k: float = 0.0, k3: float = 0.0
+    ) -> FrictionChain:
+        return self.element("spring", on, with_, name=name, k=k, k3=k3)
+
+    def damper(
+        self, on: str, with_: str | None = None, *, name: str = "", c: float = 0.0, c3: float = 0.0
+    ) -> FrictionChain:
+        return self.element("damper", on, with_, name=name, c=c, c3=c3)
+
+    def force(self, on: str, *, name: str = "", Q: float, phi: float = 0.0) -> FrictionChain:
+        return self.element("force", on, name=name, Q=Q, phi=phi)
+
+    def friction(self, on: str, *, name: str = "", **values: Any) -> FrictionChain:
+        """Dry friction on ``on``: ``mu_s``, ``mu_k``, and ``N``, ``P``, ``w`` (a belt's speed)."""
+        return self.element("friction", on, name=name, **values)
+
+    def stop(self, on: str, *, name: str = "", side: str, at: float, K: float, C: float = 0.0) -> FrictionChain:
+        return self.element("stop", on, name=name, side=side, at=at, K=K, C=C)
+
+    def contact(
+        self, on: str, with_: str, *, name: str = "", side: str, gap: float, K: float, C: float = 0.0
+    ) -> FrictionChain:
+        return self.element("contact", on, with_, name=name, side=side, gap=gap, K=K, C=C)
+
+    def jenkins(self, on: str, with_: str | None = None, *, name: str = "", kt: float, F: float) -> FrictionChain:
+        return self.element("jenkins", on, with_, name=name, kt=kt, F=F)
+
+    # -- what the chain is made of ----------------------------------------------------------------
+
+    @property
+    def period(self) -> float:
+        """The forcing period ``2 pi / Omega`` (s)."""
+        return 2.0 * math.pi / self.Omega
+
+    def normal_force(self, element: Element) -> float:
+        """A friction element's normal force: its ``N``, or its mass's weight ``m g``."""
+        if element.values.get("N") is not None:
+            return float(element.values["N"])
+        mass = next(m for m in self.masses if m.name == element.on)
+        return mass.m * self.g
