@@ -134,9 +134,9 @@ BAD = {
         "side must be 'left' or 'right'",
         "side",
     ),
-    "a stop without stiffness": (
-        BLADE + '[[element]]\ntype = "stop"\non = "blade"\nside = "right"\nat = 1\nK = 0\n',
-        "element 'stop-4': K must be positive",
+    "a stop of negative stiffness": (
+        BLADE + '[[element]]\ntype = "stop"\non = "blade"\nside = "right"\nat = 1\nK = -1\n',
+        "element 'stop-4': K must not be negative",
         "K",
     ),
     "text for a number": (_with(BLADE, "F = 0.3", 'F = "strong"'), "element 'jenkins-2': F = 'strong' is not", "F"),
@@ -159,3 +159,75 @@ def test_a_bad_declaration_is_refused_naming_the_element_and_the_field(tmp_path,
     message = str(refused.value)
     assert said in message and refused.value.field == field, message
     assert message.startswith(str(tmp_path)) and "\n" not in message and "\x1b" not in message
+
+
+def test_the_articles_system_as_a_chain_has_the_articles_field_in_every_mode():
+    """The article's two masses written as a friction chain (article_chain): in each of its 36
+    modes (each mass slipping either way or stuck, the contact and the stop open or closed), at
+    random states and times of Instance 1 and of a system with every term on, the chain's compiled
+    field equals the built-in one (model.kernels.rates) to 1e-12."""
+    import itertools
+
+    import numpy as np
+
+    from oscillator.io.cases import resolve_case
+    from oscillator.model.chain_fields import arrays_of, chain_derivative
+    from oscillator.model.chains import article_chain, article_mode
+    from oscillator.model.fields import coefficients
+    from oscillator.model.kernels import rates
+
+    every = {"C2": 0.1, "C3": 0.3, "C5": 0.05, "K2": 0.2, "K5": 0.3, "P1": 0.4, "P2": 0.2, "phi2": 0.7, "Q2": 3.0}
+    rng = np.random.default_rng(51)
+    for case in (resolve_case("instance-1"), resolve_case("instance-1", **every)):
+        p = case.parameters
+        chain = article_chain(p, case.initial)
+        a = arrays_of(chain)
+        c = coefficients(p)
+        for s1, s2, left, right in itertools.product((-1, 0, 1), (-1, 0, 1), (False, True), (False, True)):
+            mode = np.array(article_mode(s1, s2, left, right), dtype=np.int64)
+            for _ in range(5):
+                t, (x1, v1, x2, v2) = rng.uniform(0, 10), rng.uniform(-5, 5, 4)
+                v1, v2 = (v1 if s1 else 0.0), (v2 if s2 else 0.0)  # a stuck mass rests
+                y, yp = np.array([x1, v1, x2, v2]), np.empty(4)
+                chain_derivative(t, y, yp, mode, a.mass, a.kind, a.on, a.other, a.value, a.slider, a.friction, a.Omega)
+                expected = rates(t, x1, v1, x2, v2, c, s1, s2, left, right)[:4]
+                np.testing.assert_allclose(yp, expected, rtol=1e-12, atol=1e-12 * max(1.0, np.max(np.abs(expected))))
+
+
+def test_a_jenkins_slider_and_a_belt_in_their_modes():
+    """A mass on a belt moving at w = 0.4 with a Jenkins element to the ground (kt = 2, F = 0.3) and
+    a contact to a second mass: stuck to the belt it moves with it (x' = w, v' = 0); the stuck
+    slider holds (z' = 0) and pulls with kt (u - z); slipping, it pulls with F against its motion
+    and follows (z' = u'); the closed contact pushes with K (u + gap) + C u'."""
+    import numpy as np
+
+    from oscillator.model.chain_fields import arrays_of, chain_derivative, state_of
+
+    chain = (
+        FrictionChain(Omega=2.0)
+        .mass("a", m=2.0, x=0.5, v=0.4)
+        .mass("b", m=1.0, x=1.0)
+        .friction("a", mu_s=0.3, mu_k=0.2, w=0.4)
+        .jenkins("a", kt=2.0, F=0.3)
+        .contact("a", "b", side="left", gap=0.1, K=10.0, C=0.5)
+    )
+    a = arrays_of(chain)
+    y = state_of(chain)
+    assert a.size == 5 and list(y) == [0.5, 0.4, 1.0, 0.0, 0.5]  # the slider unstretched at a's place
+    y[4] = 0.2  # the slider has slipped back: its spring is stretched by 0.3
+
+    def field(*mode):
+        yp = np.empty(5)
+        chain_derivative(0.0, y, yp, np.array(mode, dtype=np.int64), a.mass, a.kind, a.on, a.other, a.value,
+                         a.slider, a.friction, a.Omega)  # fmt: skip
+        return yp
+
+    stuck = field(0, 0, 0)
+    assert list(stuck[:2]) == [0.4, 0.0] and stuck[4] == 0.0  # a rides the belt; the slider holds
+    assert stuck[3] == 0.0  # b: no force on it with the contact open
+    slipping = field(1, 0, 0)
+    assert slipping[1] == pytest.approx((-2.0 * 0.3 - 0.2 * 2.0 * 9.8) / 2.0)  # kt (u - z) and kinetic friction
+    assert field(1, 1, 0)[1] == pytest.approx((-0.3 - 0.2 * 2.0 * 9.8) / 2.0) and field(1, 1, 0)[4] == 0.4
+    closed = field(1, 1, 1)
+    push = 10.0 * (0.5 - 1.0 + 0.1) + 0.5 * (0.4 - 0.0)  # K (u + gap) + C u' = -3.8: a pushed by +3.8, b by -3.8
+    assert closed[1] == pytest.approx((-0.3 - 0.2 * 2.0 * 9.8 - push) / 2.0) and closed[3] == pytest.approx(push / 1.0)

@@ -35,10 +35,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from oscillator.errors import InputError
-from oscillator.model.parameters import MAX_MAGNITUDE, as_float, is_finite_number
+from oscillator.model.parameters import MAX_MAGNITUDE, InitialState, Parameters, as_float, is_finite_number
 from oscillator.text import did_you_mean, printable, shown
 
-__all__ = ["ELEMENTS", "MAX_ELEMENTS", "MAX_MASSES", "Element", "FrictionChain", "Mass"]
+__all__ = [
+    "ELEMENTS",
+    "MAX_ELEMENTS",
+    "MAX_MASSES",
+    "Element",
+    "FrictionChain",
+    "Mass",
+    "article_chain",
+    "article_mode",
+]
 
 #: The most masses and elements a chain may have: the compiled kernels hold a chain's state (two
 #: values a mass, one a Jenkins slider) and its modes in fixed-width arrays.
@@ -63,8 +72,8 @@ ELEMENTS: dict[str, dict[str, Any]] = {
 _WITH = {"spring": None, "damper": None, "force": False, "friction": False, "stop": False, "contact": True}
 _WITH["jenkins"] = None
 #: Fields that must not be negative, and those that must be positive.
-_NOT_NEGATIVE = {"c", "c3", "C", "gap", "F", "mu_k", "mu_s"}
-_POSITIVE = {"K", "kt", "N"}
+_NOT_NEGATIVE = {"c", "c3", "C", "K", "gap", "F", "mu_k", "mu_s", "P"}
+_POSITIVE = {"kt", "N"}
 _SIDES = ("left", "right")
 
 
@@ -307,3 +316,32 @@ class FrictionChain:
             return float(element.values["N"])
         mass = next(m for m in self.masses if m.name == element.on)
         return mass.m * self.g
+
+
+def article_chain(p: Parameters, initial: InitialState) -> FrictionChain:
+    """The article's two masses as a friction chain (docs/model.md): each mass's spring (K1, K2;
+    K4, K5) and damper (C1, C2; C4, C5) to the ground, its forcing (Q1, phi1; Q2, phi2) and its
+    friction (mu_s, mu_k, N = m g, feedback P1; P2); the contact between the masses on the left
+    (gap d, K3, C3) and m1's stop on the right at d1 (K6).  Its elements, in this order, are those
+    :func:`article_mode` numbers."""
+    return (
+        FrictionChain(Omega=p.Omega, g=p.g, t0=initial.t0, title="the article's system")
+        .mass("m1", p.m1, initial.x1, initial.v1)
+        .mass("m2", p.m2, initial.x2, initial.v2)
+        .spring("m1", k=p.K1, k3=p.K2)
+        .damper("m1", c=p.C1, c3=p.C2)
+        .force("m1", Q=p.Q1, phi=p.phi1)
+        .friction("m1", mu_s=p.mu_s, mu_k=p.mu_k, P=p.P1)
+        .spring("m2", k=p.K4, k3=p.K5)
+        .damper("m2", c=p.C4, c3=p.C5)
+        .force("m2", Q=p.Q2, phi=p.phi2)
+        .friction("m2", mu_s=p.mu_s, mu_k=p.mu_k, P=p.P2)
+        .contact("m1", "m2", side="left", gap=p.d, K=p.K3, C=p.C3)
+        .stop("m1", side="right", at=p.d1, K=p.K6)
+    )
+
+
+def article_mode(s1: int, s2: int, left: bool, right: bool) -> list[int]:
+    """The article's mode (each mass's velocity sign, the contacts) as :func:`article_chain`'s
+    mode vector: one integer per element."""
+    return [0, 0, 0, s1, 0, 0, 0, s2, int(left), int(right)]
