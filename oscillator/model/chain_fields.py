@@ -142,7 +142,7 @@ def element_force(
     omega: float,
 ) -> float:  # pragma: no cover - compiled
     """The force element ``row`` puts on its ``on`` mass in ``mode`` (N; the ``with`` mass takes
-    it with the other sign); friction's is not here (it is the field's)."""  # fmt: skip
+    it with the other sign); friction's is not here (it is the field's)."""
     code, v = kind[row], value[row]
     u, w = _stretch(y, on[row], other[row])
     force: float = 0.0
@@ -176,7 +176,7 @@ def chain_derivative(
     friction: np.ndarray,
     omega: float,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``yp`` with the chain's field in ``mode`` (module docstring)."""  # fmt: skip
+    """Fill ``yp`` with the chain's field in ``mode`` (module docstring)."""
     n = mass.shape[0]
     forces = np.zeros(n)
     for row in range(kind.shape[0]):
