@@ -37,6 +37,7 @@ __all__ = [
     "frequency_store",
     "measures_part",
     "no_points",
+    "sweep_columns",
     "sweep_part",
 ]
 
@@ -183,11 +184,16 @@ def measures_part(index: int, branch: Branch) -> Expected:
     return Expected({"branch": index, "points": len(points)}, columns, len(points), equal)
 
 
+def sweep_columns(param: str) -> dict[str, str]:
+    """The kinds of a sweep's columns (:func:`~oscillator.attractors.responding.sweep`)."""
+    columns = dict.fromkeys([param, "period", *STATE, *RESPONSE_COLUMNS], "number")
+    return columns | {"direction": "text", "signature": "text", "jump": "flag"}
+
+
 def sweep_part(param: str, direction: str, values: np.ndarray) -> Expected:
     """What the part of the sweep ``direction`` over ``values`` must hold: one row per value, in
     order, with its direction, period (0 or more), signature, jump and every measure."""
-    columns = dict.fromkeys([param, "period", *STATE, *RESPONSE_COLUMNS], "number")
-    columns |= {"direction": "text", "signature": "text", "jump": "flag"}
+    columns = sweep_columns(param)
     equal = {param: np.asarray(values, dtype=float), "direction": np.full(len(values), direction, dtype=object)}
 
     def check(frame: pd.DataFrame, meta: Any) -> str:

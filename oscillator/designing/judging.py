@@ -28,7 +28,17 @@ from oscillator.hybrid.counting import runs
 
 _STATE = ("x1", "v1", "x2", "v2")
 
-__all__ = ["Judged", "Seen", "follow", "seen_from_table", "seen_table", "survey", "survey_part", "survey_task"]
+__all__ = [
+    "Judged",
+    "Seen",
+    "follow",
+    "seen_columns",
+    "seen_from_table",
+    "seen_table",
+    "survey",
+    "survey_part",
+    "survey_task",
+]
 
 
 @dataclass(frozen=True)
@@ -65,13 +75,19 @@ def seen_table(seen: list[Seen]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS, "failure"])
 
 
+def seen_columns() -> dict[str, str]:
+    """The kinds of :func:`seen_table`'s columns (a design store's part, a design folder's
+    attractors)."""
+    from oscillator.orbits.response import COLUMNS
+
+    return dict.fromkeys(["band", "period", *_STATE, *COLUMNS], "number") | {"failure": "text"}
+
+
 def survey_part(candidate: int, band: int, design: np.ndarray, value: float) -> Expected:
     """What the part of candidate ``candidate``'s survey at band value number ``band`` must hold
     (a design store's part): :func:`seen_table`'s columns, one row or more, all at ``value``,
     whole periods, and the runs it took in its metadata."""
-    from oscillator.orbits.response import COLUMNS
-
-    columns = dict.fromkeys(["band", "period", *_STATE, *COLUMNS], "number") | {"failure": "text"}
+    columns = seen_columns()
 
     def check(frame: pd.DataFrame, meta: Any) -> str:
         periods = frame["period"].to_numpy(float)

@@ -289,11 +289,10 @@ def read_design(folder: Path) -> Design:
     """
     import json
 
-    from oscillator.designing.judging import seen_from_table
+    from oscillator.designing.judging import seen_columns, seen_from_table
     from oscillator.designing.optimise import Design
     from oscillator.errors import InputError
     from oscillator.io.files import read_untrusted
-    from oscillator.orbits.response import COLUMNS
     from oscillator.report.orbit_folders import checked_table
     from oscillator.text import printable
 
@@ -303,10 +302,10 @@ def read_design(folder: Path) -> Design:
         raise InputError(
             f"{printable(str(folder))} is not a finished design: best.json is missing; {_REMAKE}", field="best.json"
         )
-    seen_kinds = dict.fromkeys(["band", "period", "x1", "v1", "x2", "v2", *COLUMNS], "number") | {"failure": "text"}
     tables = {}
     for table in ("attractors", "start-attractors"):
-        tables[table] = checked_table(folder / f"{table}.parquet", seen_kinds, folder="design folder", remake=_REMAKE)
+        path = folder / f"{table}.parquet"
+        tables[table] = checked_table(path, seen_columns(), folder="design folder", remake=_REMAKE)
     scores = dict.fromkeys([*problem.names, "objective", "violation", "runs"], "number")
     tables["candidates"] = checked_table(folder / "candidates.parquet", scores, folder="design folder", remake=_REMAKE)
     history = checked_table(folder / "history.parquet", {}, folder="design folder", remake=_REMAKE)

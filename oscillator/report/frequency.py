@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from oscillator.analysis.axes import STATE as STATE_COLUMNS
 from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
 from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS
@@ -273,28 +272,20 @@ def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:
     import json
 
     from oscillator.attractors.frequency import FrequencyResponse
-    from oscillator.attractors.frequency_parts import branch_part_columns, branches_from_disk, branches_problem
+    from oscillator.attractors.frequency_parts import (
+        branch_part_columns,
+        branches_from_disk,
+        branches_problem,
+        sweep_columns,
+    )
     from oscillator.io.files import read_untrusted
-    from oscillator.model.parameters import Parameters
     from oscillator.orbits.branch import points_from_disk
     from oscillator.orbits.response import COLUMNS as RESPONSE_COLUMNS
-    from oscillator.report.global_results import marker_identity
     from oscillator.report.orbit_folders import checked_table
     from oscillator.report.outputs import folder_case
     from oscillator.text import printable
 
-    def damaged(why: str) -> InputError:
-        return InputError(f"{printable(str(folder))}/frc.json is damaged ({why}); {_REMAKE}", field="folder")
-
-    known = marker_identity(folder / "frc.json")
-    try:
-        param = Parameters.check_name(known.get("param"), "folder")
-        low, high = (float(value) for value in known["span"])
-    except (KeyError, TypeError, ValueError, InputError) as error:
-        raise damaged(f"its parameter or span: {error}") from None
-    period = known.get("period", 1)
-    if isinstance(period, bool) or not isinstance(period, int) or period < 1:
-        raise damaged("its period is not a whole number of forcing periods")
+    param, (low, high), period = _identity_of(folder)
     case = folder_case(folder, "frc.json")
     where = folder / RESPONSE
     if not where.is_file():
@@ -319,10 +310,31 @@ def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:
             f"{printable(str(folder))}: points.parquet and {RESPONSE} disagree ({why}); {_REMAKE}", field=RESPONSE
         )
     branches = branches_from_disk(case, param, branch_table, meta)
-    sweep_kinds = dict.fromkeys([param, "period", *STATE_COLUMNS, *RESPONSE_COLUMNS], "number")
-    sweep_kinds |= {"direction": "text", "signature": "text", "jump": "flag"}
-    sweeps = checked_table(folder / "sweeps.parquet", sweep_kinds, folder="frequency-response folder", remake=_REMAKE)
+    sweeps = checked_table(
+        folder / "sweeps.parquet", sweep_columns(param), folder="frequency-response folder", remake=_REMAKE
+    )
     if not sweeps["direction"].isin(("up", "down")).all():
         raise InputError(f"{printable(str(folder))}/sweeps.parquet is damaged (a direction); {_REMAKE}", field="folder")
     found = FrequencyResponse(param, tuple(branches), points_from_disk(table), sweeps, case, period)
     return found, measure
+
+
+def _identity_of(folder: Path) -> tuple[str, tuple[float, float], int]:
+    """The parameter, the span and the period a frequency-response folder's ``frc.json`` holds."""
+    from oscillator.model.parameters import Parameters
+    from oscillator.report.global_results import marker_identity
+    from oscillator.text import printable
+
+    def damaged(why: str) -> InputError:
+        return InputError(f"{printable(str(folder))}/frc.json is damaged ({why}); {_REMAKE}", field="folder")
+
+    known = marker_identity(folder / "frc.json")
+    try:
+        param = Parameters.check_name(known.get("param"), "folder")
+        low, high = (float(value) for value in known["span"])
+    except (KeyError, TypeError, ValueError, InputError) as error:
+        raise damaged(f"its parameter or span: {error}") from None
+    period = known.get("period", 1)
+    if isinstance(period, bool) or not isinstance(period, int) or period < 1:
+        raise damaged("its period is not a whole number of forcing periods")
+    return param, (low, high), period

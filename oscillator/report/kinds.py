@@ -65,14 +65,14 @@ class Kind:
 _HERE = __name__
 
 
-def _marker(folder: Path, marker: str, known: dict[str, Any], name: str, format: int | None = None) -> None:
+def _marker(folder: Path, marker: str, known: dict[str, Any], name: str, layout: int | None = None) -> None:
     """A saved folder's marker (the identity, status ``saved``, the format of the parts its
     command keeps: the attractors' store's by default) and ``case.toml``."""
     from oscillator.attractors.store import FORMAT
     from oscillator.io.files import atomic_path
 
-    format = FORMAT if format is None else format
-    kept = {"identity": known, **({"format": format} if format is not None else {}), "case_name": name}
+    layout = FORMAT if layout is None else layout
+    kept = {"identity": known, "format": layout, "case_name": name}
     text = json.dumps(kept | {"status": "saved"}, indent=2, default=str)
     for file, content in ((marker, text), ("case.toml", str(known["case"]))):
         with atomic_path(folder / file) as temporary:
