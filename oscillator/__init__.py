@@ -47,6 +47,10 @@ _EXPORTS = {
     "EnergyAudit": "oscillator.hybrid.result",
     "SolverStats": "oscillator.hybrid.result",
     "simulate": "oscillator.hybrid.simulate",
+    "FrictionChain": "oscillator.model.chains",
+    "ChainResult": "oscillator.hybrid.chain_run",
+    "simulate_chain": "oscillator.hybrid.chain_run",
+    "load_system": "oscillator.io.chains",
     "read_run": "oscillator.saved",
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
@@ -91,6 +95,7 @@ __all__ = [
     "Basins",
     "Branch",
     "Case",
+    "ChainResult",
     "Curve",
     "Design",
     "EnergyAudit",
@@ -99,6 +104,7 @@ __all__ = [
     "ExpectedEvent",
     "Explorer",
     "FrequencyResponse",
+    "FrictionChain",
     "InitialState",
     "InputError",
     "Interrupted",
@@ -128,6 +134,7 @@ __all__ = [
     "follow_attractors",
     "frequency_response",
     "load_case",
+    "load_system",
     "lyapunov",
     "read_run",
     "regime_atlas",
@@ -135,6 +142,7 @@ __all__ = [
     "response",
     "sensitivities",
     "simulate",
+    "simulate_chain",
     "trace_curve",
 ]
 
@@ -152,11 +160,14 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.exploring import explore
     from oscillator.exploring.app import Explorer
+    from oscillator.hybrid.chain_run import ChainResult, simulate_chain
     from oscillator.hybrid.record import Segment
     from oscillator.hybrid.recording import SaveAt
     from oscillator.hybrid.result import EnergyAudit, Result, SolverStats, Status
     from oscillator.hybrid.simulate import simulate
     from oscillator.io.cases import Case, ExpectedEvent, case_names, load_case, resolve_case
+    from oscillator.io.chains import load_system
+    from oscillator.model.chains import FrictionChain
     from oscillator.model.events import Event, EventKind
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode

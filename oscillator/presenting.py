@@ -21,7 +21,9 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
+    from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 else:
@@ -57,6 +59,12 @@ class Presenter(Protocol):
     def save_global(self, found: object, folder: str | Path) -> Path: ...
 
     def global_html(self, found: object) -> str: ...
+
+    def plot_system(self, chain: FrictionChain) -> Figure: ...
+
+    def plot_chain_result(self, result: ChainResult) -> Figure: ...
+
+    def save_chain_result(self, result: ChainResult, folder: str | Path, *, figures: bool, report: bool) -> Path: ...
 
 
 _registered: list[Presenter] = []

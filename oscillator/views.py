@@ -12,7 +12,9 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
+    from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.shooting import Orbit
 
@@ -89,3 +91,18 @@ class Views:
         from oscillator.report.kinds import html
 
         return html(found)
+
+    def plot_system(self, chain: FrictionChain) -> Figure:
+        from oscillator.report.chain_figures import schematic_figure
+
+        return schematic_figure(chain)
+
+    def plot_chain_result(self, result: ChainResult) -> Figure:
+        from oscillator.report.chain_figures import motion_figure
+
+        return motion_figure(result)
+
+    def save_chain_result(self, result: ChainResult, folder: str | Path, *, figures: bool, report: bool) -> Path:
+        from oscillator.report.chain_runs import save_chain_result
+
+        return save_chain_result(result, folder, figures=figures, report=report)

@@ -171,7 +171,7 @@ def test_the_articles_system_as_a_chain_has_the_articles_field_in_every_mode():
     import numpy as np
 
     from oscillator.io.cases import resolve_case
-    from oscillator.model.chain_fields import arrays_of, chain_derivative
+    from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
     from oscillator.model.chains import article_chain, article_mode
     from oscillator.model.fields import coefficients
     from oscillator.model.kernels import rates
@@ -189,7 +189,7 @@ def test_the_articles_system_as_a_chain_has_the_articles_field_in_every_mode():
                 t, (x1, v1, x2, v2) = rng.uniform(0, 10), rng.uniform(-5, 5, 4)
                 v1, v2 = (v1 if s1 else 0.0), (v2 if s2 else 0.0)  # a stuck mass rests
                 y, yp = np.array([x1, v1, x2, v2]), np.empty(4)
-                chain_derivative(t, y, yp, mode, a.mass, a.kind, a.on, a.other, a.value, a.slider, a.friction, a.Omega)
+                chain_derivative(t, y, yp, pack(a, mode))
                 expected = rates(t, x1, v1, x2, v2, c, s1, s2, left, right)[:4]
                 np.testing.assert_allclose(yp, expected, rtol=1e-12, atol=1e-12 * max(1.0, np.max(np.abs(expected))))
 
@@ -201,7 +201,7 @@ def test_a_jenkins_slider_and_a_belt_in_their_modes():
     and follows (z' = u'); the closed contact pushes with K (u + gap) + C u'."""
     import numpy as np
 
-    from oscillator.model.chain_fields import arrays_of, chain_derivative, state_of
+    from oscillator.model.chain_fields import arrays_of, chain_derivative, pack, state_of
 
     chain = (
         FrictionChain(Omega=2.0)
@@ -213,13 +213,17 @@ def test_a_jenkins_slider_and_a_belt_in_their_modes():
     )
     a = arrays_of(chain)
     y = state_of(chain)
-    assert a.size == 5 and list(y) == [0.5, 0.4, 1.0, 0.0, 0.5]  # the slider unstretched at a's place
+    assert a.size == 5 and list(y) == [0.5, 0.4, 1.0, 0.0, 0.5]
+    from oscillator.model.chain_fields import data_length
+
+    assert len(pack(a, [0, 0, 0])) == data_length(
+        2, 3
+    )  # what the callbacks read  # the slider unstretched at a's place
     y[4] = 0.2  # the slider has slipped back: its spring is stretched by 0.3
 
     def field(*mode):
         yp = np.empty(5)
-        chain_derivative(0.0, y, yp, np.array(mode, dtype=np.int64), a.mass, a.kind, a.on, a.other, a.value,
-                         a.slider, a.friction, a.Omega)  # fmt: skip
+        chain_derivative(0.0, y, yp, pack(a, mode))
         return yp
 
     stuck = field(0, 0, 0)

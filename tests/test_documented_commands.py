@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -145,11 +146,13 @@ def shrunk(arguments: list[str]) -> list[str]:
 
 
 def _fixtures(folder: Path) -> None:
-    """The files the pages name: their example case, a malformed file, a chattering case."""
+    """The files the pages name: their example case, a malformed file, a chattering case, the
+    system files of docs/systems/."""
     cases = (ROOT / "docs" / "cases.md").read_text(encoding="utf-8")
     (folder / "my-case.toml").write_text(cases.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
     (folder / "broken.toml").write_text("[parameters]\nm1 = 1.0\nm2 = = 2\n", encoding="utf-8")
     (folder / "chatter.toml").write_text(case_to_toml(chatter_case()), encoding="utf-8")
+    shutil.copytree(ROOT / "docs" / "systems", folder / "docs" / "systems")  # the system files docs/systems.md shows
 
 
 def _serve_once(shown: Shown, arguments: list[str], folder: Path) -> None:

@@ -17,7 +17,7 @@ from oscillator.report.transitions import BOTH_MASSES_SENTENCES, SENTENCES, tran
 
 PACKAGE = Path(oscillator.__file__).parent
 #: Where the kinds are defined, the only places their text may be written.
-DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "branch.py"}
+DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "branch.py", PACKAGE / "model" / "chain_rules.py"}
 #: The same words meaning something else.
 OTHER_MEANINGS = {
     ("analysis/locate.py", "grazing"): "the word `oscillator locate --what` takes",

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import tomllib
+from pathlib import Path
+from typing import Annotated
 
+import typer
 from rich.table import Table
 
 from oscillator.cli.commands import command
@@ -54,13 +57,34 @@ def _written(case: Case) -> dict[str, str]:
 
 
 @command(20, "Show a case: parameters, start, settings, expected events.")
-def show(case: CaseArgument) -> None:
-    """Show a case: its parameters, start, run settings and expected events.
+def show(
+    case: CaseArgument,
+    figure: Annotated[
+        Path | None,
+        typer.Option(
+            "--figure",
+            metavar="FILE",
+            help="A system file's schematic (.png, .svg or .pdf; default: NAME-schematic.png).",
+        ),
+    ] = None,
+) -> None:
+    """Show a case: its parameters, start, run settings and expected events; or a system file:
+    its masses and elements, and its schematic drawn.
 
     \b
-    Example:
+    Examples:
       oscillator show instance-2
+      oscillator show docs/systems/blade-damper.toml --figure blade.png
     """
+    from oscillator.io.chains import system_path
+
+    system = system_path(case)
+    if system is not None:
+        from oscillator.cli.system import show_system
+
+        return show_system(system, figure)
+    if figure is not None:
+        raise fail("--figure draws a system file's schematic; a case has none (oscillator run draws its figures)")
     try:
         c = load_case(case)
     except OscillatorError as error:

@@ -190,7 +190,8 @@ def run(
     ] = None,
     quiet: QuietOption = False,
 ) -> None:
-    """Run a case, print its switching events, and write tables, figures and a report.
+    """Run a case or a system file (docs/systems.md), print its switching events, and write tables,
+    figures and a report.
 
     A case changed by --set in a parameter or its start is another case: the article's expected
     times are then not compared.
@@ -203,7 +204,10 @@ def run(
       oscillator run instance-1 --t-end 2000 --sample 0.05 --out runs/long
       oscillator run instance-1 --t-end 2000 --sample 0.05 --window 1000 1010 --out runs/long-window
       oscillator run instance-1 --t-end 4000 --sample 1 --keep-events-from 3990 --out runs/longer
+      oscillator run docs/systems/blade-damper.toml --out runs/blade
     """
+    if _ran_system(case, t_end, set_, out_dir, fmt, no_plots, no_report, sample, window, engine, keep, quiet):
+        return
     try:
         if window is not None and no_plots:
             raise InputError("--window chooses what the figures show; it has no use with --no-plots", field="--window")
@@ -221,6 +225,49 @@ def run(
     if pending:
         _finish(folder, figures=not no_plots, report=not no_report, window=window)
     _print_summary(summary, folder, quiet)
+
+
+def _ran_system(
+    case: str,
+    t_end: float | None,
+    set_: list[str] | None,
+    out_dir: Path | None,
+    fmt: str,
+    no_plots: bool,
+    no_report: bool,
+    sample: float | None,
+    window: tuple[float, float] | None,
+    engine: str | None,
+    keep: float | None,
+    quiet: bool,
+) -> bool:
+    """Run ``case`` if it is a system file (:mod:`oscillator.cli.system`); whether it was one."""
+    from oscillator.io.chains import system_path
+
+    system = system_path(case)
+    if system is None:
+        return False
+    from oscillator.cli.system import run_system
+
+    given = (
+        ("--set", set_),
+        ("--sample", sample),
+        ("--window", window),
+        ("--engine", engine),
+        ("--keep-events-from", keep),
+    )
+    flags = [flag for flag, value in given if value]
+    run_system(
+        system,
+        t_end=t_end,
+        out_dir=out_dir,
+        fmt=fmt,
+        no_plots=no_plots,
+        no_report=no_report,
+        quiet=quiet,
+        case_only=flags,
+    )
+    return True
 
 
 def _simulate_or_keep_partial(

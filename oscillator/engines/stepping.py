@@ -85,7 +85,8 @@ def cvode_returns(  # pragma: no cover - compiled
     rows: Any,
     last: Any,
 ) -> tuple[int, int]:
-    """CVODE's returns, each written as a row ``(t, x1, v1, x2, v2)`` of ``rows``, at most
+    """CVODE's returns, each written as a row ``(t, x1, v1, x2, v2)`` of ``rows`` (the time and
+    the state's first ``rows.shape[1] - 1`` values: a friction chain's masses and sliders), at most
     ``len(rows)``, until a root, the stop time or a failure:
 
     * with an empty ``grid``, its steps (``CV_ONE_STEP``) up to ``tau_target``: every return a
@@ -116,7 +117,7 @@ def cvode_returns(  # pragma: no cover - compiled
                 break
             t = t_ref + tret[0]
         rows[n, 0] = t
-        for k in range(4):
+        for k in range(rows.shape[1] - 1):
             rows[n, 1 + k] = out[k]
         for k in range(out.shape[0]):  # not last[:] = out: its shape check compiles numba's string formatting (2.5 s)
             last[k] = out[k]

@@ -6,6 +6,8 @@ written back.
     title = "Blade with a friction damper"
     [system]
     Omega = 1.0          # g = 9.8, t0 = 0.0 by default
+    [run]
+    t_end = 20.0         # by default 10 forcing periods
     [[mass]]
     name = "blade"
     m = 1.0
@@ -34,11 +36,12 @@ from oscillator.io.files import read_untrusted
 from oscillator.model.chains import ELEMENTS, MAX_ELEMENTS, MAX_MASSES, Element, FrictionChain, Mass
 from oscillator.text import did_you_mean, printable, shown
 
-__all__ = ["MAX_SYSTEM_BYTES", "chain_from_dict", "chain_to_toml", "is_system", "load_system"]
+__all__ = ["MAX_SYSTEM_BYTES", "chain_from_dict", "chain_to_toml", "is_system", "load_system", "system_path"]
 
 #: The largest system file read.
 MAX_SYSTEM_BYTES = 1 << 20
-_TOP = ("title", "system", "mass", "element")
+_TOP = ("title", "system", "mass", "element", "run")
+_RUN = ("t_end",)
 _SYSTEM = ("Omega", "g", "t0")
 _MASS = ("name", "m", "x", "v")
 _ENDS = ("type", "on", "with", "name")
@@ -47,6 +50,20 @@ _ENDS = ("type", "on", "with", "name")
 def is_system(data: dict[str, Any]) -> bool:
     """Whether parsed TOML declares a friction chain (it has ``[[mass]]`` or ``[system]``)."""
     return "mass" in data or "system" in data
+
+
+def system_path(argument: str) -> Path | None:
+    """The path ``argument`` names when it is a system file (a ``.toml`` file declaring masses or
+    ``[system]``), else ``None`` (a named case or a case file: the article's system)."""
+    path = Path(argument)
+    if path.suffix.lower() != ".toml" or not path.is_file():
+        return None
+    try:
+        text = read_untrusted(path, what="system file", field="case", limit=MAX_SYSTEM_BYTES)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
+    except (OscillatorError, tomllib.TOMLDecodeError, ValueError, RecursionError, MemoryError):
+        return None  # the case reader says what is wrong with it
+    return path if is_system(data) else None
 
 
 def _unknown(key: object, known: tuple[str, ...] | list[str], where: str) -> InputError:
@@ -104,18 +121,24 @@ def _element(table: dict[str, Any], number: int, source: str) -> Element:
     return Element(kind, table["on"], table.get("with"), values, name)
 
 
+def _table(data: dict[str, Any], key: str, known: tuple[str, ...], source: str) -> dict[str, Any]:
+    """The table ``[key]`` (empty if absent), each of its keys one of ``known``."""
+    table = data.get(key, {})
+    if not isinstance(table, dict):
+        raise InputError(f"{source}: [{key}] must be a table", field=key)
+    for name in table:
+        if name not in known:
+            raise _unknown(name, known, f"{source}: [{key}]")
+    return table
+
+
 def chain_from_dict(data: dict[str, Any], *, source: str = "<system>") -> FrictionChain:
     """The friction chain parsed TOML declares (module docstring); refused naming the table and
     key of the first bad value."""
     for key in data:
         if key not in _TOP:
             raise _unknown(key, _TOP, source)
-    system = data.get("system", {})
-    if not isinstance(system, dict):
-        raise InputError(f"{source}: [system] must be a table", field="system")
-    for key in system:
-        if key not in _SYSTEM:
-            raise _unknown(key, _SYSTEM, f"{source}: [system]")
+    system, run = _table(data, "system", _SYSTEM, source), _table(data, "run", _RUN, source)
     title = data.get("title", "")
     if not isinstance(title, str) or len(title) > 300:
         raise InputError(f"{source}: title must be text of at most 300 characters", field="title")
@@ -123,6 +146,7 @@ def chain_from_dict(data: dict[str, Any], *, source: str = "<system>") -> Fricti
         masses = tuple(_mass(t, k + 1, source) for k, t in enumerate(_list(data, "mass", MAX_MASSES, source)))
         elements = tuple(_element(t, k + 1, source) for k, t in enumerate(_list(data, "element", MAX_ELEMENTS, source)))
         settings = {key: _value(raw, key, "[system]") for key, raw in system.items()}
+        settings |= {key: _value(raw, key, "[run]") for key, raw in run.items()}
         return FrictionChain(masses, elements, title=title, **settings).checked()
     except OscillatorError as error:
         message = str(error)
@@ -152,6 +176,8 @@ def chain_to_toml(chain: FrictionChain) -> str:
 
     data: dict[str, Any] = {"title": chain.title} if chain.title else {}
     data["system"] = {"Omega": chain.Omega, "g": chain.g, "t0": chain.t0}
+    if chain.t_end is not None:
+        data["run"] = {"t_end": chain.t_end}
     data["mass"] = [{"name": m.name, "m": m.m, "x": m.x, "v": m.v} for m in chain.masses]
     elements = []
     for element in chain.elements:

@@ -32,7 +32,18 @@ from oscillator.compiled import njit
 from oscillator.model.chains import FrictionChain
 from oscillator.model.types import Vector
 
-__all__ = ["CODES", "LAYOUT", "ChainArrays", "arrays_of", "chain_derivative", "state_of"]
+__all__ = [
+    "CODES",
+    "HEADER",
+    "LAYOUT",
+    "ChainArrays",
+    "arrays_of",
+    "chain_derivative",
+    "forces_on",
+    "pack",
+    "root_values",
+    "state_of",
+]
 
 SPRING, DAMPER, FORCE, FRICTION, STOP, CONTACT, JENKINS = range(7)
 #: Each type's code in the arrays.
@@ -120,6 +131,41 @@ def state_of(chain: FrictionChain) -> np.ndarray:
     return y
 
 
+#: The data vector's head (:func:`pack`): CVODE's time origin, the counts, the state's length
+#: (masses and sliders: the works of the elements follow it), ``Omega``.
+HEADER = ("t_ref", "masses", "elements", "size", "Omega")
+
+
+def pack(arrays: ChainArrays, mode: np.ndarray | list[int]) -> np.ndarray:
+    """The chain in ``mode`` as one vector of floats, what the compiled field reads (and CVODE's
+    user data): :data:`HEADER`, then the mode, the masses, each mass's friction element, each
+    element's code, ends, slider and values, and room for the forces on the masses (the compiled
+    functions' scratch: they allocate nothing).  Its length is :func:`data_length`."""
+    n, e = len(arrays.mass), len(arrays.kind)
+    head = [0.0, float(n), float(e), float(arrays.size), arrays.Omega]
+    parts = [head, mode, arrays.mass, arrays.friction, arrays.kind, arrays.on, arrays.other, arrays.slider]
+    scratch = np.zeros(n)
+    return np.concatenate([np.asarray(part, dtype=float).ravel() for part in (*parts, arrays.value, scratch)])
+
+
+@njit(cache=True)
+def data_length(masses: int, elements: int) -> int:  # pragma: no cover - compiled
+    """The length of :func:`pack`'s vector."""
+    return len(HEADER) + 3 * masses + 10 * elements
+
+
+@njit(cache=True)
+def _offsets(d: Vector) -> tuple[int, int, int, int, int, int, int, int, int, int]:  # pragma: no cover - compiled
+    """``(n, e, mode, mass, friction, kind, on, other, slider, value)``: the counts and where each
+    part of the data vector starts."""
+    n, e = int(d[1]), int(d[2])
+    mode = len(HEADER)
+    mass = mode + e
+    friction = mass + n
+    kind = friction + n
+    return n, e, mode, mass, friction, kind, kind + e, kind + 2 * e, kind + 3 * e, kind + 4 * e
+
+
 @njit(cache=True)
 def _stretch(y: Vector, on: int, other: int) -> tuple[float, float]:  # pragma: no cover - compiled
     """``(u, u')``: how far ``on`` is from ``other`` (or the ground) and how fast."""
@@ -129,70 +175,116 @@ def _stretch(y: Vector, on: int, other: int) -> tuple[float, float]:  # pragma: 
 
 
 @njit(cache=True)
-def element_force(
-    t: float,
-    y: Vector,
-    mode: np.ndarray,
-    row: int,
-    kind: np.ndarray,
-    on: np.ndarray,
-    other: np.ndarray,
-    value: np.ndarray,
-    slider: np.ndarray,
-    omega: float,
-) -> float:  # pragma: no cover - compiled
-    """The force element ``row`` puts on its ``on`` mass in ``mode`` (N; the ``with`` mass takes
-    it with the other sign); friction's is not here (it is the field's)."""
-    code, v = kind[row], value[row]
-    u, w = _stretch(y, on[row], other[row])
+def element_force(t: float, y: Vector, d: Vector, row: int) -> float:  # pragma: no cover - compiled
+    """The force element ``row`` puts on its ``on`` mass in the data's mode (N; the ``with`` mass
+    takes it with the other sign); friction's is not here (it is the field's)."""
+    _, _, mode, _, _, kind, on_at, other_at, slider_at, value_at = _offsets(d)
+    code, on, other, s = int(d[kind + row]), int(d[on_at + row]), int(d[other_at + row]), d[mode + row]
+    v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
+    u, w = _stretch(y, on, other)
     force: float = 0.0
     if code == SPRING:
         force = -(v[0] * u + v[1] * (u * u * u))
     elif code == DAMPER:
         force = -(v[0] * w + v[1] * (w * w * w))
     elif code == FORCE:
-        force = v[0] * math.sin(omega * t + v[1])
-    elif code == STOP and mode[row] != 0:
-        force = -(v[2] * (y[2 * on[row]] - v[1]) + v[3] * y[2 * on[row] + 1])
-    elif code == CONTACT and mode[row] != 0:
+        force = v[0] * math.sin(d[4] * t + v[1])
+    elif code == STOP and s != 0.0:
+        force = -(v[2] * (y[2 * on] - v[1]) + v[3] * y[2 * on + 1])
+    elif code == CONTACT and s != 0.0:
         force = -(v[2] * (u + v[1] if v[0] < 0 else u - v[1]) + v[3] * w)
     elif code == JENKINS:
-        force = -(v[0] * (u - y[slider[row]])) if mode[row] == 0 else -mode[row] * v[1]
+        force = -(v[0] * (u - y[int(d[slider_at + row])])) if s == 0.0 else -s * v[1]
     return force
 
 
 @njit(cache=True)
-def chain_derivative(
-    t: float,
-    y: Vector,
-    yp: Vector,
-    mode: np.ndarray,
-    mass: Vector,
-    kind: np.ndarray,
-    on: np.ndarray,
-    other: np.ndarray,
-    value: np.ndarray,
-    slider: np.ndarray,
-    friction: np.ndarray,
-    omega: float,
-) -> None:  # pragma: no cover - compiled
-    """Fill ``yp`` with the chain's field in ``mode`` (module docstring)."""
-    n = mass.shape[0]
-    forces = np.zeros(n)
-    for row in range(kind.shape[0]):
-        f = element_force(t, y, mode, row, kind, on, other, value, slider, omega)
-        forces[on[row]] += f
-        if other[row] >= 0:
-            forces[other[row]] -= f
+def forces_on(t: float, y: Vector, d: Vector, out: Vector) -> None:  # pragma: no cover - compiled
+    """``out[i]``: the force every element but friction puts on mass ``i`` (N)."""
+    n, e, _, _, _, _, on_at, other_at, _, _ = _offsets(d)
     for i in range(n):
-        row = friction[i]
-        if row >= 0 and mode[row] == 0:  # stuck to its floor or belt
-            yp[2 * i], yp[2 * i + 1] = value[row, 4], 0.0
-            continue
-        yp[2 * i] = y[2 * i + 1]
-        kinetic = 0.0 if row < 0 else mode[row] * (value[row, 1] * value[row, 2] + value[row, 3])
-        yp[2 * i + 1] = (forces[i] - kinetic) / mass[i]
-    for row in range(kind.shape[0]):
-        if slider[row] >= 0:
-            _, rate = _stretch(y, on[row], other[row])
-            yp[slider[row]] = 0.0 if mode[row] == 0 else rate
+        out[i] = 0.0
+    for row in range(e):
+        f = element_force(t, y, d, row)
+        out[int(d[on_at + row])] += f
+        if d[other_at + row] >= 0:
+            out[int(d[other_at + row])] -= f
+
+
+@njit(cache=True)
+def _friction_force(y: Vector, d: Vector, i: int, force: float) -> float:  # pragma: no cover - compiled
+    """The friction force on mass ``i`` (N) under the other forces' sum ``force``: kinetic
+    ``-s (mu_k N + P)`` slipping, ``-force`` (what holds it to its floor or belt) stuck."""
+    _, _, mode, _, friction, _, _, _, _, value_at = _offsets(d)
+    row = int(d[friction + i])
+    if row < 0:
+        return 0.0
+    v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
+    s = d[mode + row]
+    return -force if s == 0.0 else -s * (v[1] * v[2] + v[3])
+
+
+@njit(cache=True)
+def chain_derivative(t: float, y: Vector, yp: Vector, d: Vector) -> None:  # pragma: no cover - compiled
+    """Fill ``yp`` with the chain's field in the data's mode (module docstring), and, when ``y``
+    is longer than the state (``d[3]``), the power of each element on the masses (W): the rates
+    of the elements' works."""
+    n, e, mode, mass, friction, _, on_at, other_at, slider_at, value_at = _offsets(d)
+    size = int(d[3])
+    forces = d[value_at + WIDTH * e : value_at + WIDTH * e + n]  # the data's scratch (no allocation)
+    forces_on(t, y, d, forces)
+    for i in range(n):
+        row = int(d[friction + i])
+        if row >= 0 and d[mode + row] == 0.0:  # stuck to its floor or belt
+            yp[2 * i], yp[2 * i + 1] = d[value_at + WIDTH * row + 4], 0.0
+        else:
+            yp[2 * i] = y[2 * i + 1]
+            yp[2 * i + 1] = (forces[i] + _friction_force(y, d, i, forces[i])) / d[mass + i]
+    for row in range(e):
+        if d[slider_at + row] >= 0:
+            _, rate = _stretch(y, int(d[on_at + row]), int(d[other_at + row]))
+            yp[int(d[slider_at + row])] = 0.0 if d[mode + row] == 0.0 else rate
+    if y.shape[0] > size:
+        for row in range(e):
+            on = int(d[on_at + row])
+            if row == int(d[friction + on]):
+                yp[size + row] = _friction_force(y, d, on, forces[on]) * y[2 * on + 1]
+            else:
+                _, rate = _stretch(y, on, int(d[other_at + row]))
+                yp[size + row] = element_force(t, y, d, row) * rate
+
+
+@njit(cache=True)
+def root_values(t: float, y: Vector, d: Vector, g: Vector) -> None:  # pragma: no cover - compiled
+    """Two root functions per element in the data's mode (docs/systems.md, "Events"), ``1``
+    where an element has none:
+
+    * friction slipping: the velocity against the floor or belt ``v - w`` and the acceleration
+      (a velocity extremum: grazing, Thm 5.5); stuck: the flow barrier ``F -+ (mu_s N + P)``
+      (Thm 5.4), ``F`` the other forces' sum;
+    * stop: ``x - at``; contact: ``u + gap`` (left) or ``u - gap`` (right);
+    * Jenkins slider stuck: ``kt (u - z) -+ F``; slipping: the stretch's rate ``u'`` (it sticks
+      where the motion turns); with ``F = 0`` none (it never holds).
+    """
+    n, e, mode, mass, _, kind, on_at, other_at, slider_at, value_at = _offsets(d)
+    forces = d[value_at + WIDTH * e : value_at + WIDTH * e + n]  # the data's scratch (no allocation)
+    forces_on(t, y, d, forces)
+    for row in range(e):
+        g[2 * row], g[2 * row + 1] = 1.0, 1.0
+        code, on, s = int(d[kind + row]), int(d[on_at + row]), d[mode + row]
+        v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
+        u, w = _stretch(y, on, int(d[other_at + row]))
+        if code == FRICTION and s != 0.0:
+            g[2 * row] = y[2 * on + 1] - v[4]
+            g[2 * row + 1] = (forces[on] - s * (v[1] * v[2] + v[3])) / d[mass + on]
+        elif code == FRICTION:
+            g[2 * row], g[2 * row + 1] = forces[on] - (v[0] * v[2] + v[3]), forces[on] + (v[0] * v[2] + v[3])
+        elif code == STOP:
+            g[2 * row] = y[2 * on] - v[1]
+        elif code == CONTACT:
+            g[2 * row] = u + v[1] if v[0] < 0 else u - v[1]
+        elif code == JENKINS and v[1] > 0.0 and s == 0.0:
+            f = v[0] * (u - y[int(d[slider_at + row])])
+            g[2 * row], g[2 * row + 1] = f - v[1], f + v[1]
+        elif code == JENKINS and v[1] > 0.0:
+            g[2 * row] = w

@@ -32,11 +32,14 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from oscillator.errors import InputError
 from oscillator.model.parameters import MAX_MAGNITUDE, InitialState, Parameters, as_float, is_finite_number
 from oscillator.text import did_you_mean, printable, shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = [
     "ELEMENTS",
@@ -194,7 +197,8 @@ class Element:
 @dataclass(frozen=True)
 class FrictionChain:
     """A machine of masses and elements (module docstring), with the forcing frequency ``Omega``
-    every ``force`` shares, gravity ``g`` and the start time ``t0``.
+    every ``force`` shares, gravity ``g``, the start time ``t0`` and a run's end ``t_end`` (``None``:
+    10 forcing periods).
 
     Build it from a case file (:func:`oscillator.io.chains.load_system`) or by its methods, each
     returning a new chain::
@@ -215,10 +219,15 @@ class FrictionChain:
     g: float = 9.8
     t0: float = 0.0
     title: str = ""
+    t_end: float | None = None
 
     def __post_init__(self) -> None:
         for key in ("Omega", "g", "t0"):
             object.__setattr__(self, key, _number(getattr(self, key), "the system", key))
+        if self.t_end is not None:
+            object.__setattr__(self, "t_end", _number(self.t_end, "[run]", "t_end"))
+            if not self.t_end > self.t0:
+                raise InputError(f"[run]: t_end must be after t0 = {self.t0:g} s, got {self.t_end:g}", field="t_end")
         if not self.Omega > 0:
             raise InputError(f"the system: Omega must be positive (rad/s), got {self.Omega:g}", field="Omega")
         if len(self.masses) > MAX_MASSES or len(self.elements) > MAX_ELEMENTS:
@@ -304,6 +313,13 @@ class FrictionChain:
         return self.element("jenkins", on, with_, name=name, kt=kt, F=F)
 
     # -- what the chain is made of ----------------------------------------------------------------
+
+    def plot(self) -> Figure:
+        """The machine's schematic (a matplotlib figure): masses, springs, dampers, stops with their
+        places, contacts with their gaps, friction and belts, Jenkins elements, forces."""
+        from oscillator.presenting import presenter
+
+        return presenter().plot_system(self)
 
     @property
     def period(self) -> float:

@@ -180,6 +180,15 @@ def json_text(info: dict[str, Any]) -> str:
     return json.dumps(_plain(info), indent=2, default=str, allow_nan=False) + "\n"
 
 
+def write_tables(events: pd.DataFrame, trajectory: pd.DataFrame, folder: Path, formats: str) -> None:
+    """A run's event table (as CSV, Parquet or both: ``formats``) and its trajectory (Parquet)."""
+    if formats in ("csv", "both"):
+        events.to_csv(folder / "events.csv", index=False)
+    if formats in ("parquet", "both"):
+        events.to_parquet(folder / "events.parquet", index=False)
+    trajectory.to_parquet(folder / "trajectory.parquet", index=False)
+
+
 def write_run(
     result: Result,
     claim: FolderClaim,
@@ -199,11 +208,7 @@ def write_run(
         raise InputError(f"formats must be one of {', '.join(FORMATS)}, got {formats!r}", field="formats")
     temporary = claim.temporary
     try:
-        if formats in ("csv", "both"):
-            result.events.to_csv(temporary / "events.csv", index=False)
-        if formats in ("parquet", "both"):
-            result.events.to_parquet(temporary / "events.parquet", index=False)
-        result.trajectory.to_parquet(temporary / "trajectory.parquet", index=False)
+        write_tables(result.events, result.trajectory, temporary, formats)
         (temporary / "case.toml").write_text(case_to_toml(result.case), encoding="utf-8")
         info = {**run_info(result, command=command, pending=pending), **(extra or {})}
         (temporary / "run.json").write_text(json_text(info), encoding="utf-8")

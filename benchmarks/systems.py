@@ -1,0 +1,107 @@
+"""Friction chains (issue 51, docs/systems.md): what a new system costs, and the chain path's speed.
+
+1. the first run of a new system in a fresh process, numba's cache filled (the class compiled once,
+   at install or by an earlier run): `import oscillator`, a chain never seen (random masses and
+   elements), 10 forcing periods; the import, the run and the whole process, each measured;
+2. the article's system on both paths, alternating, 5 repeats, medians: `simulate` (the built-in
+   path) against `simulate_chain(article_chain(...))`, Instance 1 over 200 forcing periods with
+   the trajectory at every step (the chain path records it always), and their ratio;
+3. throughput of the three docs/systems/ machines: forcing periods and events per second.
+
+Usage: python benchmarks/systems.py
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_FIRST_RUN = """
+import time
+started = time.perf_counter()
+import numpy as np
+import oscillator
+imported = time.perf_counter()
+chain = oscillator.FrictionChain(Omega=1.7)
+rng = np.random.default_rng({seed})
+for i in range(4):
+    chain = chain.mass(f"m{{i}}", m=float(rng.uniform(0.5, 2)), v=float(rng.uniform(-1, 1)))
+    chain = chain.spring(f"m{{i}}", None if i == 0 else f"m{{i-1}}", k=float(rng.uniform(1, 3)))
+    chain = chain.friction(f"m{{i}}", mu_s=0.3, mu_k=0.2, w=float(rng.uniform(0, 0.3)))
+    chain = chain.jenkins(f"m{{i}}", kt=2.0, F=float(rng.uniform(0.1, 0.5)))
+chain = chain.force("m3", Q=float(rng.uniform(5, 10))).stop("m0", side="right", at=0.5, K=100.0)
+ran = time.perf_counter()
+result = oscillator.simulate_chain(chain)
+done = time.perf_counter()
+print(imported - started, done - ran, len(result.events))
+"""
+
+
+def first_run(seed: int) -> tuple[float, float, float, int]:
+    started = time.perf_counter()
+    printed = subprocess.run(
+        [sys.executable, "-c", _FIRST_RUN.format(seed=seed)], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.split()
+    return float(printed[0]), float(printed[1]), time.perf_counter() - started, int(printed[2])
+
+
+def article_paths(repeats: int = 5) -> tuple[float, float, int, int]:
+    import oscillator
+    from oscillator.io.cases import resolve_case
+    from oscillator.model.chains import article_chain
+
+    case = resolve_case("instance-1")
+    case = resolve_case("instance-1", t_end=case.initial.t0 + 200 * case.parameters.period)
+    chain = article_chain(case.parameters, case.initial)
+    oscillator.simulate(case)
+    oscillator.simulate_chain(chain, case.t_end)  # both compiled and warm
+    built, chained = [], []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        a = oscillator.simulate(case)
+        built.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        b = oscillator.simulate_chain(chain, case.t_end)
+        chained.append(time.perf_counter() - started)
+    return statistics.median(built), statistics.median(chained), len(a.events), len(b.events)
+
+
+def machines() -> list[tuple[str, float, float, int]]:
+    import oscillator
+
+    rows = []
+    for name in ("blade-damper", "conveyor", "belt-chain"):
+        chain = oscillator.load_system(ROOT / "docs" / "systems" / f"{name}.toml")
+        oscillator.simulate_chain(chain, chain.t0 + chain.period)
+        started = time.perf_counter()
+        result = oscillator.simulate_chain(chain, chain.t0 + 100 * chain.period)
+        took = time.perf_counter() - started
+        rows.append((name, 100 / took, len(result.events) / took, len(result.events)))
+    return rows
+
+
+def main() -> None:
+    print(f"friction chains, {dt.date.today()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
+    first_run(0)  # fills numba's cache if it is not
+    print("1. a new system's first run in a fresh process (cache filled): import / run / process, s")
+    for seed in (1, 2, 3):
+        imported, ran, whole, events = first_run(seed)
+        print(f"   seed {seed}: import {imported:.2f}, run {ran:.3f} ({events} events), whole process {whole:.2f}")
+    built, chained, a, b = article_paths()
+    print("2. Instance 1, 200 forcing periods, trajectory at every step (medians of 5, alternating)")
+    print(f"   built-in simulate {built:.3f} s ({a} events); chain path {chained:.3f} s ({b} events)")
+    print(f"   chain / built-in = {chained / built:.2f}")
+    print("3. docs/systems/ machines over 100 forcing periods")
+    for name, periods, events, count in machines():
+        print(f"   {name}: {periods:.0f} periods/s, {events:.0f} events/s ({count} events)")
+
+
+if __name__ == "__main__":
+    main()

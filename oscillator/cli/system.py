@@ -1,0 +1,159 @@
+"""The commands on a system file (a friction chain, docs/systems.md): ``oscillator run FILE`` and
+``oscillator show FILE`` take one where they take a case (:mod:`oscillator.cli.run`,
+:mod:`oscillator.cli.cases` hand it here)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rich import box
+from rich.table import Table
+
+from oscillator.cli.console import fail, load, message, out, say
+from oscillator.errors import InputError, OscillatorError, SimulationFailed
+from oscillator.io.files import check_name, check_new, refuse_link
+from oscillator.text import printable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.io.files import FolderClaim
+    from oscillator.model.chains import FrictionChain
+
+__all__ = ["run_system", "show_system"]
+
+#: Options of ``run`` that act on the article's cases only, and what to do instead.
+_CASE_ONLY = {
+    "--set": "edit the system file's values",
+    "--sample": "the trajectory is kept at every step",
+    "--window": "the figures show the whole run",
+    "--engine": "a system runs on CVODE",
+    "--keep-events-from": "every event is kept",
+}
+
+
+def _events_table(events) -> Table:  # type: ignore[no-untyped-def]
+    table = Table(title="switching events", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    for header, justify in (("t (s)", "right"), ("element", "left"), ("kind", "left"), ("rule", "left")):
+        table.add_column(header, justify=justify)  # type: ignore[arg-type]
+    rows = list(events.itertuples(index=False))
+    shown = rows if len(rows) <= 40 else [*rows[:20], None, *rows[-20:]]
+    for row in shown:
+        if row is None:
+            table.add_row("…", f"{len(rows) - 40} more", "", "")
+        else:
+            table.add_row(f"{row.t:.6f}", printable(row.element), row.kind, f"{row.theorem} {row.equations}")
+    return table
+
+
+def _prepare(
+    path: Path, *, t_end: float | None, out_dir: Path | None, fmt: str, quiet: bool, case_only: list[str]
+) -> tuple[FrictionChain, FolderClaim]:
+    """Every check before anything is created, then the output folder claimed."""
+    try:
+        if fmt not in ("csv", "parquet", "both"):
+            raise InputError(f"--format must be one of csv, parquet, both, got {printable(fmt)}", field="--format")
+        if case_only:
+            flag = case_only[0]
+            raise InputError(
+                f"{flag} applies to the article's cases, not to a system file: {_CASE_ONLY[flag]}", field=flag
+            )
+        if out_dir is not None:
+            check_new(out_dir, option="--out")
+        load("oscillator.hybrid.chain_run", "oscillator.report.chain_runs", notice=not quiet)
+        from oscillator.hybrid.chain_run import run_end
+        from oscillator.io.chains import load_system
+        from oscillator.report.runs import claim_output
+
+        chain = load_system(path)
+        run_end(chain, t_end)
+        return chain, claim_output(out_dir, path.stem)
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+
+
+def run_system(
+    path: Path,
+    *,
+    t_end: float | None,
+    out_dir: Path | None,
+    fmt: str,
+    no_plots: bool,
+    no_report: bool,
+    quiet: bool,
+    case_only: list[str],
+) -> None:
+    """``oscillator run FILE`` for a system file: simulate, write the folder, print the events."""
+    chain, claim = _prepare(path, t_end=t_end, out_dir=out_dir, fmt=fmt, quiet=quiet, case_only=case_only)
+    from oscillator.report.chain_runs import finish_chain_run, write_chain_run
+
+    try:
+        from oscillator.hybrid.chain_run import simulate_chain
+
+        result = simulate_chain(chain, t_end)
+        failure = None
+    except SimulationFailed as error:
+        result, failure = error.result, error  # type: ignore[assignment]
+    except BaseException:
+        claim.abandon()
+        raise
+    folder = write_chain_run(result, claim, formats=fmt, command=["oscillator", *sys.argv[1:]])
+    if failure is not None:
+        raise fail(f"{failure}\nthe partial result is in {folder}", 1)
+    if not quiet:
+        title = chain.title or path.stem
+        say((printable(title), "bold"), f": {len(chain.masses)} masses, {len(chain.elements)} elements")
+        out.print(_events_table(result.events) if len(result.events) else "no switching events")
+        say(f"energy audit residual {result.energy.residual:.2e} J")
+    try:
+        finish_chain_run(folder, result, figures=not no_plots, report=not no_report)
+    except Exception as error:  # the tables are safe
+        raise fail(
+            f"the figures or report could not be made ({type(error).__name__}: {error}); the tables are in {folder}", 1
+        ) from None
+    if quiet:
+        out.print(printable(str(folder)))
+    else:
+        say("written to ", (str(folder), "bold"))
+
+
+def show_system(path: Path, figure: Path | None) -> None:
+    """``oscillator show FILE`` for a system file: its masses and elements, and its schematic."""
+    try:
+        from oscillator.io.chains import load_system
+
+        chain = load_system(path)
+        target = figure if figure is not None else Path(f"{path.stem}-schematic.png")
+        if target.suffix.lower() not in (".png", ".svg", ".pdf"):
+            raise InputError(f"--figure must end in .png, .svg or .pdf, got {printable(str(target))}", field="--figure")
+        check_name(target, option="--figure")
+        refuse_link(target, option="--figure")
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    say(
+        (printable(chain.title or path.stem), "bold"),
+        f": Omega = {chain.Omega:g} rad/s, g = {chain.g:g}, t0 = {chain.t0:g} s",
+    )
+    masses = Table(title="masses", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    for column in ("name", "m (kg)", "x (m)", "v (m/s)"):
+        masses.add_column(column)
+    for m in chain.masses:
+        masses.add_row(printable(m.name), f"{m.m:g}", f"{m.x:g}", f"{m.v:g}")
+    out.print(masses)
+    elements = Table(title="elements", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    for column in ("name", "type", "on", "with", "values"):
+        elements.add_column(column)
+    for e in chain.elements:
+        values = ", ".join(
+            f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {printable(str(v))}"
+            for k, v in e.values.items()
+            if v is not None
+        )
+        elements.add_row(printable(e.name), e.type, printable(e.on), printable(e.with_ or "ground"), values)
+    out.print(elements)
+    from oscillator.io.files import atomic_path
+    from oscillator.report.chain_figures import schematic_figure
+
+    with atomic_path(target) as temporary:
+        schematic_figure(chain).savefig(temporary, format=target.suffix[1:], dpi=120, bbox_inches="tight")
+    say("schematic written to ", (str(target), "bold"))

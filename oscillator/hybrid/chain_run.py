@@ -1,0 +1,211 @@
+"""The supervisor of a friction chain: CVODE on the chain's mode until a root, the element's rule
+(:mod:`oscillator.model.chain_rules`), a restart; the events, the trajectory and the energy audit
+gathered in a :class:`ChainResult`.  The supervisor is the only stateful part; the rules and the
+fields are pure.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from oscillator.engines import EngineFailure, StepKind
+from oscillator.engines.chain_cvode import ChainEngine
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.hybrid.result import Status
+from oscillator.model.chain_energy import ChainEnergy, audit
+from oscillator.model.chain_fields import ChainArrays, arrays_of, state_of
+from oscillator.model.chain_rules import ChainEvent, ChatterError, Names, start, switch
+from oscillator.model.chains import FrictionChain
+from oscillator.model.parameters import SolverOptions
+from oscillator.presenting import presenter
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+__all__ = ["ChainResult", "simulate_chain"]
+
+#: The forcing periods a run lasts when no end is given.
+DEFAULT_PERIODS = 10
+#: The most solver steps the compiled loop takes before it returns to the supervisor.
+STEPS_AT_ONCE = 4096
+#: Element types whose mode the trajectory records.
+_SWITCHING = ("friction", "stop", "contact", "jenkins")
+
+
+def names_of(chain: FrictionChain) -> Names:
+    """The names the events and tables carry."""
+    return Names(
+        tuple(m.name for m in chain.masses),
+        tuple(e.name for e in chain.elements),
+        tuple(e.type for e in chain.elements),
+    )
+
+
+def state_columns(chain: FrictionChain) -> tuple[str, ...]:
+    """The trajectory's state columns: ``x:<mass>``, ``v:<mass>`` for each mass, ``z:<element>``
+    for each Jenkins slider."""
+    columns = [f"{q}:{m.name}" for m in chain.masses for q in ("x", "v")]
+    return (*columns, *(f"z:{e.name}" for e in chain.elements if e.type == "jenkins"))
+
+
+@dataclass(frozen=True)
+class ChainResult:
+    """A friction chain's run: its ``events`` (one row per event, :meth:`ChainEvent.columns`), its
+    ``trajectory`` (``t``, the state columns, each switching element's mode ``mode:<element>``),
+    each element's ``work`` on the masses over the run (J), and how it ended."""
+
+    chain: FrictionChain
+    events: pd.DataFrame
+    trajectory: pd.DataFrame
+    work: dict[str, float]
+    status: Status = Status.COMPLETE
+    message: str = ""
+    t_end: float = math.nan
+    y_end: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+    def plot(self) -> Figure:
+        """Each mass's motion and each slider's force against time (a matplotlib figure)."""
+        return presenter().plot_chain_result(self)
+
+    def save(self, folder: str | Path, *, figures: bool = True, report: bool = True) -> Path:
+        """Write the run as ``oscillator run FILE`` does into ``folder`` (a new one)."""
+        return presenter().save_chain_result(self, folder, figures=figures, report=report)
+
+    @property
+    def energy(self) -> ChainEnergy:
+        """The work-energy balance over the run (:func:`~oscillator.model.chain_energy.audit`)."""
+        start = self.trajectory.iloc[0, 1:].to_numpy(dtype=float)
+        return audit(self.chain, start, self.y_end, self.work)
+
+
+class _Run:
+    """What the supervisor keeps while it runs: the rows, the events, the guards' counts."""
+
+    def __init__(self, chain: FrictionChain, arrays: ChainArrays, options: SolverOptions) -> None:
+        self.chain, self.arrays, self.options = chain, arrays, options
+        self.rows: list[np.ndarray] = []
+        self.events: list[ChainEvent] = []
+        self.recent: deque[float] = deque(maxlen=options.storm_events)
+        self.switching = [k for k, e in enumerate(chain.elements) if e.type in _SWITCHING]
+
+    def keep(self, t: float, y: np.ndarray, mode: np.ndarray) -> None:
+        """One row: the time, the state, the mode."""
+        row = np.empty((1, 1 + self.arrays.size + len(self.switching)))
+        row[0, 0], row[0, 1 : 1 + self.arrays.size] = t, y[: self.arrays.size]
+        row[0, 1 + self.arrays.size :] = mode[self.switching]
+        self.rows.append(row)
+
+    def keep_steps(self, steps: np.ndarray, mode: np.ndarray) -> None:
+        """Rows of the stepping loop (time and state) in one mode."""
+        block = np.empty((len(steps), steps.shape[1] + len(self.switching)))
+        block[:, : steps.shape[1]] = steps
+        block[:, steps.shape[1] :] = mode[self.switching]
+        self.rows.append(block)
+
+    def happened(self, events: list[ChainEvent]) -> None:
+        self.events.extend(events)
+        window = self.options.storm_window
+        for event in events:
+            self.recent.append(event.t)
+        if len(self.recent) == self.recent.maxlen and self.recent[-1] - self.recent[0] <= window:
+            last = self.events[-1]
+            raise SimulationFailed(
+                f"an event storm: {len(self.recent)} events within {window:g} s up to t = {last.t!r} s (last: "
+                f"element {last.element!r}, {last.kind}); the motion chatters: refine the model or raise "
+                "storm_events",
+                reason=Reason.STORM,
+            )
+
+    def result(self, status: Status, message: str, t: float, y: np.ndarray) -> ChainResult:
+        chain = self.chain
+        columns = ["t", *state_columns(chain), *(f"mode:{chain.elements[k].name}" for k in self.switching)]
+        data = np.concatenate(self.rows) if self.rows else np.empty((0, len(columns)))
+        trajectory = pd.DataFrame(data, columns=columns)
+        for k in self.switching:
+            trajectory[f"mode:{chain.elements[k].name}"] = trajectory[f"mode:{chain.elements[k].name}"].astype("int64")
+        events = pd.DataFrame([e.row() for e in self.events], columns=list(ChainEvent.columns()))
+        events = events.astype({"t": "float64", "mode_before": "int64", "mode_after": "int64"})
+        size = self.arrays.size
+        work = {e.name: float(y[size + k]) for k, e in enumerate(chain.elements)}
+        return ChainResult(chain, events, trajectory, work, status, message, t, y.copy())
+
+
+def run_end(chain: FrictionChain, t_end: float | None) -> float:
+    """The time a run of ``chain`` ends: ``t_end``, the chain's, or 10 forcing periods; refused when
+    not after ``t0`` or too long."""
+    t_end = chain.t_end if t_end is None else t_end
+    end = chain.t0 + DEFAULT_PERIODS * chain.period if t_end is None else float(t_end)
+    if not math.isfinite(end) or end <= chain.t0:
+        raise InputError(f"t_end must be a time after t0 = {chain.t0!r} s, got {t_end!r}", field="t_end")
+    if (end - chain.t0) / chain.period > 1e8:
+        raise InputError("t_end: a run of more than 10^8 forcing periods is refused; shorten it", field="t_end")
+    return end
+
+
+def simulate_chain(
+    chain: FrictionChain, t_end: float | None = None, *, options: SolverOptions | None = None
+) -> ChainResult:
+    """Simulate a friction chain from its start to ``t_end`` (s; by default the chain's, else 10
+    forcing periods),
+    the trajectory recorded at every solver step and at every event.
+
+    Raises :class:`~oscillator.errors.SimulationFailed` (its ``result`` the run so far) when the
+    solver fails or the events storm."""
+    chain = chain.checked()
+    options = options or SolverOptions()
+    end = run_end(chain, t_end)
+    arrays, names = arrays_of(chain), names_of(chain)
+    y = np.concatenate([state_of(chain), np.zeros(len(arrays.kind))])
+    run = _Run(chain, arrays, options)
+    engine = ChainEngine(arrays, options, max_step=options.max_step_fraction * chain.period)
+    t = chain.t0
+    try:
+        mode, y, events = start(arrays, names, t, y)
+        run.keep(t, y, mode)
+        run.happened(events)
+        engine.reset(mode, t, y)
+        t, y = _supervise(run, engine, names, mode, t, y, end)
+    except ChatterError as error:
+        failure = SimulationFailed(str(error), reason=Reason.STORM)
+        failure.result = run.result(Status.FAILED, str(error), t, y)  # type: ignore[assignment]
+        raise failure from None
+    except EngineFailure as error:
+        message = f"CVODE failed at t = {t!r} s: {error}"
+        failure = SimulationFailed(message, reason=Reason.SOLVER_FAILURE)
+        failure.result = run.result(Status.FAILED, message, t, y)  # type: ignore[assignment]
+        raise failure from None
+    except SimulationFailed as failure:
+        failure.result = run.result(Status.FAILED, str(failure), t, y)  # type: ignore[assignment]
+        raise
+    finally:
+        engine.close()
+    return run.result(Status.COMPLETE, "", t, y)
+
+
+def _supervise(
+    run: _Run, engine: ChainEngine, names: Names, mode: np.ndarray, t: float, y: np.ndarray, end: float
+) -> tuple[float, np.ndarray]:
+    near = run.options.grazing_velocity_tolerance
+    rows = np.empty((STEPS_AT_ONCE, 1 + run.arrays.size))
+    while t < end:
+        step, n = engine.advance_steps(end, rows)
+        t, y = step.t, step.y
+        if not np.isfinite(rows[:n]).all() or not np.isfinite(y).all():
+            raise SimulationFailed(f"the state left floating point before t = {t!r} s", reason=Reason.ARITHMETIC)
+        run.keep_steps(rows[:n].copy(), mode)
+        if step.kind is not StepKind.ROOT:
+            continue
+        new_mode, new_y, events = switch(run.arrays, names, t, y, mode, step.roots, near)
+        run.happened(events)
+        if not np.array_equal(new_mode, mode) or not np.array_equal(new_y, y):
+            mode, y = new_mode, new_y
+            run.keep(t, y, mode)
+            engine.reset(mode, t, y)
+    return t, y

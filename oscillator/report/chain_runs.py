@@ -1,0 +1,133 @@
+"""A friction chain's run folder: its tables, its system file and ``run.json`` written whole
+(then put in place), its figures and report after (their failure keeps the tables).
+
+::
+
+    events.csv / events.parquet   one row per event (the element, the rule, the G-values)
+    trajectory.parquet            t, x:<mass>, v:<mass>, z:<slider>, mode:<element>
+    energy.csv                    each element's work, stored energy change, dissipation
+    system.toml                   the system as run (read back by ``oscillator run``)
+    run.json                      how the run ended, the counts, the energy residual
+    figures/motion.png, .svg      one panel per mass and per slider
+    figures/schematic.png, .svg   the machine
+    report.md, report.html        the events and the audit, the figures
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from oscillator.hybrid.chain_run import ChainResult
+from oscillator.io.chains import chain_to_toml
+from oscillator.io.files import FolderClaim
+from oscillator.report.markup import Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
+from oscillator.report.runs import claim_output, finish_or_warn, json_text, run_metadata, write_tables
+
+__all__ = ["finish_chain_run", "save_chain_result", "write_chain_run"]
+
+
+def _info(result: ChainResult, command: list[str] | None) -> dict[str, Any]:
+    energy = result.energy
+    return {
+        "kind": "system",
+        "title": result.chain.title,
+        "status": str(result.status),
+        "message": result.message,
+        "t0": result.chain.t0,
+        "t_end": result.t_end,
+        "masses": len(result.chain.masses),
+        "elements": len(result.chain.elements),
+        "events": len(result.events),
+        "energy_residual": energy.residual,
+        **run_metadata(command),
+    }
+
+
+def write_chain_run(
+    result: ChainResult, claim: FolderClaim, *, formats: str = "both", command: list[str] | None = None
+) -> Path:
+    """Write the tables, ``system.toml`` and ``run.json`` and put the folder in place; on any
+    failure nothing is left behind.  The folder's path."""
+    temporary = claim.temporary
+    try:
+        write_tables(result.events, result.trajectory, temporary, formats)
+        result.energy.table.to_csv(temporary / "energy.csv", index=False)
+        (temporary / "system.toml").write_text(chain_to_toml(result.chain), encoding="utf-8")
+        (temporary / "run.json").write_text(json_text(_info(result, command)), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+def _report(result: ChainResult) -> list[Any]:
+    chain, events, energy = result.chain, result.events, result.energy
+    counts = events.groupby(["element", "kind"]).size() if len(events) else None
+    blocks: list[Any] = [
+        Heading(1, (chain.title or "Friction chain",)),
+        Paragraph(
+            (
+                f"{len(chain.masses)} masses, {len(chain.elements)} elements; from t = {chain.t0:g} s to "
+                f"{result.t_end:g} s: {len(events)} events, ",
+                Span(str(result.status), "strong"),
+                ".",
+            )
+        ),
+        Figure("schematic", "The machine"),
+        Figure("motion", "Displacements, velocities and slider forces; grey: stuck, rose: in contact"),
+        Heading(2, ("Events",)),
+    ]
+    if counts is not None:
+        blocks.append(Table(("element", "kind", "count"), tuple((e, k, str(n)) for (e, k), n in counts.items())))
+        first = events.head(30)
+        blocks.append(
+            Table(
+                ("t (s)", "element", "kind", "theorem", "G0", "G1"),
+                tuple(
+                    (f"{r.t:.9f}", r.element, r.kind, f"{r.theorem} {r.equations}", f"{r.G0:.6g}", f"{r.G1:.6g}")
+                    for r in first.itertuples(index=False)
+                ),
+            )
+        )
+    else:
+        blocks.append(Paragraph(("No switching event.",)))
+    blocks += [
+        Heading(2, ("Energy audit",)),
+        Bullets(((f"kinetic energy change {energy.kinetic_change:.9g} J; residual {energy.residual:.3e} J",),)),
+        Table(
+            ("element", "type", "work (J)", "stored (J)", "dissipated (J)"),
+            tuple(
+                (r.element, r.type, f"{r.work:.9g}", f"{r.stored:.9g}", f"{r.dissipated:.9g}")
+                for r in energy.table.itertuples(index=False)
+            ),
+        ),
+    ]
+    return blocks
+
+
+def finish_chain_run(folder: Path, result: ChainResult, *, figures: bool = True, report: bool = True) -> None:
+    """The figures and the report of a written run folder."""
+    from oscillator.report.chain_figures import motion_figure, schematic_figure
+    from oscillator.report.figures import save_figure
+
+    if figures:
+        directory = folder / "figures"
+        directory.mkdir(exist_ok=True)
+        save_figure(schematic_figure(result.chain), directory, "schematic")
+        save_figure(motion_figure(result), directory, "motion")
+    if report:
+        blocks = _report(result)
+        (folder / "report.md").write_text(to_markdown(blocks), encoding="utf-8")
+        title = result.chain.title or "Friction chain"
+        (folder / "report.html").write_text(to_html(blocks, folder=folder, title=title), encoding="utf-8")
+
+
+def save_chain_result(result: ChainResult, folder: Path | str, *, figures: bool = True, report: bool = True) -> Path:
+    """Write ``result`` as ``oscillator run FILE`` does into ``folder``, a new one; a failure of the
+    figures or the report keeps the tables (a warning says so)."""
+    folder = Path(folder)
+    path = write_chain_run(result, claim_output(folder, folder.name), command=["python", "oscillator.ChainResult.save"])
+    if figures or report:
+        finish_or_warn(lambda: finish_chain_run(path, result, figures=figures, report=report), path)
+    return path

@@ -1,0 +1,97 @@
+"""``oscillator run`` and ``oscillator show`` on a system file (issue 51): the folder a run writes,
+its tables read back, a refused file that creates nothing, options that belong to cases refused,
+and names that are hostile text shown as text."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from oscillator.cli.app import app
+
+ROOT = Path(__file__).resolve().parents[1]
+BLADE = ROOT / "docs" / "systems" / "blade-damper.toml"
+
+
+def _invoke(*arguments: str):
+    return CliRunner().invoke(app, list(arguments))
+
+
+def test_run_writes_a_system_folder(tmp_path):
+    done = _invoke("run", str(BLADE), "--out", str(tmp_path / "blade"), "--t-end", "12")
+    assert done.exit_code == 0, done.stderr
+    folder = tmp_path / "blade"
+    names = {p.name for p in folder.iterdir()}
+    assert {"events.csv", "events.parquet", "trajectory.parquet", "energy.csv", "system.toml", "run.json"} <= names
+    assert {"report.md", "report.html", "figures"} <= names
+    events = pd.read_csv(folder / "events.csv")
+    assert list(events.columns[:6]) == ["t", "element", "type", "mass", "with", "kind"]
+    assert set(events.element) == {"platform"} and events.t.between(0, 12).all()
+    assert "slider_slips" in done.stdout and "platform" in done.stdout
+    info = json.loads((folder / "run.json").read_text())
+    assert info["status"] == "complete" and info["t_end"] == 12.0 and info["events"] == len(events)
+    assert abs(info["energy_residual"]) < 1e-6
+    trajectory = pd.read_parquet(folder / "trajectory.parquet")
+    assert trajectory.t.iloc[-1] == 12.0 and {"x:blade", "v:damper", "z:platform", "mode:platform"} <= set(trajectory)
+    from oscillator.io.chains import load_system
+
+    assert load_system(folder / "system.toml").masses == load_system(BLADE).masses
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("[[mass]]\nname = 'a'\nm = 0\n", "m must be positive"),
+        ("[[mass]]\nname = 'a'\nm = 1\n[[element]]\ntype = 'spring'\non = 'b'\nk = 1\n", "is no mass of the system"),
+        (
+            "[[mass]]\nname = 'a'\nm = 1\n[[element]]\ntype = 'friction'\non = 'a'\nmu_s = 0.1\nmu_k = 0.2\n",
+            "mu_s (0.1) must be at least mu_k (0.2)",
+        ),
+        ("[system]\nOmega = 1.0\n", "has no mass"),
+        ("[[mass]]\nname = 'a'\nm = 1\n[[element]]\ntype = 'sprung'\non = 'a'\n", "did you mean 'spring'"),
+    ],
+)
+def test_a_bad_system_file_is_refused_and_nothing_is_created(tmp_path, text, said):
+    path = tmp_path / "machine.toml"
+    path.write_text(text, encoding="utf-8")
+    done = _invoke("run", str(path), "--out", str(tmp_path / "out"))
+    assert done.exit_code == 2 and said in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists() and sorted(p.name for p in tmp_path.iterdir()) == ["machine.toml"]
+
+
+def test_options_of_the_articles_cases_are_refused_for_a_system(tmp_path):
+    done = _invoke("run", str(BLADE), "--set", "m1=2", "--out", str(tmp_path / "out"))
+    assert done.exit_code == 2 and "--set applies to the article's cases" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_hostile_names_are_shown_as_text(tmp_path):
+    """Names with markup in them reach the report escaped and the figures as plain text."""
+    hostile = "<script>alert(1)</script> **bold** $x^2$"
+    path = tmp_path / "hostile.toml"
+    path.write_text(
+        f'title = "{hostile}"\n[[mass]]\nname = "{hostile}"\nm = 1\nv = 1\n[[element]]\ntype = "spring"\n'
+        f'on = "{hostile}"\nk = 1\n[[element]]\ntype = "friction"\nname = "[link](http://x)"\non = "{hostile}"\n'
+        "mu_s = 0.3\nmu_k = 0.2\n",
+        encoding="utf-8",
+    )
+    done = _invoke("run", str(path), "--out", str(tmp_path / "out"), "--t-end", "10")
+    assert done.exit_code == 0, done.stderr
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "<script>" not in page and "&lt;script&gt;" in page
+    markdown = (tmp_path / "out" / "report.md").read_text()
+    assert "[link](http://x)" not in markdown and "<script>" not in markdown
+
+
+def test_show_draws_the_schematic(tmp_path):
+    target = tmp_path / "blade.png"
+    done = _invoke("show", str(BLADE), "--figure", str(target))
+    assert done.exit_code == 0, done.stderr
+    assert target.read_bytes().startswith(b"\x89PNG") and "platform" in done.stdout and "jenkins" in done.stdout
+    refused = _invoke("show", "instance-1", "--figure", str(tmp_path / "x.png"))
+    assert refused.exit_code == 2 and not (tmp_path / "x.png").exists()
