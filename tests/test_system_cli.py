@@ -95,3 +95,37 @@ def test_show_draws_the_schematic(tmp_path):
     assert target.read_bytes().startswith(b"\x89PNG") and "platform" in done.stdout and "jenkins" in done.stdout
     refused = _invoke("show", "instance-1", "--figure", str(tmp_path / "x.png"))
     assert refused.exit_code == 2 and not (tmp_path / "x.png").exists()
+
+
+def test_report_rebuilds_a_system_folder_and_refuses_a_damaged_one(tmp_path):
+    import shutil
+
+    folder = tmp_path / "blade"
+    assert _invoke("run", str(BLADE), "--out", str(folder), "--t-end", "8", "--no-plots", "--no-report").exit_code == 0
+    assert not (folder / "report.md").exists() and not (folder / "figures").exists()
+    done = _invoke("report", str(folder))
+    assert done.exit_code == 0, done.stderr
+    assert (folder / "figures" / "motion.png").is_file() and (folder / "figures" / "schematic.png").is_file()
+    report = (folder / "report.md").read_text()
+    assert "platform" in report and "Energy audit" in report
+    damaged = tmp_path / "damaged"
+    shutil.copytree(folder, damaged)
+    (damaged / "energy.csv").write_text("element,type,work\nelsewhere,spring,1.0\n")
+    refused = _invoke("report", str(damaged))
+    assert refused.exit_code == 2 and "is damaged" in refused.stderr and "energy.csv" in refused.stderr
+
+
+def test_check_compares_a_systems_expected_events(tmp_path):
+    """The belt chain's expected times (from the independent implementation) are met; a time moved
+    by 0.01 s is out of tolerance (exit 1); an expected event naming no element is refused."""
+    done = _invoke("check", str(ROOT / "docs" / "systems" / "belt-chain.toml"))
+    assert done.exit_code == 0 and "all 4 expected events within tolerance" in done.stdout, done.stderr
+    text = (ROOT / "docs" / "systems" / "belt-chain.toml").read_text()
+    moved = tmp_path / "moved.toml"
+    moved.write_text(text.replace("t = 0.5420", "t = 0.5520"))
+    out = _invoke("check", str(moved))
+    assert out.exit_code == 1 and "1 expected event(s) out of tolerance" in out.stderr and "OUT" in out.stdout
+    wrong = tmp_path / "wrong.toml"
+    wrong.write_text(text.replace('element = "belt under m3"', 'element = "belt under m4"'))
+    refused = _invoke("check", str(wrong))
+    assert refused.exit_code == 2 and "did you mean 'belt under m3'" in refused.stderr

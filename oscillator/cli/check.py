@@ -25,20 +25,31 @@ __all__ = ["check"]
 
 @command(40, "Compare a case's switching times with the article's.")
 def check(
-    case: Annotated[str, typer.Argument(metavar="CASE", help="A case with [[expected]] events.")],
+    case: Annotated[str, typer.Argument(metavar="CASE", help="A case or a system file with [[expected]] events.")],
     set_: Annotated[
         list[str] | None,
         typer.Option("--set", metavar="NAME=VALUE", help="A solver option (rtol, atol, ...) for this check."),
     ] = None,
     engine: EngineOption = None,
 ) -> None:
-    """Compare a case's switching times with the article's; exit 1 if one is out of tolerance.
+    """Compare a case's switching times with the article's, or a system file's events with its
+    [[expected]] ones; exit 1 if one is out of tolerance.
 
     \b
     Examples:
       oscillator check instance-5
       oscillator check instance-3 --set rtol=1e-12 --set atol=1e-12
+      oscillator check docs/systems/belt-chain.toml
     """
+    from oscillator.io.chains import system_path
+
+    system = system_path(case)
+    if system is not None:
+        if set_ or engine:
+            raise fail("--set and --engine apply to the article's cases; a system file is checked as written")
+        from oscillator.cli.system import check_system
+
+        return check_system(system)
     try:
         check_engine(engine)
         resolved = case_from(case, None, set_)

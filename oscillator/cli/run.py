@@ -319,6 +319,23 @@ def _finish(folder: Path, *, figures: bool, report: bool, window: tuple[float, f
         raise fail(f"the figures or report could not be made ({reason}); {_tables_kept(folder)}", 1) from None
 
 
+def _rebuilt_chain(folder: Path, window: tuple[float, float] | None) -> bool:
+    """The figures and report of a friction chain's run folder made again; whether it was one."""
+    from oscillator.report.chain_runs import finish_chain_run, is_chain_folder, read_chain_run
+
+    if not is_chain_folder(folder):
+        return False
+    if window is not None:
+        raise InputError(
+            "--window redraws an article case's run; a system's figures show the whole run", field="--window"
+        )
+    result = read_chain_run(folder)  # a damaged folder is refused before anything is drawn
+    load("oscillator.report.chain_figures")
+    finish_chain_run(folder, result)
+    say(f"report rebuilt: {folder / 'report.md'}, {folder / 'report.html'}")
+    return True
+
+
 def _tables_kept(folder: Path) -> str:
     return f"the run's tables are in {folder}; `oscillator report {folder}` makes its figures and report"
 
@@ -382,6 +399,7 @@ def report(
     Examples:
       oscillator report runs/omega-1.7-q2-70
       oscillator report runs/long --window 1990 2000
+      oscillator report runs/blade
     """
     try:
         load("oscillator.report.runs")
@@ -392,6 +410,8 @@ def report(
         load("oscillator.report.kinds")
         from oscillator.report.kinds import rebuild
 
+        if _rebuilt_chain(folder, window):
+            return
         rebuilt = rebuild(folder)  # an analysis's folder (its marker names its kind), or None
         if rebuilt is not None:
             what, problems = rebuilt

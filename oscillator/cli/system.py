@@ -157,3 +157,54 @@ def show_system(path: Path, figure: Path | None) -> None:
     with atomic_path(target) as temporary:
         schematic_figure(chain).savefig(temporary, format=target.suffix[1:], dpi=120, bbox_inches="tight")
     say("schematic written to ", (str(target), "bold"))
+
+
+def check_system(path: Path) -> None:
+    """``oscillator check FILE`` for a system file: its run's events against its ``[[expected]]``
+    ones (the nearest event of the element and kind); exit 1 if one is out of tolerance."""
+    try:
+        from oscillator.io.chains import expected_events
+
+        chain, expected = expected_events(path)
+        if not expected:
+            raise InputError(
+                f"{printable(str(path))} has no [[expected]] events to check against; add some (docs/systems.md)",
+                field="case",
+            )
+        load("oscillator.hybrid.chain_run", notice=True)
+        from oscillator.hybrid.chain_run import run_end, simulate_chain
+
+        end = run_end(chain, None)
+        late = [e for e in expected if e.t > end]
+        if late:
+            raise InputError(
+                f"expected event {late[0].label!r} at t = {late[0].t:g} s is after the run's end {end:g} s; "
+                "set [run] t_end",
+                field="t",
+            )
+        events = simulate_chain(chain).events
+    except OscillatorError as error:
+        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+    table = Table(
+        title=f"{printable(chain.title or path.stem)}: expected events (s)", title_justify="left", header_style="bold"
+    )
+    for column in ("event", "element", "kind", "expected", "run", "difference", ""):
+        table.add_column(column)
+    failed = 0
+    for e in expected:
+        same = events[(events.element == e.element) & (events.kind == e.kind)]
+        if same.empty:
+            ran, verdict = None, False
+        else:
+            ran = float(same.t.iloc[(same.t - e.t).abs().argmin()])
+            verdict = abs(ran - e.t) <= e.tolerance
+        failed += not verdict
+        shown_run = "none" if ran is None else f"{ran:.6f}"
+        difference = "" if ran is None else f"{ran - e.t:+.2e}"
+        table.add_row(
+            e.label, printable(e.element), e.kind, f"{e.t:g}", shown_run, difference, "ok" if verdict else "OUT"
+        )
+    out.print(table)
+    if failed:
+        raise fail(f"{failed} expected event(s) out of tolerance", 1)
+    say(f"all {len(expected)} expected events within tolerance")

@@ -27,6 +27,7 @@ is refused naming the mass or element and the keys it may have, with the closest
 from __future__ import annotations
 
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,13 +35,24 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.io.expressions import parse_value
 from oscillator.io.files import read_untrusted
 from oscillator.model.chains import ELEMENTS, MAX_ELEMENTS, MAX_MASSES, Element, FrictionChain, Mass
+from oscillator.model.parameters import is_finite_number
 from oscillator.text import did_you_mean, printable, shown
 
-__all__ = ["MAX_SYSTEM_BYTES", "chain_from_dict", "chain_to_toml", "is_system", "load_system", "system_path"]
+__all__ = [
+    "MAX_SYSTEM_BYTES",
+    "Expected",
+    "chain_from_dict",
+    "chain_to_toml",
+    "expected_events",
+    "is_system",
+    "load_system",
+    "system_path",
+]
 
 #: The largest system file read.
 MAX_SYSTEM_BYTES = 1 << 20
-_TOP = ("title", "system", "mass", "element", "run")
+_TOP = ("title", "system", "mass", "element", "run", "expected")
+_EXPECTED = ("label", "element", "kind", "t", "tolerance")
 _RUN = ("t_end",)
 _SYSTEM = ("Omega", "g", "t0")
 _MASS = ("name", "m", "x", "v")
@@ -50,6 +62,46 @@ _ENDS = ("type", "on", "with", "name")
 def is_system(data: dict[str, Any]) -> bool:
     """Whether parsed TOML declares a friction chain (it has ``[[mass]]`` or ``[system]``)."""
     return "mass" in data or "system" in data
+
+
+@dataclass(frozen=True)
+class Expected:
+    """An event a system file expects (``[[expected]]``): the element, the kind of event, the time
+    (s) and how far from it the run's may be (s, 1e-3 by default); what ``oscillator check`` compares."""
+
+    label: str
+    element: str
+    kind: str
+    t: float
+    tolerance: float = 1e-3
+
+
+def expected_events(path: str | Path) -> tuple[FrictionChain, tuple[Expected, ...]]:
+    """A system file's chain and its ``[[expected]]`` events, each naming an element of the chain
+    and an event kind."""
+    from oscillator.model.chain_rules import ChainEventKind
+
+    path = Path(path)
+    chain, data = _load(path)
+    source, names = printable(str(path)), [e.name for e in chain.elements]
+    found = []
+    for number, table in enumerate(_list(data, "expected", MAX_ELEMENTS, source), start=1):
+        where = f"{source}: expected event {number}"
+        for key in table:
+            if key not in _EXPECTED:
+                raise _unknown(key, _EXPECTED, where)
+        if table.get("element") not in names:
+            hint = did_you_mean(str(table.get("element")), names)
+            raise InputError(f"{where}: element must name an element of the system{hint}", field="element")
+        if table.get("kind") not in set(ChainEventKind):
+            hint = did_you_mean(str(table.get("kind")), [str(k) for k in ChainEventKind])
+            raise InputError(f"{where}: kind must be one of {', '.join(ChainEventKind)}{hint}", field="kind")
+        t, tolerance = (_value(table.get(k, d), k, where) for k, d in (("t", None), ("tolerance", 1e-3)))
+        if not (is_finite_number(t) and is_finite_number(tolerance) and float(tolerance) > 0):
+            raise InputError(f"{where}: t must be a time and tolerance a positive number of s", field="t")
+        label = table.get("label", f"{table['element']} {table['kind']}")
+        found.append(Expected(printable(str(label))[:200], table["element"], table["kind"], float(t), float(tolerance)))
+    return chain, tuple(found)
 
 
 def system_path(argument: str) -> Path | None:
@@ -154,10 +206,7 @@ def chain_from_dict(data: dict[str, Any], *, source: str = "<system>") -> Fricti
         raise InputError(text, field=error.field) from None
 
 
-def load_system(path: str | Path) -> FrictionChain:
-    """The friction chain a system file declares, read as untrusted text (at most
-    :data:`MAX_SYSTEM_BYTES`, UTF-8, a regular file)."""
-    path = Path(path)
+def _load(path: Path) -> tuple[FrictionChain, dict[str, Any]]:
     source = printable(str(path))
     text = read_untrusted(path, what="system file", field="case", limit=MAX_SYSTEM_BYTES).removeprefix("\ufeff")
     try:
@@ -166,7 +215,13 @@ def load_system(path: str | Path) -> FrictionChain:
         raise InputError(f"{source}: malformed TOML: {error}", field="case") from None
     except (ValueError, RecursionError, MemoryError):
         raise InputError(f"{source}: malformed TOML: a value too long or nested too deeply", field="case") from None
-    return chain_from_dict(data, source=source)
+    return chain_from_dict(data, source=source), data
+
+
+def load_system(path: str | Path) -> FrictionChain:
+    """The friction chain a system file declares, read as untrusted text (at most
+    :data:`MAX_SYSTEM_BYTES`, UTF-8, a regular file)."""
+    return _load(Path(path))[0]
 
 
 def chain_to_toml(chain: FrictionChain) -> str:

@@ -15,16 +15,19 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
+from oscillator.errors import InputError
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.report.markup import Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
 from oscillator.report.runs import claim_output, finish_or_warn, json_text, run_metadata, write_tables
+from oscillator.text import printable
 
-__all__ = ["finish_chain_run", "save_chain_result", "write_chain_run"]
+__all__ = ["finish_chain_run", "is_chain_folder", "read_chain_run", "save_chain_result", "write_chain_run"]
 
 
 def _info(result: ChainResult, command: list[str] | None) -> dict[str, Any]:
@@ -131,3 +134,46 @@ def save_chain_result(result: ChainResult, folder: Path | str, *, figures: bool 
     if figures or report:
         finish_or_warn(lambda: finish_chain_run(path, result, figures=figures, report=report), path)
     return path
+
+
+def is_chain_folder(folder: Path) -> bool:
+    """Whether ``folder`` is a friction chain's run folder (its ``system.toml`` and ``run.json``)."""
+    return (folder / "system.toml").is_file() and (folder / "run.json").is_file()
+
+
+def _damaged(folder: Path, what: str) -> InputError:
+    return InputError(f"{printable(str(folder))} is damaged: {what}; run the system again", field="DIR")
+
+
+def read_chain_run(folder: Path) -> ChainResult:
+    """A chain's run folder read back (what :func:`write_chain_run` wrote), each table checked."""
+    import numpy as np
+    import pandas as pd
+
+    from oscillator.hybrid.chain_run import ChainResult, state_columns
+    from oscillator.hybrid.result import Status
+    from oscillator.io.chains import load_system
+    from oscillator.model.chain_rules import ChainEvent
+
+    chain = load_system(folder / "system.toml")
+    try:
+        info = json.loads((folder / "run.json").read_text(encoding="utf-8"))
+        events = pd.read_parquet(folder / "events.parquet") if (folder / "events.parquet").is_file() else None
+        events = pd.read_csv(folder / "events.csv", keep_default_na=False) if events is None else events
+        trajectory = pd.read_parquet(folder / "trajectory.parquet")
+        energy = pd.read_csv(folder / "energy.csv", keep_default_na=False)
+    except (OSError, ValueError) as error:
+        raise _damaged(folder, f"a table cannot be read ({type(error).__name__})") from None
+    if list(events.columns) != list(ChainEvent.columns()):
+        raise _damaged(folder, "the event table's columns are not a chain's")
+    if not set(state_columns(chain)) <= set(trajectory.columns) or trajectory.empty:
+        raise _damaged(folder, "the trajectory lacks the system's columns")
+    names = [e.name for e in chain.elements]
+    if list(energy.get("element", [])) != names:
+        raise _damaged(folder, "energy.csv does not list the system's elements")
+    work = dict(zip(names, energy["work"].astype(float), strict=True))
+    end = trajectory[list(state_columns(chain))].iloc[-1].to_numpy(dtype=float)
+    y_end = np.concatenate([end, np.array([work[name] for name in names])])
+    status = Status(info.get("status", "complete")) if info.get("status") in set(Status) else Status.COMPLETE
+    t_end = float(info.get("t_end", trajectory.t.iloc[-1]))
+    return ChainResult(chain, events, trajectory, work, status, str(info.get("message", "")), t_end, y_end)
