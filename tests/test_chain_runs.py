@@ -356,3 +356,29 @@ def test_random_chains_switch_as_an_independent_implementation(seed):
     assert len(mine) == len(theirs) > 10
     for (t, switches), (t_ref, switches_ref) in zip(mine, theirs, strict=True):
         assert abs(t - t_ref) < 1e-7 and switches == switches_ref, (t, switches, t_ref, switches_ref)
+
+
+@pytest.mark.parametrize(
+    ("settings", "reason"),
+    [
+        ({"storm_events": 5, "storm_window": 100.0}, "storm"),
+        ({"max_events": 3}, "max_events"),
+        ({"max_trajectory_rows": 50}, "max_rows"),
+    ],
+)
+def test_a_guard_stops_a_run_with_its_partial_result(settings, reason):
+    """An event storm, too many events or too long a trajectory stop the run with the reason named
+    and the run so far kept (its events end before the stop, its trajectory is the run's start)."""
+    from pathlib import Path
+
+    from oscillator.errors import SimulationFailed
+    from oscillator.io.chains import load_system
+
+    chain = load_system(Path(__file__).parents[1] / "docs" / "systems" / "blade-damper.toml")
+    with pytest.raises(SimulationFailed) as raised:
+        simulate_chain(chain, 60.0, options=SolverOptions(**settings))
+    failure = raised.value
+    assert str(failure.reason) == reason and failure.result.status == "failed"
+    assert failure.result.trajectory.t.iloc[0] == 0.0 and failure.result.trajectory.t.iloc[-1] < 60.0
+    complete = simulate_chain(chain, 60.0)
+    assert len(failure.result.events) <= len(complete.events)

@@ -94,6 +94,7 @@ class _Run:
         self.events: list[ChainEvent] = []
         self.recent: deque[float] = deque(maxlen=options.storm_events)
         self.switching = [k for k, e in enumerate(chain.elements) if e.type in _SWITCHING]
+        self.count = 0  # rows kept
 
     def keep(self, t: float, y: np.ndarray, mode: np.ndarray) -> None:
         """One row: the time, the state, the mode."""
@@ -108,9 +109,23 @@ class _Run:
         block[:, : steps.shape[1]] = steps
         block[:, steps.shape[1] :] = mode[self.switching]
         self.rows.append(block)
+        self.count += len(block)
+        if self.count > self.options.max_trajectory_rows:
+            raise SimulationFailed(
+                f"the trajectory passed max_trajectory_rows = {self.options.max_trajectory_rows} rows at t = "
+                f"{steps[-1, 0]!r} s; shorten the run (--t-end) or raise max_trajectory_rows",
+                reason=Reason.MAX_ROWS,
+            )
 
     def happened(self, events: list[ChainEvent]) -> None:
+        """Record the events of an instant; refuse a storm, or more than ``max_events`` in all."""
         self.events.extend(events)
+        if len(self.events) > self.options.max_events:
+            raise SimulationFailed(
+                f"more than max_events = {self.options.max_events} events by t = {self.events[-1].t!r} s; shorten the "
+                "run or raise max_events",
+                reason=Reason.MAX_EVENTS,
+            )
         window = self.options.storm_window
         for event in events:
             self.recent.append(event.t)
