@@ -65,9 +65,24 @@ def test_a_bad_system_file_is_refused_and_nothing_is_created(tmp_path, text, sai
 
 
 def test_options_of_the_articles_cases_are_refused_for_a_system(tmp_path):
-    done = _invoke("run", str(BLADE), "--set", "m1=2", "--out", str(tmp_path / "out"))
-    assert done.exit_code == 2 and "--set applies to the article's cases" in done.stderr
+    done = _invoke("run", str(BLADE), "--sample", "0.1", "--out", str(tmp_path / "out"))
+    assert done.exit_code == 2 and "--sample applies to the article's cases" in done.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_set_changes_a_systems_numbers_by_name(tmp_path):
+    """--set element.field=VALUE and mass.m=VALUE change the system run (system.toml holds it as run);
+    a name that is no number of the system is refused with the closest one, nothing created."""
+    from oscillator.io.chains import load_system
+
+    folder = tmp_path / "out"
+    done = _invoke("run", str(BLADE), "--set", "platform.F=0.5", "--set", "damper.m=pi/20", "--out", str(folder))
+    assert done.exit_code == 0, done.stderr
+    ran = load_system(folder / "system.toml")
+    assert ran.elements[2].values["F"] == 0.5 and ran.masses[1].m == pytest.approx(0.15707963267948966)
+    refused = _invoke("run", str(BLADE), "--set", "platfrom.F=0.5", "--out", str(tmp_path / "no"))
+    assert refused.exit_code == 2 and "did you mean 'platform.F'" in refused.stderr
+    assert not (tmp_path / "no").exists()
 
 
 def test_hostile_names_are_shown_as_text(tmp_path):

@@ -205,6 +205,7 @@ def run(
       oscillator run instance-1 --t-end 2000 --sample 0.05 --window 1000 1010 --out runs/long-window
       oscillator run instance-1 --t-end 4000 --sample 1 --keep-events-from 3990 --out runs/longer
       oscillator run docs/systems/blade-damper.toml --out runs/blade
+      oscillator run docs/systems/blade-damper.toml --set platform.F=0.5 --out runs/blade-0.5
     """
     if _ran_system(case, t_end, set_, out_dir, fmt, no_plots, no_report, sample, window, engine, keep, quiet):
         return
@@ -249,13 +250,7 @@ def _ran_system(
         return False
     from oscillator.cli.system import run_system
 
-    given = (
-        ("--set", set_),
-        ("--sample", sample),
-        ("--window", window),
-        ("--engine", engine),
-        ("--keep-events-from", keep),
-    )
+    given = (("--sample", sample), ("--window", window), ("--engine", engine), ("--keep-events-from", keep))
     flags = [flag for flag, value in given if value]
     run_system(
         system,
@@ -266,6 +261,7 @@ def _ran_system(
         no_report=no_report,
         quiet=quiet,
         case_only=flags,
+        assignments=set_ or [],
     )
     return True
 

@@ -24,7 +24,6 @@ __all__ = ["run_system", "show_system"]
 
 #: Options of ``run`` that act on the article's cases only, and what to do instead.
 _CASE_ONLY = {
-    "--set": "edit the system file's values",
     "--sample": "the trajectory is kept at every step",
     "--window": "the figures show the whole run",
     "--engine": "a system runs on CVODE",
@@ -46,8 +45,28 @@ def _events_table(events) -> Table:  # type: ignore[no-untyped-def]
     return table
 
 
+def changed(chain: FrictionChain, assignments: list[str]) -> FrictionChain:
+    """The chain with ``--set NAME=VALUE`` applied (``platform.F=0.5``, ``blade.m=2``, ``Omega=1.3``)."""
+    from oscillator.io.expressions import parse_value
+
+    values = {}
+    for item in assignments:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise InputError(f"--set {printable(item)}: write NAME=VALUE, e.g. --set platform.F=0.5", field="--set")
+        values[name.strip()] = parse_value(text.strip(), field=f"--set {printable(name.strip())}")
+    return chain.with_values(values)
+
+
 def _prepare(
-    path: Path, *, t_end: float | None, out_dir: Path | None, fmt: str, quiet: bool, case_only: list[str]
+    path: Path,
+    *,
+    t_end: float | None,
+    out_dir: Path | None,
+    fmt: str,
+    quiet: bool,
+    case_only: list[str],
+    assignments: list[str],
 ) -> tuple[FrictionChain, FolderClaim]:
     """Every check before anything is created, then the output folder claimed."""
     try:
@@ -65,7 +84,7 @@ def _prepare(
         from oscillator.io.chains import load_system
         from oscillator.report.runs import claim_output
 
-        chain = load_system(path)
+        chain = changed(load_system(path), assignments)
         run_end(chain, t_end)
         return chain, claim_output(out_dir, path.stem)
     except OscillatorError as error:
@@ -82,9 +101,12 @@ def run_system(
     no_report: bool,
     quiet: bool,
     case_only: list[str],
+    assignments: list[str],
 ) -> None:
     """``oscillator run FILE`` for a system file: simulate, write the folder, print the events."""
-    chain, claim = _prepare(path, t_end=t_end, out_dir=out_dir, fmt=fmt, quiet=quiet, case_only=case_only)
+    chain, claim = _prepare(
+        path, t_end=t_end, out_dir=out_dir, fmt=fmt, quiet=quiet, case_only=case_only, assignments=assignments
+    )
     from oscillator.report.chain_runs import finish_chain_run, write_chain_run
 
     try:

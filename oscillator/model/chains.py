@@ -314,6 +314,40 @@ class FrictionChain:
 
     # -- what the chain is made of ----------------------------------------------------------------
 
+    def parameter_names(self) -> list[str]:
+        """Every number of the chain by its name: ``Omega``, ``g``, ``t0``, ``<mass>.m`` (``.x``,
+        ``.v``), ``<element>.<field>`` (e.g. ``platform.F``, ``blade.m``)."""
+        names = ["Omega", "g", "t0"]
+        names += [f"{m.name}.{q}" for m in self.masses for q in ("m", "x", "v")]
+        for e in self.elements:
+            names += [f"{e.name}.{k}" for k, v in e.values.items() if k != "side"]
+        return names
+
+    def with_values(self, changes: Mapping[str, float]) -> FrictionChain:
+        """This chain with numbers changed by name (:meth:`parameter_names`), each checked as where
+        it was first given; an unknown name is refused with the closest one."""
+        known = self.parameter_names()
+        masses, elements, top = list(self.masses), list(self.elements), dict[str, Any]()
+        for name, value in changes.items():
+            if name not in known:
+                hint = did_you_mean(name, known)
+                raise InputError(
+                    f"{printable(name)} is no number of the system{hint}: name one as <mass>.m, <element>.<field>, "
+                    "Omega, g or t0",
+                    field=name,
+                )
+            owner, _, key = name.rpartition(".")
+            if not owner:
+                top[name] = value
+                continue
+            k = next((i for i, m in enumerate(masses) if m.name == owner and key in ("m", "x", "v")), None)
+            if k is not None:
+                masses[k] = dataclasses.replace(masses[k], **{key: value})  # type: ignore[arg-type]
+                continue
+            k = next(i for i, e in enumerate(elements) if e.name == owner)
+            elements[k] = dataclasses.replace(elements[k], values={**elements[k].values, key: value})
+        return dataclasses.replace(self, masses=tuple(masses), elements=tuple(elements), **top)
+
     def plot(self) -> Figure:
         """The machine's schematic (a matplotlib figure): masses, springs, dampers, stops with their
         places, contacts with their gaps, friction and belts, Jenkins elements, forces."""
