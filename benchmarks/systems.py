@@ -2,7 +2,8 @@
 
 1. the first run of a new system in a fresh process, numba's cache filled (the class compiled once,
    at install or by an earlier run): `import oscillator`, a chain never seen (random masses and
-   elements), 10 forcing periods; the import, the run and the whole process, each measured;
+   elements), 10 forcing periods; the import, the run, a second system (other values) in the same
+   process and the whole process, each measured;
 2. the article's system on both paths, alternating, 5 repeats, medians: `simulate` (the built-in
    path) against `simulate_chain(article_chain(...))`, Instance 1 over 200 forcing periods with
    the trajectory at every step (the chain path records it always), and their ratio;
@@ -40,16 +41,19 @@ chain = chain.force("m3", Q=float(rng.uniform(5, 10))).stop("m0", side="right", 
 ran = time.perf_counter()
 result = oscillator.simulate_chain(chain)
 done = time.perf_counter()
-print(imported - started, done - ran, len(result.events))
+oscillator.simulate_chain(chain.with_values({{"m0.m": 3.0, "m3.x": 0.2}}))
+again = time.perf_counter()
+print(imported - started, done - ran, len(result.events), again - done)
 """
 
 
-def first_run(seed: int) -> tuple[float, float, float, int]:
+def first_run(seed: int) -> tuple[float, float, float, int, float]:
     started = time.perf_counter()
     printed = subprocess.run(
         [sys.executable, "-c", _FIRST_RUN.format(seed=seed)], capture_output=True, text=True, check=True, cwd=ROOT
     ).stdout.split()
-    return float(printed[0]), float(printed[1]), time.perf_counter() - started, int(printed[2])
+    whole = time.perf_counter() - started
+    return float(printed[0]), float(printed[1]), whole, int(printed[2]), float(printed[3])
 
 
 def article_paths(repeats: int = 5) -> tuple[float, float, int, int]:
@@ -92,8 +96,11 @@ def main() -> None:
     first_run(0)  # fills numba's cache if it is not
     print("1. a new system's first run in a fresh process (cache filled): import / run / process, s")
     for seed in (1, 2, 3):
-        imported, ran, whole, events = first_run(seed)
-        print(f"   seed {seed}: import {imported:.2f}, run {ran:.3f} ({events} events), whole process {whole:.2f}")
+        imported, ran, whole, events, again = first_run(seed)
+        print(
+            f"   seed {seed}: import {imported:.2f}, run {ran:.3f} ({events} events), another system in the same "
+            f"process {again:.3f}, whole process {whole:.2f}"
+        )
     built, chained, a, b = article_paths()
     print("2. Instance 1, 200 forcing periods, trajectory at every step (medians of 5, alternating)")
     print(f"   built-in simulate {built:.3f} s ({a} events); chain path {chained:.3f} s ({b} events)")

@@ -148,6 +148,10 @@ def pack(arrays: ChainArrays, mode: np.ndarray | list[int]) -> np.ndarray:
     return np.concatenate([np.asarray(part, dtype=float).ravel() for part in (*parts, arrays.value, scratch)])
 
 
+#: Where each part of the data vector starts (:func:`_offsets`).
+Offsets = tuple[int, int, int, int, int, int, int, int, int, int]
+
+
 @njit(cache=True)
 def data_length(masses: int, elements: int) -> int:  # pragma: no cover - compiled
     """The length of :func:`pack`'s vector."""
@@ -155,9 +159,9 @@ def data_length(masses: int, elements: int) -> int:  # pragma: no cover - compil
 
 
 @njit(cache=True)
-def _offsets(d: Vector) -> tuple[int, int, int, int, int, int, int, int, int, int]:  # pragma: no cover - compiled
+def _offsets(d: Vector) -> Offsets:  # pragma: no cover - compiled
     """``(n, e, mode, mass, friction, kind, on, other, slider, value)``: the counts and where each
-    part of the data vector starts."""
+    part of the data vector starts (computed once a call: the element loops take them)."""
     n, e = int(d[1]), int(d[2])
     mode = len(HEADER)
     mass = mode + e
@@ -175,53 +179,66 @@ def _stretch(y: Vector, on: int, other: int) -> tuple[float, float]:  # pragma: 
 
 
 @njit(cache=True)
+def _force(t: float, y: Vector, d: Vector, row: int, at: Offsets) -> float:  # pragma: no cover - compiled
+    """:func:`element_force` with the data's offsets ``at`` (:func:`_offsets`) given; the values
+    read in place."""
+    _, _, mode, _, _, kind, on_at, other_at, slider_at, value_at = at
+    code, on, s = int(d[kind + row]), int(d[on_at + row]), d[mode + row]
+    v = value_at + WIDTH * row
+    u, w = _stretch(y, on, int(d[other_at + row]))
+    force: float = 0.0
+    if code == SPRING:
+        force = -(d[v] * u + d[v + 1] * (u * u * u))
+    elif code == DAMPER:
+        force = -(d[v] * w + d[v + 1] * (w * w * w))
+    elif code == FORCE:
+        force = d[v] * math.sin(d[4] * t + d[v + 1])
+    elif code == STOP and s != 0.0:
+        force = -(d[v + 2] * (y[2 * on] - d[v + 1]) + d[v + 3] * y[2 * on + 1])
+    elif code == CONTACT and s != 0.0:
+        force = -(d[v + 2] * (u + d[v + 1] if d[v] < 0 else u - d[v + 1]) + d[v + 3] * w)
+    elif code == JENKINS:
+        force = -(d[v] * (u - y[int(d[slider_at + row])])) if s == 0.0 else -s * d[v + 1]
+    return force
+
+
+@njit(cache=True)
 def element_force(t: float, y: Vector, d: Vector, row: int) -> float:  # pragma: no cover - compiled
     """The force element ``row`` puts on its ``on`` mass in the data's mode (N; the ``with`` mass
     takes it with the other sign); friction's is not here (it is the field's)."""
-    _, _, mode, _, _, kind, on_at, other_at, slider_at, value_at = _offsets(d)
-    code, on, other, s = int(d[kind + row]), int(d[on_at + row]), int(d[other_at + row]), d[mode + row]
-    v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
-    u, w = _stretch(y, on, other)
-    force: float = 0.0
-    if code == SPRING:
-        force = -(v[0] * u + v[1] * (u * u * u))
-    elif code == DAMPER:
-        force = -(v[0] * w + v[1] * (w * w * w))
-    elif code == FORCE:
-        force = v[0] * math.sin(d[4] * t + v[1])
-    elif code == STOP and s != 0.0:
-        force = -(v[2] * (y[2 * on] - v[1]) + v[3] * y[2 * on + 1])
-    elif code == CONTACT and s != 0.0:
-        force = -(v[2] * (u + v[1] if v[0] < 0 else u - v[1]) + v[3] * w)
-    elif code == JENKINS:
-        force = -(v[0] * (u - y[int(d[slider_at + row])])) if s == 0.0 else -s * v[1]
-    return force
+    return _force(t, y, d, row, _offsets(d))
+
+
+@njit(cache=True)
+def _forces(t: float, y: Vector, d: Vector, out: Vector, at: Offsets) -> None:  # pragma: no cover - compiled
+    n, e, _, _, _, _, on_at, other_at, _, _ = at
+    for i in range(n):
+        out[i] = 0.0
+    for row in range(e):
+        f = _force(t, y, d, row, at)
+        out[int(d[on_at + row])] += f
+        other = int(d[other_at + row])
+        if other >= 0:
+            out[other] -= f
 
 
 @njit(cache=True)
 def forces_on(t: float, y: Vector, d: Vector, out: Vector) -> None:  # pragma: no cover - compiled
     """``out[i]``: the force every element but friction puts on mass ``i`` (N)."""
-    n, e, _, _, _, _, on_at, other_at, _, _ = _offsets(d)
-    for i in range(n):
-        out[i] = 0.0
-    for row in range(e):
-        f = element_force(t, y, d, row)
-        out[int(d[on_at + row])] += f
-        if d[other_at + row] >= 0:
-            out[int(d[other_at + row])] -= f
+    _forces(t, y, d, out, _offsets(d))
 
 
 @njit(cache=True)
-def _friction_force(y: Vector, d: Vector, i: int, force: float) -> float:  # pragma: no cover - compiled
+def _friction_force(d: Vector, i: int, force: float, at: Offsets) -> float:  # pragma: no cover - compiled
     """The friction force on mass ``i`` (N) under the other forces' sum ``force``: kinetic
     ``-s (mu_k N + P)`` slipping, ``-force`` (what holds it to its floor or belt) stuck."""
-    _, _, mode, _, friction, _, _, _, _, value_at = _offsets(d)
+    _, _, mode, _, friction, _, _, _, _, value_at = at
     row = int(d[friction + i])
     if row < 0:
         return 0.0
-    v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
     s = d[mode + row]
-    return -force if s == 0.0 else -s * (v[1] * v[2] + v[3])
+    v = value_at + WIDTH * row
+    return -force if s == 0.0 else -s * (d[v + 1] * d[v + 2] + d[v + 3])
 
 
 @njit(cache=True)
@@ -229,17 +246,23 @@ def chain_derivative(t: float, y: Vector, yp: Vector, d: Vector) -> None:  # pra
     """Fill ``yp`` with the chain's field in the data's mode (module docstring), and, when ``y``
     is longer than the state (``d[3]``), the power of each element on the masses (W): the rates
     of the elements' works."""
-    n, e, mode, mass, friction, _, on_at, other_at, slider_at, value_at = _offsets(d)
-    size = int(d[3])
-    forces = d[value_at + WIDTH * e : value_at + WIDTH * e + n]  # the data's scratch (no allocation)
-    forces_on(t, y, d, forces)
+    at = _offsets(d)
+    n, e, mode, mass, friction, _, on_at, other_at, slider_at, value_at = at
+    size, scratch = int(d[3]), value_at + WIDTH * e
     for i in range(n):
-        row = int(d[friction + i])
+        d[scratch + i] = 0.0
+    for row in range(e):  # the forces on the masses, in the data's scratch (no allocation)
+        f = _force(t, y, d, row, at)
+        d[scratch + int(d[on_at + row])] += f
+        if d[other_at + row] >= 0:
+            d[scratch + int(d[other_at + row])] -= f
+    for i in range(n):
+        row, force = int(d[friction + i]), d[scratch + i]
         if row >= 0 and d[mode + row] == 0.0:  # stuck to its floor or belt
             yp[2 * i], yp[2 * i + 1] = d[value_at + WIDTH * row + 4], 0.0
         else:
             yp[2 * i] = y[2 * i + 1]
-            yp[2 * i + 1] = (forces[i] + _friction_force(y, d, i, forces[i])) / d[mass + i]
+            yp[2 * i + 1] = (force + _friction_force(d, i, force, at)) / d[mass + i]
     for row in range(e):
         if d[slider_at + row] >= 0:
             _, rate = _stretch(y, int(d[on_at + row]), int(d[other_at + row]))
@@ -248,10 +271,10 @@ def chain_derivative(t: float, y: Vector, yp: Vector, d: Vector) -> None:  # pra
         for row in range(e):
             on = int(d[on_at + row])
             if row == int(d[friction + on]):
-                yp[size + row] = _friction_force(y, d, on, forces[on]) * y[2 * on + 1]
+                yp[size + row] = _friction_force(d, on, d[scratch + on], at) * y[2 * on + 1]
             else:
                 _, rate = _stretch(y, on, int(d[other_at + row]))
-                yp[size + row] = element_force(t, y, d, row) * rate
+                yp[size + row] = _force(t, y, d, row, at) * rate
 
 
 @njit(cache=True)
@@ -266,25 +289,29 @@ def root_values(t: float, y: Vector, d: Vector, g: Vector) -> None:  # pragma: n
     * Jenkins slider stuck: ``kt (u - z) -+ F``; slipping: the stretch's rate ``u'`` (it sticks
       where the motion turns); with ``F = 0`` none (it never holds).
     """
-    n, e, mode, mass, _, kind, on_at, other_at, slider_at, value_at = _offsets(d)
-    forces = d[value_at + WIDTH * e : value_at + WIDTH * e + n]  # the data's scratch (no allocation)
-    forces_on(t, y, d, forces)
+    at = _offsets(d)
+    n, e, mode, mass, _, kind, on_at, other_at, slider_at, value_at = at
+    scratch = value_at + WIDTH * e
+    _forces(t, y, d, d[scratch : scratch + n], at)
     for row in range(e):
         g[2 * row], g[2 * row + 1] = 1.0, 1.0
         code, on, s = int(d[kind + row]), int(d[on_at + row]), d[mode + row]
-        v = d[value_at + WIDTH * row : value_at + WIDTH * (row + 1)]
-        u, w = _stretch(y, on, int(d[other_at + row]))
+        v = value_at + WIDTH * row
         if code == FRICTION and s != 0.0:
-            g[2 * row] = y[2 * on + 1] - v[4]
-            g[2 * row + 1] = (forces[on] - s * (v[1] * v[2] + v[3])) / d[mass + on]
+            g[2 * row] = y[2 * on + 1] - d[v + 4]
+            g[2 * row + 1] = (d[scratch + on] - s * (d[v + 1] * d[v + 2] + d[v + 3])) / d[mass + on]
         elif code == FRICTION:
-            g[2 * row], g[2 * row + 1] = forces[on] - (v[0] * v[2] + v[3]), forces[on] + (v[0] * v[2] + v[3])
+            static = d[v] * d[v + 2] + d[v + 3]
+            g[2 * row], g[2 * row + 1] = d[scratch + on] - static, d[scratch + on] + static
         elif code == STOP:
-            g[2 * row] = y[2 * on] - v[1]
+            g[2 * row] = y[2 * on] - d[v + 1]
         elif code == CONTACT:
-            g[2 * row] = u + v[1] if v[0] < 0 else u - v[1]
-        elif code == JENKINS and v[1] > 0.0 and s == 0.0:
-            f = v[0] * (u - y[int(d[slider_at + row])])
-            g[2 * row], g[2 * row + 1] = f - v[1], f + v[1]
-        elif code == JENKINS and v[1] > 0.0:
-            g[2 * row] = w
+            u, _ = _stretch(y, on, int(d[other_at + row]))
+            g[2 * row] = u + d[v + 1] if d[v] < 0 else u - d[v + 1]
+        elif code == JENKINS and d[v + 1] > 0.0:
+            u, w = _stretch(y, on, int(d[other_at + row]))
+            if s == 0.0:
+                f = d[v] * (u - y[int(d[slider_at + row])])
+                g[2 * row], g[2 * row + 1] = f - d[v + 1], f + d[v + 1]
+            else:
+                g[2 * row] = w
