@@ -382,3 +382,26 @@ def test_a_guard_stops_a_run_with_its_partial_result(settings, reason):
     assert failure.result.trajectory.t.iloc[0] == 0.0 and failure.result.trajectory.t.iloc[-1] < 60.0
     complete = simulate_chain(chain, 60.0)
     assert len(failure.result.events) <= len(complete.events)
+
+
+def test_simulate_takes_a_chain_or_a_system_file():
+    """oscillator.simulate runs a FrictionChain or a system file's path as simulate_chain does, its
+    numbers and solver options as overrides; the article's own settings are refused by name."""
+    from pathlib import Path
+
+    import oscillator
+    from oscillator.errors import InputError
+
+    path = Path(__file__).parents[1] / "docs" / "systems" / "belt-chain.toml"
+    chain = oscillator.load_system(path)
+    by_path = oscillator.simulate(str(path), t_end=8.0)
+    by_value = oscillator.simulate(chain, t_end=8.0)
+    direct = simulate_chain(chain, 8.0)
+    assert isinstance(by_path, oscillator.ChainResult)
+    assert list(by_path.events.t) == list(by_value.events.t) == list(direct.events.t)
+    faster = oscillator.simulate(chain, t_end=8.0, **{"belt under m1.w": 0.4}, rtol=1e-12)
+    assert faster.chain.elements[3].values["w"] == 0.4 and list(faster.events.t) != list(direct.events.t)
+    with pytest.raises(InputError, match="t_eval applies to the article's cases"):
+        oscillator.simulate(chain, t_eval=[1.0, 2.0])
+    with pytest.raises(InputError, match="did you mean 'Omega'"):
+        oscillator.simulate(chain, Omegaa=2.0)

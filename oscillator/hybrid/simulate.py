@@ -6,6 +6,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
@@ -18,8 +19,13 @@ from oscillator.hybrid.recording import SaveAt, recording
 from oscillator.hybrid.result import Result, Status
 from oscillator.hybrid.supervisor import CallbackRaised, Supervisor
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import as_float
+from oscillator.io.chains import load_system, system_path
+from oscillator.model.chains import FrictionChain
+from oscillator.model.parameters import SolverOptions, as_float
 from oscillator.text import shown
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.hybrid.chain_run import ChainResult
 
 __all__ = ["admit", "resolve_case", "simulate"]
 
@@ -82,6 +88,46 @@ def admit(case: Case) -> None:
         )
 
 
+def _chain_of(case: object) -> FrictionChain | None:
+    """The friction chain ``case`` is or names (a system file's path), else ``None``."""
+    if isinstance(case, FrictionChain):
+        return case
+    if isinstance(case, (str, Path)) and (path := system_path(str(case))) is not None:
+        return load_system(path)
+    return None
+
+
+def _simulate_chain(chain: FrictionChain, t_end: float | None, unused: list[str], overrides: dict[str, float]) -> Any:
+    """:func:`simulate` of a friction chain: :func:`~oscillator.hybrid.chain_run.simulate_chain`,
+    overrides the chain's numbers by name (``Omega``; ``platform.F`` as ``**{"platform.F": 0.5}``) or
+    solver options; the article's own settings refused by name."""
+    from oscillator.hybrid.chain_run import simulate_chain
+
+    if unused:
+        raise InputError(f"{unused[0]} applies to the article's cases, not to a friction chain", field=unused[0])
+    options = SolverOptions.names()
+    chain = chain.with_values({name: value for name, value in overrides.items() if name not in options})
+    settings: dict[str, Any] = {name: value for name, value in overrides.items() if name in options}
+    return simulate_chain(chain, t_end, options=SolverOptions(**settings))
+
+
+@overload
+def simulate(
+    case: FrictionChain,
+    /,
+    *,
+    t_end: float | None = None,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    record_trajectory: bool = True,
+    progress: Callable[[float], None] | None = None,
+    keep_events_from: float | None = None,
+    engine: EngineChoice = None,
+    save: SaveAt | None = None,
+    **overrides: float,
+) -> ChainResult: ...
+
+
+@overload
 def simulate(
     case: Case | str | Path,
     /,
@@ -94,13 +140,32 @@ def simulate(
     engine: EngineChoice = None,
     save: SaveAt | None = None,
     **overrides: float,
-) -> Result:
+) -> Result: ...
+
+
+def simulate(
+    case: Case | str | Path | FrictionChain,
+    /,
+    *,
+    t_end: float | None = None,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    record_trajectory: bool = True,
+    progress: Callable[[float], None] | None = None,
+    keep_events_from: float | None = None,
+    engine: EngineChoice = None,
+    save: SaveAt | None = None,
+    **overrides: float,
+) -> Any:
     """Simulate a case from its start to ``t_end``.
 
     Parameters
     ----------
-    case : Case, str or Path
-        A :class:`Case`, a shipped case's name (``"instance-1"``) or a case file's path.
+    case : Case, str, Path or FrictionChain
+        A :class:`Case`, a shipped case's name (``"instance-1"``) or a case file's path; or a
+        friction chain (:class:`~oscillator.FrictionChain`, or a system file's path: docs/systems.md),
+        whose run is :func:`~oscillator.simulate_chain`'s :class:`~oscillator.ChainResult` (the
+        chain's numbers by name and solver options as overrides; ``t_eval``, ``save``, ``engine``
+        and ``keep_events_from`` are the article's).
     t_end : float, optional
         End time (s); the case's by default.
     t_eval : array_like, optional
@@ -152,6 +217,11 @@ def simulate(
     >>> result.events[["t", "mass", "kind", "to_domain"]].round(4).values.tolist()
     [[1.1746, 2, 'sliding_vanish', 1], [1.289, 1, 'sliding_vanish', 2]]
     """
+    chain = _chain_of(case)
+    if chain is not None:  # a friction chain (docs/systems.md)
+        unused = {"t_eval": t_eval, "keep_events_from": keep_events_from, "engine": engine, "save": save}
+        return _simulate_chain(chain, t_end, [k for k, v in unused.items() if v is not None], overrides)
+    assert not isinstance(case, FrictionChain)  # for the type checker: a chain returned above
     if keep_events_from is not None:
         _time(keep_events_from, "keep_events_from")
     if save is not None and (t_eval is not None or record_trajectory is not True or keep_events_from is not None):
