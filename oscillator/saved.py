@@ -14,6 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.frequency import FrequencyResponse
     from oscillator.attractors.lyapunov import LyapunovSpectrum
     from oscillator.designing.optimise import Design
+    from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.curves import Curve
@@ -24,10 +25,23 @@ __all__ = ["read_run"]
 
 def read_run(
     folder: str | Path,
-) -> Result | Orbit | Branch | Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum | FrequencyResponse | Design:
+) -> (
+    Result
+    | ChainResult
+    | Orbit
+    | Branch
+    | Basins
+    | AttractorsOver
+    | Atlas
+    | Curve
+    | LyapunovSpectrum
+    | FrequencyResponse
+    | Design
+):
     """What a folder holds, as the object that was saved.
 
-    A folder of ``oscillator run`` or :meth:`Result.save` gives a :class:`~oscillator.Result`
+    A folder of ``oscillator run`` on a system file or of :meth:`ChainResult.save` gives a
+    :class:`~oscillator.ChainResult`; one of ``oscillator run`` or :meth:`Result.save` a :class:`~oscillator.Result`
     (its case, tables, status, energy audit and counts); one of :meth:`Orbit.save` an
     :class:`~oscillator.Orbit`; one of ``oscillator continue`` or :meth:`Branch.save` a
     :class:`~oscillator.Branch` (with its case); one of ``oscillator basins``, ``attractors``,
@@ -46,6 +60,10 @@ def read_run(
     from oscillator.report.runs import folder_kind, read_run_folder, result_of
 
     folder = as_folder(folder)
+    from oscillator.report.chain_runs import is_chain_folder, read_chain_run
+
+    if is_chain_folder(folder):  # a friction chain's run (docs/systems.md)
+        return read_chain_run(folder)
     kind = analysis_kind(folder)
     if kind is not None:
         found: Basins | AttractorsOver | Atlas | Curve | LyapunovSpectrum | FrequencyResponse | Design

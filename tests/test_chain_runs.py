@@ -405,3 +405,17 @@ def test_simulate_takes_a_chain_or_a_system_file():
         oscillator.simulate(chain, t_eval=[1.0, 2.0])
     with pytest.raises(InputError, match="did you mean 'Omega'"):
         oscillator.simulate(chain, Omegaa=2.0)
+
+
+def test_a_saved_chain_run_reads_back_as_it_was(tmp_path):
+    """ChainResult.save writes the folder `oscillator run` writes; oscillator.read_run gives back the
+    chain, the events, the trajectory, the works and the energy audit."""
+    import oscillator
+
+    result = simulate_chain(_blade(0.3), 20.0)
+    folder = result.save(tmp_path / "blade", figures=False, report=False)
+    again = oscillator.read_run(folder)
+    assert isinstance(again, oscillator.ChainResult) and again.chain == result.chain
+    assert again.events.equals(result.events) and again.trajectory.equals(result.trajectory)
+    assert again.work == pytest.approx(result.work, rel=1e-15)
+    assert again.energy.residual == pytest.approx(result.energy.residual, abs=1e-12)
