@@ -1,8 +1,9 @@
 """The screenshots of docs/explore.md, taken in headless Chromium from ``oscillator explore`` as a
 user runs it: the explorer of the impacting system with its orbit asked for, an atlas with a cell
-clicked, and a frequency response with a branch point clicked.
+clicked, a frequency response with a branch point clicked, and the vibration conveyor's system
+file (docs/systems.md).
 
-Usage: python scripts/explore_screenshots.py
+Usage: python scripts/explore_screenshots.py [case|atlas|frc|system ...]
 """
 
 import subprocess
@@ -25,6 +26,18 @@ def case() -> None:
             page.locator(".oscillator-orbit-found").wait_for(timeout=60e3)
             page.wait_for_timeout(500)
             page.screenshot(path=IMAGES / "explore-case.png", full_page=False)
+            assert not elsewhere, elsewhere
+
+
+def system() -> None:
+    """The conveyor of docs/systems/conveyor.toml: its walls' contacts shaded, the part stuck."""
+    path = IMAGES.parent / "systems" / "conveyor.toml"
+    with Served(str(path), "--set", "drive.Q=18", "--periods", "12") as served:
+        with browser_page(1300, 1500) as (page, elsewhere):
+            page.goto(served.url)
+            wait_revision(page, 1)
+            page.wait_for_timeout(500)
+            page.screenshot(path=IMAGES / "explore-system.png", full_page=False)
             assert not elsewhere, elsewhere
 
 
@@ -77,6 +90,6 @@ def clicked(image: str, command: list[str], at: tuple[float, float]) -> None:
 
 
 if __name__ == "__main__":
-    case()
-    atlas()
-    frc()
+    TAKEN = {"case": case, "atlas": atlas, "frc": frc, "system": system}
+    for name in sys.argv[1:] or list(TAKEN):
+        TAKEN[name]()

@@ -338,3 +338,45 @@ def test_a_value_that_costs_too_much_is_bounded_said_and_leaves_the_server_answe
         page.get_by_role("button", name="Reset to the case's values").click()
         wait_revision(page, 5)
         assert model_value(page, "C1") == 0.05 and page.url == served.url
+
+
+def test_a_system_file_explored_in_the_browser_moves_with_its_named_sliders(tmp_path):
+    """A friction chain's page (issue 51): a slider for ``platform.F``, whose key press shows the
+    events ``chain_scene_of`` gives for the new value, in the chain's own table (element, mass,
+    kind, modes, theorem); the file's title, a script, shows as text."""
+    import tomllib
+
+    import tomli_w
+
+    from oscillator.exploring.scene import chain_scene_of
+    from oscillator.io.chains import chain_from_dict
+
+    hostile = "<script>window.__pwned = 1</script>Blade"
+    data = tomllib.loads((Path(__file__).parents[1] / "docs" / "systems" / "blade-damper.toml").read_text())
+    path = tmp_path / "blade.toml"
+    path.write_text(tomli_w.dumps(data | {"title": hostile}), encoding="utf-8")
+    chain = chain_from_dict(data)
+    with Served(str(path), "--periods", "20", cwd=tmp_path) as served, browser_page() as (page, elsewhere):
+        page.goto(served.url)
+        wait_revision(page, 1)
+        assert hostile in page.locator(".oscillator-title").inner_text()
+        assert page.evaluate("() => window.__pwned === undefined")
+        page.locator(".control-platform-F .noUi-handle").focus()
+        page.keyboard.press("ArrowRight")
+        wait_revision(page, 2)
+        value = model_value(page, "platform.F")
+        assert value == pytest.approx(0.3 + 0.003)  # one step of the slider (0.6 / 200)
+        expected = chain_scene_of(chain.with_values({"platform.F": value}), 20).events
+        status = page.locator("span[data-revision='2']").inner_text()
+        assert f"20 periods, {len(expected)} events; cvode" in status, status
+        shown = rows(page)
+        assert len(shown) >= 8
+        for cells, (_, event) in zip(shown, expected.iterrows(), strict=False):
+            t, element, mass, kind, before, after, theorem, _equations = cells
+            assert float(t) == pytest.approx(event.t, abs=1e-6), (cells, event)
+            assert (element, mass, kind, int(before), int(after), theorem) == (
+                event.element, event.mass, event.kind, event.mode_before, event.mode_after, event.theorem
+            ), cells  # fmt: skip
+        page.screenshot(path=tmp_path / "explore-system.png", full_page=True)
+        assert not elsewhere, elsewhere
+    assert served.process.returncode == 0

@@ -25,13 +25,17 @@ DrawingEngineOption = Annotated[
 ]
 
 
-@command(150, "Explore a case in the browser: move a parameter, see the motion; click a map, see its attractor.")
+@command(
+    150,
+    "Explore a case or system file in the browser: move a parameter, see the motion; click a map, see its attractor.",
+)
 def explore(
     target: Annotated[
         str,
         typer.Argument(
             metavar="CASE|FOLDER",
-            help="A named case, a case file (.toml), or a folder the atlas, basins, sweep or frc command wrote.",
+            help="A named case, a case file (.toml), a system file (.toml, docs/systems.md), or a folder the atlas, "
+            "basins, sweep or frc command wrote.",
         ),
     ],
     set_: SetOption = None,
@@ -49,15 +53,18 @@ def explore(
     ] = "127.0.0.1",
     engine: DrawingEngineOption = "dop853",
 ) -> None:
-    """Serve the explorer of CASE, or of an atlas, basins, sweep or frc FOLDER, on this machine
-    and print its address; open it in a browser.  Every parameter and the start have a slider; on
-    each change the motion is simulated again (drawn with the compiled DOP853, then checked by
-    CVODE) and the time series, phase portraits, stroboscopic points and event table redraw.  On
-    a folder's picture, a click on a cell or point shows the attractors there.  Ctrl-C stops.
+    """Serve the explorer of CASE, of a system file, or of an atlas, basins, sweep or frc FOLDER,
+    on this machine and print its address; open it in a browser.  Every parameter and the start
+    have a slider (a system file's: every number by its name, platform.F); on each change the
+    motion is simulated again (drawn with the compiled DOP853, then checked by CVODE; a system
+    file's with CVODE) and the time series, phase portraits, stroboscopic points and event table
+    redraw.  On a folder's picture, a click on a cell or point shows the attractors there.  Ctrl-C
+    stops.
 
     \b
     Examples:
       oscillator explore instance-3 --set Omega=2.2 --periods 20
+      oscillator explore docs/systems/blade-damper.toml --set platform.F=0.5
       oscillator explore runs/atlas --port 5007
     """
     try:
@@ -94,9 +101,16 @@ def explore(
 
 
 def _opened(target: str, set_: list[str] | None) -> tuple[Any, Any]:
-    """The case to explore and the folder's map (None for a case), read once."""
+    """The case or system to explore and the folder's map (None for a case), read once."""
     from oscillator.exploring.maps import picture_of
+    from oscillator.exploring.subjects import ChainSubject
+    from oscillator.io.chains import load_system, system_path
 
+    system = system_path(target)
+    if system is not None:
+        from oscillator.cli.system import changed
+
+        return ChainSubject(changed(load_system(system), set_ or []), system.stem), None
     picture = picture_of(target) if Path(target).is_dir() else None
     if picture is not None and set_:
         raise InputError("--set applies to a case, not to a folder (its map has its own values)", field="--set")

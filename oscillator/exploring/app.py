@@ -37,23 +37,18 @@ from bokeh.models.widgets.sliders import Slider
 
 from oscillator.analysis.axes import STATE
 from oscillator.errors import InputError, OscillatorError
-from oscillator.exploring.controls import GROUPS, START, Control, controls_of
+from oscillator.exploring.controls import START, Control, groups_of
 from oscillator.exploring.maps import Picture
 from oscillator.exploring.page import Figures, event_table, map_figure, plain, url_keeper
 from oscillator.exploring.runner import Job, Runner
-from oscillator.exploring.scene import (
-    PERIODS,
-    TIME_AGREEMENT,
-    Scene,
-    check_periods,
-    differences,
-    scene_of,
-    with_changes,
-)
-from oscillator.io.cases import Case, case_to_toml, resolve_case
+from oscillator.exploring.scene import PERIODS, TIME_AGREEMENT, Scene, System, check_periods, differences
+from oscillator.exploring.subjects import CaseSubject, ChainSubject, subject_of
+from oscillator.io.cases import Case
 from oscillator.io.expressions import parse_value
+from oscillator.model.chains import FrictionChain
+from oscillator.text import did_you_mean
 
-__all__ = ["Explorer"]
+__all__ = ["Explorer", "css_class"]
 
 #: The response measures shown with an orbit or an attractor.
 MEASURES = (
@@ -92,12 +87,13 @@ class _Text(pn.pane.HTML):
 
 
 class Explorer:
-    """The explorer of one case, or of a folder's map (module docstring).
+    """The explorer of one case or friction chain, or of a folder's map (module docstring).
 
     Parameters
     ----------
-    case : Case or str
-        The case (a name, a file, or a Case).
+    case : Case, FrictionChain or str
+        The system: a case (a name, a case file, or a Case), a friction chain or a system file
+        (:mod:`oscillator.exploring.subjects`).
     periods : int
         Forcing periods simulated on every change.
     picture : Picture, optional
@@ -107,24 +103,35 @@ class Explorer:
         The integrator that draws each change (:mod:`oscillator.engines`): the compiled DOP853 by
         default, whose motion CVODE runs again once the controls rest (:data:`CHECK_DELAY`) and
         either confirms, event by event, or replaces; ``"cvode"`` draws with the reference itself.
+        A friction chain is drawn by CVODE, its one engine.
     """
 
     def __init__(
-        self, case: Case | str, periods: int = PERIODS, *, picture: Picture | None = None, engine: str = DRAWING_ENGINE
+        self,
+        case: Case | FrictionChain | str | CaseSubject | ChainSubject,
+        periods: int = PERIODS,
+        *,
+        picture: Picture | None = None,
+        engine: str = DRAWING_ENGINE,
     ) -> None:
         from oscillator.engines import check_engine
 
-        self.engine = check_engine(engine)
-        self.case = resolve_case(case)
+        self.subject = subject_of(case)
+        #: The system explored, as given (the controls' values apply to it).
+        self.case = self.subject.system
+        engine = check_engine(engine)
+        self.engine = engine if engine in self.subject.engines else self.subject.engines[0]
         self.picture = picture
         self.periods = check_periods(periods)
         #: The number of the last change asked; the status line shows the one drawn.
         self.revision = 0
         self.clicks = 0
         self.scene: Scene | None = None
-        self.figures = Figures()
+        self.figures = Figures(self.subject.outline, orbits=self.subject.orbits)
         self.sources = self.figures.sources
-        self.controls = {control.name: control for control in controls_of(self.case)}
+        found = self.subject.controls()
+        self.groups = groups_of(found)
+        self.controls = {control.name: control for control in found}
         self.widgets = {name: self._slider(control) for name, control in self.controls.items()}
         self.status = _Text("", sizing_mode="stretch_width", height=24)
         self.heading = _Text("", sizing_mode="stretch_width")
@@ -154,15 +161,18 @@ class Explorer:
             format="0[.]00000",
             width=250,
             name=control.name,
-            css_classes=[f"control-{control.name}"],
+            css_classes=[css_class(control.name)],
         )
         slider.on_change("value_throttled", lambda attr, old, new: self.update())  # a drag runs once, when let go
         return slider
 
     def _build_inputs(self, periods: int) -> None:
-        self.find_box = TextInput(title="find a control", placeholder="e.g. K3", width=250, name="find")
+        # an example of a control's name, as its owner names it: the article's K3, a chain's last element field
+        example = "K3" if "K3" in self.controls else list(self.controls)[-1]
+        self._example = f"{example}={2.5 if example == 'K3' else self.controls[example].value:g}"
+        self.find_box = TextInput(title="find a control", placeholder=f"e.g. {example}", width=250, name="find")
         self.find_box.on_change("value_input", lambda attr, old, new: self._find(new))
-        self.set_box = TextInput(title="set NAME=VALUE (any value)", placeholder="e.g. K3=2.5", width=250)
+        self.set_box = TextInput(title="set NAME=VALUE (any value)", placeholder=f"e.g. {self._example}", width=250)
         self.set_box.on_change("value", lambda attr, old, new: self._set(new))
         self.periods_box = NumericInput(title="periods", value=periods, low=1, high=10_000, mode="int", width=120)
         self.periods_box.on_change("value", lambda attr, old, new: self.update())
@@ -170,7 +180,7 @@ class Explorer:
         self.reset_button.on_click(self._reset)
         self.orbit_button = Button(label="Orbit and multipliers", width=180)
         self.orbit_button.on_click(self._orbit)
-        stem = re.sub(r"[^A-Za-z0-9_.-]+", "-", self.case.name).strip(".-")[:60] or "case"
+        stem = re.sub(r"[^A-Za-z0-9_.-]+", "-", self.subject.name).strip(".-")[:60] or "case"
         self.downloads = [
             pn.widgets.FileDownload(callback=callback, filename=f"{stem}-{name}", label=label, width=180)
             for callback, name, label in (
@@ -182,14 +192,11 @@ class Explorer:
 
     def _layout(self) -> pn.viewable.Viewable:
         sections: list[Any] = [self.find_box, self.reset_button]
-        self._group_titles = {group: Div(text=f"<b>{group}</b>", name=f"group-{group}") for group in GROUPS}
-        for group, names in GROUPS.items():
+        self._group_titles = {group: Div(text=f"<b>{plain(group)}</b>", name=f"group-{group}") for group in self.groups}
+        for group, names in self.groups.items():
             sections += [self._group_titles[group], *(self.widgets[n] for n in names)]
         sidebar = column(*sections, self.set_box, self.periods_box, width=270)
-        # a case changed by overrides (said in its title) is another system: the description of the one
-        # it came from is not its own
-        changed = self.case.modified or "(modified:" in self.case.title
-        shown = self.case.description if not changed else ""
+        shown = self.subject.description
         self.description = Div(text=f"<p>{plain(shown)}</p>" if shown else "", sizing_mode="stretch_width")
         picture: list[Any] = []
         if self.picture is not None:
@@ -199,19 +206,21 @@ class Explorer:
             shown_map.on_event(DoubleTap, self._tap)  # a click within 0.3 s of the one before is a double tap
             picture = [shown_map, self.picked]
         figures = self.figures
+        phases = list(figures.phase.values())
+        tools = [self.orbit_button] if self.subject.orbits else []
         main = pn.Column(
             self.heading,
             self.description,
             *picture,
             self.status,
-            pn.Row(self.orbit_button, *self.downloads),
+            pn.Row(*tools, *self.downloads),
             self.orbit_text,
             figures.overview,
             figures.series["x"],
             figures.series["v"],
-            pn.Row(figures.phase[1], figures.phase[2], sizing_mode="stretch_width"),
+            *(pn.Row(*phases[k : k + 2], sizing_mode="stretch_width") for k in range(0, len(phases), 2)),
             Div(text="<b>Switching events</b>"),
-            event_table(self.sources["events"]),
+            event_table(self.sources["events"], self.subject.outline.event_columns),
             sizing_mode="stretch_width",
         )
         return pn.Row(pn.Column(sidebar, height=900, scroll=True, width=290), main, sizing_mode="stretch_width")
@@ -221,9 +230,9 @@ class Explorer:
         """The controls' values: every parameter and the start."""
         return {name: float(widget.value) for name, widget in self.widgets.items()}
 
-    def current_case(self) -> Case:
-        """The case on screen: the controls' values applied to the case (checked)."""
-        return with_changes(self.case, self.values())
+    def current_case(self) -> System:
+        """The system on screen: the controls' values applied to the case or chain (checked)."""
+        return self.subject.changed(self.values())
 
     def _put(self, values: dict[str, float]) -> None:
         """Put ``values`` on the controls (none of them runs: their callbacks follow a drag's end)."""
@@ -248,7 +257,7 @@ class Explorer:
         wanted = text.strip().lower()
         for name, widget in self.widgets.items():
             widget.visible = not wanted or wanted in name.lower()
-        for group, names in GROUPS.items():
+        for group, names in self.groups.items():
             self._group_titles[group].visible = any(self.widgets[name].visible for name in names)
 
     def _address(self) -> str:
@@ -274,7 +283,7 @@ class Explorer:
                     raise InputError(f"the address names {name[:40]!r}, which is not a parameter or start value")
                 number = _number(name, text)
                 if name != "periods":
-                    with_changes(self.case, {**given, name: number})  # refused here, not left on a slider
+                    self.subject.changed({**given, name: number})  # refused here, not left on a slider
             except OscillatorError as error:
                 self._address_problems.append(str(error))
                 continue
@@ -292,10 +301,10 @@ class Explorer:
             self._say(str(error), error=True)
             return
         self.revision += 1
-        number, engine = self.revision, self.engine
+        number, engine, subject = self.revision, self.engine, self.subject
 
         def work(stop: Any) -> Scene:
-            return scene_of(case, periods, engine=engine, stop=stop)
+            return subject.scene(case, periods, engine=engine, stop=stop)
 
         self.runner.ask(Job(work, number))
 
@@ -318,8 +327,10 @@ class Explorer:
         if checked:
             shown = result
 
+            subject = self.subject
+
             def check(stop: Any) -> tuple[Scene, Scene]:
-                return shown, scene_of(shown.case, shown.periods, engine="cvode", stop=stop)
+                return shown, subject.scene(shown.case, shown.periods, engine="cvode", stop=stop)
 
             self.runner.ask(Job(check, job.number, wait=CHECK_DELAY, kind="check"), change=False)
 
@@ -343,7 +354,7 @@ class Explorer:
     def check(self) -> None:
         """Run the motion on screen again with CVODE now (in this thread), and say how it compares."""
         if self.scene is not None and self.scene.engine != "cvode":
-            self._checked(self.scene, scene_of(self.scene.case, self.scene.periods, engine="cvode"))
+            self._checked(self.scene, self.subject.scene(self.scene.case, self.scene.periods, engine="cvode"))
 
     def _checked(self, shown: Scene, reference: Scene) -> None:
         """CVODE's verdict on the motion drawn: the status line says that the two agree event by
@@ -383,7 +394,7 @@ class Explorer:
         ]
         listed = ", ".join(changed[:8]) + (f" and {len(changed) - 8} more" if len(changed) > 8 else "")
         below = f"<p class='oscillator-changed'>changed here: {plain(listed)}</p>" if changed else ""
-        return f"<h2 class='oscillator-title'>{plain(self.case.full_title)}</h2>{below}"
+        return f"<h2 class='oscillator-title'>{plain(self.subject.title)}</h2>{below}"
 
     def _set(self, text: str) -> None:
         """``NAME=VALUE`` typed in the box: the control set to it (its slider widened to hold it)."""
@@ -392,9 +403,12 @@ class Explorer:
         name, _, value = (part.strip() for part in text.partition("="))
         try:
             if name not in self.widgets:
-                raise InputError(f"{name or text!r} is not a parameter or start value; write NAME=VALUE, e.g. K3=2.5")
+                raise InputError(
+                    f"{name or text!r} is not a parameter or start value{did_you_mean(name, list(self.widgets))}; "
+                    f"write NAME=VALUE, e.g. {self._example}"
+                )
             number = _number(name, value)
-            with_changes(self.current_case(), {name: number})  # refused here, not left on the slider
+            self.subject.changed({**self.values(), name: number})  # refused here, not left on the slider
         except OscillatorError as error:
             self._say(str(error), error=True)
             return
@@ -403,9 +417,10 @@ class Explorer:
 
     def _orbit(self, *_: Any) -> None:
         """The periodic orbit near the motion's end, its multipliers and measures (on request)."""
+        from oscillator.exploring.scene import scene_of
         from oscillator.orbits.shooting import find_orbit
 
-        if self.scene is None:
+        if self.scene is None or not isinstance(self.scene.case, Case):
             return
         try:
             end = self.scene.trajectory.iloc[-1][list(STATE)].to_numpy(float)
@@ -416,13 +431,13 @@ class Explorer:
             return
         with pn.io.hold():
             self.orbit_text.set_text(_orbit_html(orbit))
-            self.sources["orbit"].data = {name: one.trajectory[name].to_numpy() for name in STATE}
+            self.sources["orbit"].data = self.figures.state(one.trajectory)
 
     def _tap(self, event: Any) -> None:
         """A click on the map: the attractors there now; the motion from the site's orbit (a
         branch point's) or the first attractor's point on the next tick.  A click outside the
         cells is said, and picks nothing (it picked the nearest cell, which the map did not show)."""
-        assert self.picture is not None
+        assert self.picture is not None and isinstance(self.case, Case)
         if not self.picture.inside(float(event.x), float(event.y)):
             self.picked.set_text(
                 "<span class='oscillator-error'>click inside the map: that is outside its cells</span>"
@@ -449,7 +464,7 @@ class Explorer:
         self.update()
 
     def _case_file(self) -> io.StringIO:
-        return io.StringIO(case_to_toml(self.current_case()))
+        return io.StringIO(self.subject.toml(self.current_case()))
 
     def _events_file(self) -> io.StringIO:
         return io.StringIO("" if self.scene is None else self.scene.events.to_csv(index=False))
@@ -464,6 +479,13 @@ class Explorer:
     def _repr_mimebundle_(self, include: Any = None, exclude: Any = None) -> Any:
         pn.extension()
         return self.layout._repr_mimebundle_(include, exclude)
+
+
+def css_class(name: str) -> str:
+    """The class of ``name``'s control on the page: ``control-K3``; a chain's ``platform.F``,
+    ``blade damping.c`` as ``control-platform-F``, ``control-blade-damping-c`` (one class, no
+    selector's punctuation)."""
+    return "control-" + re.sub(r"[^A-Za-z0-9_-]", "-", name)
 
 
 def _on_loop() -> Any:

@@ -20,16 +20,15 @@ from bokeh.palettes import Category10
 from bokeh.plotting import figure
 from bokeh.transform import factor_cmap
 
-from oscillator.analysis.axes import STATE
 from oscillator.exploring.maps import WHAT, Picture
-from oscillator.exploring.scene import EVENT_COLUMNS, Scene
+from oscillator.exploring.scene import ARTICLE, Outline, Scene
 
 __all__ = ["COLOURS", "CONTACT", "SHOWN_PERIODS", "Figures", "event_table", "map_figure", "plain", "url_keeper"]
 
-#: The masses' colours, as the report's figures draw them.
-COLOURS = {1: "#1f77b4", 2: "#d62728"}
-#: The contacts' shading: between the masses (left) and on the right stop.
-CONTACT = {"left": "#2ca02c", "right": "#9467bd"}
+#: The masses' colours in order, the first two as the report's figures draw the article's masses.
+COLOURS = ("#1f77b4", "#d62728", "#8c564b", "#e377c2", "#bcbd22", "#17becf", "#ff7f0e", "#7f7f7f")
+#: The contacts' shading in order: the article's between the masses (left) and on the right stop.
+CONTACT = ("#2ca02c", "#9467bd", "#17becf", "#bcbd22", "#8c564b", "#e377c2")
 #: The forcing periods the time series show at first (the overview's box moves them).
 SHOWN_PERIODS = 10
 #: The overview draws about this many points of each mass's path.
@@ -73,25 +72,43 @@ def spans(intervals: list[tuple[float, float]]) -> dict[str, list[float]]:
 class Figures:
     """The motion's figures and their data: an overview of the whole run (its box sets what the
     time series show), the displacements and velocities with rests and contacts shaded, and each
-    mass's phase portrait with its stroboscopic points and the orbit asked for."""
+    mass's phase portrait with its stroboscopic points and the orbit asked for.  What they draw
+    comes from ``outline`` (the system's masses and contacts); the sources name the ``i``-th
+    mass's columns ``x<i>``, ``v<i>`` (the article's own names), the shading ``rest<i>`` and
+    ``contact<j>``."""
 
-    def __init__(self) -> None:
+    def __init__(self, outline: Outline = ARTICLE, *, orbits: bool = True) -> None:
+        self.outline, self.orbits = outline, orbits
+        self.keys = tuple(str(i + 1) for i in range(len(outline.masses)))
+        state = [f"{q}{i}" for i in self.keys for q in ("x", "v")]
         self.sources = {
-            "line": ColumnDataSource({name: [] for name in ("t", *STATE)}),
-            "overview": ColumnDataSource({name: [] for name in ("t", "x1", "x2")}),
-            "strobe": ColumnDataSource({name: [] for name in ("k", *STATE)}),
-            "events": ColumnDataSource({name: [] for name in (*EVENT_COLUMNS, "x")}),
-            "orbit": ColumnDataSource({name: [] for name in STATE}),
-            **{f"rest{mass}": _quads() for mass in (1, 2)},
-            **{f"contact_{side}": _quads() for side in CONTACT},
+            "line": ColumnDataSource({name: [] for name in ("t", *state)}),
+            "overview": ColumnDataSource({name: [] for name in ("t", *(f"x{i}" for i in self.keys))}),
+            "strobe": ColumnDataSource({name: [] for name in ("k", *state)}),
+            "events": ColumnDataSource({name: [] for name in (*outline.event_columns, "x")}),
+            "orbit": ColumnDataSource({name: [] for name in state}),
+            **{f"rest{i}": _quads() for i in self.keys},
+            **{f"contact{j + 1}": _quads() for j in range(len(outline.contacts))},
         }
         self.shown = Range1d(start=0.0, end=1.0)  # the time series' window
         self.series = {key: self._series(key, label, title) for key, label, title in _SERIES}
         self.overview = self._overview()
-        self.phase = {mass: self._phase(mass) for mass in (1, 2)}
+        self.phase = {i: self._phase(i) for i in self.keys}
+
+    def colour(self, i: str) -> str:
+        """The ``i``-th mass's colour (counted from 1)."""
+        return COLOURS[(int(i) - 1) % len(COLOURS)]
+
+    def state(self, frame: Any) -> dict[str, Any]:
+        """``frame``'s positions and velocities under the sources' names (``x1``, ``v1``, ...)."""
+        return {
+            f"{q}{i}": frame[column].to_numpy()
+            for i, (_, _, x, v) in zip(self.keys, self.outline.masses, strict=True)
+            for q, column in (("x", x), ("v", v))
+        }
 
     def _series(self, key: str, label: str, title: str) -> Any:
-        line = self.sources["line"]
+        line, outline = self.sources["line"], self.outline
         fig = figure(
             title=title,
             height=280,
@@ -102,12 +119,26 @@ class Figures:
             x_range=self.shown,
             name=f"series-{key}",
         )
-        sides = [(f"rest{mass}", f"m{mass} at rest", COLOURS[mass], _SHADE) for mass in (1, 2)]
-        sides += [(f"contact_{side}", f"{side} contact", colour, 2 * _SHADE) for side, colour in CONTACT.items()]
+        labels = [mass[1] for mass in outline.masses]
+        sides = [
+            (f"rest{i}", f"{mass[1]} {outline.rest}", self.colour(i), _SHADE)
+            for i, mass in zip(self.keys, outline.masses, strict=True)
+            if outline.resting is None or mass[0] in outline.resting
+        ]
+        sides += [
+            (
+                f"contact{j + 1}",
+                f"{name} contact" if outline is ARTICLE else f"{name} closed",
+                CONTACT[j % len(CONTACT)],
+                2 * _SHADE,
+            )
+            for j, name in enumerate(outline.contacts)
+        ]
         for name, legend, colour, alpha in sides:
             _keyed(fig, "quad", legend, source=self.sources[name], color=colour, alpha=alpha, line_width=0)
         lines: list[Any] = [
-            _keyed(fig, "line", f"m{mass}", "t", f"{key}{mass}", source=line, color=COLOURS[mass]) for mass in (1, 2)
+            _keyed(fig, "line", n, "t", f"{key}{i}", source=line, color=self.colour(i))
+            for i, n in zip(self.keys, labels, strict=True)
         ]
         fig.y_range = DataRange1d(renderers=lines)  # the shading spans any height: not in the range
         if key == "x":
@@ -127,7 +158,7 @@ class Figures:
             name="overview",
         )
         source = self.sources["overview"]
-        drawn: list[Any] = [fig.line("t", f"x{mass}", source=source, color=COLOURS[mass]) for mass in (1, 2)]
+        drawn: list[Any] = [fig.line("t", f"x{i}", source=source, color=self.colour(i)) for i in self.keys]
         fig.x_range = DataRange1d(renderers=drawn)
         fig.y_range = DataRange1d(renderers=drawn)
         box = RangeTool(x_range=self.shown)
@@ -135,22 +166,22 @@ class Figures:
         fig.add_tools(box)
         return fig
 
-    def _phase(self, mass: int) -> Any:
+    def _phase(self, i: str) -> Any:
+        _, label, x_name, v_name = self.outline.masses[int(i) - 1]
         fig = figure(
-            title=f"m{mass}: phase portrait, stroboscopic points",
+            title=f"{label}: phase portrait, stroboscopic points",
             height=340,
             sizing_mode="stretch_width",
-            x_axis_label=f"x{mass} (m)",
-            y_axis_label=f"v{mass} (m/s)",
+            x_axis_label=f"{x_name} (m)",
+            y_axis_label=f"{v_name} (m/s)",
             tools=_TOOLS,
-            name=f"phase-{mass}",
+            name=f"phase-{i}",
         )
-        x, v = f"x{mass}", f"v{mass}"
-        drawn = [
-            fig.line(x, v, source=self.sources["line"], color=COLOURS[mass], alpha=0.5),
-            _keyed(fig, "line", "orbit", x, v, source=self.sources["orbit"], color="orange", line_width=3),
-            _keyed(fig, "scatter", "t0 + kT", x, v, source=self.sources["strobe"], size=6, color="black"),
-        ]
+        x, v = f"x{i}", f"v{i}"
+        drawn: list[Any] = [fig.line(x, v, source=self.sources["line"], color=self.colour(i), alpha=0.5)]
+        if self.orbits:
+            drawn.append(_keyed(fig, "line", "orbit", x, v, source=self.sources["orbit"], color="orange", line_width=3))
+        drawn.append(_keyed(fig, "scatter", "t0 + kT", x, v, source=self.sources["strobe"], size=6, color="black"))
         fig.x_range, fig.y_range = DataRange1d(renderers=drawn), DataRange1d(renderers=drawn)
         fig.legend.location = "top_left"
         fig.legend.background_fill_alpha = 0.6
@@ -158,37 +189,49 @@ class Figures:
 
     def draw(self, scene: Scene) -> None:
         """The figures' data: ``scene``'s motion, the last :data:`SHOWN_PERIODS` periods in view."""
-        events = scene.events
-        x = np.where(events["mass"].to_numpy() == 1, events["x1"].to_numpy(), events["x2"].to_numpy())
-        table = {name: events[name].astype(str).to_numpy() for name in EVENT_COLUMNS[1:]}
-        self.sources["line"].data = {name: scene.trajectory[name].to_numpy() for name in ("t", *STATE)}
-        every = max(1, len(scene.trajectory) // OVERVIEW_POINTS)  # a sample of the path: drawn whole, 45 ms a change
-        self.sources["overview"].data = {name: scene.trajectory[name].to_numpy()[::every] for name in ("t", "x1", "x2")}
+        events, trajectory, outline = scene.events, scene.trajectory, self.outline
+        times = trajectory.t.to_numpy(float)
+        where = {key: trajectory[x].to_numpy(float) for key, _, x, _ in outline.masses}
+        x = np.array(
+            [
+                np.interp(t, times, where[m]) if m in where else math.nan
+                for t, m in zip(events.t, events["mass"], strict=True)
+            ]
+        )
+        table = {name: events[name].astype(str).to_numpy() for name in outline.event_columns[1:]}
+        state = self.state(trajectory)
+        self.sources["line"].data = {"t": times, **state}
+        every = max(1, len(trajectory) // OVERVIEW_POINTS)  # a sample of the path: drawn whole, 45 ms a change
+        self.sources["overview"].data = {
+            name: values[::every] for name, values in {"t": times, **state}.items() if not name.startswith("v")
+        }
         # lists, not arrays: a few points each, sent in the message's text instead of one frame each
-        self.sources["strobe"].data = {name: scene.strobe[name].tolist() for name in ("k", *STATE)}
+        self.sources["strobe"].data = {"k": scene.strobe.k.tolist()} | {
+            name: values.tolist() for name, values in self.state(scene.strobe).items()
+        }
         self.sources["events"].data = {"t": events["t"].to_numpy(), **table, "x": x}
-        for mass in (1, 2):
-            self.sources[f"rest{mass}"].data = spans(scene.rests[mass])
-        for side in CONTACT:
-            self.sources[f"contact_{side}"].data = spans(scene.contacts[side])
-        end = float(scene.trajectory.t.iloc[-1])
-        period = float(scene.case.parameters.period)
-        self.shown.start, self.shown.end = max(scene.t0, end - SHOWN_PERIODS * period), end
+        for i, (key, *_) in zip(self.keys, outline.masses, strict=True):
+            self.sources[f"rest{i}"].data = spans(scene.rests[key])
+        for j, name in enumerate(outline.contacts):
+            self.sources[f"contact{j + 1}"].data = spans(scene.contacts[name])
+        end = float(times[-1])
+        self.shown.start, self.shown.end = max(scene.t0, end - SHOWN_PERIODS * scene.period), end
         if len(self.sources["orbit"].data["x1"]):
-            self.sources["orbit"].data = {name: [] for name in STATE}
+            self.sources["orbit"].data = {name: [] for name in self.sources["orbit"].data}
 
 
 _SERIES = (("x", "displacement (m)", "displacements"), ("v", "velocity (m/s)", "velocities"))
 
 
-def event_table(source: ColumnDataSource) -> DataTable:
-    """The switching events of ``source``, every row (the table scrolls), redrawn whenever its data
-    change: SlickGrid kept the old rows where the new run had as many events (the page showed
-    Omega = 1.58's events with 1.54's in its data), so a change of the data tells the table."""
+def event_table(source: ColumnDataSource, names: tuple[str, ...] = ARTICLE.event_columns) -> DataTable:
+    """The switching events of ``source`` (its columns ``names``, time first), every row (the table
+    scrolls), redrawn whenever its data change: SlickGrid kept the old rows where the new run had
+    as many events (the page showed Omega = 1.58's events with 1.54's in its data), so a change of
+    the data tells the table."""
     text = StringFormatter()
-    titles = {"from_domain": "from", "to_domain": "to"}
+    titles = {"from_domain": "from", "to_domain": "to", "mode_before": "from", "mode_after": "to"}
     columns = [TableColumn(field="t", title="t (s)", formatter=NumberFormatter(format="0.000000"))] + [
-        TableColumn(field=name, title=titles.get(name, name), formatter=text) for name in EVENT_COLUMNS[1:]
+        TableColumn(field=name, title=titles.get(name, name), formatter=text) for name in names[1:]
     ]
     table = DataTable(
         source=source,

@@ -1,18 +1,22 @@
 """What the explorer shows of one motion: computed here, drawn by :mod:`oscillator.exploring.app`.
 
-A :class:`Scene` is the motion of a case over a number of forcing periods from its start: the
-trajectory on a grid of the period, every switching event (time, mass, kind, theorem, equation),
-the stroboscopic (Poincaré) points ``y(t0 + kT)``, and the intervals in which each mass rests
-and each stop is in contact, exact from the run's smooth pieces (a rest shorter than the grid's
-step is kept).  Nothing here draws or serves: the page is a view of these values, and the tests
-compare them with :func:`~oscillator.simulate` directly.
+A :class:`Scene` is the motion of a system over a number of forcing periods from its start: the
+trajectory on a grid of the period (a friction chain's: at every solver step), every switching
+event (time, mass, kind, theorem, equation), the stroboscopic (Poincaré) points ``y(t0 + kT)``,
+and the intervals in which each mass rests and each stop is in contact, exact from the run's
+smooth pieces (a rest shorter than the grid's step is kept).  Its :class:`Outline` says what of
+it the page draws, read from the system: the masses' names and columns, the contacts, the event
+table's columns.  Nothing here draws or serves: the page is a view of these values, and the tests
+compare them with :func:`~oscillator.simulate` and
+:func:`~oscillator.hybrid.chain_run.simulate_chain` directly.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
 import pandas as pd
@@ -22,18 +26,23 @@ from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
-from oscillator.model.parameters import Parameters
+from oscillator.model.chains import FrictionChain
+from oscillator.model.parameters import Parameters, SolverOptions
 
 __all__ = [
+    "ARTICLE",
     "EVENT_COLUMNS",
     "GRID",
     "MAX_EVENTS",
     "MAX_POINTS",
     "PERIODS",
     "TIME_AGREEMENT",
+    "Outline",
     "Scene",
     "Superseded",
+    "chain_scene_of",
     "differences",
+    "outline_of",
     "scene_of",
 ]
 
@@ -53,6 +62,58 @@ TIME_AGREEMENT = 1e-6
 EVENT_ROWS = 64
 #: The event table's columns, in the page's order.
 EVENT_COLUMNS = ("t", "mass", "kind", "from_domain", "to_domain", "theorem", "equation", "boundary")
+#: A friction chain's event table's columns, in the page's order.
+CHAIN_EVENT_COLUMNS = ("t", "element", "mass", "kind", "mode_before", "mode_after", "theorem", "equations")
+#: The system a scene shows: the article's (a case) or a friction chain.
+System: TypeAlias = Case | FrictionChain
+
+
+@dataclass(frozen=True)
+class Outline:
+    """What the page draws of a system's motion, read from the system.
+
+    Attributes
+    ----------
+    masses : tuple
+        Each mass as ``(key, label, position column, velocity column)``: its key in the events'
+        ``mass`` column and in :attr:`Scene.rests`, its name, its trajectory's columns.
+    contacts : tuple
+        The keys of :attr:`Scene.contacts`, each a stop or contact shaded while closed.
+    event_columns : tuple
+        The event table's columns, time first.
+    rest, closed : str
+        What a mass's shaded interval is called (``at rest``; a chain's mass ``stuck`` on its
+        belt or the floor), and a contact's (``contact``; a chain's stop ``closed``).
+    resting : tuple or None
+        The keys of the masses that may rest (a chain's with a friction element); None: all.
+    """
+
+    masses: tuple[tuple[Hashable, str, str, str], ...]
+    contacts: tuple[str, ...]
+    event_columns: tuple[str, ...]
+    rest: str = "at rest"
+    closed: str = "contact"
+    resting: tuple[Hashable, ...] | None = None
+
+    @property
+    def state(self) -> tuple[str, ...]:
+        """The positions and velocities the page draws, mass after mass."""
+        return tuple(column for _, _, x, v in self.masses for column in (x, v))
+
+
+#: The article's system as the page draws it.
+ARTICLE = Outline(((1, "m1", "x1", "v1"), (2, "m2", "x2", "v2")), ("left", "right"), EVENT_COLUMNS)
+
+
+def outline_of(chain: FrictionChain) -> Outline:
+    """A friction chain as the page draws it: each mass by its name (``x:<mass>``, ``v:<mass>``),
+    each stop and contact by its element's name."""
+    masses = tuple((m.name, m.name, f"x:{m.name}", f"v:{m.name}") for m in chain.masses)
+    contacts = tuple(e.name for e in chain.elements if e.type in ("stop", "contact"))
+    resting = tuple(
+        m.name for m in chain.masses if any(e.type == "friction" and e.on == m.name for e in chain.elements)
+    )
+    return Outline(masses, contacts, CHAIN_EVENT_COLUMNS, "stuck", "closed", resting)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,21 +122,24 @@ class Scene:
 
     Attributes
     ----------
-    case : Case
-        The case simulated (its ``t_end`` set by the periods).
+    case : Case or FrictionChain
+        The system simulated (a case's ``t_end`` set by the periods).
     periods : int
         Forcing periods from the start.
     trajectory : DataFrame
-        ``t, x1, v1, x2, v2`` on :data:`GRID` points a period, with the state on both sides of
-        every switch.
+        ``t`` and the state (``x1, v1, x2, v2``; a chain's ``x:<mass>``, ``v:<mass>``,
+        ``z:<slider>``) on :data:`GRID` points a period (a chain's: at every solver step, at most
+        :data:`MAX_POINTS`), with the state on both sides of every switch.
     events : DataFrame
-        Every switching event, :data:`EVENT_COLUMNS` and the state.
+        Every switching event, :attr:`Outline.event_columns` and (the article's) the state.
     strobe : DataFrame
-        ``k, t, x1, v1, x2, v2`` at ``t0 + kT``, ``k = 0 .. periods``.
+        ``k, t`` and the state at ``t0 + kT``, ``k = 0 .. periods``.
     rests : dict
-        Mass (1, 2) -> the ``(from, to)`` intervals in which it rests.
+        Mass (1, 2; a chain's by name) -> the ``(from, to)`` intervals in which it rests (a
+        chain's mass: stuck on its belt or the floor).
     contacts : dict
-        ``"left"`` (between the masses), ``"right"`` (the right stop) -> its contact intervals.
+        ``"left"`` (between the masses), ``"right"`` (the right stop); a chain's stops and
+        contacts by name -> its contact intervals.
     seconds : float
         The simulation's wall time.
     status : str
@@ -85,27 +149,27 @@ class Scene:
     bounded : bool
         Whether the run stopped at :data:`MAX_EVENTS`, the explorer's bound (``status`` says so);
         a run another guard or the solver stopped shows its motion up to there too.
+    outline : Outline
+        What the page draws of it.
+    t0, t_end, period : float
+        The run's start and end, the forcing period (s).
     """
 
-    case: Case
+    case: System
     periods: int
     trajectory: pd.DataFrame
     events: pd.DataFrame
     strobe: pd.DataFrame
-    rests: dict[int, list[tuple[float, float]]]
+    rests: dict[Hashable, list[tuple[float, float]]]
     contacts: dict[str, list[tuple[float, float]]]
     seconds: float
     status: str
     engine: str
-    bounded: bool = False
-
-    @property
-    def t0(self) -> float:
-        return float(self.case.initial.t0)
-
-    @property
-    def t_end(self) -> float:
-        return float(self.case.t_end)
+    bounded: bool
+    outline: Outline
+    t0: float
+    t_end: float
+    period: float
 
 
 def check_periods(periods: object) -> int:
@@ -171,6 +235,74 @@ def scene_of(
         status=status,
         engine=engine,
         bounded=bounded,
+        outline=ARTICLE,
+        t0=float(run_case.initial.t0),
+        t_end=float(run_case.t_end),
+        period=float(run_case.parameters.period),
+    )
+
+
+def chain_scene_of(
+    chain: FrictionChain, periods: int = PERIODS, *, stop: Callable[[], bool] | None = None, **changes: float
+) -> Scene:
+    """The motion of a friction chain (with ``changes`` of its numbers by name:
+    :meth:`~oscillator.model.chains.FrictionChain.with_values`) over ``periods`` forcing periods
+    from its start: one run of :func:`~oscillator.hybrid.chain_run.simulate_chain` (CVODE, the
+    trajectory at every step and at each ``t0 + kT``), at most :data:`MAX_EVENTS` events (the
+    run stops there, and the scene says so); the trajectory thinned to :data:`MAX_POINTS` rows
+    (the strobe points, rests and contacts from the whole run).  A run a guard or the solver stops
+    is shown up to there, its ``status`` the reason.  ``stop()`` is asked before the run (a
+    chain's run is not cut short: it is bounded instead).
+    """
+    from oscillator.hybrid.chain_run import simulate_chain, state_columns
+
+    periods = check_periods(periods)
+    chain = (chain.with_values(changes) if changes else chain).checked()
+    if stop is not None and stop():
+        raise Superseded
+    marks = chain.t0 + chain.period * np.arange(periods + 1)
+    options = SolverOptions(max_events=MAX_EVENTS, max_trajectory_rows=100 * MAX_POINTS)
+    started = time.perf_counter()
+    bounded = False
+    try:
+        result = simulate_chain(chain, float(marks[-1]), options=options, at=marks)
+        status = result.status.value
+    except SimulationFailed as failed:
+        if failed.result is None:
+            raise
+        result = failed.result  # type: ignore[assignment]  # simulate_chain's run so far
+        bounded = failed.reason == Reason.MAX_EVENTS
+        status = str(failed)
+        if bounded:
+            status = (
+                f"stopped after {MAX_EVENTS} events at t = {float(result.trajectory.t.iloc[-1]):.6g} s, the explorer's "
+                "bound for one change: fewer periods, or `oscillator run` for the whole motion"
+            )
+    seconds = time.perf_counter() - started
+    outline, full = outline_of(chain), result.trajectory
+    times, end = full.t.to_numpy(float), float(marks[-1])
+    stuck = {e.on: f"mode:{e.name}" for e in chain.elements if e.type == "friction"}
+    trajectory = full[["t", *state_columns(chain)]]
+    every = max(1, -(-len(trajectory) // MAX_POINTS))
+    return Scene(
+        case=chain,
+        periods=periods,
+        trajectory=trajectory.iloc[::every].reset_index(drop=True),
+        events=result.events.reset_index(drop=True),
+        strobe=_strobe(trajectory, marks[marks <= times[-1] + 1e-9]),
+        rests={
+            m.name: _intervals(times, full[stuck[m.name]].to_numpy() == 0, end) if m.name in stuck else []
+            for m in chain.masses
+        },
+        contacts={name: _intervals(times, full[f"mode:{name}"].to_numpy() != 0, end) for name in outline.contacts},
+        seconds=seconds,
+        status=status,
+        engine="cvode",
+        bounded=bounded,
+        outline=outline,
+        t0=chain.t0,
+        t_end=end,
+        period=chain.period,
     )
 
 
@@ -267,7 +399,8 @@ def _with_switches(trajectory: pd.DataFrame, events: pd.DataFrame) -> pd.DataFra
 
 
 def _strobe(trajectory: pd.DataFrame, marks: np.ndarray) -> pd.DataFrame:
-    """The grid's rows at the section times (the grid holds them, one every :data:`GRID` rows)."""
+    """The trajectory's rows at the section times (it holds them: the grid one every :data:`GRID`
+    rows, a chain's run stopped there)."""
     t = trajectory.t.to_numpy(float)
     rows = trajectory.iloc[np.clip(np.searchsorted(t, marks - 1e-9 * (1.0 + np.abs(marks))), 0, len(t) - 1)]
     strobe = rows.reset_index(drop=True).assign(t=marks)

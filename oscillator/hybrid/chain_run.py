@@ -165,11 +165,16 @@ def run_end(chain: FrictionChain, t_end: float | None) -> float:
 
 
 def simulate_chain(
-    chain: FrictionChain, t_end: float | None = None, *, options: SolverOptions | None = None
+    chain: FrictionChain,
+    t_end: float | None = None,
+    *,
+    options: SolverOptions | None = None,
+    at: np.ndarray | None = None,
 ) -> ChainResult:
     """Simulate a friction chain from its start to ``t_end`` (s; by default the chain's, else 10
-    forcing periods),
-    the trajectory recorded at every solver step and at every event.
+    forcing periods), the trajectory recorded at every solver step and at every event, and at
+    each time of ``at`` exactly (the solver stops there: the stroboscopic section
+    ``t0 + kT``, say).
 
     Raises :class:`~oscillator.errors.SimulationFailed` (its ``result`` the run so far) when the
     solver fails or the events storm."""
@@ -186,7 +191,8 @@ def simulate_chain(
         run.keep(t, y, mode)
         run.happened(events)
         engine.reset(mode, t, y)
-        t, y = _supervise(run, engine, names, mode, t, y, end)
+        marks = np.sort(np.asarray(at if at is not None else (), dtype=float).ravel())
+        t, y = _supervise(run, engine, names, mode, t, y, end, marks[(marks > t) & (marks < end)])
     except ChatterError as error:
         failure = SimulationFailed(str(error), reason=Reason.STORM)
         failure.result = run.result(Status.FAILED, str(error), t, y)  # type: ignore[assignment]
@@ -205,13 +211,23 @@ def simulate_chain(
 
 
 def _supervise(
-    run: _Run, engine: ChainEngine, names: Names, mode: np.ndarray, t: float, y: np.ndarray, end: float
+    run: _Run,
+    engine: ChainEngine,
+    names: Names,
+    mode: np.ndarray,
+    t: float,
+    y: np.ndarray,
+    end: float,
+    marks: np.ndarray,
 ) -> tuple[float, np.ndarray]:
     near = run.options.grazing_velocity_tolerance
     rows = np.empty((STEPS_AT_ONCE, 1 + run.arrays.size))
+    stops, k = [*marks.tolist(), end], 0
     while t < end:
-        step, n = engine.advance_steps(end, rows)
+        step, n = engine.advance_steps(stops[k], rows)
         t, y = step.t, step.y
+        if t >= stops[k]:
+            k += 1
         if not np.isfinite(rows[:n]).all() or not np.isfinite(y).all():
             raise SimulationFailed(f"the state left floating point before t = {t!r} s", reason=Reason.ARITHMETIC)
         run.keep_steps(rows[:n].copy(), mode)

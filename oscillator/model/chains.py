@@ -45,6 +45,7 @@ __all__ = [
     "ELEMENTS",
     "MAX_ELEMENTS",
     "MAX_MASSES",
+    "UNITS",
     "Element",
     "FrictionChain",
     "Mass",
@@ -78,6 +79,31 @@ _WITH["jenkins"] = None
 _NOT_NEGATIVE = {"c", "c3", "C", "K", "gap", "F", "mu_k", "mu_s", "P"}
 _POSITIVE = {"kt", "N"}
 _SIDES = ("left", "right")
+#: The SI unit of each number of a chain, by its field (a mass's ``m``, ``x``, ``v``; the system's
+#: ``Omega``, ``g``, ``t0``; an element's fields); dimensionless ones (``mu_s``, ``mu_k``) have none.
+UNITS = {
+    "Omega": "rad/s",
+    "g": "m/s^2",
+    "t0": "s",
+    "m": "kg",
+    "x": "m",
+    "v": "m/s",
+    "k": "N/m",
+    "k3": "N/m^3",
+    "c": "N s/m",
+    "c3": "N s^3/m^3",
+    "Q": "N",
+    "phi": "rad",
+    "N": "N",
+    "P": "N",
+    "w": "m/s",
+    "at": "m",
+    "K": "N/m",
+    "C": "N s/m",
+    "gap": "m",
+    "kt": "N/m",
+    "F": "N",
+}
 
 
 def _name(value: object, what: str, field: str = "name") -> str:
@@ -347,6 +373,12 @@ class FrictionChain:
             k = next(i for i, e in enumerate(elements) if e.name == owner)
             elements[k] = dataclasses.replace(elements[k], values={**elements[k].values, key: value})
         return dataclasses.replace(self, masses=tuple(masses), elements=tuple(elements), **top)
+
+    @staticmethod
+    def unit(name: str) -> str:
+        """The SI unit of the number ``name`` (:meth:`parameter_names`): ``blade.m`` kg,
+        ``platform.F`` N, ``Omega`` rad/s; ``""`` for a dimensionless one."""
+        return UNITS.get(name.rpartition(".")[2], "")
 
     def plot(self) -> Figure:
         """The machine's schematic (a matplotlib figure): masses, springs, dampers, stops with their
