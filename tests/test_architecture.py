@@ -250,3 +250,49 @@ def test_the_repository_holds_no_stray_files():
     expected = {".ci", ".gitignore", "README.md", "benchmarks", "cases", "docs", "oscillator", "pyproject.toml"}
     expected |= {"scripts", "tests"}
     assert top <= expected, sorted(top - expected)
+
+
+def test_the_state_names_are_read_from_the_system_not_written_again():
+    """The article's state names ``x1, v1, x2, v2`` are written once, in its system
+    (:mod:`oscillator.model.system`, from :class:`~oscillator.model.parameters.InitialState`): no
+    module outside the model spells them as a tuple or list of their own (issue 51: a layer reads
+    names and sizes from the system it is given)."""
+    spelled = []
+    for name, tree in modules().items():
+        if name.startswith("oscillator.model"):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Tuple | ast.List):
+                words = [e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
+                if {"x1", "v1", "x2", "v2"} <= set(words):
+                    spelled.append(f"{name}:{node.lineno}")
+    assert not spelled, spelled
+
+
+def test_a_system_says_its_shape_for_the_article_and_for_a_chain():
+    from oscillator.io.cases import resolve_case
+    from oscillator.model.chains import FrictionChain
+    from oscillator.model.parameters import Parameters
+
+    article = resolve_case("instance-1").system
+    assert article.state == ("x1", "v1", "x2", "v2") and article.size == 4 and article.masses == (1, 2)
+    assert (article.position(2), article.velocity(1), article.suffix(2)) == ("x2", "v1", "_m2")
+    assert article.parameters == Parameters.names() and len(article.parameters) == 25
+    chain = (
+        FrictionChain(Omega=2.0)
+        .mass("blade", 1.0)
+        .mass("damper", 0.1)
+        .jenkins("blade", "damper", kt=2.0, F=0.3, name="platform")
+        .stop("damper", side="right", at=0.5, K=100.0, name="wall")
+    )
+    system = chain.system
+    assert system.state == ("x:blade", "v:blade", "x:damper", "v:damper", "z:platform") and system.size == 5
+    assert system.motion == system.state[:4] and system.position("damper") == "x:damper"
+    assert system.contacts == ("wall",) and system.mode_width == 2
+    assert "platform.F" in system.parameters and system.label("blade") == "blade"
+    try:
+        system.position("rotor")
+    except KeyError as error:
+        assert "'rotor' is no mass" in str(error) and "'blade', 'damper'" in str(error)
+    else:
+        raise AssertionError("an unknown mass was given a position")

@@ -21,13 +21,14 @@ import numpy as np
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import InitialState, Parameters
+from oscillator.model.parameters import Parameters
+from oscillator.model.system import ARTICLE
 from oscillator.text import shown
 
 __all__ = ["MAX_COUNT", "STATE", "Axis", "admitted_box", "parameter_plane", "state_plane"]
 
 #: The state components, in the order of a state vector.
-STATE: tuple[str, ...] = tuple(name for name in InitialState.names() if name != "t0")
+STATE: tuple[str, ...] = ARTICLE.state
 #: The most values along one axis.
 MAX_COUNT = 2000
 

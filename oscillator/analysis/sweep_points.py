@@ -139,7 +139,7 @@ def point_case(
     and its Poincaré times: one at the start of each recorded period (the run ends with the
     last period)."""
     param = settings.param
-    begin = {} if from_state is None else dict(zip(("x1", "v1", "x2", "v2"), from_state, strict=True))
+    begin = {} if from_state is None else dict(zip(case.system.state, from_state, strict=True))
     point = resolve_case(case, **{param: value}, **begin)
     return point, section_times(point, settings.transient, settings.transient + settings.record)
 
@@ -198,7 +198,7 @@ def run_point(
     switches = _switch_rows(window, param, value, index, mass, point.parameters.Omega, columns["switches"])
     trajectory = result.trajectory
     poincare = _poincare_rows(trajectory, param, value, index, settings.transient, columns["poincare"])
-    n = detect_period(poincare[["x1", "v1", "x2", "v2"]].to_numpy(), settings.period_tolerance, settings.max_period)
+    n = detect_period(poincare[list(point.system.state)].to_numpy(), settings.period_tolerance, settings.max_period)
     rest, intervals = _rest_time(events, mass, int(trajectory[f"domain{mass}"].iloc[0]), start, stop)
     crossings = window[window.kind.isin(EventKind.values_where(lambda kind: kind.reaches_velocity_boundary))]
     grazings = window[~window.kind.isin(EventKind.values_where(lambda kind: kind.switches))]  # reports only

@@ -29,6 +29,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from oscillator.analysis.axes import STATE
 from oscillator.analysis.execution import check_workers, connect, run_tasks
 from oscillator.analysis.store import Expected, TableFolder, identity
 from oscillator.analysis.sweep_points import TABLES, PointTables, Tasks, frame_of, point_case, run_point, table_columns
@@ -102,7 +103,7 @@ class _Store(TableFolder):
         if part is None:
             return None
         row = part[0].iloc[0]
-        state = tuple(float(row.get(f"end_{name}", math.nan)) for name in ("x1", "v1", "x2", "v2"))
+        state = tuple(float(row.get(f"end_{name}", math.nan)) for name in STATE)
         return state if all(math.isfinite(v) for v in state) else None
 
     def write_point(self, point: PointTables) -> None:
@@ -158,7 +159,7 @@ def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: 
             start = ends[index - 1]
         point = run_point(case, settings, index, value, from_state=start, direction=directions[index])
         row = point.summary.iloc[0]
-        state = tuple(float(row[f"end_{name}"]) for name in ("x1", "v1", "x2", "v2"))
+        state = tuple(float(row[f"end_{name}"]) for name in case.system.state)
         ends[index] = state if all(math.isfinite(v) for v in state) else None
         yield point
 

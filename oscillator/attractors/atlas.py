@@ -303,7 +303,7 @@ def _table(continued: Continued, columns: int, responses: tuple[str, ...]) -> pd
                 "starts": a.starts,
                 "status": "ok",
                 "message": "",
-                **dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in a.points[-1]), strict=True)),
+                **dict(zip(found.case.system.state, (float(v) for v in a.points[-1]), strict=True)),
             }
             for a in found.attractors
         ]

@@ -38,7 +38,7 @@ def impact_velocity(case: Case, attractor: Attractor) -> float:
     if not attractor.contacts:
         return 0.0
     periods = max(attractor.period, 1)
-    begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
+    begin = dict(zip(case.system.state, (float(v) for v in attractor.points[-1]), strict=True))
     run = resolve_case(case, **begin)
     result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, save=SaveAt(steps=False))
     speeds = np.concatenate([impact_speeds(result.events, stop) for stop in ("right", "left")])
@@ -79,7 +79,7 @@ class Measured:
         try:
             if not attractor.period:
                 raise OscillatorError("aperiodic")
-            begin = dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in attractor.points[-1]), strict=True))
+            begin = dict(zip(case.system.state, (float(v) for v in attractor.points[-1]), strict=True))
             columns = response(resolve_case(case, **begin), attractor.period).columns()
         except OscillatorError:
             columns = {}

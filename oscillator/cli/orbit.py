@@ -28,6 +28,7 @@ from oscillator.cli.options import CaseArgument, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
 from oscillator.io.signals import interrupts_deferred
+from oscillator.model.system import ARTICLE
 from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -59,7 +60,7 @@ SectionOption = Annotated[
     float | None,
     typer.Option("--section", metavar="T", help="The section's time in s (default: the case's t0; needs --guess)."),
 ]
-COORDINATES = ("x1", "v1", "x2", "v2")
+COORDINATES = ARTICLE.state
 
 
 def _guess(text: str | None) -> tuple[float, ...] | None:  # four numbers

@@ -25,8 +25,9 @@ from oscillator.analysis.store import Expected
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.designing.problem import Problem
 from oscillator.hybrid.counting import runs
+from oscillator.model.system import ARTICLE
 
-_STATE = ("x1", "v1", "x2", "v2")
+_STATE = ARTICLE.state
 
 __all__ = [
     "Judged",

@@ -41,7 +41,7 @@ from oscillator.exploring.controls import START, Control, groups_of
 from oscillator.exploring.maps import Picture
 from oscillator.exploring.page import Figures, event_table, map_figure, plain, url_keeper
 from oscillator.exploring.runner import Job, Runner
-from oscillator.exploring.scene import PERIODS, TIME_AGREEMENT, Scene, System, check_periods, differences
+from oscillator.exploring.scene import PERIODS, TIME_AGREEMENT, Explored, Scene, check_periods, differences
 from oscillator.exploring.subjects import CaseSubject, ChainSubject, subject_of
 from oscillator.io.cases import Case
 from oscillator.io.expressions import parse_value
@@ -230,7 +230,7 @@ class Explorer:
         """The controls' values: every parameter and the start."""
         return {name: float(widget.value) for name, widget in self.widgets.items()}
 
-    def current_case(self) -> System:
+    def current_case(self) -> Explored:
         """The system on screen: the controls' values applied to the case or chain (checked)."""
         return self.subject.changed(self.values())
 

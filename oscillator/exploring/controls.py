@@ -44,7 +44,7 @@ GROUPS = {
     "Friction": ("mu_k", "mu_s", "g"),
     "Start": START,
 }
-_STATE_UNITS = {"x1": "m", "v1": "m/s", "x2": "m", "v2": "m/s"}
+_STATE_UNITS = {name: "m" if k % 2 == 0 else "m/s" for k, name in enumerate(START)}
 
 
 @dataclass(frozen=True)

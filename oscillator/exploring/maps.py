@@ -34,6 +34,7 @@ from oscillator.attractors.finding import Attractors, find_attractors
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters
+from oscillator.model.system import System
 from oscillator.text import printable
 
 __all__ = ["Picture", "Site", "picture_of"]
@@ -236,7 +237,8 @@ def _sweep(folder: Path) -> Picture:
     settings = identity.get("settings")
     settings = settings if isinstance(settings, dict) else {}
     param = _parameter(settings.get("param"), folder, "sweep.json")
-    coordinate = f"x{settings.get('mass') if settings.get('mass') in (1, 2) else 2}"
+    mass = settings.get("mass")
+    coordinate = case.system.position(mass if mass in case.system.masses and not isinstance(mass, bool) else 2)
     columns = {param: "number", "index": "number", "status": "text", "period": "number", "direction": "text"}
     columns |= {f"end_{name}": "number" for name in STATE}
     read = partial(checked_table, folder="sweep folder", remake="run the sweep again into a new folder")
@@ -277,9 +279,10 @@ def _frc(folder: Path) -> Picture:
     from oscillator.report.orbit_folders import checked_table
 
     identity, case = _identity(folder, "frc.json")
+    system = case.system
     param = _parameter(identity.get("param"), folder, "frc.json")
     columns = {param: "number", "branch": "number", "period": "number", "stable": "flag"}
-    columns |= dict.fromkeys((*STATE, "x_pp_m1", "x_pp_m2"), "number")
+    columns |= dict.fromkeys((*system.state, *(f"x_pp{system.suffix(m)}" for m in system.masses)), "number")
     columns |= {f"{name}_{part}": "number" for name in MULTIPLIERS for part in ("re", "im")}
     table = checked_table(
         folder / "points.parquet", columns, folder="frequency-response folder", remake="run oscillator frc again"
@@ -291,21 +294,23 @@ def _frc(folder: Path) -> Picture:
             pd.DataFrame(
                 {
                     "x": branch[param].to_numpy(float),
-                    "y": branch[f"x_pp_m{mass}"].to_numpy(float),
-                    "label": [f"m{mass} {kind}" for kind in stable],
+                    "y": branch[f"x_pp{system.suffix(mass)}"].to_numpy(float),
+                    "label": [f"{system.label(mass)} {kind}" for kind in stable],
                     "at": np.arange(len(branch)),
                 }
             )
-            for mass in (1, 2)
+            for mass in system.masses
         ],
         ignore_index=True,
     )
-    return Picture("frc", case, param, "x_pp", points, 0.0, 0.0, branch, _frc_site, _frc_marks(folder, param, branch))
+    return Picture(
+        "frc", case, param, "x_pp", points, 0.0, 0.0, branch, _frc_site, _frc_marks(folder, param, branch, system)
+    )
 
 
-def _frc_marks(folder: Path, param: str, branch: pd.DataFrame) -> pd.DataFrame:
-    """The frequency response's bifurcations, each at the ``x_pp`` of both masses of its branch's
-    point nearest it (none where the folder keeps no bifurcation table)."""
+def _frc_marks(folder: Path, param: str, branch: pd.DataFrame, system: System) -> pd.DataFrame:
+    """The frequency response's bifurcations, each at the ``x_pp`` of every mass of ``system`` at
+    its branch's point nearest it (none where the folder keeps no bifurcation table)."""
     from oscillator.orbits.branch import BIFURCATION_KINDS
     from oscillator.report.orbit_folders import checked_table
 
@@ -325,7 +330,10 @@ def _frc_marks(folder: Path, param: str, branch: pd.DataFrame) -> pd.DataFrame:
             continue
         value = float(getattr(row, param))
         nearest = mine.iloc[int(np.argmin(np.abs(mine[param].to_numpy(float) - value)))]
-        marks += [(value, float(nearest[f"x_pp_m{mass}"]), str(row.kind).replace("_", " ")) for mass in (1, 2)]
+        marks += [
+            (value, float(nearest[f"x_pp{system.suffix(mass)}"]), str(row.kind).replace("_", " "))
+            for mass in system.masses
+        ]
     return pd.DataFrame(marks, columns=["x", "y", "label"])
 
 

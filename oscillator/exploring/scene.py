@@ -16,7 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
-from typing import TypeAlias
+from typing import Any, TypeAlias
 
 import numpy as np
 import pandas as pd
@@ -28,6 +28,8 @@ from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import Parameters, SolverOptions
+from oscillator.model.system import ARTICLE as ARTICLE_SYSTEM
+from oscillator.model.system import System
 
 __all__ = [
     "ARTICLE",
@@ -37,6 +39,7 @@ __all__ = [
     "MAX_POINTS",
     "PERIODS",
     "TIME_AGREEMENT",
+    "Explored",
     "Outline",
     "Scene",
     "Superseded",
@@ -65,7 +68,7 @@ EVENT_COLUMNS = ("t", "mass", "kind", "from_domain", "to_domain", "theorem", "eq
 #: A friction chain's event table's columns, in the page's order.
 CHAIN_EVENT_COLUMNS = ("t", "element", "mass", "kind", "mode_before", "mode_after", "theorem", "equations")
 #: The system a scene shows: the article's (a case) or a friction chain.
-System: TypeAlias = Case | FrictionChain
+Explored: TypeAlias = Case | FrictionChain
 
 
 @dataclass(frozen=True)
@@ -100,20 +103,24 @@ class Outline:
         """The positions and velocities the page draws, mass after mass."""
         return tuple(column for _, _, x, v in self.masses for column in (x, v))
 
+    @classmethod
+    def of(cls, system: System, event_columns: tuple[str, ...], contacts: tuple[str, ...], **words: Any) -> Outline:
+        """The outline of ``system`` (:mod:`oscillator.model.system`): each of its masses with its
+        label, position and velocity; ``contacts`` in the order shaded."""
+        masses = tuple((m, system.label(m), system.position(m), system.velocity(m)) for m in system.masses)
+        return cls(masses, contacts, event_columns, **words)
 
-#: The article's system as the page draws it.
-ARTICLE = Outline(((1, "m1", "x1", "v1"), (2, "m2", "x2", "v2")), ("left", "right"), EVENT_COLUMNS)
+
+#: The article's system as the page draws it (the contact between the masses, then the right stop).
+ARTICLE = Outline.of(ARTICLE_SYSTEM, EVENT_COLUMNS, ("left", "right"))
 
 
 def outline_of(chain: FrictionChain) -> Outline:
     """A friction chain as the page draws it: each mass by its name (``x:<mass>``, ``v:<mass>``),
-    each stop and contact by its element's name."""
-    masses = tuple((m.name, m.name, f"x:{m.name}", f"v:{m.name}") for m in chain.masses)
-    contacts = tuple(e.name for e in chain.elements if e.type in ("stop", "contact"))
-    resting = tuple(
-        m.name for m in chain.masses if any(e.type == "friction" and e.on == m.name for e in chain.elements)
-    )
-    return Outline(masses, contacts, CHAIN_EVENT_COLUMNS, "stuck", "closed", resting)
+    each stop and contact by its element's name, a mass with a friction element stuck."""
+    system = chain.system
+    resting = tuple(e.on for e in chain.elements if e.type == "friction")
+    return Outline.of(system, CHAIN_EVENT_COLUMNS, system.contacts, rest="stuck", closed="closed", resting=resting)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +162,7 @@ class Scene:
         The run's start and end, the forcing period (s).
     """
 
-    case: System
+    case: Explored
     periods: int
     trajectory: pd.DataFrame
     events: pd.DataFrame
@@ -223,13 +230,15 @@ def scene_of(
     seconds = time.perf_counter() - started
     trajectory, events, modes, status, bounded = run
     times, end = modes[:, 0], float(run_case.t_end)
+    system = run_case.system
+    state = list(system.state)
     return Scene(
         case=run_case,
         periods=periods,
-        trajectory=_with_switches(trajectory, events),
-        events=events[[*EVENT_COLUMNS, "x1", "v1", "x2", "v2"]].reset_index(drop=True),
+        trajectory=_with_switches(trajectory, events, state),
+        events=events[[*EVENT_COLUMNS, *state]].reset_index(drop=True),
         strobe=_strobe(trajectory, marks[marks <= float(trajectory.t.iloc[-1]) + 1e-9]),
-        rests={mass: _intervals(times, modes[:, mass] == 0, end) for mass in (1, 2)},
+        rests={mass: _intervals(times, modes[:, k] == 0, end) for k, mass in enumerate(system.masses, start=1)},
         contacts={side: _intervals(times, modes[:, k] != 0, end) for k, side in ((3, "left"), (4, "right"))},
         seconds=seconds,
         status=status,
@@ -335,7 +344,7 @@ def _simulated_run(case: Case, grid: np.ndarray, engine: str, stop: Callable[[],
             f"stopped after {MAX_EVENTS} events at t = {float(result.trajectory.t.iloc[-1]):.6g} s, the explorer's "
             "bound for one change: fewer periods, or `oscillator run` for the whole motion"
         )
-    return result.trajectory[["t", "x1", "v1", "x2", "v2"]], result.events, modes, status, bounded
+    return result.trajectory[["t", *case.system.state]], result.events, modes, status, bounded
 
 
 def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
@@ -363,7 +372,7 @@ def _compiled_run(case: Case, grid: np.ndarray) -> _Run | None:
         return None
     if status != OK or done != len(grid):
         return None
-    trajectory = pd.DataFrame(buffers[0], columns=["t", "x1", "v1", "x2", "v2"])
+    trajectory = pd.DataFrame(buffers[0], columns=["t", *case.system.state])
     return trajectory, events_frame(buffers[1][:kept]), buffers[2][:changes], Status.COMPLETE.value, False
 
 
@@ -390,10 +399,10 @@ def differences(scene: Scene, reference: Scene) -> tuple[str | None, float]:
     return None, largest
 
 
-def _with_switches(trajectory: pd.DataFrame, events: pd.DataFrame) -> pd.DataFrame:
-    """The grid's rows and each event's state, in time order: the corners of a contact or a
+def _with_switches(trajectory: pd.DataFrame, events: pd.DataFrame, state: list[str]) -> pd.DataFrame:
+    """The grid's rows and each event's ``state``, in time order: the corners of a contact or a
     stop show where they are, not cut by the grid."""
-    switches = events[["t", "x1", "v1", "x2", "v2"]]
+    switches = events[["t", *state]]
     merged = pd.concat([trajectory, switches], ignore_index=True)
     return merged.sort_values("t", kind="stable").reset_index(drop=True)
 

@@ -20,9 +20,9 @@ from typing import Any, Protocol
 from oscillator.exploring.controls import Control, chain_controls, controls_of
 from oscillator.exploring.scene import (
     ARTICLE,
+    Explored,
     Outline,
     Scene,
-    System,
     chain_scene_of,
     outline_of,
     scene_of,
@@ -38,7 +38,7 @@ class Subject(Protocol):
     """A system as the explorer takes it (module docstring)."""
 
     #: The system explored, as given.
-    system: System
+    system: Explored
     #: What the page draws of its motion.
     outline: Outline
     #: Whether the page finds its periodic orbit and multipliers.
@@ -61,14 +61,14 @@ class Subject(Protocol):
     def controls(self) -> list[Control]:
         """A control for every number the page may change, each with its group."""
 
-    def changed(self, values: dict[str, float]) -> System:
+    def changed(self, values: dict[str, float]) -> Explored:
         """The system with ``values`` (names of :meth:`controls`), checked: an
         :class:`~oscillator.errors.InputError` naming the field otherwise."""
 
-    def scene(self, system: System, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
+    def scene(self, system: Explored, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
         """The motion of ``system`` (one :meth:`changed` gave) over ``periods`` forcing periods."""
 
-    def toml(self, system: System) -> str:
+    def toml(self, system: Explored) -> str:
         """``system`` as a file that ``oscillator run`` reads."""
 
 
@@ -102,11 +102,11 @@ class CaseSubject:
     def changed(self, values: dict[str, float]) -> Case:
         return with_changes(self.system, values)
 
-    def scene(self, system: System, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
+    def scene(self, system: Explored, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
         assert isinstance(system, Case)
         return scene_of(system, periods, engine=engine, stop=stop)
 
-    def toml(self, system: System) -> str:
+    def toml(self, system: Explored) -> str:
         assert isinstance(system, Case)
         return case_to_toml(system)
 
@@ -146,11 +146,11 @@ class ChainSubject:
         changes = {name: value for name, value in values.items() if given.get(name) != value}
         return self.system.with_values(changes).checked() if changes else self.system
 
-    def scene(self, system: System, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
+    def scene(self, system: Explored, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
         assert isinstance(system, FrictionChain)
         return chain_scene_of(system, periods, stop=stop)
 
-    def toml(self, system: System) -> str:
+    def toml(self, system: Explored) -> str:
         from oscillator.io.chains import chain_to_toml
 
         assert isinstance(system, FrictionChain)

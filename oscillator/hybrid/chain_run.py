@@ -51,8 +51,7 @@ def names_of(chain: FrictionChain) -> Names:
 def state_columns(chain: FrictionChain) -> tuple[str, ...]:
     """The trajectory's state columns: ``x:<mass>``, ``v:<mass>`` for each mass, ``z:<element>``
     for each Jenkins slider."""
-    columns = [f"{q}:{m.name}" for m in chain.masses for q in ("x", "v")]
-    return (*columns, *(f"z:{e.name}" for e in chain.elements if e.type == "jenkins"))
+    return chain.system.state
 
 
 @dataclass(frozen=True)

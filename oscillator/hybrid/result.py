@@ -165,7 +165,7 @@ class Result:
     case: Case
     energy: EnergyAudit
     stats: SolverStats
-    final_state: tuple[float, float, float, float, float]
+    final_state: tuple[float, ...]
     status: Status = Status.COMPLETE
     message: str = ""
     reason: Reason | None = None

@@ -81,7 +81,7 @@ def admit(case: Case) -> None:
         )
     problem = start_problem(start.t0, start.y, p)
     if problem is not None:
-        state = ", ".join(f"{name} = {value:g}" for name, value in zip(("x1", "v1", "x2", "v2"), start.y, strict=True))
+        state = ", ".join(f"{name} = {value:g}" for name, value in zip(case.system.state, start.y, strict=True))
         raise InputError(
             f"at the start (t0 = {start.t0:g} s, {state}) {problem}; give parameters and a start of physical size",
             field="initial",

@@ -34,6 +34,7 @@ from oscillator.model.parameters import (
     is_finite_number,
     real_argument,
 )
+from oscillator.model.system import ARTICLE, System
 from oscillator.text import printable, shown, unsafe_characters
 
 __all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "resolve_case", "section_times"]
@@ -103,6 +104,12 @@ class Case:
     #: Keep only the events at or after this time (``[run] keep_events_from``; all when None):
     #: a long run's memory and report stay bounded.  The counts still count every event.
     keep_events_from: float | None = None
+
+    @property
+    def system(self) -> System:
+        """The machine this case runs: the article's two-mass oscillator (its shape, names and
+        sizes: :mod:`oscillator.model.system`)."""
+        return ARTICLE
 
     @property
     def full_title(self) -> str:

@@ -16,6 +16,7 @@ import pandas as pd
 from oscillator.errors import InputError
 from oscillator.model.events import COLUMN, Event, EventKind, decode_column
 from oscillator.model.phase_space import Mode, system_state
+from oscillator.model.system import ARTICLE
 from oscillator.text import shown
 
 __all__ = [
@@ -28,7 +29,7 @@ __all__ = [
     "trajectory_frame",
 ]
 
-TRAJECTORY_COLUMNS = ("t", "x1", "v1", "x2", "v2", "domain1", "domain2", "system_state")
+TRAJECTORY_COLUMNS = ("t", *ARTICLE.state, "domain1", "domain2", "system_state")
 _DOMAINS = {1: set(range(9)), 2: {0, 1, 2, 5, 6}}
 _STATES = {
     system_state(left, right, r1, r2)

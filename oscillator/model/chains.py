@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 from oscillator.errors import InputError
 from oscillator.model.parameters import MAX_MAGNITUDE, InitialState, Parameters, as_float, is_finite_number
+from oscillator.model.system import System
 from oscillator.text import did_you_mean, printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -373,6 +374,18 @@ class FrictionChain:
             k = next(i for i, e in enumerate(elements) if e.name == owner)
             elements[k] = dataclasses.replace(elements[k], values={**elements[k].values, key: value})
         return dataclasses.replace(self, masses=tuple(masses), elements=tuple(elements), **top)
+
+    @property
+    def system(self) -> System:
+        """The chain's shape as every layer reads it (:mod:`oscillator.model.system`): its masses by
+        name, the state ``x:<mass>``, ``v:<mass>`` mass after mass then ``z:<slider>``, its numbers'
+        names, its stops and contacts, one mode integer per element."""
+        masses = tuple(m.name for m in self.masses)
+        state = [f"{q}:{m}" for m in masses for q in ("x", "v")]
+        state += [f"z:{e.name}" for e in self.elements if e.type == "jenkins"]
+        contacts = tuple(e.name for e in self.elements if e.type in ("stop", "contact"))
+        title = self.title or "a friction chain"
+        return System(title, masses, masses, tuple(state), tuple(self.parameter_names()), contacts, len(self.elements))
 
     @staticmethod
     def unit(name: str) -> str:

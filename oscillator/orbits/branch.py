@@ -15,6 +15,7 @@ import pandas as pd
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.io.cases import Case
 from oscillator.io.files import as_folder
+from oscillator.model.system import ARTICLE
 from oscillator.orbits.shooting import STATE
 from oscillator.presenting import presenter
 
@@ -142,11 +143,14 @@ class Branch:
     def coordinate(self) -> str:
         """The coordinate drawn by default: ``x2`` (as Fig. 14), unless it does not change along
         the branch (m2 parked): then the first of ``x1, v2, v1`` that does."""
-        for name in ("x2", "x1", "v2", "v1"):
+        system = ARTICLE if self.case is None else self.case.system
+        masses = system.masses[::-1]  # the last mass first: Fig. 14 draws x2
+        order = [*(system.position(m) for m in masses), *(system.velocity(m) for m in masses)]
+        for name in order:
             values = self.points[name].to_numpy(float)
             if len(values) and np.ptp(values) > 1e-9 * max(1.0, float(np.max(np.abs(values)))):
                 return name
-        return "x2"
+        return order[0]
 
     def plot(self, coordinate: str | None = None, *, sweep_points: pd.DataFrame | None = None) -> Figure:
         """The branch as ``oscillator continue`` draws it (``figures/branch.png``): ``coordinate``

@@ -161,7 +161,7 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
     rows = []
     for point in branch.points.itertuples(index=False):
         values = point._asdict()
-        state = {name: float(values[name]) for name in ("x1", "v1", "x2", "v2")}
+        state = {name: float(values[name]) for name in branch.case.system.state}
         case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
         try:
             refined = find_orbit(case, period=branch.period, guess=list(state.values()), tol=REFINE)

@@ -34,6 +34,7 @@ from oscillator.model.fields import (
 )
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
+from oscillator.model.system import ARTICLE
 from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES
 from oscillator.orbits.sensitivity import Pass, Piece, domains_text
 from oscillator.orbits.tangent import INTEGRALS, tangent_rates
@@ -235,7 +236,7 @@ def margins_of(along: Pass, p: Parameters) -> pd.DataFrame:
     cross (a stop in free flight, a contact's end, zero velocity, the flow barrier at rest),
     read at its interior minima on 33 samples a piece."""
     samples = np.concatenate([piece.samples for piece in along.pieces])
-    reach = {name: float(np.ptp(samples[:, k])) + 1e-300 for k, name in enumerate(("x1", "v1", "x2", "v2"))}
+    reach = {name: float(np.ptp(samples[:, k])) + 1e-300 for k, name in enumerate(ARTICLE.state)}
     c = coefficients(p)
     fields = np.array([_field(piece.t0, y, c, piece.mode)[0] for piece in along.pieces for y in piece.samples])
     rates = np.max(np.abs(fields), axis=0) + 1e-300

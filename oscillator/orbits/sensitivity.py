@@ -44,6 +44,7 @@ from oscillator.model.fields import coefficients, state_derivative
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
+from oscillator.model.system import ARTICLE
 from oscillator.orbits.tangent import INTEGRALS, force_gradient, tangent_rates, threshold_gradient
 from oscillator.text import shown
 
@@ -71,7 +72,7 @@ __all__ = [
 MARGIN = 1e-6
 #: The re-integration's tolerances (as the response measures').
 _TOLERANCE = 1e-12
-_STATE = ("x1", "v1", "x2", "v2")
+_STATE = ARTICLE.state
 _POSITION = {name: k for k, name in enumerate(Parameters.names())}
 
 

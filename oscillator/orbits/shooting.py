@@ -35,6 +35,7 @@ from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
 from oscillator.model.phase_space import Mode
+from oscillator.model.system import ARTICLE
 from oscillator.orbits.signature import Signature, cyclic_signature, event_signature
 from oscillator.presenting import presenter
 from oscillator.text import shown
@@ -62,7 +63,8 @@ MAX_ITERATIONS = 200
 MAX_TRANSIENT = 1_000_000
 #: CVODE's tolerances for orbits unless the caller sets them.
 ORBIT_RTOL = 1e-12
-STATE = ("x1", "v1", "x2", "v2")
+#: The state's names (the article's system: :data:`oscillator.model.system.ARTICLE`).
+STATE = ARTICLE.state
 
 
 @dataclass(frozen=True)
@@ -414,7 +416,7 @@ def settled(case: Case, state: np.ndarray | Sequence[float], periods: int) -> np
     y = np.array(state, dtype=float)
     if periods == 0:
         return y
-    start = dataclasses.replace(case.initial, **dict(zip(("x1", "v1", "x2", "v2"), (float(v) for v in y), strict=True)))
+    start = dataclasses.replace(case.initial, **dict(zip(case.system.state, (float(v) for v in y), strict=True)))
     end = case.initial.t0 + periods * case.parameters.period
     warm = simulate(dataclasses.replace(case, initial=start), t_end=end, save=SaveAt(steps=False, events_from=end))
     return np.asarray(warm.final_state[1:], dtype=float)

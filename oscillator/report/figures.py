@@ -32,6 +32,7 @@ from oscillator.model.events import EventKind
 from oscillator.model.fields import flow_barrier_field, kinetic_field, non_friction_force
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import contacts_of_state, velocity_sign
+from oscillator.model.system import ARTICLE
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -137,7 +138,7 @@ def _dense(trajectory: pd.DataFrame, points: int) -> pd.DataFrame:
     t = trajectory.t.to_numpy()
     if len(t) < 2 or t[-1] == t[0]:
         return trajectory
-    numbers = ["t", "x1", "v1", "x2", "v2"]
+    numbers = ["t", *ARTICLE.state]
     labels = ["domain1", "domain2", "system_state"]
     values = trajectory[numbers].to_numpy(float)
     same = np.ones(len(t) - 1, dtype=bool)
@@ -458,7 +459,7 @@ def _clipped(trajectory: pd.DataFrame, events: pd.DataFrame, window: Window) -> 
             return []
         w = (edge - t[k - 1]) / (t[k] - t[k - 1])
         row = trajectory.iloc[[k - 1]].copy()
-        for column in ("t", "x1", "v1", "x2", "v2"):
+        for column in ("t", *ARTICLE.state):
             row[column] = (1 - w) * trajectory[column].iloc[k - 1] + w * trajectory[column].iloc[k]
         return [row]
 

@@ -62,9 +62,7 @@ def result_html(result: Result) -> str:
 
 def orbit_html(orbit: Orbit) -> str:
     case = orbit.case
-    state = ", ".join(
-        f"{name} = {value:.10g}" for name, value in zip(("x1", "v1", "x2", "v2"), orbit.state, strict=True)
-    )
+    state = ", ".join(f"{name} = {value:.10g}" for name, value in zip(case.system.state, orbit.state, strict=True))
     header = ("multiplier", "modulus")
     rows = tuple((f"{mu.real:+.6e} {mu.imag:+.6e}i", f"{abs(mu):.6e}") for mu in orbit.multipliers)
     found = (

@@ -13,6 +13,7 @@ import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import atomic_path, inner_folder
+from oscillator.model.system import ARTICLE
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title, save_figure
 from oscillator.text import printable
@@ -72,7 +73,7 @@ def quantity_label(name: str, prefix: str = "") -> str:
 
     if name in Parameters.names():
         return prefix + labelled(name)
-    if name in ("x1", "v1", "x2", "v2"):
+    if name in ARTICLE.state:
         return prefix + state_label(name)
     if name in COLUMNS:
         unit = measure_unit(name)

@@ -148,7 +148,7 @@ def run_info(result: Result, *, command: list[str] | None = None, pending: tuple
         "t0": case.initial.t0,
         "t_end": case.t_end,
         "t_final": result.final_state[0],
-        "final_state": dict(zip(("t", "x1", "v1", "x2", "v2"), result.final_state, strict=True)),
+        "final_state": dict(zip(("t", *case.system.state), result.final_state, strict=True)),
         "wall_time": result.stats.wall_time,
         "counts": {k: v for k, v in result.stats.as_dict().items() if k not in ("wall_time", "engine")},
         "energy": result.energy.as_dict(),
@@ -395,8 +395,7 @@ def result_of(run: RunFolder) -> Result:
     final: dict[str, Any] = given if isinstance(given, dict) else {}
     if not final and len(run.trajectory):
         final = run.trajectory.iloc[-1].to_dict()
-    t, x1, v1, x2, v2 = (number(final.get(name)) for name in ("t", "x1", "v1", "x2", "v2"))
-    state = (t, x1, v1, x2, v2)
+    state = tuple(number(final.get(name)) for name in ("t", *run.case.system.state))
     return Result(
         run.case,
         audit,
