@@ -54,6 +54,7 @@ _EXPORTS = {
     "read_run": "oscillator.saved",
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
+    "ChainOrbit": "oscillator.orbits.chain_orbits",
     "Response": "oscillator.orbits.response",
     "FrequencyResponse": "oscillator.attractors.frequency",
     "frequency_response": "oscillator.attractors.frequency",
@@ -95,6 +96,7 @@ __all__ = [
     "Basins",
     "Branch",
     "Case",
+    "ChainOrbit",
     "ChainResult",
     "Curve",
     "Design",
@@ -172,6 +174,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_orbits import ChainOrbit
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.response import Response, response

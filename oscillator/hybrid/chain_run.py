@@ -169,11 +169,14 @@ def simulate_chain(
     *,
     options: SolverOptions | None = None,
     at: np.ndarray | None = None,
+    start_state: np.ndarray | None = None,
 ) -> ChainResult:
     """Simulate a friction chain from its start to ``t_end`` (s; by default the chain's, else 10
     forcing periods), the trajectory recorded at every solver step and at every event, and at
     each time of ``at`` exactly (the solver stops there: the stroboscopic section
-    ``t0 + kT``, say).
+    ``t0 + kT``, say).  ``start_state`` starts it from another state than the chain's (its
+    :attr:`~oscillator.model.chains.FrictionChain.system`'s ``state``: each mass's ``x, v``, then
+    each slider's ``z``), as a period map does.
 
     Raises :class:`~oscillator.errors.SimulationFailed` (its ``result`` the run so far) when the
     solver fails or the events storm."""
@@ -181,7 +184,9 @@ def simulate_chain(
     options = options or SolverOptions()
     end = run_end(chain, t_end)
     arrays, names = arrays_of(chain), names_of(chain)
-    y = np.concatenate([state_of(chain), np.zeros(len(arrays.kind))])
+    y = np.concatenate(
+        [state_of(chain) if start_state is None else _given(chain, start_state), np.zeros(len(arrays.kind))]
+    )
     run = _Run(chain, arrays, options)
     engine = ChainEngine(arrays, options, max_step=options.max_step_fraction * chain.period)
     t = chain.t0
@@ -207,6 +212,18 @@ def simulate_chain(
     finally:
         engine.close()
     return run.result(Status.COMPLETE, "", t, y)
+
+
+def _given(chain: FrictionChain, state: np.ndarray) -> np.ndarray:
+    """``state`` as a start of ``chain``: one finite number per name of its system's state."""
+    names = chain.system.state
+    given = np.asarray(state, dtype=float).ravel()
+    if len(given) != len(names) or not np.isfinite(given).all():
+        raise InputError(
+            f"start_state must hold {len(names)} finite numbers ({', '.join(names)}), got {len(given)}",
+            field="start_state",
+        )
+    return given.copy()
 
 
 def _supervise(

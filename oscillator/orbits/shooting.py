@@ -19,7 +19,7 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 import pandas as pd
@@ -31,6 +31,7 @@ from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case
 from oscillator.io.files import as_folder
+from oscillator.model.chains import FrictionChain
 from oscillator.model.events import COLUMN, KINDS, EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
@@ -43,6 +44,7 @@ from oscillator.text import shown
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from oscillator.orbits.chain_orbits import ChainOrbit
     from oscillator.orbits.response import Response
     from oscillator.orbits.sensitivity import Sensitivities
 
@@ -452,6 +454,21 @@ def check_orbit_settings(period: object, tol: object, max_iterations: object) ->
     )
 
 
+@overload
+def find_orbit(
+    case: FrictionChain,
+    *,
+    period: int = 1,
+    section: float | None = None,
+    guess: Sequence[float] | np.ndarray | None = None,
+    transient: int | None = None,
+    tol: float = 1e-9,
+    max_iterations: int = 20,
+    **overrides: float,
+) -> ChainOrbit: ...
+
+
+@overload
 def find_orbit(
     case: Case | str,
     *,
@@ -462,13 +479,27 @@ def find_orbit(
     tol: float = 1e-9,
     max_iterations: int = 20,
     **overrides: float,
-) -> Orbit:
+) -> Orbit: ...
+
+
+def find_orbit(
+    case: Case | FrictionChain | str,
+    *,
+    period: int = 1,
+    section: float | None = None,
+    guess: Sequence[float] | np.ndarray | None = None,
+    transient: int | None = None,
+    tol: float = 1e-9,
+    max_iterations: int = 20,
+    **overrides: float,
+) -> Orbit | ChainOrbit:
     """A period-``period`` orbit of the stroboscopic map ``y(section) -> y(section + period T)``.
 
     Parameters
     ----------
-    case : Case or str
-        A case or a shipped case's name.
+    case : Case, FrictionChain or str
+        A case or a shipped case's name; a friction chain (its ``overrides`` by name, its orbit a
+        :class:`~oscillator.orbits.chain_orbits.ChainOrbit`: :func:`~oscillator.orbits.chain_orbits.find_chain_orbit`).
     period : int
         Forcing periods per return, 1 to 1000 (1 for a period-1 orbit).
     section : float, optional
@@ -503,6 +534,15 @@ def find_orbit(
     (True, True)
     """
     period, tol, max_iterations = check_orbit_settings(period, tol, max_iterations)
+    if isinstance(case, FrictionChain):
+        from oscillator.orbits.chain_orbits import find_chain_orbit
+
+        chain, given = (
+            (case.with_values(overrides) if overrides else case),
+            None if guess is None else np.asarray(guess),
+        )
+        transient = 100 if transient is None else transient
+        return find_chain_orbit(chain, given, period=period, section=section, transient=transient, tol=tol)
     case = orbit_case(case, overrides)
     section, start = start_of(case, section, guess, transient)
     return _orbit(case, section, start, period, tol=tol, max_iterations=max_iterations)

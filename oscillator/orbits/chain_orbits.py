@@ -1,0 +1,232 @@
+"""Periodic orbits of a friction chain (issue 52, its first step): the fixed points of the
+stroboscopic map by Newton's method, and their Floquet multipliers.
+
+The period map ``P`` takes the chain's state ``y`` (its
+:attr:`~oscillator.model.chains.FrictionChain.system`'s ``state``: each mass's ``x, v``, each
+slider's ``z``) at the section ``s`` to the state at ``s + N T``: one run of
+:func:`~oscillator.hybrid.chain_run.simulate_chain` from ``y``, every switch by the chains' rules.
+Its derivative ``M = dP/dy`` is taken here by central differences, one coordinate at a time
+(:data:`STEP` of its scale, at CVODE's tolerance 1e-12): the switches move with the start, and a
+difference over a step that keeps the cycle of switches is the derivative through them.  Newton's
+method solves ``P(y) = y`` in the coordinates that can move at the section: a mass stuck on its
+belt or floor there keeps its velocity (the belt's speed is its domain, as the article's resting
+mass keeps ``v = 0``), and one stuck the whole period keeps its place too (a nearby place is an
+orbit as well: the multiplier 1, neutral).  The multipliers are the eigenvalues of ``M`` over the
+coordinates that move.  The exact monodromy through the saltation matrices of every switch, as
+the article's orbits have, comes next (issue 52); these differences are what it will be checked
+against.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.hybrid.chain_run import ChainResult, simulate_chain
+from oscillator.model.chain_fields import state_of
+from oscillator.model.chains import FrictionChain
+from oscillator.model.parameters import SolverOptions
+
+__all__ = ["ORBIT_OPTIONS", "STEP", "ChainOrbit", "chain_period_map", "find_chain_orbit"]
+
+#: CVODE's tolerances for a chain's period map.
+ORBIT_OPTIONS = SolverOptions(rtol=1e-12, atol=1e-12)
+#: The central differences' step, relative to each coordinate's scale (at least 1).
+STEP = 1e-6
+
+
+@dataclass(frozen=True)
+class ChainOrbit:
+    """A periodic orbit of a friction chain's stroboscopic map.
+
+    Attributes
+    ----------
+    chain : FrictionChain
+        The chain.
+    section : float
+        The section's time: the orbit passes ``state`` at ``section + k N T``.
+    state : ndarray
+        The state at ``section`` (the chain's system's ``state`` names).
+    period : int
+        ``N``: forcing periods per return.
+    free : tuple of str
+        The coordinates that move at the section, those Newton solved for and the multipliers
+        are of.
+    monodromy : ndarray
+        ``dP/dy`` over :attr:`free` (central differences).
+    multipliers : ndarray
+        Its eigenvalues, largest modulus first.
+    residual : float
+        ``|P(state) - state|`` over :attr:`free` (max norm).
+    iterations : int
+        Newton steps taken.
+    resting : tuple of str
+        The masses stuck on their belt or floor the whole period (neutral in their place).
+    run : ChainResult
+        One return of the orbit: its events and trajectory.
+    """
+
+    chain: FrictionChain
+    section: float
+    state: np.ndarray
+    period: int
+    free: tuple[str, ...]
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    residual: float
+    iterations: int
+    resting: tuple[str, ...]
+    run: ChainResult
+
+    @property
+    def stable(self) -> bool:
+        """No disturbance grows: every multiplier inside the unit circle."""
+        return bool(np.all(np.abs(self.multipliers) < 1.0))
+
+    @property
+    def events(self) -> pd.DataFrame:
+        """The events over one return of the orbit."""
+        return self.run.events
+
+    @property
+    def verdict(self) -> str:
+        """The stability in words, with each mass that rests the whole period."""
+        words = ["stable" if self.stable else "unstable"]
+        words += [f"neutral in x:{mass}: it stays stuck all period where it stuck" for mass in self.resting]
+        return "; ".join(words)
+
+
+def chain_period_map(
+    chain: FrictionChain, section: float, state: np.ndarray, periods: int = 1, options: SolverOptions = ORBIT_OPTIONS
+) -> ChainResult:
+    """The run of ``chain`` from ``state`` at ``section`` over ``periods`` forcing periods:
+    ``P(state)`` is its ``y_end`` (the chain's state first)."""
+    moved = dataclasses.replace(chain, t0=float(section), t_end=None)
+    return simulate_chain(moved, float(section) + periods * chain.period, options=options, start_state=state)
+
+
+def _ends(result: ChainResult) -> np.ndarray:
+    return np.asarray(result.y_end[: result.chain.system.size], dtype=float)
+
+
+def _still(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[str, ...]]:
+    """The state's indices held at the section (the velocity of a mass stuck there; the place of
+    one stuck all period), and the masses stuck all period."""
+    system, trajectory = chain.system, result.trajectory
+    held: set[int] = set()
+    resting = []
+    for element in chain.elements:
+        if element.type != "friction":
+            continue
+        mode = trajectory[f"mode:{element.name}"].to_numpy()
+        k = system.masses.index(element.on)
+        if mode[0] == 0:
+            held.add(2 * k + 1)
+            if (mode == 0).all():
+                held.add(2 * k)
+                resting.append(element.on)
+    return held, tuple(resting)
+
+
+def _derivative(
+    chain: FrictionChain, section: float, y: np.ndarray, free: list[int], periods: int, options: SolverOptions
+) -> np.ndarray:
+    """``dP/dy`` over ``free`` by central differences."""
+    columns = []
+    for k in free:
+        h = STEP * max(1.0, abs(y[k]))
+        ahead, back = y.copy(), y.copy()
+        ahead[k] += h
+        back[k] -= h
+        forward = _ends(chain_period_map(chain, section, ahead, periods, options))
+        backward = _ends(chain_period_map(chain, section, back, periods, options))
+        columns.append((forward - backward)[free] / (2 * h))
+    return np.array(columns).T.reshape(len(free), len(free))
+
+
+def _guess(chain: FrictionChain, section: float, transient: int, options: SolverOptions) -> np.ndarray:
+    """The state at the first section time ``transient`` periods or more after the chain's start
+    (its start itself for none at the start)."""
+    returns = max(0, math.ceil((chain.t0 + transient * chain.period - section) / chain.period - 1e-12))
+    end = section + returns * chain.period
+    if end <= chain.t0:
+        return state_of(chain)
+    return _ends(simulate_chain(chain, end, options=options))
+
+
+def find_chain_orbit(
+    chain: FrictionChain,
+    guess: np.ndarray | None = None,
+    *,
+    period: int = 1,
+    section: float | None = None,
+    transient: int = 100,
+    tol: float = 1e-10,
+    max_iterations: int = 25,
+    options: SolverOptions = ORBIT_OPTIONS,
+) -> ChainOrbit:
+    """The periodic orbit of ``chain`` through ``guess`` at ``section`` (by default: where the
+    chain's motion is after ``transient`` forcing periods), returning after ``period`` forcing
+    periods, by Newton's method on the period map (module docstring); its multipliers.
+    ``oscillator.find_orbit(chain)`` calls it.
+
+    Raises
+    ------
+    InputError
+        A guess of another size than the chain's state, or not finite; a period not a whole number
+        from 1 to 1000.
+    SimulationFailed
+        Newton's method did not converge (``reason`` ``no_convergence``), or a run failed.
+    """
+    chain, periods = chain.checked(), period
+    if isinstance(periods, bool) or not isinstance(periods, int) or not 1 <= periods <= 1000:
+        raise InputError(f"period must be a whole number from 1 to 1000, got {periods!r}", field="period")
+    section = chain.t0 if section is None else float(section)
+    names = chain.system.state
+    y = _guess(chain, section, transient, options) if guess is None else np.asarray(guess, dtype=float).ravel()
+    if len(y) != len(names) or not np.isfinite(y).all():
+        raise InputError(f"guess must be {len(names)} finite numbers ({', '.join(names)})", field="guess")
+    history: list[float] = []
+    for iteration in range(max_iterations + 1):
+        image = chain_period_map(chain, section, y, periods, options)
+        held, resting = _still(chain, image)
+        free = [k for k in range(len(y)) if k not in held]
+        residual = (_ends(image) - y)[free]
+        history.append(float(np.max(np.abs(residual), initial=0.0)))
+        if history[-1] <= tol * max(1.0, float(np.max(np.abs(y)))):
+            monodromy = _derivative(chain, section, y, free, periods, options)
+            multipliers = np.linalg.eigvals(monodromy) if len(free) else np.empty(0, complex)
+            order = np.argsort(-np.abs(multipliers), kind="stable")
+            return ChainOrbit(
+                chain,
+                section,
+                y,
+                periods,
+                tuple(names[k] for k in free),
+                monodromy,
+                multipliers[order],
+                history[-1],
+                iteration,
+                resting,
+                image,
+            )
+        if iteration == max_iterations:
+            break
+        matrix = _derivative(chain, section, y, free, periods, options) - np.eye(len(free))
+        try:
+            step = np.linalg.solve(matrix, -residual)
+        except np.linalg.LinAlgError:
+            break
+        y = y.copy()
+        y[free] += step
+    raise SimulationFailed(
+        f"Newton's method did not converge in {max_iterations} steps (residuals "
+        f"{', '.join(f'{r:.2e}' for r in history)}); give a better guess, a longer transient or more iterations",
+        reason=Reason.NO_CONVERGENCE,
+        field="guess",
+    )

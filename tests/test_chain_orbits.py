@@ -1,0 +1,145 @@
+"""Periodic orbits of friction chains (issue 52, first step: oscillator/orbits/chain_orbits.py):
+known answers (a linear chain's steady response and its monodromy ``expm(A T)``; Den Hartog's
+amplitude), a friction damper's stick-slip orbit that the map returns to and whose multipliers the
+decay of a disturbance confirms, a mass stuck all period, and the refusals."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import oscillator as osc
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.io.chains import load_system
+from oscillator.model.chains import FrictionChain
+from oscillator.orbits.chain_orbits import ChainOrbit, chain_period_map, find_chain_orbit
+from test_chain_runs import _den_hartog
+
+SYSTEMS = Path(__file__).resolve().parents[1] / "docs" / "systems"
+OMEGA = 1.3
+
+
+def linear_chain() -> FrictionChain:
+    """Two masses, springs and dampers to the ground and between them, forced on the first."""
+    return (
+        FrictionChain(Omega=OMEGA)
+        .mass("a", 1.0)
+        .mass("b", 0.5)
+        .spring("a", k=2.0)
+        .spring("a", "b", k=1.0)
+        .damper("a", c=0.1)
+        .damper("b", c=0.05)
+        .force("a", Q=1.0, phi=0.3)
+    )
+
+
+def test_a_linear_chains_orbit_is_its_steady_response_and_its_monodromy_the_exponential():
+    """``M X'' + C X' + K X = F sin(Omega t + phi)``: the orbit at t0 is ``Im(X e^{i phi})`` with
+    ``(K - Omega^2 M + i Omega C) X = F`` (1e-9), and ``dP/dy`` is ``expm(A T)`` (1e-6: central
+    differences)."""
+    orbit = osc.find_orbit(linear_chain(), transient=5)
+    assert isinstance(orbit, ChainOrbit) and orbit.free == ("x:a", "v:a", "x:b", "v:b")
+    mass, damping = np.diag([1.0, 0.5]), np.diag([0.1, 0.05])
+    stiffness = np.array([[3.0, -1.0], [-1.0, 1.0]])
+    amplitude = np.linalg.solve(stiffness - OMEGA**2 * mass + 1j * OMEGA * damping, [1.0, 0.0]) * np.exp(0.3j)
+    steady = np.ravel(np.column_stack([amplitude.imag, (1j * OMEGA * amplitude).imag]))
+    np.testing.assert_allclose(orbit.state, steady, rtol=0, atol=1e-9)
+    a = np.zeros((4, 4))
+    a[0, 1] = a[2, 3] = 1.0
+    a[np.ix_([1, 3], [0, 2])] = -np.linalg.solve(mass, stiffness)
+    a[np.ix_([1, 3], [1, 3])] = -np.linalg.solve(mass, damping)
+    exact = scipy.linalg.expm(a * 2 * math.pi / OMEGA)
+    np.testing.assert_allclose(orbit.monodromy, exact, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(np.abs(orbit.multipliers), np.sort(np.abs(np.linalg.eigvals(exact)))[::-1], atol=1e-6)
+    assert orbit.stable and orbit.residual <= 1e-10 and orbit.verdict == "stable"
+
+
+def test_den_hartogs_orbit_turns_at_his_amplitude():
+    """The forced Coulomb oscillator's orbit (section a quarter period after the turn at -X):
+    it turns at +X and -X half a period apart (1e-8), never sticking."""
+    amplitude, phi = _den_hartog()
+    chain = (
+        FrictionChain(Omega=0.6)
+        .mass("m", m=1.0)
+        .spring("m", k=1.0)
+        .force("m", Q=1.0, phi=phi)
+        .friction("m", mu_s=0.2, mu_k=0.2, N=1.0)
+    )
+    period = 2 * math.pi / 0.6
+    orbit = find_chain_orbit(chain, section=period / 4, transient=30)
+    turns = orbit.events[orbit.events.kind == "passable"]
+    assert len(turns) == 2 and (orbit.events.kind != "sticks").all()
+    np.testing.assert_allclose(turns.t.to_numpy(), period * np.array([0.5, 1.0]), rtol=0, atol=1e-8)
+    at = orbit.run.trajectory.drop_duplicates("t", keep="last").set_index("t")["x:m"]
+    np.testing.assert_allclose(at.loc[turns.t.to_numpy()].to_numpy(), [amplitude, -amplitude], rtol=0, atol=1e-8)
+    assert orbit.stable and orbit.free == ("x:m", "v:m")
+
+
+def test_a_friction_dampers_stick_slip_orbit_returns_and_a_disturbance_decays_as_its_multipliers_say():
+    """The blade with its Jenkins damper (docs/systems/blade-damper.toml): the slider sticks and
+    slips twice a period; the map returns to the orbit (1e-10 of its scale); a disturbance along the largest
+    multiplier's eigenvector shrinks by that multiplier a period (to 2 %, over 8 periods)."""
+    chain = load_system(SYSTEMS / "blade-damper.toml")
+    orbit = find_chain_orbit(chain, transient=60)
+    kinds = set(orbit.events.kind)
+    assert {"slider_sticks", "slider_slips"} <= kinds and orbit.free == chain.system.state
+    image = chain_period_map(chain, orbit.section, orbit.state)
+    assert np.max(np.abs(image.y_end[:5] - orbit.state)) <= 1e-10 * np.max(np.abs(orbit.state))
+    values, vectors = np.linalg.eig(orbit.monodromy)
+    k = int(np.argmax(np.abs(values)))
+    assert abs(values[k].imag) < 1e-12 and 0 < abs(values[k]) < 1 and orbit.stable
+    push = 1e-5 * np.real(vectors[:, k]) / np.max(np.abs(vectors[:, k]))
+    state, periods = orbit.state + push, 8
+    for _ in range(periods):
+        state = chain_period_map(chain, orbit.section, state).y_end[:5]
+    grown = np.max(np.abs(state - orbit.state)) / np.max(np.abs(push))
+    assert grown == pytest.approx(abs(values[k]) ** periods, rel=0.02)
+
+
+def test_a_mass_stuck_all_period_keeps_its_place_and_velocity():
+    """A second mass held by friction far above the force it feels: it rests the whole period,
+    neutral in its place; Newton moves the first mass only."""
+    chain = (
+        linear_chain()
+        .friction("b", mu_s=50.0, mu_k=40.0)
+        .mass("c", 1.0, x=0.3)
+        .spring("c", k=1.0)
+        .friction("c", mu_s=10.0, mu_k=8.0)
+    )
+    orbit = find_chain_orbit(chain, transient=10)
+    assert orbit.resting == ("b", "c") and orbit.free == ("x:a", "v:a")
+    assert orbit.state[4] == 0.3 and orbit.state[5] == 0.0 and "neutral in x:c" in orbit.verdict
+
+
+def test_bad_input_and_a_motion_without_an_orbit_are_refused():
+    chain = linear_chain()
+    with pytest.raises(InputError, match="guess must be 4 finite numbers") as said:
+        find_chain_orbit(chain, guess=[0.0, 1.0])
+    assert said.value.field == "guess"
+    with pytest.raises(InputError, match="period must be a whole number"):
+        find_chain_orbit(chain, period=0)
+    # the rattling conveyor has no period-1 orbit near its motion
+    with pytest.raises(SimulationFailed, match="did not converge") as failed:
+        find_chain_orbit(load_system(SYSTEMS / "conveyor.toml"), transient=20, max_iterations=4)
+    assert failed.value.reason == Reason.NO_CONVERGENCE
+
+
+def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, capsys):
+    """docs/systems.md's ```python blocks run as shown (in a fresh folder holding docs/systems/, as
+    the repository does), and the orbit's printed lines are those the page says."""
+    import shutil
+
+    text = (SYSTEMS.parent / "systems.md").read_text(encoding="utf-8")
+    blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
+    assert len(blocks) == 2
+    shutil.copytree(SYSTEMS, tmp_path / "docs" / "systems")
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        exec(compile(block, "docs/systems.md", "exec"), {"__name__": "__main__"})
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0] == "stable" and printed[1] == "['0.9388', '0.7622', '0.3493', '0.3493', '0.0000']"
+    assert "slider_slips" in printed[3] and printed[3].split()[1] == "0.137144"
