@@ -55,6 +55,7 @@ _EXPORTS = {
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
     "ChainOrbit": "oscillator.orbits.chain_orbits",
+    "frequency_sweep": "oscillator.orbits.chain_response",
     "Response": "oscillator.orbits.response",
     "FrequencyResponse": "oscillator.attractors.frequency",
     "frequency_response": "oscillator.attractors.frequency",
@@ -135,6 +136,7 @@ __all__ = [
     "find_orbit",
     "follow_attractors",
     "frequency_response",
+    "frequency_sweep",
     "load_case",
     "load_system",
     "lyapunov",
@@ -175,6 +177,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.phase_space import Mode
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.chain_orbits import ChainOrbit
+    from oscillator.orbits.chain_response import frequency_sweep
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.response import Response, response

@@ -111,7 +111,7 @@ def test_a_mass_stuck_all_period_keeps_its_place_and_velocity():
         .friction("c", mu_s=10.0, mu_k=8.0)
     )
     orbit = find_chain_orbit(chain, transient=10)
-    assert orbit.resting == ("b", "c") and orbit.free == ("x:a", "v:a")
+    assert orbit.neutral == ("x:b", "x:c") and orbit.free == ("x:a", "v:a")
     assert orbit.state[4] == 0.3 and orbit.state[5] == 0.0 and "neutral in x:c" in orbit.verdict
 
 
@@ -135,7 +135,7 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
 
     text = (SYSTEMS.parent / "systems.md").read_text(encoding="utf-8")
     blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
-    assert len(blocks) == 2
+    assert len(blocks) == 3
     shutil.copytree(SYSTEMS, tmp_path / "docs" / "systems")
     monkeypatch.chdir(tmp_path)
     for block in blocks:
@@ -143,3 +143,76 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
     printed = capsys.readouterr().out.splitlines()
     assert printed[0] == "stable" and printed[1] == "['0.9388', '0.7622', '0.3493', '0.3493', '0.0000']"
     assert "slider_slips" in printed[3] and printed[3].split()[1] == "0.137144"
+    said = [line.removeprefix("# ") for line in blocks[2].splitlines() if line.startswith("# F = ")]
+    assert printed[-3:] == said and len(said) == 3
+
+
+def _den_hartog_amplitude(omega: float, friction: float = 0.2) -> float:
+    """Den Hartog's amplitude of the continuous motion of ``x'' + x + F sgn(x') = sin(Omega t)``."""
+    u = math.sin(math.pi / omega) / (omega * (1 + math.cos(math.pi / omega)))
+    return math.sqrt(1 / (1 - omega**2) ** 2 - (friction * u) ** 2)
+
+
+def test_a_sweep_over_omega_gives_the_linear_chains_frequency_response():
+    """The sweep's amplitudes ``x_pp / 2`` are ``|X(Omega)|`` of the closed form, each mass, to 1e-9,
+    and ``x_max`` the same (the extremes found between steps, exact to the solver)."""
+    from oscillator.orbits.chain_response import frequency_sweep
+
+    values = np.linspace(0.5, 2.0, 7)
+    table = frequency_sweep(linear_chain(), values, transient=10)
+    assert list(table.status) == ["followed"] * 7 and table.stable.all()
+    mass, damping = np.diag([1.0, 0.5]), np.diag([0.1, 0.05])
+    stiffness = np.array([[3.0, -1.0], [-1.0, 1.0]])
+    for value, (_, row) in zip(values, table.iterrows(), strict=True):
+        exact = np.abs(np.linalg.solve(stiffness - value**2 * mass + 1j * value * damping, [1.0, 0.0]))
+        assert row["x_pp:a"] / 2 == pytest.approx(exact[0], abs=1e-9) and row["x_max:a"] == pytest.approx(
+            exact[0], abs=1e-9
+        )
+        assert row["x_pp:b"] / 2 == pytest.approx(exact[1], abs=1e-9), value
+
+
+def test_a_sweep_gives_den_hartogs_amplitude_along_a_band():
+    """The forced Coulomb oscillator over Omega in [0.55, 0.75] (continuous motion: it never
+    sticks): ``x_max = -x_min = X(Omega)`` of Den Hartog's closed form to 1e-8."""
+    from oscillator.orbits.chain_response import frequency_sweep
+
+    chain = (
+        FrictionChain(Omega=0.55)
+        .mass("m", m=1.0)
+        .spring("m", k=1.0)
+        .force("m", Q=1.0)
+        .friction("m", mu_s=0.2, mu_k=0.2, N=1.0, name="floor")
+    )
+    values = [0.55, 0.6, 0.65, 0.7, 0.75]
+    table = frequency_sweep(chain, values, transient=40)
+    for value, (_, row) in zip(values, table.iterrows(), strict=True):
+        amplitude = _den_hartog_amplitude(value)
+        assert row["x_max:m"] == pytest.approx(amplitude, abs=1e-8) and row["x_min:m"] == pytest.approx(
+            -amplitude, abs=1e-8
+        )
+        assert row["stuck:floor"] == 0.0 and row.stable, value
+
+
+def test_a_friction_dampers_stuck_share_is_read_from_its_events_and_a_lost_orbit_is_said():
+    """The blade's damper holds between its sticking and its slipping events: its stuck share is
+    their spans over the period; a value where no orbit is found is a failed row, with why, and
+    the sweep goes on."""
+    from oscillator.orbits.chain_response import frequency_sweep, orbit_measures
+
+    chain = load_system(SYSTEMS / "blade-damper.toml")
+    orbit = find_chain_orbit(chain, transient=60)
+    events = orbit.events
+    held = sum(
+        b - a
+        for a, b in zip(
+            events.t[events.kind == "slider_sticks"], events.t[events.kind == "slider_slips"][1:], strict=False
+        )
+    )
+    held += events.t.iloc[0] - orbit.section + orbit.section + chain.period - events.t.iloc[-1]
+    assert orbit_measures(orbit)["stuck:platform"] == pytest.approx(held / chain.period, abs=1e-12)
+    with pytest.raises(InputError, match="kt") as refused:
+        frequency_sweep(chain, [2.0, -1.0], param="platform.kt")
+    assert refused.value.field == "kt"
+    conveyor = load_system(SYSTEMS / "conveyor.toml")  # rattles: no period-1 orbit near its motion
+    table = frequency_sweep(conveyor, [3.0, 3.1], transient=20, max_iterations=3)
+    assert list(table.status) == ["failed", "failed"] and table.message.str.contains("did not converge").all()

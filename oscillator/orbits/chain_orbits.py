@@ -11,7 +11,8 @@ difference over a step that keeps the cycle of switches is the derivative throug
 method solves ``P(y) = y`` in the coordinates that can move at the section: a mass stuck on its
 belt or floor there keeps its velocity (the belt's speed is its domain, as the article's resting
 mass keeps ``v = 0``), and one stuck the whole period keeps its place too (a nearby place is an
-orbit as well: the multiplier 1, neutral).  The multipliers are the eigenvalues of ``M`` over the
+orbit as well: the multiplier 1, neutral), as does the stretch ``z`` of a slider that holds the
+whole period or has ``F = 0``.  The multipliers are the eigenvalues of ``M`` over the
 coordinates that move.  The exact monodromy through the saltation matrices of every switch, as
 the article's orbits have, comes next (issue 52); these differences are what it will be checked
 against.
@@ -65,8 +66,11 @@ class ChainOrbit:
         ``|P(state) - state|`` over :attr:`free` (max norm).
     iterations : int
         Newton steps taken.
-    resting : tuple of str
-        The masses stuck on their belt or floor the whole period (neutral in their place).
+    neutral : tuple of str
+        The coordinates in which the orbit is neutral, held by Newton at the guess's values: the
+        place of a mass stuck on its belt or floor the whole period (``x:<mass>``), the stretch of
+        a slider that holds the whole period or has ``F = 0`` (``z:<slider>``): a nearby value is
+        an orbit too (multiplier 1).
     run : ChainResult
         One return of the orbit: its events and trajectory.
     """
@@ -80,7 +84,7 @@ class ChainOrbit:
     multipliers: np.ndarray
     residual: float
     iterations: int
-    resting: tuple[str, ...]
+    neutral: tuple[str, ...]
     run: ChainResult
 
     @property
@@ -95,9 +99,9 @@ class ChainOrbit:
 
     @property
     def verdict(self) -> str:
-        """The stability in words, with each mass that rests the whole period."""
+        """The stability in words, with the coordinates in which the orbit is neutral."""
         words = ["stable" if self.stable else "unstable"]
-        words += [f"neutral in x:{mass}: it stays stuck all period where it stuck" for mass in self.resting]
+        words += [f"neutral in {name}: a nearby value is an orbit too (multiplier 1)" for name in self.neutral]
         return "; ".join(words)
 
 
@@ -115,22 +119,29 @@ def _ends(result: ChainResult) -> np.ndarray:
 
 
 def _still(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[str, ...]]:
-    """The state's indices held at the section (the velocity of a mass stuck there; the place of
-    one stuck all period), and the masses stuck all period."""
+    """The state's indices held at the section, and the names neutral in them: the velocity of a
+    mass stuck there; the place of one stuck all period (any nearby place is an orbit too); the
+    ``z`` of a slider that holds all period (any nearby stretch too) or never can (``F = 0``: its
+    ``z`` follows the motion and acts on nothing)."""
     system, trajectory = chain.system, result.trajectory
     held: set[int] = set()
-    resting = []
+    neutral = []
     for element in chain.elements:
-        if element.type != "friction":
+        if element.type not in ("friction", "jenkins"):
             continue
         mode = trajectory[f"mode:{element.name}"].to_numpy()
+        if element.type == "jenkins":
+            if (mode == 0).all() or element.values["F"] == 0:
+                held.add(system.state.index(f"z:{element.name}"))
+                neutral.append(f"z:{element.name}")
+            continue
         k = system.masses.index(element.on)
         if mode[0] == 0:
             held.add(2 * k + 1)
             if (mode == 0).all():
                 held.add(2 * k)
-                resting.append(element.on)
-    return held, tuple(resting)
+                neutral.append(system.position(element.on))
+    return held, tuple(neutral)
 
 
 def _derivative(
@@ -194,7 +205,7 @@ def find_chain_orbit(
     history: list[float] = []
     for iteration in range(max_iterations + 1):
         image = chain_period_map(chain, section, y, periods, options)
-        held, resting = _still(chain, image)
+        held, neutral = _still(chain, image)
         free = [k for k in range(len(y)) if k not in held]
         residual = (_ends(image) - y)[free]
         history.append(float(np.max(np.abs(residual), initial=0.0)))
@@ -212,7 +223,7 @@ def find_chain_orbit(
                 multipliers[order],
                 history[-1],
                 iteration,
-                resting,
+                neutral,
                 image,
             )
         if iteration == max_iterations:

@@ -1,0 +1,152 @@
+"""A friction chain's response: the measures of a periodic orbit, and a frequency sweep of orbits
+(issue 52, its first steps).
+
+:func:`orbit_measures` reads a :class:`~oscillator.orbits.chain_orbits.ChainOrbit`'s return: each
+mass's largest and smallest displacement and its peak-to-peak ``x_pp`` (the extremes exact to the
+solver's tolerance: between two steps where the velocity changes sign, the cubic through both
+ends' positions and velocities has its turn), and each friction element's and Jenkins slider's
+share of the period stuck, from the event times.  :func:`frequency_sweep` follows the orbit over
+values of a parameter (``Omega`` by default), each found by Newton from the one before, as a
+sweep up or down a test rig's band does: where the orbit it follows ends (a fold, a grazing), the
+next value starts again from a transient, and the row says so.  The continuation of every branch
+through its folds, as the article's system has, comes next (issue 52).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import InputError, OscillatorError
+from oscillator.hybrid.chain_run import ChainResult
+from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
+from oscillator.model.chains import FrictionChain
+from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
+
+__all__ = ["frequency_sweep", "orbit_measures", "turning_points"]
+
+
+def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """The positions where the velocity changes sign between two rows (or is zero at one): on the
+    quintic through both rows' position, velocity and acceleration (Hermite: exact to the step's
+    sixth power), at its turn inside the step.  ``a`` holds the accelerations of the rows before
+    and after each sign change (any value elsewhere)."""
+    found = list(x[v == 0.0])
+    for k in np.flatnonzero(v[:-1] * v[1:] < 0.0).tolist():
+        h = t[k + 1] - t[k]
+        x0, v0, a0, v1, a1 = x[k], v[k] * h, a[k] * h * h, v[k + 1] * h, a[k + 1] * h * h
+        d, e, f = x[k + 1] - x0 - v0 - a0 / 2, v1 - v0 - a0, a1 - a0
+        c3, c4, c5 = 10 * d - 4 * e + f / 2, -15 * d + 7 * e - f, 6 * d - 3 * e + f / 2
+        roots = np.roots([5 * c5, 4 * c4, 3 * c3, a0, v0])
+        inside = [r.real for r in roots if abs(r.imag) < 1e-9 and -1e-9 <= r.real <= 1 + 1e-9]
+        if inside:
+            s = min(inside, key=lambda r: abs(r - 0.5))
+            found.append(x0 + v0 * s + a0 / 2 * s**2 + c3 * s**3 + c4 * s**4 + c5 * s**5)
+    return np.array(found, dtype=float)
+
+
+def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
+    """Each mass's acceleration at the trajectory's ``rows`` (one row of masses each; nan
+    elsewhere), from the chain's field in the row's mode."""
+    chain, trajectory = run.chain, run.trajectory
+    arrays, system = arrays_of(chain), chain.system
+    states = trajectory[list(system.state)].to_numpy(float)
+    switching = [(k, f"mode:{e.name}") for k, e in enumerate(chain.elements) if f"mode:{e.name}" in trajectory]
+    modes = trajectory[[name for _, name in switching]].to_numpy()
+    found = np.full((len(trajectory), len(system.masses)), math.nan)
+    rate = np.empty(arrays.size)
+    for row in rows.tolist():
+        mode = np.zeros(len(chain.elements))
+        mode[[k for k, _ in switching]] = modes[row]
+        chain_derivative(float(trajectory.t.iloc[row]), states[row], rate, pack(arrays, mode))
+        found[row] = rate[1 : 2 * len(system.masses) : 2]
+    return found
+
+
+def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
+    """The measures of one return of ``orbit``: ``x_max:<mass>``, ``x_min:<mass>``,
+    ``x_pp:<mass>`` (m) for each mass; ``stuck:<element>`` for each friction element and Jenkins
+    slider: the share of the return it holds (0 to 1)."""
+    return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
+
+
+def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
+    chain, trajectory = run.chain, run.trajectory
+    t = trajectory.t.to_numpy(float)
+    velocities = trajectory[[chain.system.velocity(m) for m in chain.system.masses]].to_numpy(float)
+    turns = np.flatnonzero((velocities[:-1] * velocities[1:] < 0.0).any(axis=1))
+    accelerations = _accelerations(run, np.union1d(turns, turns + 1))
+    found: dict[str, float] = {}
+    for i, mass in enumerate(chain.system.masses):
+        x = trajectory[chain.system.position(mass)].to_numpy(float)
+        extremes = np.concatenate([x[[0, -1]], turning_points(t, x, velocities[:, i], accelerations[:, i])])
+        found[f"x_max:{mass}"], found[f"x_min:{mass}"] = float(extremes.max()), float(extremes.min())
+        found[f"x_pp:{mass}"] = found[f"x_max:{mass}"] - found[f"x_min:{mass}"]
+    events = run.events
+    for element in chain.elements:
+        if element.type not in ("friction", "jenkins"):
+            continue
+        mode = trajectory[f"mode:{element.name}"].to_numpy()
+        mine = events[(events.element == element.name) & (events.mode_before != events.mode_after)]
+        times = [start, *mine.t.to_numpy(float), start + span]
+        held = [mode[0] == 0, *(mine.mode_after.to_numpy() == 0)]
+        found[f"stuck:{element.name}"] = sum(b - a for a, b, h in zip(times, times[1:], held, strict=False) if h) / span
+    return found
+
+
+def frequency_sweep(
+    chain: FrictionChain,
+    values: Sequence[float] | np.ndarray,
+    *,
+    param: str = "Omega",
+    transient: int = 100,
+    max_iterations: int = 25,
+    progress: Callable[[int, int], None] | None = None,
+) -> pd.DataFrame:
+    """The period-1 orbit of ``chain`` at each of ``values`` of ``param`` (a name of
+    :meth:`~oscillator.model.chains.FrictionChain.parameter_names`), in the order given (a sweep
+    up, or down), each from the orbit before it; one row per value: the value, ``status``
+    (``"followed"``, ``"restarted"`` after a transient where the orbit followed was lost, or
+    ``"failed"`` with ``message``), ``stable`` and ``largest`` (the largest multiplier's modulus),
+    the measures (:func:`orbit_measures`) and the orbit's state at the section.  ``progress(done,
+    total)`` is told after each value.  A name the chain has not, or a value it refuses, is refused
+    before any orbit is sought (the field named)."""
+    values = np.asarray(values, dtype=float).ravel()
+    if not len(values) or not np.isfinite(values).all():
+        raise InputError("values must be finite numbers, at least one", field="values")
+    points = [chain.with_values({param: value}) for value in values.tolist()]  # each checked, the field named
+    names = chain.system.state
+    rows: list[dict[str, object]] = []
+    guess: np.ndarray | None = None
+    for k, (value, point) in enumerate(zip(values.tolist(), points, strict=True)):
+        row: dict[str, object] = {param: value}
+        try:
+            orbit, row["status"] = _followed(point, guess, transient, max_iterations)
+        except OscillatorError as error:
+            rows.append(row | {"status": "failed", "message": str(error), "stable": False, "largest": math.nan})
+            guess = None
+        else:
+            largest = float(np.max(np.abs(orbit.multipliers), initial=0.0))
+            rows.append(row | {"message": "", "stable": orbit.stable, "largest": largest} | orbit_measures(orbit))
+            rows[-1] |= dict(zip(names, orbit.state.tolist(), strict=True))
+            guess = orbit.state
+        if progress is not None:
+            progress(k + 1, len(values))
+    return pd.DataFrame(rows)
+
+
+def _followed(
+    point: FrictionChain, guess: np.ndarray | None, transient: int, max_iterations: int
+) -> tuple[ChainOrbit, str]:
+    """The orbit from ``guess`` (the one before), or after a transient where there is none or it
+    is lost; and which."""
+    if guess is not None:
+        try:
+            return find_chain_orbit(point, guess, transient=0, max_iterations=max_iterations), "followed"
+        except OscillatorError:
+            pass
+    found = find_chain_orbit(point, transient=transient, max_iterations=max_iterations)
+    return found, "restarted" if guess is not None else "followed"
