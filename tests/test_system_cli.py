@@ -144,3 +144,33 @@ def test_check_compares_a_systems_expected_events(tmp_path):
     wrong.write_text(text.replace('element = "belt under m3"', 'element = "belt under m4"'))
     refused = _invoke("check", str(wrong))
     assert refused.exit_code == 2 and "did you mean 'belt under m3'" in refused.stderr
+
+
+def test_orbit_of_a_system_file_prints_the_orbit_find_orbit_finds():
+    """``oscillator orbit FILE --set platform.F=0.5``: the state at the section, to the ten digits
+    printed, is find_chain_orbit's; the multipliers' moduli too; what is neutral is said."""
+    import numpy as np
+
+    from oscillator.io.chains import load_system
+    from oscillator.orbits.chain_orbits import find_chain_orbit
+
+    done = _invoke("orbit", str(BLADE), "--set", "platform.F=0.5", "--transient", "60")
+    assert done.exit_code == 0, done.stderr
+    chain = load_system(BLADE).with_values({"platform.F": 0.5})
+    orbit = find_chain_orbit(chain, transient=60)
+    state = ", ".join(f"{n} = {v:.10g}" for n, v in zip(chain.system.state, orbit.state, strict=True))
+    assert state in done.stdout and "period-1 orbit at t = 0 s" in done.stdout
+    for mu in orbit.multipliers:
+        assert f"{abs(mu):.6e}" in done.stdout
+    assert "neutral in z:platform" in done.stdout and orbit.free == ("x:blade", "v:blade", "x:damper", "v:damper")
+    assert np.all(np.abs(orbit.multipliers) < 1)
+
+
+def test_orbit_of_a_system_file_refuses_a_guess_of_another_size_and_says_when_newton_fails():
+    done = _invoke("orbit", str(BLADE), "--guess", "1,2")
+    assert done.exit_code == 2 and "--guess must be 5 numbers, one for each of x:blade" in done.stderr
+    done = _invoke("orbit", str(BLADE), "--sensitivities", "platform.F")
+    assert done.exit_code == 2 and "--sensitivities takes the article's system" in done.stderr
+    conveyor = ROOT / "docs" / "systems" / "conveyor.toml"
+    done = _invoke("orbit", str(conveyor), "--transient", "10", "--max-iterations", "3")
+    assert done.exit_code == 1 and "did not converge in 3 steps" in done.stderr and "Traceback" not in done.stderr

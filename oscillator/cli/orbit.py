@@ -97,12 +97,21 @@ def orbit(
     and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md).
 
     \b
+    A system file (docs/systems.md) takes --set by its names (platform.F=0.5) and --guess as one
+    number per name of its state (x:blade,v:blade,...,z:platform).
+
+    \b
     Examples:
       oscillator orbit instance-1
       oscillator orbit instance-1 --set Q2=70.5
       oscillator orbit instance-1 --set Q2=70.5 --transient 20 --max-iterations 40
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.5 --sensitivities d1,K3,Omega
+      oscillator orbit docs/systems/blade-damper.toml --set platform.F=0.5 --transient 60
     """
+    from oscillator.cli.system import orbit_system
+
+    if orbit_system(case, set_, period, guess, transient, section, max_iterations, sensitivities):
+        return
     try:
         resolved = case_from(case, None, set_)
         start = _guess(guess)

@@ -8,8 +8,10 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 from rich import box
 from rich.table import Table
+from rich.text import Text
 
 from oscillator.cli.console import fail, load, message, out, say
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
@@ -20,7 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
 
-__all__ = ["run_system", "show_system"]
+__all__ = ["orbit_system", "run_system", "show_system"]
 
 #: Options of ``run`` that act on the article's cases only, and what to do instead.
 _CASE_ONLY = {
@@ -179,6 +181,77 @@ def show_system(path: Path, figure: Path | None) -> None:
     with atomic_path(target) as temporary:
         schematic_figure(chain).savefig(temporary, format=target.suffix[1:], dpi=120, bbox_inches="tight")
     say("schematic written to ", (str(target), "bold"))
+
+
+def _state(text: str | None, names: tuple[str, ...]) -> list[float] | None:
+    """``--guess`` as one number per name of the system's state."""
+    from oscillator.io.expressions import parse_value
+
+    if text is None:
+        return None
+    parts = [part.strip() for part in text.split(",")]
+    values = [parse_value(part, field="--guess") for part in parts] if len(parts) == len(names) else []
+    if not values or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
+        raise InputError(
+            f"--guess must be {len(names)} numbers, one for each of {', '.join(names)}, got {printable(text)}",
+            field="--guess",
+        )
+    return [float(v) for v in values]
+
+
+def orbit_system(
+    target: str,
+    assignments: list[str] | None,
+    period: int,
+    guess: str | None,
+    transient: int | None,
+    section: float | None,
+    max_iterations: int,
+    sensitivities: str | None,
+) -> bool:
+    """``oscillator orbit FILE`` if ``target`` is a system file: the chain's periodic orbit
+    (:func:`~oscillator.orbits.chain_orbits.find_chain_orbit`), its multipliers and events; whether
+    it was one."""
+    from oscillator.io.chains import load_system, system_path
+
+    path = system_path(target)
+    if path is None:
+        return False
+    if sensitivities:
+        raise fail("--sensitivities takes the article's system for now; a system file's derivatives come next")
+    try:
+        from oscillator.orbits.chain_orbits import find_chain_orbit
+
+        chain = changed(load_system(path), assignments or [])
+        start = _state(guess, chain.system.state)
+        found = find_chain_orbit(
+            chain,
+            None if start is None else np.asarray(start),
+            period=period,
+            section=section,
+            transient=100 if transient is None else transient,
+            max_iterations=max_iterations,
+        )
+    except OscillatorError as error:
+        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted", code=130) from None
+    title = printable(chain.title or path.stem)
+    out.print(Text(f"{title}: period-{found.period} orbit at t = {found.section:g} s (the section)"))
+    state = ", ".join(f"{printable(n)} = {v:.10g}" for n, v in zip(chain.system.state, found.state, strict=True))
+    out.print(Text(f"  {state}"))
+    out.print(Text(f"  residual {found.residual:.1e} after {found.iterations} Newton step(s); {found.verdict}"))
+    table = Table(title="Floquet multipliers", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    for column in ("multiplier", "modulus"):
+        table.add_column(column, justify="right")
+    for mu in found.multipliers:
+        table.add_row(f"{mu.real:+.6e} {mu.imag:+.6e}i", f"{abs(mu):.6e}")
+    out.print(table)
+    if found.events.empty:
+        out.print(Text("no switching event over the period (every element keeps its mode)"))
+    else:
+        out.print(_events_table(found.events))
+    return True
 
 
 def check_system(path: Path) -> None:
