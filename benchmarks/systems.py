@@ -7,7 +7,9 @@
 2. the article's system on both paths, alternating, 5 repeats, medians: `simulate` (the built-in
    path) against `simulate_chain(article_chain(...))`, Instance 1 over 200 forcing periods with
    the trajectory at every step (the chain path records it always), and their ratio;
-3. throughput of the three docs/systems/ machines: forcing periods and events per second.
+3. throughput of the three docs/systems/ machines: forcing periods and events per second;
+4. the friction damper's orbit (Newton, differences for the map's derivative) and its frequency
+   sweep over docs/systems.md's band at three normal loads (11 values each), warm, medians of 3.
 
 Usage: python benchmarks/systems.py
 """
@@ -91,6 +93,25 @@ def machines() -> list[tuple[str, float, float, int]]:
     return rows
 
 
+def orbits(repeats: int = 3) -> tuple[float, float, int]:
+    import numpy as np
+
+    import oscillator
+
+    chain = oscillator.load_system(ROOT / "docs" / "systems" / "blade-damper.toml")
+    oscillator.find_orbit(chain, transient=60)  # warm
+    found, swept, band = [], [], np.linspace(0.6, 1.6, 11)
+    for _ in range(repeats):
+        started = time.perf_counter()
+        orbit = oscillator.find_orbit(chain, transient=60)
+        found.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        for load in (0.0, 0.3, 3.0):
+            oscillator.frequency_sweep(chain.with_values({"platform.F": load}), band)
+        swept.append(time.perf_counter() - started)
+    return statistics.median(found), statistics.median(swept), orbit.iterations
+
+
 def main() -> None:
     print(f"friction chains, {dt.date.today()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
     first_run(0)  # fills numba's cache if it is not
@@ -108,6 +129,10 @@ def main() -> None:
     print("3. docs/systems/ machines over 100 forcing periods")
     for name, periods, events, count in machines():
         print(f"   {name}: {periods:.0f} periods/s, {events:.0f} events/s ({count} events)")
+    found, swept, steps = orbits()
+    print("4. the blade's friction damper (medians of 3, warm)")
+    print(f"   find_orbit after 60 periods' transient: {found:.3f} s ({steps} Newton steps)")
+    print(f"   frequency_sweep, 3 normal loads x 11 values of Omega: {swept:.2f} s")
 
 
 if __name__ == "__main__":
