@@ -519,3 +519,32 @@ def test_sweep_settings_that_could_not_finish_are_refused(changes, fragment):
 
     with pytest.raises(OscillatorError, match=re.escape(fragment)):
         SweepSettings(**{"param": "Omega", "start": 1.5, "stop": 1.7, **changes})
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the drop this test makes
+def test_a_ctrl_c_that_python_drops_in_a_del_still_stops_the_run():
+    """SIGINT's ``KeyboardInterrupt`` raised inside an object's ``__del__`` is dropped by Python
+    ("Exception ignored in ..."): a garbage collection runs one anywhere (llvmlite's, while numba
+    loads its kernels, lost a Ctrl-C once). The run still stops at the engine's next return, with
+    the run so far."""
+    import os
+
+    from oscillator.errors import Interrupted
+
+    class Dropping:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):  # the handler runs here, between bytecodes: its exception is dropped
+                pass
+
+    told = []
+
+    def progress(t):
+        if not told:
+            told.append(t)
+            Dropping()
+
+    with pytest.raises(Interrupted) as stopped:
+        simulate("instance-1", t_end=2000.0, progress=progress)
+    partial = stopped.value.result
+    assert partial.status.value == "interrupted" and told[0] <= partial.final_state[0] < 2000.0

@@ -20,6 +20,7 @@ from oscillator.hybrid.result import Result, Status
 from oscillator.hybrid.supervisor import CallbackRaised, Supervisor
 from oscillator.io.cases import Case, resolve_case
 from oscillator.io.chains import load_system, system_path
+from oscillator.io.signals import interrupts_heard
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SolverOptions, as_float
 from oscillator.text import shown
@@ -267,12 +268,20 @@ def _run(case: Case, integrator: Engine, save: SaveAt, progress: Callable[[float
     p, options = case.parameters, case.options
     counted()
     policy = recording(save, max_rows=options.max_trajectory_rows, period=p.period)
-    supervisor = Supervisor(
-        p, options, integrator, policy, progress=progress, segments=save.segments, derivative=save.derivative
-    )
     record = RunRecord()
     try:
-        supervisor.run(case.initial.t0, case.initial.y, case.t_end, record)
+        with interrupts_heard() as heard:
+            supervisor = Supervisor(
+                p,
+                options,
+                integrator,
+                policy,
+                progress=progress,
+                segments=save.segments,
+                derivative=save.derivative,
+                interrupted=heard,
+            )
+            supervisor.run(case.initial.t0, case.initial.y, case.t_end, record)
     except CallbackRaised as raised:
         raise raised.error from None
     except SimulationFailed as error:

@@ -90,6 +90,7 @@ class Supervisor:
         progress: Callable[[float], None] | None = None,
         segments: bool = False,
         derivative: bool = False,
+        interrupted: Callable[[], bool] | None = None,
     ) -> None:
         #: The state's length: 8, or 24 with the derivative (an engine of the user's without a
         #: ``size`` integrates the 8 of the state and the works).
@@ -101,6 +102,9 @@ class Supervisor:
         self.engine = engine
         self.recording = recording
         self.progress = progress
+        #: Whether a Ctrl-C came (:func:`~oscillator.io.signals.interrupts_heard`), asked at each
+        #: return of the engine: one Python dropped where it was raised is raised again here.
+        self.interrupted = interrupted
         self.segments = segments
         self.derivative = derivative
         #: The segment under way: its start and the event rows written since (when segments are kept).
@@ -212,6 +216,8 @@ class Supervisor:
                 steps.count(step.kind is StepKind.ROOT, step.t, step.y, mode)
             self._grid_idle = self._grid_idle and step.kind is StepKind.ROOT
         record.reached(step.t, step.y, mode)
+        if self.interrupted is not None and self.interrupted():
+            raise KeyboardInterrupt
         if self.progress is not None:
             self._report_progress(step.t)
         return step

@@ -2,6 +2,10 @@
 
 * :func:`interrupts_deferred` holds Ctrl-C while files are being written, so that a finished
   computation reaches the disk whole; the interrupt is raised when the block ends.
+* :func:`interrupts_heard` raises Ctrl-C at once, as Python does, and also remembers it: a
+  ``KeyboardInterrupt`` raised where Python drops it (in an object's ``__del__``, which a garbage
+  collection runs anywhere: llvmlite's, while numba loads its kernels) is raised again where the
+  caller next asks.
 * :func:`interrupts_ignored` ignores SIGINT while worker processes are spawned: they are born
   ignoring it, so a Ctrl-C that reaches a worker before it is ready (its imports take seconds)
   cannot print a traceback.
@@ -20,9 +24,9 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
-__all__ = ["interrupts_deferred", "interrupts_ignored", "prepare_worker", "quiet_resource_tracker"]
+__all__ = ["interrupts_deferred", "interrupts_heard", "interrupts_ignored", "prepare_worker", "quiet_resource_tracker"]
 
 #: How often a worker checks that its parent is alive (s).
 _WATCH_INTERVAL = 0.25
@@ -46,6 +50,28 @@ def interrupts_deferred() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
     if received:
         raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def interrupts_heard() -> Iterator[Callable[[], bool]]:
+    """Raise ``KeyboardInterrupt`` at SIGINT, as Python's own handler does, and yield a function
+    that says whether one came during the block (a caller that asks it where it can stop raises
+    the interrupt again: one dropped in a ``__del__`` is not lost).  Where SIGINT is not Python's
+    own (a worker ignoring it, a block deferring it, a program's handler), it is left as it is."""
+    if not _main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield lambda: False
+        return
+    heard: list[int] = []
+
+    def handler(signum: int, frame: object) -> None:
+        heard.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield lambda: bool(heard)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
