@@ -32,7 +32,8 @@ def pytest_configure(config):
     """On a fresh install (numba's cache empty), the kernels compiled once, before the test workers
     start (this runs in pytest-xdist's controller first): both workers compiled all of them at once
     (CI's default run: 217 s, against 162 s with the cache filled).  The compiled landing's kernels
-    too, as the analyses compile them before their own workers (``before_workers``)."""
+    too, as the analyses compile them before their own workers (``before_workers``), and the
+    friction chains'."""
     from oscillator.compiled import CACHE, kernels_cached
 
     if hasattr(config, "workerinput") or not CACHE or kernels_cached():
@@ -42,6 +43,27 @@ def pytest_configure(config):
 
     compile_kernels(beside=True, show=False)
     _compile_landing()
+    _compile_chains()
+
+
+def _compile_chains() -> None:
+    """The friction chains' kernels (field, roots, CVODE's callbacks; the field called from Python
+    for the orbit's measures): about 6 s a worker, cold."""
+    from oscillator.model.chains import FrictionChain
+    from oscillator.orbits.chain_orbits import find_chain_orbit
+    from oscillator.orbits.chain_response import orbit_measures
+
+    chain = (
+        FrictionChain(Omega=1.0)
+        .mass("m", 1.0, v=1.0)
+        .spring("m", k=1.0)
+        .damper("m", c=0.5)
+        .force("m", Q=1.0)
+        .friction("m", mu_s=0.2, mu_k=0.1)
+        .jenkins("m", kt=1.0, F=0.1)
+        .stop("m", side="right", at=5.0, K=10.0)
+    )
+    orbit_measures(find_chain_orbit(chain, transient=5))
 
 
 #: A system with every nonlinear and contact term off; stops far away.
