@@ -114,6 +114,8 @@ def shrunk(arguments: list[str]) -> list[str]:
             arguments = _set(arguments, option, value)
         if "--no-plots" not in arguments:  # tests/test_attractors.py draws them; `report` on its folder too
             arguments = [*arguments, "--no-plots"]
+    elif command == "frc" and arguments[1].startswith("docs/systems/"):  # a system file's sweeps: three values
+        arguments = _set(_set(arguments, "--sweep", "3"), "--transient", "40")
     elif command == "frc":  # two seeds, short branches, the sweeps' two ends, in this process
         for option, value in (("--seeds", "2"), ("--sweep", "2"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)

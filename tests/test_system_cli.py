@@ -174,3 +174,39 @@ def test_orbit_of_a_system_file_refuses_a_guess_of_another_size_and_says_when_ne
     conveyor = ROOT / "docs" / "systems" / "conveyor.toml"
     done = _invoke("orbit", str(conveyor), "--transient", "10", "--max-iterations", "3")
     assert done.exit_code == 1 and "did not converge in 3 steps" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_frc_of_a_system_file_sweeps_up_and_down_and_writes_its_folder(tmp_path):
+    """``oscillator frc FILE --param Omega LOW HIGH --sweep N``: the folder holds both sweeps, each
+    row the orbit frequency_sweep finds there (the same table), the system as swept, run.json and
+    the figure; what it prints is the table's largest amplitude."""
+    import numpy as np
+
+    from oscillator.io.chains import load_system
+    from oscillator.orbits.chain_response import frequency_sweep
+
+    folder = tmp_path / "frc"
+    done = _invoke("frc", str(BLADE), "--param", "Omega", "0.9", "1.1", "--sweep", "3", "--transient", "40",
+                   "--out", str(folder))  # fmt: skip
+    assert done.exit_code == 0, done.stderr
+    table = pd.read_parquet(folder / "sweeps.parquet")
+    assert list(table.direction) == ["up"] * 3 + ["down"] * 3 and list(table.Omega) == [0.9, 1.0, 1.1, 1.1, 1.0, 0.9]
+    expected = frequency_sweep(load_system(BLADE), np.linspace(0.9, 1.1, 3), transient=40)
+    np.testing.assert_allclose(table["x_max:blade"][:3], expected["x_max:blade"], rtol=0, atol=1e-12)
+    info = json.loads((folder / "run.json").read_text())
+    assert info["kind"] == "system-frc" and info["span"] == [0.9, 1.1] and info["failed"] == 0
+    assert (folder / "figures" / "frequency.png").stat().st_size > 0 and (folder / "system.toml").is_file()
+    worst = expected.loc[expected["x_max:blade"].idxmax()]
+    assert f"sweep up: largest x_max of blade {worst['x_max:blade']:.6g} m at Omega = {worst.Omega:.6g}" in done.stdout
+
+
+def test_frc_of_a_system_file_refuses_the_options_of_cases_and_bad_spans_creating_nothing(tmp_path):
+    folder = tmp_path / "frc"
+    for extra, said in ((["--seeds", "3"], "--seeds applies to the article's cases"),
+                        (["--sweep", "1"], "--sweep must be 2 to 100000"),
+                        (["--set", "platform.F=-1"], "F must not be negative")):  # fmt: skip
+        done = _invoke("frc", str(BLADE), "--param", "Omega", "0.9", "1.1", *extra, "--out", str(folder))
+        assert done.exit_code == 2 and said in done.stderr, (extra, done.stderr)
+        assert not folder.exists()
+    done = _invoke("frc", str(BLADE), "--param", "platform.kt", "-1", "2", "--out", str(folder))
+    assert done.exit_code == 2 and "kt" in done.stderr and not folder.exists()

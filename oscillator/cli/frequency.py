@@ -37,6 +37,22 @@ __all__ = ["frc"]
 SpanOption = tuple[str, float, float]
 
 
+#: The options of ``frc`` for the article's cases, at their defaults, in the order ``frc`` reads them
+#: (a system file takes none of them).
+_DEFAULTS: dict[str, object] = {
+    "--seeds": 5,
+    "--starts": 1,
+    "--max-points": 3000,
+    "--record": None,
+    "--full-transient": False,
+    "--engine": "dop853",
+    "--workers": None,
+    "--scheduler": None,
+    "--period": 1,
+    "--measure": "x_pp",
+}
+
+
 @command(125, "The frequency response: every branch of periodic orbits, and slow sweeps up and down.")
 def frc(
     case: CaseArgument,
@@ -72,14 +88,23 @@ def frc(
 
     Writes points.parquet, bifurcations.parquet, sweeps.parquet, figures/frequency-*.png (the
     --measure of each mass, and the impact velocities where there are contacts) and a report.
-    Parts are kept as they finish: the same command with the same --out resumes.
+    Parts are kept as they finish: the same command with the same --out resumes.  A system file
+    (docs/systems.md) is swept up and down over --sweep values, its orbit followed from value to
+    value: sweeps.parquet, figures/frequency.png.
 
     \b
     Examples:
       oscillator frc instance-1 --param Omega 1.3 1.85 --out runs/frc
       oscillator frc instance-1 --param Omega 1.5 1.7 --seeds 3 --sweep 21 --measure v_peak
       oscillator frc instance-1 --set Q2=71.165 --param Omega 1.5999 1.6001 --starts 16 --out runs/frc-window
+      oscillator frc docs/systems/blade-damper.toml --param Omega 0.6 1.6 --sweep 21 --out runs/blade-frc
     """
+    from oscillator.cli.system import frc_system
+
+    given = (seeds, starts, max_points, record, full_transient, engine, workers, scheduler, period, measure)
+    case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
+    if frc_system(case, set_, param, sweep, transient, out_dir, case_only, not no_plots, quiet):
+        return
     with refusing():
         resolved = case_from(case, None, set_)
         name, low, high = param

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pandas as pd
 from rich import box
 from rich.table import Table
 from rich.text import Text
@@ -22,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
 
-__all__ = ["orbit_system", "run_system", "show_system"]
+__all__ = ["frc_system", "orbit_system", "run_system", "show_system"]
 
 #: Options of ``run`` that act on the article's cases only, and what to do instead.
 _CASE_ONLY = {
@@ -252,6 +253,87 @@ def orbit_system(
     else:
         out.print(_events_table(found.events))
     return True
+
+
+def frc_system(
+    target: str,
+    assignments: list[str] | None,
+    param: tuple[str, float, float],
+    sweep: int,
+    transient: int | None,
+    out_dir: Path | None,
+    case_only: list[str],
+    plots: bool,
+    quiet: bool,
+) -> bool:
+    """``oscillator frc FILE`` if ``target`` is a system file: the chain's period-1 orbit swept up
+    and down ``param``'s span over ``sweep`` values (:func:`~oscillator.orbits.chain_response.
+    frequency_sweep`), the folder written (:mod:`oscillator.report.chain_frequency`), the jumps
+    and the failed values said; whether it was one."""
+    from oscillator.io.chains import load_system, system_path
+
+    path = system_path(target)
+    if path is None:
+        return False
+    name, low, high = param
+    try:
+        if case_only:
+            raise InputError(
+                f"{case_only[0]} applies to the article's cases; a system file's frequency response is a sweep up "
+                "and down (--sweep N values) for now",
+                field=case_only[0],
+            )
+        if not (2 <= sweep <= 100_000) or not low < high:
+            raise InputError(f"--sweep must be 2 to 100000 values over LOW < HIGH, got {sweep} over {low:g}..{high:g}")
+        if out_dir is not None:
+            check_new(out_dir, option="--out")
+        load("oscillator.orbits.chain_response", notice=not quiet)
+        from oscillator.orbits.chain_response import frequency_sweep
+        from oscillator.report.runs import claim_output
+
+        chain = changed(load_system(path), assignments or [])
+        chain.with_values({name: low}).with_values({name: high})  # both ends checked, the field named
+        claim = claim_output(out_dir, f"{path.stem}-frc")
+    except OscillatorError as error:
+        raise fail(message(error)) from None
+    try:
+        values = np.linspace(low, high, sweep)
+        periods = 100 if transient is None else transient
+        up = frequency_sweep(chain, values, param=name, transient=periods).assign(direction="up")
+        down = frequency_sweep(chain, values[::-1], param=name, transient=periods).assign(direction="down")
+    except BaseException:
+        claim.abandon()
+        raise
+    table = pd.concat([up, down], ignore_index=True)
+    from oscillator.report.chain_frequency import finish_chain_sweeps, write_chain_sweeps
+
+    folder = write_chain_sweeps(table, chain, name, claim, command=["oscillator", *sys.argv[1:]])
+    _said_sweeps(table, chain, name, quiet)
+    if plots:
+        try:
+            finish_chain_sweeps(folder, table, chain, name)
+        except Exception as error:  # the tables are safe
+            raise fail(
+                f"the figure could not be drawn ({type(error).__name__}: {error}); the tables are in {folder}", 1
+            ) from None
+    say("written to ", (printable(str(folder)), "bold"))
+    return True
+
+
+def _said_sweeps(table: pd.DataFrame, chain: FrictionChain, name: str, quiet: bool) -> None:
+    """Each sweep's largest displacement of each mass and where it jumps; the values with no orbit."""
+    if quiet:
+        return
+    for direction, rows in table.groupby("direction", sort=False):
+        found = rows[rows.status != "failed"]
+        for mass in chain.system.masses:
+            if len(found):
+                worst = found.loc[found[f"x_max:{mass}"].idxmax()]
+                largest = f"{worst[f'x_max:{mass}']:.6g} m at {name} = {worst[name]:.6g}"
+                out.print(Text(f"  sweep {direction}: largest x_max of {printable(str(mass))} {largest}"))
+        failed = ", ".join(f"{v:.6g}" for v in rows[rows.status == "failed"][name])
+        if failed:
+            out.print(Text(f"  sweep {direction}: no orbit found at {name} = {failed}"))
 
 
 def check_system(path: Path) -> None:

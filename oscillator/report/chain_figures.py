@@ -21,13 +21,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.hybrid.chain_run import ChainResult
 
-__all__ = ["motion_figure", "schematic_figure"]
+__all__ = ["motion_figure", "plain_label", "schematic_figure"]
 
 #: Colours: each quantity's, and the shading of stuck and closed intervals.
 _X, _V, _STUCK, _CLOSED = "#1f4e9c", "#c4512b", "#d9d9d9", "#f4c7c3"
 
 
-def _label(text: str) -> str:
+def plain_label(text: str) -> str:
     """A name as plain text for matplotlib (no mathtext)."""
     return printable(text).replace("$", r"\$")
 
@@ -65,7 +65,7 @@ def motion_figure(result: ChainResult) -> Figure:
         twin.plot(t, v, color=_V, lw=0.9, ls="--", label="v (m/s)")
         twin.set_ylabel("v (m/s)", color=_V)
         ax.set_ylabel("x (m)", color=_X)
-        ax.set_title(f"mass {_label(mass.name)} (m = {mass.m:g} kg)", loc="left", fontsize=10)
+        ax.set_title(f"mass {plain_label(mass.name)} (m = {mass.m:g} kg)", loc="left", fontsize=10)
         handles = ax.get_legend_handles_labels()[0] + twin.get_legend_handles_labels()[0]
         ax.legend(handles=handles, loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=8, ncol=4, frameon=False)
     for ax, element in zip(axes[len(chain.masses) :], sliders, strict=True):
@@ -76,10 +76,12 @@ def motion_figure(result: ChainResult) -> Figure:
         for level in (-element.values["F"], element.values["F"]):
             ax.axhline(level, color="0.4", lw=0.8, ls=":")
         ax.set_ylabel("force (N)")
-        ax.set_title(f"Jenkins slider {_label(element.name)} (F = {element.values['F']:g} N)", loc="left", fontsize=10)
+        ax.set_title(
+            f"Jenkins slider {plain_label(element.name)} (F = {element.values['F']:g} N)", loc="left", fontsize=10
+        )
         ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=8, ncol=2, frameon=False)
     axes[-1].set_xlabel("t (s)")
-    fig.suptitle(_label(chain.title or "friction chain"), fontsize=11)
+    fig.suptitle(plain_label(chain.title or "friction chain"), fontsize=11)
     return fig
 
 
@@ -119,7 +121,7 @@ def schematic_figure(chain: FrictionChain) -> Figure:
     ax.plot([0.0, place[chain.masses[-1].name] + 1.6], [0.0, 0.0], color="k", lw=1.2)
     for m in chain.masses:
         ax.add_patch(Rectangle((place[m.name] - 0.4, 0.05), 0.8, 0.8, facecolor="#cfe0f5", edgecolor="k", lw=1.2))
-        ax.text(place[m.name], 0.45, f"{_label(m.name)}\n{m.m:g} kg", ha="center", va="center", fontsize=8)
+        ax.text(place[m.name], 0.45, f"{plain_label(m.name)}\n{m.m:g} kg", ha="center", va="center", fontsize=8)
     used: dict[tuple[str, str], int] = {}
     for element in chain.elements:
         _draw(ax, chain, element, place, used)
@@ -127,7 +129,7 @@ def schematic_figure(chain: FrictionChain) -> Figure:
     ax.set_ylim(-0.55, 2.4)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title(_label(chain.title or "friction chain"), fontsize=10)
+    ax.set_title(plain_label(chain.title or "friction chain"), fontsize=10)
     return fig
 
 
@@ -140,7 +142,7 @@ def _values(element) -> str:  # type: ignore[no-untyped-def]
 def _draw(ax: Axes, chain: FrictionChain, element, place: dict[str, float], used: dict[tuple[str, str], int]) -> None:  # type: ignore[no-untyped-def]
     """One element of the schematic (the rows of a pair's elements stacked upwards)."""
     x = place[element.on]
-    label = f"{_label(element.name)}: {_label(_values(element))}"
+    label = f"{plain_label(element.name)}: {plain_label(_values(element))}"
     if element.type == "force":
         ax.add_patch(FancyArrowPatch((x - 0.3, 2.0), (x + 0.3, 2.0), arrowstyle="-|>", mutation_scale=12, color="#a33"))
         ax.text(x, 2.08, label, ha="center", va="bottom", fontsize=6.5, color="#a33")

@@ -1,0 +1,113 @@
+"""A friction chain's frequency sweeps (``oscillator frc FILE``): the folder and its figure.
+
+::
+
+    sweeps.csv / sweeps.parquet   one row per value and direction (up, down): the orbit's status,
+                                  stability, largest multiplier, measures and state
+    system.toml                   the system as swept
+    run.json                      the parameter, its span, the values, the failed ones
+    figures/frequency.png, .svg   each mass's largest displacement up and down the band (unstable
+                                  orbits hollow), and each friction element's and slider's stuck share
+
+The tables and ``run.json`` are written whole, then the folder put in place; the figure after (its
+failure keeps the tables).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from oscillator.io.chains import chain_to_toml
+from oscillator.io.files import FolderClaim
+from oscillator.model.chains import FrictionChain
+from oscillator.report.chain_figures import plain_label
+from oscillator.report.runs import json_text, run_metadata
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+__all__ = ["sweep_figure", "write_chain_sweeps"]
+
+#: How each direction is drawn: line style and marker.
+_STYLE = {"up": ("-", "o"), "down": ("--", "s")}
+
+
+def write_chain_sweeps(
+    table: pd.DataFrame,
+    chain: FrictionChain,
+    param: str,
+    claim: FolderClaim,
+    *,
+    formats: str = "both",
+    command: list[str] | None = None,
+) -> Path:
+    """Write the sweeps' table, ``system.toml`` and ``run.json`` and put the folder in place; on
+    any failure nothing is left behind.  The folder's path."""
+    temporary = claim.temporary
+    try:
+        if formats in ("csv", "both"):
+            table.to_csv(temporary / "sweeps.csv", index=False)
+        if formats in ("parquet", "both"):
+            table.to_parquet(temporary / "sweeps.parquet", index=False)
+        (temporary / "system.toml").write_text(chain_to_toml(chain), encoding="utf-8")
+        values = table[table.direction == "up"][param]
+        info: dict[str, Any] = {
+            "kind": "system-frc",
+            "title": chain.title,
+            "param": param,
+            "span": [float(values.min()), float(values.max())],
+            "values": len(values),
+            "failed": int((table.status == "failed").sum()),
+            **run_metadata(command),
+        }
+        (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+def sweep_figure(table: pd.DataFrame, chain: FrictionChain, param: str) -> Figure:
+    """Each mass's ``x_max`` against ``param`` up and down the band (unstable orbits hollow, failed
+    values left out), and, where the chain has friction elements or sliders, their stuck shares."""
+    from matplotlib.figure import Figure
+
+    system = chain.system
+    held = [e.name for e in chain.elements if e.type in ("friction", "jenkins")]
+    panels = len(system.masses) + (1 if held else 0)
+    fig = Figure(figsize=(9, 2.6 * panels + 0.6), layout="constrained")
+    axes = fig.subplots(panels, 1, sharex=True, squeeze=False)[:, 0]
+    for ax, mass in zip(axes, system.masses, strict=False):
+        for direction, rows in table[table.status != "failed"].groupby("direction", sort=False):
+            line, marker = _STYLE[str(direction)]
+            ax.plot(rows[param], rows[f"x_max:{mass}"], line, color="tab:blue", lw=1, label=f"sweep {direction}")
+            unstable = rows[~rows.stable.astype(bool)]
+            ax.plot(rows[param], rows[f"x_max:{mass}"], marker, color="tab:blue", ms=4, ls="none")
+            ax.plot(unstable[param], unstable[f"x_max:{mass}"], marker, mfc="white", color="tab:red", ms=6, ls="none")
+        ax.set_ylabel(f"x_max of {plain_label(str(mass))} (m)")
+        ax.set_title(f"{plain_label(str(mass))}: largest displacement over the orbit", loc="left", fontsize=9)
+        ax.legend(fontsize=8, loc="upper right")
+    if held:
+        ax = axes[-1]
+        for name in held:
+            rows = table[(table.status != "failed") & (table.direction == "up")]
+            ax.plot(rows[param], rows[f"stuck:{name}"], "-o", ms=3, lw=1, label=plain_label(name))
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_ylabel("stuck share of the period")
+        ax.set_title("friction elements and sliders (sweep up)", loc="left", fontsize=9)
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel(plain_label(param))
+    fig.suptitle(f"{plain_label(chain.title or 'friction chain')}: sweeps over {plain_label(param)}", fontsize=10)
+    return fig
+
+
+def finish_chain_sweeps(folder: Path, table: pd.DataFrame, chain: FrictionChain, param: str) -> None:
+    """The folder's figure (PNG and SVG), each file written whole."""
+    from oscillator.report.figures import save_figure
+
+    figures = folder / "figures"
+    figures.mkdir(exist_ok=True)
+    save_figure(sweep_figure(table, chain, param), figures, "frequency")
