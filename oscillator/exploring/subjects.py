@@ -123,8 +123,12 @@ class ChainSubject:
     orbits: bool = field(default=False, init=False)
     engines: tuple[str, ...] = field(default=("cvode",), init=False)
 
+    #: Each control's value as the file gives it (a change is what differs from these).
+    given: dict[str, float] = field(init=False, repr=False, compare=False)
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "outline", outline_of(self.system.checked()))
+        object.__setattr__(self, "given", {control.name: control.value for control in self.controls()})
 
     @property
     def name(self) -> str:
@@ -142,8 +146,7 @@ class ChainSubject:
         return chain_controls(self.system)
 
     def changed(self, values: dict[str, float]) -> FrictionChain:
-        given = {control.name: control.value for control in self.controls()}
-        changes = {name: value for name, value in values.items() if given.get(name) != value}
+        changes = {name: value for name, value in values.items() if self.given.get(name) != value}
         return self.system.with_values(changes).checked() if changes else self.system
 
     def scene(self, system: Explored, periods: int, *, engine: str, stop: Callable[[], bool] | None = None) -> Scene:
