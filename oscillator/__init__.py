@@ -55,6 +55,7 @@ _EXPORTS = {
     "Orbit": "oscillator.orbits.shooting",
     "find_orbit": "oscillator.orbits.shooting",
     "ChainOrbit": "oscillator.orbits.chain_orbits",
+    "ChainSensitivities": "oscillator.orbits.chain_sensitivity",
     "frequency_sweep": "oscillator.orbits.chain_response",
     "Response": "oscillator.orbits.response",
     "FrequencyResponse": "oscillator.attractors.frequency",
@@ -99,6 +100,7 @@ __all__ = [
     "Case",
     "ChainOrbit",
     "ChainResult",
+    "ChainSensitivities",
     "Curve",
     "Design",
     "EnergyAudit",
@@ -178,6 +180,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.branch import Branch
     from oscillator.orbits.chain_orbits import ChainOrbit
     from oscillator.orbits.chain_response import frequency_sweep
+    from oscillator.orbits.chain_sensitivity import ChainSensitivities
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
     from oscillator.orbits.response import Response, response

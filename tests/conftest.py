@@ -48,7 +48,8 @@ def pytest_configure(config):
 
 def _compile_chains() -> None:
     """The friction chains' kernels (field, roots, CVODE's callbacks; the field called from Python
-    for the orbit's measures): about 6 s a worker, cold."""
+    for the orbit's measures; the tangent equations and the roots' gradients of the orbits'
+    derivatives): about 6 s a worker, cold."""
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.chain_orbits import find_chain_orbit
     from oscillator.orbits.chain_response import orbit_measures
@@ -63,7 +64,9 @@ def _compile_chains() -> None:
         .jenkins("m", kt=1.0, F=0.1)
         .stop("m", side="right", at=5.0, K=10.0)
     )
-    orbit_measures(find_chain_orbit(chain, transient=5))
+    orbit = find_chain_orbit(chain, transient=5)
+    orbit_measures(orbit)
+    orbit.sensitivities("Omega")
 
 
 #: A system with every nonlinear and contact term off; stops far away.

@@ -130,12 +130,13 @@ def test_bad_input_and_a_motion_without_an_orbit_are_refused():
 
 def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, capsys):
     """docs/systems.md's ```python blocks run as shown (in a fresh folder holding docs/systems/, as
-    the repository does), and the orbit's printed lines are those the page says."""
+    the repository does), and the orbit's, its sensitivities' and the sweeps' printed lines are
+    those the page says."""
     import shutil
 
     text = (SYSTEMS.parent / "systems.md").read_text(encoding="utf-8")
     blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     shutil.copytree(SYSTEMS, tmp_path / "docs" / "systems")
     monkeypatch.chdir(tmp_path)
     for block in blocks:
@@ -143,7 +144,9 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
     printed = capsys.readouterr().out.splitlines()
     assert printed[0] == "stable" and printed[1] == "['0.9388', '0.7622', '0.3493', '0.3493', '0.0000']"
     assert "slider_slips" in printed[3] and printed[3].split()[1] == "0.137144"
-    said = [line.removeprefix("# ") for line in blocks[2].splitlines() if line.startswith("# F = ")]
+    derivative = next(line.removeprefix("# ") for line in blocks[2].splitlines() if line.startswith("# {"))
+    assert derivative in printed
+    said = [line.removeprefix("# ") for line in blocks[3].splitlines() if line.startswith("# F = ")]
     assert printed[-3:] == said and len(said) == 3
 
 

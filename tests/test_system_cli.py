@@ -166,11 +166,29 @@ def test_orbit_of_a_system_file_prints_the_orbit_find_orbit_finds():
     assert np.all(np.abs(orbit.multipliers) < 1)
 
 
+def test_orbit_of_a_system_file_prints_its_sensitivities_by_element_and_field():
+    """``--sensitivities platform.F,Omega``: the tables hold the orbit's state and measures with
+    their derivatives, to the six digits printed, as ``orbit.sensitivities`` gives them."""
+    from oscillator.io.chains import load_system
+    from oscillator.orbits.chain_orbits import find_chain_orbit
+
+    done = _invoke("orbit", str(BLADE), "--transient", "60", "--sensitivities", "platform.F,Omega")
+    assert done.exit_code == 0, done.stderr
+    found = find_chain_orbit(load_system(BLADE), transient=60).sensitivities(["platform.F", "Omega"])
+    lines = done.stdout.splitlines()
+    for frame in (found.state, found.measures):
+        for name, values in frame.iterrows():
+            row = next(line.split() for line in lines if line.split()[:1] == [name] and "=" not in line)
+            assert row[1:] == [f"{value:+.6g}" for value in values], name
+    assert "Sensitivities of the measures" in done.stdout and "d/dplatform.F" in done.stdout
+
+
 def test_orbit_of_a_system_file_refuses_a_guess_of_another_size_and_says_when_newton_fails():
     done = _invoke("orbit", str(BLADE), "--guess", "1,2")
     assert done.exit_code == 2 and "--guess must be 5 numbers, one for each of x:blade" in done.stderr
-    done = _invoke("orbit", str(BLADE), "--sensitivities", "platform.F")
-    assert done.exit_code == 2 and "--sensitivities takes the article's system" in done.stderr
+    done = _invoke("orbit", str(BLADE), "--sensitivities", "platform.G")
+    assert done.exit_code == 2 and "platform.G is no number of the system; did you mean 'platform.F'" in done.stderr
+    assert "Floquet" not in done.stdout  # refused before the orbit is sought
     conveyor = ROOT / "docs" / "systems" / "conveyor.toml"
     done = _invoke("orbit", str(conveyor), "--transient", "10", "--max-iterations", "3")
     assert done.exit_code == 1 and "did not converge in 3 steps" in done.stderr and "Traceback" not in done.stderr

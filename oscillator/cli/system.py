@@ -22,6 +22,7 @@ from oscillator.text import printable
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
+    from oscillator.orbits.chain_orbits import ChainOrbit
 
 __all__ = ["frc_system", "orbit_system", "run_system", "show_system"]
 
@@ -218,12 +219,14 @@ def orbit_system(
     path = system_path(target)
     if path is None:
         return False
-    if sensitivities:
-        raise fail("--sensitivities takes the article's system for now; a system file's derivatives come next")
     try:
         from oscillator.orbits.chain_orbits import find_chain_orbit
+        from oscillator.orbits.chain_tangents import check_names
 
         chain = changed(load_system(path), assignments or [])
+        names = check_names(chain, [n.strip() for n in (sensitivities or "").split(",") if n.strip()])
+        if sensitivities is not None and not names:
+            raise InputError("--sensitivities needs names of the system's numbers, e.g. platform.F,Omega")
         start = _state(guess, chain.system.state)
         found = find_chain_orbit(
             chain,
@@ -252,7 +255,28 @@ def orbit_system(
         out.print(Text("no switching event over the period (every element keeps its mode)"))
     else:
         out.print(_events_table(found.events))
+    if names:
+        _print_sensitivities(found, names)
     return True
+
+
+def _print_sensitivities(found: ChainOrbit, names: tuple[str, ...]) -> None:
+    """The orbit's derivatives in ``names``, after the orbit (printed already: a refusal keeps it)."""
+    try:
+        derivatives = found.sensitivities(names)
+    except OscillatorError as error:
+        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+    for title, frame in (
+        ("Sensitivities of the section point", derivatives.state),
+        ("Sensitivities of the measures", derivatives.measures),
+    ):
+        table = Table(title=title, title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+        table.add_column("")
+        for column in frame.columns:
+            table.add_column(printable(str(column)), justify="right", no_wrap=True)
+        for row, values in frame.iterrows():
+            table.add_row(printable(str(row)), *(f"{value:+.6g}" for value in values))
+        out.print(table)
 
 
 def frc_system(

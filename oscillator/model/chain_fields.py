@@ -39,8 +39,10 @@ __all__ = [
     "ChainArrays",
     "arrays_of",
     "chain_derivative",
+    "chain_jacobian",
     "forces_on",
     "pack",
+    "root_gradient",
     "root_values",
     "state_of",
 ]
@@ -315,3 +317,117 @@ def root_values(t: float, y: Vector, d: Vector, g: Vector) -> None:  # pragma: n
                 g[2 * row], g[2 * row + 1] = f - d[v + 1], f + d[v + 1]
             else:
                 g[2 * row] = w
+
+
+# -- the field's derivatives: the tangent equations and the saltation matrices (issue 52) -----------
+
+
+@njit(cache=True)
+def _gradient(
+    t: float, y: Vector, d: Vector, row: int, at: Offsets, sign: float, grad: Vector
+) -> float:  # pragma: no cover - compiled
+    """Add ``sign`` times the gradient in ``y`` of :func:`_force` of element ``row`` to ``grad``;
+    return ``sign`` times its derivative in ``t``."""
+    _, _, mode, _, _, kind, on_at, other_at, slider_at, value_at = at
+    code, on, other, s = int(d[kind + row]), int(d[on_at + row]), int(d[other_at + row]), d[mode + row]
+    v = value_at + WIDTH * row
+    u, w = _stretch(y, on, other)
+    along, rate = 0.0, 0.0  # the force's derivatives in the stretch u and its rate u'
+    if code == SPRING:
+        along = -(d[v] + 3.0 * d[v + 1] * u * u)
+    elif code == DAMPER:
+        rate = -(d[v] + 3.0 * d[v + 1] * w * w)
+    elif code == FORCE:
+        return float(sign * d[v] * d[4] * math.cos(d[4] * t + d[v + 1]))
+    elif code == STOP and s != 0.0:
+        grad[2 * on] -= sign * d[v + 2]
+        grad[2 * on + 1] -= sign * d[v + 3]
+        return 0.0
+    elif code == CONTACT and s != 0.0:
+        along, rate = -d[v + 2], -d[v + 3]
+    elif code == JENKINS and s == 0.0:
+        along = -d[v]
+        grad[int(d[slider_at + row])] += sign * d[v]
+    grad[2 * on] += sign * along
+    grad[2 * on + 1] += sign * rate
+    if other >= 0:
+        grad[2 * other] -= sign * along
+        grad[2 * other + 1] -= sign * rate
+    return 0.0
+
+
+@njit(cache=True)
+def _force_gradient(t: float, y: Vector, d: Vector, i: int, at: Offsets, grad: Vector) -> float:  # pragma: no cover
+    """Fill ``grad`` with the gradient in ``y`` of :func:`forces_on`'s ``i``-th force; return its
+    derivative in ``t``."""
+    _, e, _, _, _, _, on_at, other_at, _, _ = at
+    for k in range(grad.shape[0]):
+        grad[k] = 0.0
+    rate = 0.0
+    for row in range(e):
+        if int(d[on_at + row]) == i:
+            rate += _gradient(t, y, d, row, at, 1.0, grad)
+        elif int(d[other_at + row]) == i:
+            rate += _gradient(t, y, d, row, at, -1.0, grad)
+    return rate
+
+
+@njit(cache=True)
+def chain_jacobian(t: float, y: Vector, d: Vector, jacobian: np.ndarray, rate: Vector) -> None:  # pragma: no cover
+    """Fill ``jacobian`` with the derivative of :func:`chain_derivative`'s field in the state
+    (square, the state's size) and ``rate`` with its derivative in ``t``, in the data's mode:
+    a stuck mass's rows are zero (``x' = w``, ``v' = 0``), a moving mass's ``x`` row is ``e_v``
+    and its ``v`` row the gradient of the forces on it over its mass (kinetic friction is
+    constant in a mode), a stuck slider's row zero and a slipping one's the stretch's rate's."""
+    at = _offsets(d)
+    n, e, mode, mass, friction, _, on_at, other_at, slider_at, _ = at
+    size = jacobian.shape[0]
+    grad = np.zeros(size)
+    jacobian[:, :] = 0.0
+    rate[:] = 0.0
+    for i in range(n):
+        row = int(d[friction + i])
+        if row >= 0 and d[mode + row] == 0.0:
+            continue
+        jacobian[2 * i, 2 * i + 1] = 1.0
+        rate[2 * i + 1] = _force_gradient(t, y, d, i, at, grad) / d[mass + i]
+        jacobian[2 * i + 1, :] = grad / d[mass + i]
+    for row in range(e):
+        z = int(d[slider_at + row])
+        if z >= 0 and d[mode + row] != 0.0:
+            jacobian[z, 2 * int(d[on_at + row]) + 1] = 1.0
+            if d[other_at + row] >= 0:
+                jacobian[z, 2 * int(d[other_at + row]) + 1] = -1.0
+
+
+@njit(cache=True)
+def root_gradient(t: float, y: Vector, d: Vector, index: int, grad: Vector) -> float:  # pragma: no cover
+    """Fill ``grad`` with the gradient in ``y`` of :func:`root_values`' function ``index`` in the
+    data's mode; return its derivative in ``t``."""
+    at = _offsets(d)
+    _, _, mode, mass, _, kind, on_at, other_at, slider_at, value_at = at
+    row, slot = index // 2, index % 2
+    code, on, other, s = int(d[kind + row]), int(d[on_at + row]), int(d[other_at + row]), d[mode + row]
+    v = value_at + WIDTH * row
+    for k in range(grad.shape[0]):
+        grad[k] = 0.0
+    if code == FRICTION and s != 0.0 and slot == 0:
+        grad[2 * on + 1] = 1.0
+        return 0.0
+    if code == FRICTION:  # the forces on the mass, or over its mass (its acceleration)
+        scale = 1.0 if s == 0.0 else 1.0 / d[mass + on]
+        rate = _force_gradient(t, y, d, on, at, grad)
+        for k in range(grad.shape[0]):
+            grad[k] *= scale
+        return rate * scale
+    if code < STOP or (code != JENKINS and slot == 1) or (code == JENKINS and (d[v + 1] <= 0.0 or (s != 0.0 and slot))):
+        return 0.0  # a constant: no root function here
+    position = 0 if code != JENKINS or s == 0.0 else 1
+    grad[2 * on + position] = 1.0
+    if other >= 0 and code != STOP:
+        grad[2 * other + position] = -1.0
+    if code == JENKINS and s == 0.0:
+        grad[int(d[slider_at + row])] = -1.0
+        for k in range(grad.shape[0]):
+            grad[k] *= d[v]
+    return 0.0

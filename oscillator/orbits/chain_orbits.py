@@ -5,24 +5,26 @@ The period map ``P`` takes the chain's state ``y`` (its
 :attr:`~oscillator.model.chains.FrictionChain.system`'s ``state``: each mass's ``x, v``, each
 slider's ``z``) at the section ``s`` to the state at ``s + N T``: one run of
 :func:`~oscillator.hybrid.chain_run.simulate_chain` from ``y``, every switch by the chains' rules.
-Its derivative ``M = dP/dy`` is taken here by central differences, one coordinate at a time
-(:data:`STEP` of its scale, at CVODE's tolerance 1e-12): the switches move with the start, and a
-difference over a step that keeps the cycle of switches is the derivative through them.  Newton's
+Its derivative ``M = dP/dy`` is exact: the tangent equations along each
+smooth piece and the saltation rule at every switch (:mod:`oscillator.orbits.chain_tangents`;
+the tests compare it with central differences of the map).  Newton's
 method solves ``P(y) = y`` in the coordinates that can move at the section: a mass stuck on its
 belt or floor there keeps its velocity (the belt's speed is its domain, as the article's resting
 mass keeps ``v = 0``), and one stuck the whole period keeps its place too (a nearby place is an
 orbit as well: the multiplier 1, neutral), as does the stretch ``z`` of a slider that holds the
-whole period or has ``F = 0``.  The multipliers are the eigenvalues of ``M`` over the
-coordinates that move.  The exact monodromy through the saltation matrices of every switch, as
-the article's orbits have, comes next (issue 52); these differences are what it will be checked
-against.
+whole period or has ``F = 0``.  A Newton step longer than twice the larger of the state and
+the residual is shortened to that (far from an orbit the map's derivative says little, and a
+long step can take the motion where every run is long).  The multipliers are the eigenvalues of ``M`` over the
+coordinates that move.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -32,13 +34,15 @@ from oscillator.hybrid.chain_run import ChainResult, simulate_chain
 from oscillator.model.chain_fields import state_of
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SolverOptions
+from oscillator.orbits.chain_tangents import tangent_pass
 
-__all__ = ["ORBIT_OPTIONS", "STEP", "ChainOrbit", "chain_period_map", "find_chain_orbit"]
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.orbits.chain_sensitivity import ChainSensitivities
+
+__all__ = ["ORBIT_OPTIONS", "ChainOrbit", "chain_period_map", "find_chain_orbit"]
 
 #: CVODE's tolerances for a chain's period map.
 ORBIT_OPTIONS = SolverOptions(rtol=1e-12, atol=1e-12)
-#: The central differences' step, relative to each coordinate's scale (at least 1).
-STEP = 1e-6
 
 
 @dataclass(frozen=True)
@@ -59,7 +63,7 @@ class ChainOrbit:
         The coordinates that move at the section, those Newton solved for and the multipliers
         are of.
     monodromy : ndarray
-        ``dP/dy`` over :attr:`free` (central differences).
+        ``dP/dy`` over :attr:`free`, exact through every switch (saltation).
     multipliers : ndarray
         Its eigenvalues, largest modulus first.
     residual : float
@@ -96,6 +100,14 @@ class ChainOrbit:
     def events(self) -> pd.DataFrame:
         """The events over one return of the orbit."""
         return self.run.events
+
+    def sensitivities(self, params: str | Sequence[str]) -> ChainSensitivities:
+        """The exact derivatives of the orbit in the chain's numbers ``params`` (``platform.F``,
+        ``blade.k``, ``Omega``): of its state, its switch times and its measures
+        (:func:`oscillator.orbits.chain_sensitivity.chain_sensitivities`)."""
+        from oscillator.orbits.chain_sensitivity import chain_sensitivities
+
+        return chain_sensitivities(self, params)
 
     @property
     def verdict(self) -> str:
@@ -144,20 +156,9 @@ def _still(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[s
     return held, tuple(neutral)
 
 
-def _derivative(
-    chain: FrictionChain, section: float, y: np.ndarray, free: list[int], periods: int, options: SolverOptions
-) -> np.ndarray:
-    """``dP/dy`` over ``free`` by central differences."""
-    columns = []
-    for k in free:
-        h = STEP * max(1.0, abs(y[k]))
-        ahead, back = y.copy(), y.copy()
-        ahead[k] += h
-        back[k] -= h
-        forward = _ends(chain_period_map(chain, section, ahead, periods, options))
-        backward = _ends(chain_period_map(chain, section, back, periods, options))
-        columns.append((forward - backward)[free] / (2 * h))
-    return np.array(columns).T.reshape(len(free), len(free))
+def _derivative(image: ChainResult, free: list[int]) -> np.ndarray:
+    """``dP/dy`` over ``free``: the tangent pass along the map's run (exact)."""
+    return tangent_pass(image).monodromy[np.ix_(free, free)]
 
 
 def _guess(chain: FrictionChain, section: float, transient: int, options: SolverOptions) -> np.ndarray:
@@ -210,7 +211,7 @@ def find_chain_orbit(
         residual = (_ends(image) - y)[free]
         history.append(float(np.max(np.abs(residual), initial=0.0)))
         if history[-1] <= tol * max(1.0, float(np.max(np.abs(y)))):
-            monodromy = _derivative(chain, section, y, free, periods, options)
+            monodromy = _derivative(image, free)
             multipliers = np.linalg.eigvals(monodromy) if len(free) else np.empty(0, complex)
             order = np.argsort(-np.abs(multipliers), kind="stable")
             return ChainOrbit(
@@ -228,13 +229,14 @@ def find_chain_orbit(
             )
         if iteration == max_iterations:
             break
-        matrix = _derivative(chain, section, y, free, periods, options) - np.eye(len(free))
+        matrix = _derivative(image, free) - np.eye(len(free))
         try:
             step = np.linalg.solve(matrix, -residual)
         except np.linalg.LinAlgError:
             break
+        reach = 2.0 * max(1.0, float(np.max(np.abs(y))), float(np.max(np.abs(residual))))
         y = y.copy()
-        y[free] += step
+        y[free] += step * min(1.0, reach / max(float(np.max(np.abs(step))), 1e-300))
     raise SimulationFailed(
         f"Newton's method did not converge in {max_iterations} steps (residuals "
         f"{', '.join(f'{r:.2e}' for r in history)}); give a better guess, a longer transient or more iterations",

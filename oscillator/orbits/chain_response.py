@@ -26,7 +26,7 @@ from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
 
-__all__ = ["frequency_sweep", "orbit_measures", "turning_points"]
+__all__ = ["frequency_sweep", "orbit_measures", "turning_points", "turns"]
 
 
 def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -34,7 +34,13 @@ def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -
     quintic through both rows' position, velocity and acceleration (Hermite: exact to the step's
     sixth power), at its turn inside the step.  ``a`` holds the accelerations of the rows before
     and after each sign change (any value elsewhere)."""
-    found = list(x[v == 0.0])
+    return turns(t, x, v, a)[1]
+
+
+def turns(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`turning_points` with their times: ``(times, positions)``."""
+    still = np.flatnonzero(v == 0.0)
+    times, found = list(t[still]), list(x[still])
     for k in np.flatnonzero(v[:-1] * v[1:] < 0.0).tolist():
         h = t[k + 1] - t[k]
         x0, v0, a0, v1, a1 = x[k], v[k] * h, a[k] * h * h, v[k + 1] * h, a[k + 1] * h * h
@@ -44,8 +50,9 @@ def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -
         inside = [r.real for r in roots if abs(r.imag) < 1e-9 and -1e-9 <= r.real <= 1 + 1e-9]
         if inside:
             s = min(inside, key=lambda r: abs(r - 0.5))
+            times.append(t[k] + s * h)
             found.append(x0 + v0 * s + a0 / 2 * s**2 + c3 * s**3 + c4 * s**4 + c5 * s**5)
-    return np.array(found, dtype=float)
+    return np.array(times, dtype=float), np.array(found, dtype=float)
 
 
 def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
@@ -73,27 +80,43 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
-def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
+def extremes(run: ChainResult) -> dict[str, tuple[float, float, float, float]]:
+    """Each mass's ``(t_max, x_max, t_min, x_min)`` over ``run``: its largest and smallest
+    displacement and when (the run's ends, and every turn: :func:`turns`)."""
     chain, trajectory = run.chain, run.trajectory
     t = trajectory.t.to_numpy(float)
     velocities = trajectory[[chain.system.velocity(m) for m in chain.system.masses]].to_numpy(float)
-    turns = np.flatnonzero((velocities[:-1] * velocities[1:] < 0.0).any(axis=1))
-    accelerations = _accelerations(run, np.union1d(turns, turns + 1))
-    found: dict[str, float] = {}
+    turning = np.flatnonzero((velocities[:-1] * velocities[1:] < 0.0).any(axis=1))
+    accelerations = _accelerations(run, np.union1d(turning, turning + 1))
+    found: dict[str, tuple[float, float, float, float]] = {}
     for i, mass in enumerate(chain.system.masses):
         x = trajectory[chain.system.position(mass)].to_numpy(float)
-        extremes = np.concatenate([x[[0, -1]], turning_points(t, x, velocities[:, i], accelerations[:, i])])
-        found[f"x_max:{mass}"], found[f"x_min:{mass}"] = float(extremes.max()), float(extremes.min())
-        found[f"x_pp:{mass}"] = found[f"x_max:{mass}"] - found[f"x_min:{mass}"]
-    events = run.events
-    for element in chain.elements:
-        if element.type not in ("friction", "jenkins"):
-            continue
-        mode = trajectory[f"mode:{element.name}"].to_numpy()
-        mine = events[(events.element == element.name) & (events.mode_before != events.mode_after)]
-        times = [start, *mine.t.to_numpy(float), start + span]
-        held = [mode[0] == 0, *(mine.mode_after.to_numpy() == 0)]
-        found[f"stuck:{element.name}"] = sum(b - a for a, b, h in zip(times, times[1:], held, strict=False) if h) / span
+        times, places = turns(t, x, velocities[:, i], accelerations[:, i])
+        times, places = np.concatenate([t[[0, -1]], times]), np.concatenate([x[[0, -1]], places])
+        high, low = int(np.argmax(places)), int(np.argmin(places))
+        found[str(mass)] = (float(times[high]), float(places[high]), float(times[low]), float(places[low]))
+    return found
+
+
+def stuck_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
+    """The spans of ``[start, start + span]`` in which the friction element or Jenkins slider
+    ``element`` holds, from its events."""
+    trajectory, events = run.trajectory, run.events
+    mode = trajectory[f"mode:{element}"].to_numpy()
+    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
+    times = [start, *mine.t.to_numpy(float), start + span]
+    held = [mode[0] == 0, *(mine.mode_after.to_numpy() == 0)]
+    return [(a, b) for a, b, h in zip(times, times[1:], held, strict=False) if h]
+
+
+def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
+    found: dict[str, float] = {}
+    for mass, (_, high, _, low) in extremes(run).items():
+        found[f"x_max:{mass}"], found[f"x_min:{mass}"], found[f"x_pp:{mass}"] = high, low, high - low
+    for element in run.chain.elements:
+        if element.type in ("friction", "jenkins"):
+            spans = stuck_spans(run, element.name, start, span)
+            found[f"stuck:{element.name}"] = sum(b - a for a, b in spans) / span
     return found
 
 

@@ -442,7 +442,9 @@ class Sensitivities:
 
 def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
     """The exact derivatives of ``orbit`` in ``params`` through every switch (module docstring):
-    of its map, its section point(s), its switch times and every response measure.
+    of its map, its section point(s), its switch times and every response measure.  A system's
+    orbit (a :class:`~oscillator.orbits.chain_orbits.ChainOrbit`) takes its numbers by element and
+    field (:mod:`oscillator.orbits.chain_sensitivity`).
 
     Raises
     ------
@@ -452,9 +454,12 @@ def sensitivities(orbit: Orbit, params: str | Sequence[str]) -> Sensitivities:
         (``reason = "not_differentiable"``) the orbit sits on a grazing, sliding or rest-threshold
         point (:data:`MARGIN`): no derivative exists there.
     """
+    from oscillator.orbits.chain_orbits import ChainOrbit
     from oscillator.orbits.response_derivatives import margins_of, measure_derivatives
     from oscillator.orbits.shooting import Orbit, period_map
 
+    if isinstance(orbit, ChainOrbit):  # a system's orbit: its numbers by element and field
+        return orbit.sensitivities(params)
     if not isinstance(orbit, Orbit):
         raise InputError(f"orbit must be an Orbit (find_orbit's), got {shown(orbit)}", field="orbit")
     names = check_params(params)

@@ -1,0 +1,175 @@
+"""Exact sensitivities of a friction chain's periodic orbit in any of its numbers, by element and
+field (issue 52): ``orbit.sensitivities(["platform.F", "blade.k", "Omega"])``.
+
+The numbers are named as ``--set`` names them (:meth:`~oscillator.model.chains.FrictionChain.
+parameter_names`): ``<element>.<field>`` (``platform.F``, ``support.k``, ``belt.w``),
+``<mass>.m``, ``Omega`` and ``g``.  The tangent pass (:mod:`oscillator.orbits.chain_tangents`)
+gives the period map's derivatives ``M = dP/dy`` and ``dP/dc`` through every switch; the orbit
+``y* = P(y*, c)`` moves by
+
+    (I - M) dy*/dc = dP/dc
+
+over the coordinates that move at the section (:attr:`ChainOrbit.free`), with the velocity of a
+mass stuck there moving with its belt's speed and a neutral coordinate held (a mass stuck, or a
+slider holding, the whole period: its place is any nearby one).  Along the orbit a point moves by
+``delta(t) = Phi(t) dy*/dc + Psi(t)``; a switch time by ``-(grad g . delta + dg/dc) / (grad g . f-
++ dg/dt)``.  The measures follow: a mass's largest (smallest) displacement moves as its
+position at the turn (the velocity is zero there, so the turn's own shift does not count), a
+stuck share as the times that bound its spans, over the return's span ``N 2 pi / Omega``.
+
+Where a switch of the orbit is a grazing (the flow's speed across the boundary near zero against
+its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the switch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.orbits.chain_orbits import ChainOrbit
+from oscillator.orbits.chain_response import extremes, orbit_measures, stuck_spans
+from oscillator.orbits.chain_tangents import ChainPass, check_names, tangent_pass
+
+__all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
+
+#: The smallest crossing speed, relative to its terms, at which a switch counts as transversal.
+MARGIN = 1e-6
+
+
+@dataclass(frozen=True)
+class ChainSensitivities:
+    """The derivatives of a chain's orbit in ``params``; each table has a ``d/d<param>`` column
+    per number.
+
+    Attributes
+    ----------
+    orbit : ChainOrbit
+    params : tuple of str
+    map : DataFrame
+        ``dP/dc`` at the orbit's state (index: the state's names).
+    state : DataFrame
+        ``value`` and ``dy*/dc``: how the orbit's state at the section moves.
+    switches : DataFrame
+        Every switch over one return: ``t``, ``element``, ``kind``, ``margin`` (the crossing's
+        speed relative to its terms), ``dt/d<param>``.
+    measures : DataFrame
+        Every measure of :func:`~oscillator.orbits.chain_response.orbit_measures`: ``value`` and
+        its derivatives.
+    """
+
+    orbit: ChainOrbit
+    params: tuple[str, ...]
+    map: pd.DataFrame
+    state: pd.DataFrame
+    switches: pd.DataFrame
+    measures: pd.DataFrame
+
+    def of(self, measure: str) -> pd.Series:
+        """One measure's derivatives (``x_max:blade``, ``stuck:platform``)."""
+        if measure not in self.measures.index:
+            raise InputError(
+                f"no measure named {measure!r}; choose one of {', '.join(self.measures.index)}", field="measure"
+            )
+        return self.measures.loc[measure, [f"d/d{name}" for name in self.params]]
+
+
+def _moved_start(orbit: ChainOrbit, along: ChainPass) -> np.ndarray:
+    """``dy*/dc``: Newton's linear system over the free coordinates; a held velocity moves with
+    its belt's speed, a neutral coordinate not at all."""
+    chain, names = orbit.chain, list(orbit.chain.system.state)
+    n, params = len(names), along.params
+    moved = np.zeros((n, len(params)))
+    for element in chain.elements:
+        velocity = chain.system.velocity(element.on)
+        if element.type == "friction" and velocity not in orbit.free:
+            moved[names.index(velocity)] = [1.0 if name == f"{element.name}.w" else 0.0 for name in params]
+    free = [names.index(name) for name in orbit.free]
+    held = [k for k in range(n) if k not in free]
+    monodromy = along.monodromy
+    right = along.derivatives[free] + monodromy[np.ix_(free, held)] @ moved[held]
+    moved[free] = np.linalg.solve(np.eye(len(free)) - monodromy[np.ix_(free, free)], right)
+    return moved
+
+
+def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> ChainSensitivities:
+    """The exact derivatives of ``orbit`` (:func:`~oscillator.orbits.chain_orbits.
+    find_chain_orbit`'s) in the chain's numbers ``params`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        A name the chain has not (the closest named).
+    SimulationFailed
+        (``reason = "not_differentiable"``) a switch of the orbit is a grazing.
+    """
+    if not isinstance(orbit, ChainOrbit):
+        raise InputError("orbit must be a ChainOrbit (find_orbit's for a system)", field="orbit")
+    names = check_names(orbit.chain, params)
+    if not names:
+        raise InputError("params must name one or more numbers of the system", field="params")
+    along = tangent_pass(orbit.run, names)
+    nearest = min(along.crossings, key=lambda c: c.margin, default=None)
+    if nearest is not None and nearest.margin < MARGIN:
+        raise SimulationFailed(
+            f"the orbit grazes at t = {nearest.t!r} s ({nearest.element}, {nearest.kind}: the flow crosses at "
+            f"{nearest.margin:.1e} of its terms): its measures have no derivative there",
+            reason=Reason.NOT_DIFFERENTIABLE,
+        )
+    moved = _moved_start(orbit, along)
+    columns = [f"d/d{name}" for name in names]
+    state_names = list(orbit.chain.system.state)
+    table = pd.DataFrame(moved, index=state_names, columns=columns)
+    table.insert(0, "value", orbit.state)
+    switches = pd.DataFrame(
+        [[c.t, c.element, c.kind, c.margin, *c.time_derivative(moved).tolist()] for c in along.crossings],
+        columns=["t", "element", "kind", "margin", *(f"dt/d{name}" for name in names)],
+    )
+    return ChainSensitivities(
+        orbit,
+        names,
+        pd.DataFrame(along.derivatives, index=state_names, columns=columns),
+        table,
+        switches,
+        _measures(orbit, along, moved),
+    )
+
+
+def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.DataFrame:
+    chain, names = orbit.chain, list(orbit.chain.system.state)
+    n, params = len(names), along.params
+    span = orbit.period * chain.period
+    stretch = np.array([-span / chain.Omega if name == "Omega" else 0.0 for name in params])
+
+    def point(t: float) -> np.ndarray:
+        if t in (orbit.section, orbit.section + span):  # the section: the orbit's own start
+            return moved
+        block = along.at(t)
+        found: np.ndarray = block[:, :n] @ moved + block[:, n:]
+        return found
+
+    found: dict[str, np.ndarray] = {}
+    for mass, (t_high, _, t_low, _) in extremes(orbit.run).items():
+        x = names.index(chain.system.position(mass))
+        high, low = point(t_high)[x], point(t_low)[x]
+        found[f"x_max:{mass}"], found[f"x_min:{mass}"], found[f"x_pp:{mass}"] = high, low, high - low
+    when = {c.t: c.time_derivative(moved) for c in along.crossings}
+    start, end = orbit.section, orbit.section + span
+    for element in chain.elements:
+        if element.type not in ("friction", "jenkins"):
+            continue
+        spans = stuck_spans(orbit.run, element.name, start, span)
+        share = sum(b - a for a, b in spans) / span
+
+        def moves(t: float) -> np.ndarray:
+            return stretch if t == end else np.zeros(len(params)) if t == start else when[t]
+
+        total = sum((moves(b) - moves(a) for a, b in spans), np.zeros(len(params)))
+        found[f"stuck:{element.name}"] = total / span - share * stretch / span
+    values = orbit_measures(orbit)
+    table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
+    table.insert(0, "value", [values[name] for name in table.index])
+    return table

@@ -1,0 +1,346 @@
+"""The exact derivatives of a friction chain's period map through every switch (issue 52): its
+monodromy ``M = dP/dy`` and its derivative ``dP/dc`` in any of the chain's numbers ``c``.
+
+Along each smooth piece of a run (one mode) the tangent equations ``Phi' = J Phi`` and
+``Psi' = J Psi + df/dc`` are integrated with the state (DOP853, from the run's own state at the
+piece's start): ``J`` is the field's Jacobian in the mode
+(:func:`~oscillator.model.chain_fields.chain_jacobian`, exact), ``df/dc`` its derivative in the
+number at fixed state and time (central differences of the compiled field in the number's
+direction of the chain's arrays: the arrays are affine in every number, the field affine in all
+but ``Omega``, ``phi`` and the masses, so the differences are exact or second order at a step of
+1e-6).  At a switch the root function ``g`` that CVODE found (the first event of the instant that
+changed a mode, :func:`root_slot`) sets the switch time; with ``f-`` the field before (the old
+mode) and ``f+`` after (the mode the rules settled on, cascades included), the saltation rule
+
+    dt_s = -(grad g . delta + dg/dc) / (grad g . f- + dg/dt),     delta+ = delta- - (f+ - f-) dt_s
+
+carries both ``Phi`` and ``Psi`` across (the article's rule, :mod:`oscillator.orbits.sensitivity`).
+It covers every switch of a chain: a mass sticking to its belt (``g = v - w``: the velocity's row
+of ``Phi`` becomes ``dw/dc``), slipping off it (the flow barrier), passing its belt's speed, a
+stop or contact closing and opening, and a Jenkins slider slipping (``g = kt (u - z) -+ F``: ``z``
+then follows, ``delta z = delta u -+ delta F / kt``) and sticking (``g = u'``).  A run of ``N``
+periods ends at ``t1 = s + N 2 pi / Omega``: ``dP/dOmega`` takes ``f(t1) dt1/dOmega`` too.
+
+Where a switch is a grazing (``grad g . f- + dg/dt`` near zero against its terms) the map is not
+differentiable there; :attr:`ChainPass.margin` says how near the run comes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from oscillator.compiled import njit
+from oscillator.errors import InputError
+from oscillator.hybrid.chain_run import ChainResult
+from oscillator.model.chain_fields import (
+    LAYOUT,
+    ChainArrays,
+    arrays_of,
+    chain_derivative,
+    chain_jacobian,
+    pack,
+    root_gradient,
+    root_values,
+)
+from oscillator.model.chain_rules import ChainEventKind
+from oscillator.model.chains import FrictionChain
+from oscillator.model.types import Vector
+from oscillator.text import printable
+
+__all__ = ["STEP", "ChainPass", "Crossing", "check_names", "root_slot", "tangent_pass"]
+
+#: The step of the field's differences in a number, relative to the number (at least 1).
+STEP = 1e-6
+#: The tangent equations' tolerances (DOP853).
+RTOL, ATOL = 1e-11, 1e-12
+#: The event kinds whose time the element's second root function sets when it leaves to the left
+#: (a slip to ``s = -1`` past ``-(mu_s N + P)`` or ``-F``); every other switch's is its first.
+_SECOND_WHEN_LEFT = (ChainEventKind.SLIPS, ChainEventKind.SLIDER_SLIPS)
+
+
+def root_slot(kind: ChainEventKind, after: int) -> int:
+    """Which of an element's two root functions (:func:`~oscillator.model.chain_fields.
+    root_values`) set the time of an event of ``kind`` that left the element in mode ``after``:
+    ``v - w`` for a mass reaching its belt's speed, the flow barrier's side for a slip, the gap for
+    a stop or contact, ``kt (u - z) -+ F`` for a slider's slip, ``u'`` for its stick."""
+    return 1 if kind in _SECOND_WHEN_LEFT and after < 0 else 0
+
+
+@njit(cache=True)
+def tangent_rates(
+    t: float, big: Vector, d: Vector, plus: np.ndarray, minus: np.ndarray, steps: Vector, out: Vector
+) -> None:  # pragma: no cover - compiled
+    """``out``: the rates of ``big = (y, [Phi | Psi] by rows)`` in the data's mode (module
+    docstring); ``plus``/``minus`` the data with each number stepped by ``+-steps``."""
+    n = int(d[3])
+    columns = (big.shape[0] - n) // n
+    y = big[:n]
+    chain_derivative(t, y, out[:n], d)
+    jacobian, rate = np.empty((n, n)), np.empty(n)
+    chain_jacobian(t, y, d, jacobian, rate)
+    rates = jacobian @ big[n:].reshape((n, columns))
+    ahead, back = np.empty(n), np.empty(n)
+    for k in range(plus.shape[0]):
+        chain_derivative(t, y, ahead, plus[k])
+        chain_derivative(t, y, back, minus[k])
+        for i in range(n):
+            rates[i, n + k] += (ahead[i] - back[i]) / (2.0 * steps[k])
+    out[n:] = rates.ravel()
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """One switch of a run: its time, the element whose root set it, that root's gradient
+    ``normal`` and ``moved`` (its derivative in each number), the ``speed`` ``grad g . f- + dg/dt``
+    at which the flow crossed it, the field's ``jump`` ``f+ - f-``, the tangent block
+    ``[Phi | Psi]`` just before, and ``margin``: the speed relative to its terms (0 at a
+    grazing)."""
+
+    t: float
+    element: str
+    kind: str
+    normal: np.ndarray
+    moved: np.ndarray
+    speed: float
+    jump: np.ndarray
+    before: np.ndarray
+    margin: float
+
+    def time_derivative(self, start: np.ndarray) -> np.ndarray:
+        """``dt_s/dc`` for a start moving by ``start`` (``dy0/dc``, one column a number)."""
+        n = len(self.normal)
+        delta = self.before[:, :n] @ start + self.before[:, n:]
+        moved: np.ndarray = -(self.normal @ delta + self.moved) / self.speed
+        return moved
+
+
+@dataclass(frozen=True)
+class ChainPass:
+    """The tangent pass along one run: ``end`` is ``[M | dP/dc]`` at its end (the chain's state
+    by rows: ``M = dP/dy``, then one column a number of ``params``), ``crossings`` its switches,
+    and the dense tangents along each piece (:meth:`at`)."""
+
+    run: ChainResult
+    params: tuple[str, ...]
+    end: np.ndarray
+    crossings: tuple[Crossing, ...]
+    pieces: tuple[tuple[float, float, object, np.ndarray], ...]
+
+    @property
+    def monodromy(self) -> np.ndarray:
+        """``M = dP/dy`` over the whole state."""
+        return self.end[:, : self.end.shape[0]]
+
+    @property
+    def derivatives(self) -> np.ndarray:
+        """``dP/dc``: one column a number of :attr:`params`."""
+        return self.end[:, self.end.shape[0] :]
+
+    @property
+    def margin(self) -> float:
+        """The smallest :attr:`Crossing.margin` (``inf`` without a switch)."""
+        return min((c.margin for c in self.crossings), default=float("inf"))
+
+    def at(self, t: float) -> np.ndarray:
+        """``[Phi | Psi]`` at ``t`` (the piece that ends at a switch time: before it)."""
+        for start, stop, solution, block in self.pieces:
+            if start <= t <= stop:
+                if solution is None:
+                    return block
+                n = self.end.shape[0]
+                found: np.ndarray = np.asarray(solution(t))[n:].reshape(n, -1)  # type: ignore[operator]
+                return found
+        raise ValueError(f"t = {t!r} s is outside the run")
+
+
+def _direction(chain: FrictionChain, arrays: ChainArrays, name: str) -> ChainArrays:
+    """The chain's arrays with the number ``name`` one unit larger (the arrays are affine in it)."""
+    mass, value, omega = arrays.mass.copy(), arrays.value.copy(), arrays.Omega
+    owner, _, key = name.rpartition(".")
+    masses = [m.name for m in chain.masses]
+    for row, element in enumerate(chain.elements):
+        weight = element.type == "friction" and element.values.get("N") is None
+        if element.name == owner and key in LAYOUT[element.type]:
+            value[row, LAYOUT[element.type].index(key)] += 1.0
+        elif weight and name == "g":
+            value[row, 2] += arrays.mass[masses.index(element.on)]
+        elif weight and key == "m" and owner == element.on:
+            value[row, 2] += chain.g
+    if name == "Omega":
+        omega += 1.0
+    elif key == "m" and owner in masses:
+        mass[masses.index(owner)] += 1.0
+    return dataclasses.replace(arrays, mass=mass, value=value, Omega=omega)
+
+
+def check_names(chain: FrictionChain, params: str | Sequence[str]) -> tuple[str, ...]:
+    """``params`` as a tuple of the chain's numbers (:meth:`FrictionChain.parameter_names`);
+    an unknown one refused naming the closest."""
+    names = (params,) if isinstance(params, str) else tuple(params)
+    known = chain.parameter_names()
+    for name in names:
+        if name not in known:
+            chain.with_values({name: 0.0})  # raises, with the closest name
+            raise InputError(f"{printable(str(name))} is no number of the system", field="params")
+    return names
+
+
+def _steps(chain: FrictionChain, params: tuple[str, ...]) -> np.ndarray:
+    values = []
+    for name in params:
+        owner, _, key = name.rpartition(".")
+        if not owner:
+            values.append(float(getattr(chain, name)))
+            continue
+        mass = next((m for m in chain.masses if m.name == owner and key in ("m", "x", "v")), None)
+        element = next((e for e in chain.elements if e.name == owner), None)
+        found = getattr(mass, key) if mass is not None else (element.values.get(key) if element else None)
+        values.append(float(found) if found is not None else 0.0)
+    return STEP * np.maximum(1.0, np.abs(values))
+
+
+class _Data:
+    """The chain's packed data in a mode, and with each number stepped either way."""
+
+    def __init__(self, chain: FrictionChain, params: tuple[str, ...]) -> None:
+        self.arrays = arrays_of(chain)
+        zero = np.zeros(len(self.arrays.kind))
+        base = pack(self.arrays, zero)
+        self.directions = np.array([pack(_direction(chain, self.arrays, p), zero) - base for p in params])
+        self.directions = self.directions.reshape(len(params), len(base))
+        self.steps = _steps(chain, params)
+
+    def of(self, mode: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        d = pack(self.arrays, mode)
+        shift = self.directions * self.steps[:, None]
+        return d, d + shift, d - shift
+
+
+def _rates(t: float, y: np.ndarray, d: np.ndarray) -> np.ndarray:
+    out = np.empty(len(y))
+    chain_derivative(t, y, out, d)
+    return out
+
+
+def _crossing(
+    run: ChainResult, data: _Data, row: int, block: np.ndarray, modes: tuple[np.ndarray, np.ndarray]
+) -> Crossing:
+    """The saltation at the switch between trajectory rows ``row`` and ``row + 1``."""
+    trajectory, chain = run.trajectory, run.chain
+    t = float(trajectory.t.iloc[row])
+    names = list(chain.system.state)
+    before, after = (trajectory[names].iloc[k].to_numpy(float) for k in (row, row + 1))
+    events = run.events
+    here = events[(events.t == t) & (events.mode_before != events.mode_after)]
+    first = here.iloc[0]
+    element = [e.name for e in chain.elements].index(first.element)
+    index = 2 * element + root_slot(ChainEventKind(first.kind), int(first.mode_after))
+    (old, ahead, back), (new, _, _) = data.of(modes[0]), data.of(modes[1])
+    jump = _rates(t, after, new) - _rates(t, before, old)
+    normal = np.empty(len(before))
+    dt = root_gradient(t, before, old, index, normal)
+    rates = _rates(t, before, old)
+    speed = float(normal @ rates + dt)
+    moved = np.empty(len(data.steps))
+    g = np.empty(2 * len(chain.elements))
+    for k in range(len(moved)):
+        root_values(t, before, ahead[k], g)
+        high = g[index]
+        root_values(t, before, back[k], g)
+        moved[k] = (high - g[index]) / (2.0 * data.steps[k])
+    scale = float(np.abs(normal) @ np.abs(rates) + abs(dt))
+    margin = abs(speed) / scale if scale > 0 else 0.0
+    return Crossing(t, first.element, str(first.kind), normal, moved, speed, jump, block.copy(), margin)
+
+
+def _modes(run: ChainResult) -> np.ndarray:
+    """Each trajectory row's mode, one integer per element."""
+    chain, trajectory = run.chain, run.trajectory
+    modes = np.zeros((len(trajectory), len(chain.elements)))
+    for k, element in enumerate(chain.elements):
+        column = f"mode:{element.name}"
+        if column in trajectory:
+            modes[:, k] = trajectory[column].to_numpy()
+    return modes
+
+
+def tangent_pass(run: ChainResult, params: Sequence[str] = ()) -> ChainPass:
+    """The tangents along ``run`` (a period map's: :func:`~oscillator.orbits.chain_orbits.
+    chain_period_map`), from ``Phi = I``, ``Psi = 0`` at its start, in the numbers ``params``
+    (module docstring)."""
+    chain = run.chain
+    params = check_names(chain, params)
+    data = _Data(chain, params)
+    n, k = data.arrays.size, len(params)
+    trajectory = run.trajectory
+    t = trajectory.t.to_numpy(float)
+    states = trajectory[list(chain.system.state)].to_numpy(float)
+    modes = _modes(run)
+    block = np.hstack([np.eye(n), np.zeros((n, k))])
+    changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]
+    pieces, crossings = [], []
+    for a, b in itertools.pairwise(changes):
+        solution = None
+        if t[b - 1] > t[a]:
+            solution, block = _along_piece(data, modes[a], (t[a], t[b - 1]), states[a], block)
+        pieces.append((float(t[a]), float(t[b - 1]), solution, block.copy()))
+        if b < len(t):
+            crossing = _crossing(run, data, b - 1, block, (modes[b - 1], modes[b]))
+            row = crossing.normal @ block
+            row[n:] += crossing.moved
+            block = block + np.outer(crossing.jump, row) / crossing.speed
+            crossings.append(crossing)
+    return _ended(run, data, params, block, tuple(crossings), tuple(pieces), modes[-1])
+
+
+def _along_piece(
+    data: _Data, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray
+) -> tuple[object, np.ndarray]:
+    """The tangent equations over one piece in ``mode``: the dense solution and the block at its end."""
+    d, plus, minus = data.of(mode)
+    n = len(start)
+    found = solve_ivp(
+        lambda s, big: _big_rates(s, big, d, plus, minus, data.steps),
+        span,
+        np.concatenate([start, block.ravel()]),
+        method="DOP853",
+        rtol=RTOL,
+        atol=ATOL,
+        dense_output=True,
+    )
+    return found.sol, found.y[n:, -1].reshape(block.shape)
+
+
+def _big_rates(
+    s: float, big: np.ndarray, d: np.ndarray, plus: np.ndarray, minus: np.ndarray, steps: np.ndarray
+) -> np.ndarray:
+    out = np.empty(len(big))
+    tangent_rates(s, big, d, plus, minus, steps, out)
+    return out
+
+
+def _ended(
+    run: ChainResult,
+    data: _Data,
+    params: tuple[str, ...],
+    block: np.ndarray,
+    crossings: tuple[Crossing, ...],
+    pieces: tuple[tuple[float, float, object, np.ndarray], ...],
+    mode: np.ndarray,
+) -> ChainPass:
+    """The pass's end: ``dP/dOmega`` takes ``f(t1) dt1/dOmega`` (``t1 = s + N 2 pi/Omega``)."""
+    n = data.arrays.size
+    end = block.copy()
+    if "Omega" in params:
+        trajectory = run.trajectory
+        span = float(trajectory.t.iloc[-1] - trajectory.t.iloc[0])
+        last = trajectory[list(run.chain.system.state)].iloc[-1].to_numpy(float)
+        rates = _rates(float(trajectory.t.iloc[-1]), last, data.of(mode)[0])
+        end[:, n + params.index("Omega")] += rates * (-span / run.chain.Omega)
+    return ChainPass(run, params, end, crossings, pieces)

@@ -1,0 +1,184 @@
+"""Exact derivatives of friction chains' orbits through every switch (issue 52:
+oscillator/orbits/chain_tangents.py, chain_sensitivity.py): the monodromy against central
+differences of the period map on orbits that stick and slip on a belt, pass their floor's speed,
+close and open a stop and a contact, and hold and slip a Jenkins slider; the sensitivities in
+element fields against Richardson differences (1e-7 relative, as for the article's system); a
+linear chain's against its closed form; the refusals."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from oscillator.errors import InputError
+from oscillator.io.chains import load_system
+from oscillator.model.chains import FrictionChain
+from oscillator.orbits.chain_orbits import chain_period_map, find_chain_orbit
+from oscillator.orbits.chain_response import orbit_measures
+from oscillator.orbits.chain_sensitivity import chain_sensitivities
+from test_chain_orbits import OMEGA, linear_chain
+
+SYSTEMS = Path(__file__).resolve().parents[1] / "docs" / "systems"
+
+
+def belt_chain() -> FrictionChain:
+    """A forced mass on a belt: it sticks to the belt and slips off it once a period."""
+    return (
+        FrictionChain(Omega=0.6)
+        .mass("m", 1.0)
+        .spring("m", k=1.0)
+        .damper("m", c=0.05)
+        .friction("m", name="belt", mu_s=0.4, mu_k=0.25, N=1.0, w=0.3)
+        .force("m", Q=0.4)
+    )
+
+
+def impact_chain() -> FrictionChain:
+    """Two masses, a cubic spring between them, one on a floor with friction: its stop closes and
+    opens, the contact between them closes and opens, its speed passes the floor's."""
+    return (
+        FrictionChain(Omega=0.7)
+        .mass("a", 1.0)
+        .mass("b", 0.6)
+        .spring("a", k=1.0)
+        .spring("b", "a", k=0.8, k3=0.2)
+        .damper("a", c=0.04)
+        .damper("b", c=0.03)
+        .friction("a", name="floor", mu_s=0.12, mu_k=0.08, N=1.0)
+        .stop("a", name="wall", side="right", at=0.45, K=40.0, C=0.2)
+        .contact("b", "a", name="gap", side="right", gap=0.3, K=30.0, C=0.1)
+        .force("a", Q=0.5)
+    )
+
+
+def blade_chain() -> FrictionChain:
+    """docs/systems/blade-damper.toml: a blade, a Jenkins damper that holds and slips."""
+    return load_system(SYSTEMS / "blade-damper.toml")
+
+
+CASES = {
+    "belt": (belt_chain, {"slips", "sticks"}, ["belt.w", "belt.mu_s", "belt.mu_k", "m.m", "Omega"]),
+    "impacts": (
+        impact_chain,
+        {"passable", "stop_closes", "stop_opens", "contact_closes", "contact_opens"},
+        ["wall.at", "gap.K", "spring-2.k3", "floor.mu_k", "Omega"],
+    ),
+    "blade": (blade_chain, {"slider_slips", "slider_sticks"}, ["platform.F", "platform.kt", "spring-1.k", "Omega"]),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(CASES))
+def case(request):
+    make, kinds, params = CASES[request.param]
+    orbit = find_chain_orbit(make(), transient=150)
+    return orbit, kinds, params
+
+
+def _number(chain: FrictionChain, name: str) -> float:
+    owner, _, key = name.rpartition(".")
+    if not owner:
+        return float(getattr(chain, name))
+    mass = next((m for m in chain.masses if m.name == owner and key in ("m", "x", "v")), None)
+    if mass is not None:
+        return float(getattr(mass, key))
+    return float(next(e.values[key] for e in chain.elements if e.name == owner))
+
+
+def test_the_exact_monodromy_equals_the_period_maps_differences(case):
+    """``M`` through the saltation of every switch the orbit makes equals central differences of
+    the period map (step 1e-6 at CVODE's 1e-12, the differences good to about 1e-7: agreement to 1e-6
+    of M's scale; a missed saltation term is of order one)."""
+    orbit, kinds, _ = case
+    assert kinds <= set(orbit.events.kind), set(orbit.events.kind)
+    chain, names = orbit.chain, list(orbit.chain.system.state)
+    free = [names.index(name) for name in orbit.free]
+    columns = []
+    for k in free:
+        h = 1e-6 * max(1.0, abs(orbit.state[k]))
+        ends = []
+        for sign in (1.0, -1.0):
+            start = orbit.state.copy()
+            start[k] += sign * h
+            ends.append(chain_period_map(chain, orbit.section, start).y_end[: len(names)])
+        columns.append((ends[0] - ends[1])[free] / (2 * h))
+    differences = np.array(columns).T
+    scale = np.abs(differences).max()
+    assert np.abs(orbit.monodromy - differences).max() <= 1e-6 * scale
+    assert orbit.stable and np.abs(orbit.multipliers).max() < 1.0
+
+
+def test_sensitivities_in_element_fields_equal_richardson_differences(case):
+    """``dy*/dc`` and every measure's derivative in element fields, masses and ``Omega`` equal
+    Richardson-extrapolated central differences of the orbits found at ``c +- h`` (h 1e-4
+    relative): 1e-7 of each column's scale."""
+    orbit, _, params = case
+    found = orbit.sensitivities(params)
+    assert list(found.measures.index) == list(orbit_measures(orbit))
+    np.testing.assert_allclose(found.measures.value, list(orbit_measures(orbit).values()), rtol=0, atol=0)
+
+    def seen(name: str, value: float) -> np.ndarray:
+        moved = find_chain_orbit(orbit.chain.with_values({name: value}), orbit.state, transient=0, tol=1e-13)
+        measures = orbit_measures(moved)
+        return np.concatenate([moved.state, [measures[k] for k in found.measures.index]])
+
+    for name in params:
+        value = _number(orbit.chain, name)
+        h = 1e-4 * max(1.0, abs(value))
+        wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
+        narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
+        richardson = (4 * narrow - wide) / 3
+        exact = np.concatenate([found.state[f"d/d{name}"], found.measures[f"d/d{name}"]])
+        assert np.abs(richardson - exact).max() <= 1e-7 * np.abs(exact).max(), name
+
+
+def test_switch_times_move_as_the_orbit_found_at_a_nearby_value_says():
+    """``dt/dc`` of each switch equals the difference of the switch times of the orbits at
+    ``c +- h`` (the same switches, in the same order)."""
+    orbit = find_chain_orbit(belt_chain(), transient=150)
+    found = orbit.sensitivities("belt.mu_s")
+    h = 1e-5
+    times = [
+        find_chain_orbit(belt_chain().with_values({"belt.mu_s": 0.4 + s}), orbit.state, transient=0).events.t.to_numpy()
+        for s in (h, -h)
+    ]
+    assert list(found.switches.kind) == ["slips", "sticks"]
+    np.testing.assert_allclose(found.switches["dt/dbelt.mu_s"], (times[0] - times[1]) / (2 * h), rtol=1e-6)
+
+
+def test_a_linear_chains_sensitivities_are_its_closed_forms():
+    """``x* = Im(X e^{i phi})`` with ``A X = F``, ``A = K - Omega^2 M + i Omega C``: ``dX/dQ =
+    X / Q``, ``dX/dk = -A^-1 (dA/dk) X`` (1e-9)."""
+    orbit = find_chain_orbit(linear_chain(), transient=5)
+    found = orbit.sensitivities(["force-5.Q", "spring-2.k", "damper-3.c"])
+    mass, damping = np.diag([1.0, 0.5]), np.diag([0.1, 0.05])
+    stiffness = np.array([[3.0, -1.0], [-1.0, 1.0]])
+    matrix = stiffness - OMEGA**2 * mass + 1j * OMEGA * damping
+    amplitude = np.linalg.solve(matrix, [1.0, 0.0])
+
+    def state(moved: np.ndarray) -> np.ndarray:
+        moved = moved * np.exp(0.3j)
+        return np.ravel(np.column_stack([moved.imag, (1j * OMEGA * moved).imag]))
+
+    coupling = np.array([[1.0, -1.0], [-1.0, 1.0]])
+    expected = {
+        "force-5.Q": state(amplitude),
+        "spring-2.k": state(-np.linalg.solve(matrix, coupling @ amplitude)),
+        "damper-3.c": state(-np.linalg.solve(matrix, 1j * OMEGA * np.diag([1.0, 0.0]) @ amplitude)),
+    }
+    for name, value in expected.items():
+        np.testing.assert_allclose(found.state[f"d/d{name}"], value, rtol=0, atol=1e-9, err_msg=name)
+    assert math.isclose(found.of("x_pp:a")["d/dforce-5.Q"], found.measures.value["x_pp:a"], rel_tol=1e-9)
+
+
+def test_unknown_names_and_other_values_are_refused():
+    orbit = find_chain_orbit(belt_chain(), transient=150)
+    with pytest.raises(InputError, match=r"belt\.mu_s") as caught:
+        orbit.sensitivities("belt.mu_z")
+    assert caught.value.field == "belt.mu_z"
+    with pytest.raises(InputError, match=r"x_max:m"):
+        orbit.sensitivities("belt.w").of("x_max:blade")
+    with pytest.raises(InputError, match="ChainOrbit"):
+        chain_sensitivities("orbit", "belt.w")  # type: ignore[arg-type]
