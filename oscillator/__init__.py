@@ -57,6 +57,7 @@ _EXPORTS = {
     "ChainOrbit": "oscillator.orbits.chain_orbits",
     "ChainSensitivities": "oscillator.orbits.chain_sensitivity",
     "frequency_sweep": "oscillator.orbits.chain_response",
+    "worst_over": "oscillator.designing.chain_design",
     "Response": "oscillator.orbits.response",
     "FrequencyResponse": "oscillator.attractors.frequency",
     "frequency_response": "oscillator.attractors.frequency",
@@ -150,6 +151,7 @@ __all__ = [
     "simulate",
     "simulate_chain",
     "trace_curve",
+    "worst_over",
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -162,6 +164,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.grouping import Attractor
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.designing.chain_design import worst_over
     from oscillator.designing.optimise import Design, design
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
     from oscillator.exploring import explore

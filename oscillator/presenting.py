@@ -15,12 +15,14 @@ from __future__ import annotations
 TYPE_CHECKING = False
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports nothing at run time
+    from collections.abc import Mapping
     from pathlib import Path
     from typing import Protocol
 
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
@@ -65,6 +67,8 @@ class Presenter(Protocol):
     def plot_chain_result(self, result: ChainResult) -> Figure: ...
 
     def save_chain_result(self, result: ChainResult, folder: str | Path, *, figures: bool, report: bool) -> Path: ...
+
+    def plot_chain_design(self, design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None) -> Figure: ...
 
 
 _registered: list[Presenter] = []

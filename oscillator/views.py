@@ -7,11 +7,13 @@ from __future__ import annotations
 TYPE_CHECKING = False
 
 if TYPE_CHECKING:  # pragma: no cover
+    from collections.abc import Mapping
     from pathlib import Path
 
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
@@ -96,6 +98,11 @@ class Views:
         from oscillator.report.chain_figures import schematic_figure
 
         return schematic_figure(chain)
+
+    def plot_chain_design(self, design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None) -> Figure:
+        from oscillator.report.chain_frequency import design_figure
+
+        return design_figure(design, sweeps)
 
     def plot_chain_result(self, result: ChainResult) -> Figure:
         from oscillator.report.chain_figures import motion_figure

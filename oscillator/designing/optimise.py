@@ -318,6 +318,9 @@ def design(
 ) -> Design:
     """The design of ``vary``'s parameters that makes the worst ``objective`` over the band of
     ``over`` and every attractor there smallest, subject to ``constraints`` (module docstring).
+    Given a :class:`~oscillator.model.chains.FrictionChain` (a declared machine), one number over
+    one band, no constraints: :func:`~oscillator.designing.chain_design.chain_design`, ``band``
+    the sweep's values (at least 21; docs/damper-design.md).
 
     Parameters
     ----------
@@ -351,7 +354,14 @@ def design(
         it holds (:func:`design_store`): an interrupted design resumes.
     """
     from oscillator.attractors.mapping import check_settings
+    from oscillator.model.chains import FrictionChain
 
+    if isinstance(case, FrictionChain):  # a declared machine: one number over one band
+        from oscillator.designing.chain_design import chain_design
+
+        if not isinstance(objective, str) or constraints:
+            raise InputError("a system's design takes one objective and no constraints for now", field="objective")
+        return chain_design(case, vary, over, objective, sweep=max(band, 21))  # type: ignore[return-value]
     problem = Problem.of(case, vary, over, objective, constraints, band=band, starts=starts)
     if store is not None and not isinstance(store, DesignStore):
         raise InputError(f"store must be a DesignStore (design_store(folder, ...)), got {shown(store)}", field="store")

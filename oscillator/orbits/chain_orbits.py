@@ -34,7 +34,7 @@ from oscillator.hybrid.chain_run import ChainResult, simulate_chain
 from oscillator.model.chain_fields import state_of
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SolverOptions
-from oscillator.orbits.chain_tangents import tangent_pass
+from oscillator.orbits.chain_tangents import RTOL, tangent_pass
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.chain_sensitivity import ChainSensitivities
@@ -156,9 +156,14 @@ def _still(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[s
     return held, tuple(neutral)
 
 
-def _derivative(image: ChainResult, free: list[int]) -> np.ndarray:
+#: The tangent equations' tolerance for a Newton step's Jacobian (the orbit's multipliers take
+#: :data:`~oscillator.orbits.chain_tangents.RTOL`).
+NEWTON_RTOL = 1e-7
+
+
+def _derivative(image: ChainResult, free: list[int], rtol: float = RTOL) -> np.ndarray:
     """``dP/dy`` over ``free``: the tangent pass along the map's run (exact)."""
-    return tangent_pass(image).monodromy[np.ix_(free, free)]
+    return tangent_pass(image, rtol=rtol).monodromy[np.ix_(free, free)]
 
 
 def _guess(chain: FrictionChain, section: float, transient: int, options: SolverOptions) -> np.ndarray:
@@ -229,7 +234,7 @@ def find_chain_orbit(
             )
         if iteration == max_iterations:
             break
-        matrix = _derivative(image, free) - np.eye(len(free))
+        matrix = _derivative(image, free, NEWTON_RTOL) - np.eye(len(free))
         try:
             step = np.linalg.solve(matrix, -residual)
         except np.linalg.LinAlgError:

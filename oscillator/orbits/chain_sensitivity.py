@@ -111,6 +111,13 @@ def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> Chain
     names = check_names(orbit.chain, params)
     if not names:
         raise InputError("params must name one or more numbers of the system", field="params")
+    for element in orbit.chain.elements:
+        if element.type == "jenkins" and element.values["F"] == 0 and f"{element.name}.F" in names:
+            raise SimulationFailed(
+                f"no derivative in {element.name}.F at F = 0: the slider's slip turns with the motion there, "
+                "without an event (the amplitude has a corner); take F > 0",
+                reason=Reason.NOT_DIFFERENTIABLE,
+            )
     along = tangent_pass(orbit.run, names)
     nearest = min(along.crossings, key=lambda c: c.margin, default=None)
     if nearest is not None and nearest.margin < MARGIN:

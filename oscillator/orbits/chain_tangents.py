@@ -53,7 +53,7 @@ from oscillator.model.chains import FrictionChain
 from oscillator.model.types import Vector
 from oscillator.text import printable
 
-__all__ = ["STEP", "ChainPass", "Crossing", "check_names", "root_slot", "tangent_pass"]
+__all__ = ["ATOL", "RTOL", "STEP", "ChainPass", "Crossing", "check_names", "root_slot", "tangent_pass"]
 
 #: The step of the field's differences in a number, relative to the number (at least 1).
 STEP = 1e-6
@@ -228,27 +228,53 @@ def _rates(t: float, y: np.ndarray, d: np.ndarray) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class _Switches:
+    """A run's switching events as arrays: for each, its time, its element's row, its kind and
+    the element's mode after (only the events that changed a mode)."""
+
+    t: np.ndarray
+    rows: list[int]
+    kinds: list[str]
+    after: list[int]
+
+    @classmethod
+    def of(cls, run: ChainResult) -> _Switches:
+        events = run.events[run.events.mode_before != run.events.mode_after]
+        rows = {e.name: k for k, e in enumerate(run.chain.elements)}
+        return cls(
+            events.t.to_numpy(float),
+            [rows[name] for name in events.element],
+            [str(kind) for kind in events.kind],
+            [int(m) for m in events.mode_after],
+        )
+
+    def first_at(self, t: float) -> int:
+        """The first event at ``t``: the one whose root CVODE found (the others follow from it)."""
+        return int(np.flatnonzero(self.t == t)[0])
+
+
 def _crossing(
-    run: ChainResult, data: _Data, row: int, block: np.ndarray, modes: tuple[np.ndarray, np.ndarray]
+    data: _Data,
+    t: float,
+    states: tuple[np.ndarray, np.ndarray],
+    modes: tuple[np.ndarray, np.ndarray],
+    switch: tuple[int, str, int],
+    block: np.ndarray,
+    element: str,
 ) -> Crossing:
-    """The saltation at the switch between trajectory rows ``row`` and ``row + 1``."""
-    trajectory, chain = run.trajectory, run.chain
-    t = float(trajectory.t.iloc[row])
-    names = list(chain.system.state)
-    before, after = (trajectory[names].iloc[k].to_numpy(float) for k in (row, row + 1))
-    events = run.events
-    here = events[(events.t == t) & (events.mode_before != events.mode_after)]
-    first = here.iloc[0]
-    element = [e.name for e in chain.elements].index(first.element)
-    index = 2 * element + root_slot(ChainEventKind(first.kind), int(first.mode_after))
+    """The saltation at a switch at ``t`` from ``states[0]`` in ``modes[0]`` to ``states[1]`` in
+    ``modes[1]``, its time set by ``switch = (row, kind, mode after)``'s root function."""
+    (before, after), (row, kind, left_in) = states, switch
+    index = 2 * row + root_slot(ChainEventKind(kind), left_in)
     (old, ahead, back), (new, _, _) = data.of(modes[0]), data.of(modes[1])
-    jump = _rates(t, after, new) - _rates(t, before, old)
+    rates = _rates(t, before, old)
+    jump = _rates(t, after, new) - rates
     normal = np.empty(len(before))
     dt = root_gradient(t, before, old, index, normal)
-    rates = _rates(t, before, old)
     speed = float(normal @ rates + dt)
     moved = np.empty(len(data.steps))
-    g = np.empty(2 * len(chain.elements))
+    g = np.empty(2 * len(data.arrays.kind))
     for k in range(len(moved)):
         root_values(t, before, ahead[k], g)
         high = g[index]
@@ -256,7 +282,7 @@ def _crossing(
         moved[k] = (high - g[index]) / (2.0 * data.steps[k])
     scale = float(np.abs(normal) @ np.abs(rates) + abs(dt))
     margin = abs(speed) / scale if scale > 0 else 0.0
-    return Crossing(t, first.element, str(first.kind), normal, moved, speed, jump, block.copy(), margin)
+    return Crossing(t, element, kind, normal, moved, speed, jump, block.copy(), margin)
 
 
 def _modes(run: ChainResult) -> np.ndarray:
@@ -270,10 +296,11 @@ def _modes(run: ChainResult) -> np.ndarray:
     return modes
 
 
-def tangent_pass(run: ChainResult, params: Sequence[str] = ()) -> ChainPass:
+def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = RTOL) -> ChainPass:
     """The tangents along ``run`` (a period map's: :func:`~oscillator.orbits.chain_orbits.
     chain_period_map`), from ``Phi = I``, ``Psi = 0`` at its start, in the numbers ``params``
-    (module docstring)."""
+    (module docstring); ``rtol`` the tangent equations' tolerance (a Newton step's Jacobian needs
+    less than the orbit's multipliers)."""
     chain = run.chain
     params = check_names(chain, params)
     data = _Data(chain, params)
@@ -281,17 +308,21 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = ()) -> ChainPass:
     trajectory = run.trajectory
     t = trajectory.t.to_numpy(float)
     states = trajectory[list(chain.system.state)].to_numpy(float)
-    modes = _modes(run)
+    modes, switches = _modes(run), _Switches.of(run)
     block = np.hstack([np.eye(n), np.zeros((n, k))])
     changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]
     pieces, crossings = [], []
     for a, b in itertools.pairwise(changes):
         solution = None
         if t[b - 1] > t[a]:
-            solution, block = _along_piece(data, modes[a], (t[a], t[b - 1]), states[a], block)
+            solution, block = _along_piece(data, modes[a], (t[a], t[b - 1]), states[a], block, rtol)
         pieces.append((float(t[a]), float(t[b - 1]), solution, block.copy()))
         if b < len(t):
-            crossing = _crossing(run, data, b - 1, block, (modes[b - 1], modes[b]))
+            first = switches.first_at(t[b])
+            switch = (switches.rows[first], switches.kinds[first], switches.after[first])
+            name = chain.elements[switch[0]].name
+            pair = (states[b - 1], states[b])
+            crossing = _crossing(data, float(t[b]), pair, (modes[b - 1], modes[b]), switch, block, name)
             row = crossing.normal @ block
             row[n:] += crossing.moved
             block = block + np.outer(crossing.jump, row) / crossing.speed
@@ -300,7 +331,7 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = ()) -> ChainPass:
 
 
 def _along_piece(
-    data: _Data, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray
+    data: _Data, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray, rtol: float
 ) -> tuple[object, np.ndarray]:
     """The tangent equations over one piece in ``mode``: the dense solution and the block at its end."""
     d, plus, minus = data.of(mode)
@@ -310,8 +341,8 @@ def _along_piece(
         span,
         np.concatenate([start, block.ravel()]),
         method="DOP853",
-        rtol=RTOL,
-        atol=ATOL,
+        rtol=rtol,
+        atol=rtol * ATOL / RTOL,
         dense_output=True,
     )
     return found.sol, found.y[n:, -1].reshape(block.shape)

@@ -15,6 +15,7 @@ failure keeps the tables).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +30,9 @@ from oscillator.report.runs import json_text, run_metadata
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["sweep_figure", "write_chain_sweeps"]
+    from oscillator.designing.chain_design import ChainDesign
+
+__all__ = ["design_figure", "sweep_figure", "write_chain_sweeps"]
 
 #: How each direction is drawn: line style and marker.
 _STYLE = {"up": ("-", "o"), "down": ("--", "s")}
@@ -111,3 +114,40 @@ def finish_chain_sweeps(folder: Path, table: pd.DataFrame, chain: FrictionChain,
     figures = folder / "figures"
     figures.mkdir(exist_ok=True)
     save_figure(sweep_figure(table, chain, param), figures, "frequency")
+
+
+def design_figure(design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None = None) -> Figure:
+    """A system's design (:class:`~oscillator.designing.chain_design.ChainDesign`): the worst of
+    its objective over the band against the number varied, each value judged a point, the best
+    a star; and, given ``sweeps`` (the varied number's value -> a sweep over the band:
+    :func:`~oscillator.orbits.chain_response.frequency_sweep`), the objective along the band at
+    each, the worst's place marked."""
+    from matplotlib.figure import Figure
+
+    worst, name = design.worst, design.vary
+    fig = Figure(figsize=(10 if sweeps else 6, 3.8), layout="constrained")
+    axes = fig.subplots(1, 2 if sweeps else 1, squeeze=False)[0]
+    history = design.history.sort_values(name)
+    ax = axes[0]
+    ax.plot(history[name], history.worst, "-o", color="tab:blue", ms=4, lw=1, label="values judged")
+    ax.plot([design.value], [worst.value], "*", color="tab:red", ms=14, label=f"best: {design.value:.4g}")
+    ax.set_xlabel(plain_label(name))
+    ax.set_ylabel(f"worst {plain_label(worst.measure)} over the band")
+    ax.set_title(f"the worst over the band against {plain_label(name)}", loc="left", fontsize=9)
+    ax.legend(fontsize=8)
+    if sweeps:
+        ax = axes[1]
+        param = next(c for c in next(iter(sweeps.values())).columns if c not in ("status",))
+        for value, table in sorted(sweeps.items()):
+            rows = table[table.status != "failed"]
+            best = abs(value - design.value) <= 1e-9 * max(1.0, abs(design.value))
+            ax.plot(
+                rows[param], rows[worst.measure], "-", lw=2 if best else 1, label=f"{plain_label(name)} = {value:.4g}"
+            )
+        ax.plot([worst.at], [worst.value], "*", color="tab:red", ms=12)
+        ax.set_xlabel(plain_label(param))
+        ax.set_ylabel(plain_label(worst.measure))
+        ax.set_title("along the band", loc="left", fontsize=9)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{plain_label(design.chain.title or 'friction chain')}: {plain_label(design.summary)}", fontsize=9)
+    return fig
