@@ -104,9 +104,30 @@ def design(
     surveys are kept as they finish: the same command with the same --out resumes.
 
     \b
+    A system file (docs/systems.md) varies one number over one band (docs/damper-design.md), the
+    band swept over --band values (21 unless given): history.parquet, system.toml at the best
+    value, figures/design.png.
+
+    \b
     Examples:
       oscillator design instance-1 --vary d1=2.5,4.5 --vary K6=1,40 --over Omega 1.4 1.6 --objective x_max_m1
+      oscillator design docs/systems/blade-damper.toml --vary platform.F=0.05,3 --over Omega 0.6 1.6 \
+        --objective x_max:blade
     """
+    from oscillator.cli.system_design import design_system
+
+    given = {"--constraint": bool(constraint), "--starts": starts != 4}
+    given |= {"--candidates": candidates != 16, "--front": front != 5, "--transient": transient is not None}
+    given |= {"--record": record is not None, "--full-transient": full_transient, "--engine": engine != "dop853"}
+    given |= {"--workers": workers is not None, "--scheduler": scheduler is not None}
+    with refusing():
+        ranges = _ranges(vary)
+    plots = not no_plots
+    case_only = [flag for flag, on in given.items() if on]
+    if design_system(
+        case, set_, ranges, (over, band if band != 5 else 21), objective, out_dir, case_only, plots, quiet
+    ):
+        return
     with refusing():
         resolved = case_from(case, None, set_)
         settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
@@ -115,7 +136,6 @@ def design(
         from oscillator.designing.problem import Problem
 
         name, low, high = over
-        ranges = _ranges(vary)
         refuse_taken(set_, dict.fromkeys(ranges, "--vary") | {name: "--over"})
         problem = Problem.of(resolved, ranges, {name: (low, high)}, objective, constraint or [], band, starts)
         from oscillator.model.parameters import check_count

@@ -320,7 +320,7 @@ def design(
     ``over`` and every attractor there smallest, subject to ``constraints`` (module docstring).
     Given a :class:`~oscillator.model.chains.FrictionChain` (a declared machine), one number over
     one band, no constraints: :func:`~oscillator.designing.chain_design.chain_design`, ``band``
-    the sweep's values (at least 21; docs/damper-design.md).
+    the sweep's values over the band (21 when left at 5; docs/damper-design.md).
 
     Parameters
     ----------
@@ -361,7 +361,7 @@ def design(
 
         if not isinstance(objective, str) or constraints:
             raise InputError("a system's design takes one objective and no constraints for now", field="objective")
-        return chain_design(case, vary, over, objective, sweep=max(band, 21))  # type: ignore[return-value]
+        return chain_design(case, vary, over, objective, sweep=band if band != 5 else 21)  # type: ignore[return-value]
     problem = Problem.of(case, vary, over, objective, constraints, band=band, starts=starts)
     if store is not None and not isinstance(store, DesignStore):
         raise InputError(f"store must be a DesignStore (design_store(folder, ...)), got {shown(store)}", field="store")

@@ -21,6 +21,7 @@ coordinates that move.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -62,10 +63,6 @@ class ChainOrbit:
     free : tuple of str
         The coordinates that move at the section, those Newton solved for and the multipliers
         are of.
-    monodromy : ndarray
-        ``dP/dy`` over :attr:`free`, exact through every switch (saltation).
-    multipliers : ndarray
-        Its eigenvalues, largest modulus first.
     residual : float
         ``|P(state) - state|`` over :attr:`free` (max norm).
     iterations : int
@@ -84,12 +81,23 @@ class ChainOrbit:
     state: np.ndarray
     period: int
     free: tuple[str, ...]
-    monodromy: np.ndarray
-    multipliers: np.ndarray
     residual: float
     iterations: int
     neutral: tuple[str, ...]
     run: ChainResult
+
+    @functools.cached_property
+    def monodromy(self) -> np.ndarray:
+        """``dP/dy`` over :attr:`free`, exact through every switch (the tangent pass along
+        :attr:`run`, computed when first asked)."""
+        names = list(self.chain.system.state)
+        return _derivative(self.run, [names.index(name) for name in self.free])
+
+    @functools.cached_property
+    def multipliers(self) -> np.ndarray:
+        """The monodromy's eigenvalues, largest modulus first."""
+        found = np.linalg.eigvals(self.monodromy) if len(self.free) else np.empty(0, complex)
+        return found[np.argsort(-np.abs(found), kind="stable")]
 
     @property
     def stable(self) -> bool:
@@ -216,21 +224,8 @@ def find_chain_orbit(
         residual = (_ends(image) - y)[free]
         history.append(float(np.max(np.abs(residual), initial=0.0)))
         if history[-1] <= tol * max(1.0, float(np.max(np.abs(y)))):
-            monodromy = _derivative(image, free)
-            multipliers = np.linalg.eigvals(monodromy) if len(free) else np.empty(0, complex)
-            order = np.argsort(-np.abs(multipliers), kind="stable")
             return ChainOrbit(
-                chain,
-                section,
-                y,
-                periods,
-                tuple(names[k] for k in free),
-                monodromy,
-                multipliers[order],
-                history[-1],
-                iteration,
-                neutral,
-                image,
+                chain, section, y, periods, tuple(names[k] for k in free), history[-1], iteration, neutral, image
             )
         if iteration == max_iterations:
             break

@@ -8,7 +8,9 @@ piece's start): ``J`` is the field's Jacobian in the mode
 number at fixed state and time (central differences of the compiled field in the number's
 direction of the chain's arrays: the arrays are affine in every number, the field affine in all
 but ``Omega``, ``phi`` and the masses, so the differences are exact or second order at a step of
-1e-6).  At a switch the root function ``g`` that CVODE found (the first event of the instant that
+1e-6).  Where the field is affine in the state (no cubic spring or damper) and no number is
+asked, ``Phi`` over a piece is the exponential ``expm(J tau)`` of the mode's constant Jacobian,
+exact and without integrating.  At a switch the root function ``g`` that CVODE found (the first event of the instant that
 changed a mode, :func:`root_slot`) sets the switch time; with ``f-`` the field before (the old
 mode) and ``f+`` after (the mode the rules settled on, cascades included), the saltation rule
 
@@ -28,18 +30,22 @@ differentiable there; :attr:`ChainPass.margin` says how near the run comes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from oscillator.compiled import njit
 from oscillator.errors import InputError
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import (
+    DAMPER,
     LAYOUT,
+    SPRING,
     ChainArrays,
     arrays_of,
     chain_derivative,
@@ -130,7 +136,7 @@ class ChainPass:
     params: tuple[str, ...]
     end: np.ndarray
     crossings: tuple[Crossing, ...]
-    pieces: tuple[tuple[float, float, object, np.ndarray], ...]
+    pieces: tuple[tuple[float, float, Callable[[float], np.ndarray]], ...]
 
     @property
     def monodromy(self) -> np.ndarray:
@@ -149,13 +155,9 @@ class ChainPass:
 
     def at(self, t: float) -> np.ndarray:
         """``[Phi | Psi]`` at ``t`` (the piece that ends at a switch time: before it)."""
-        for start, stop, solution, block in self.pieces:
+        for start, stop, tangent in self.pieces:
             if start <= t <= stop:
-                if solution is None:
-                    return block
-                n = self.end.shape[0]
-                found: np.ndarray = np.asarray(solution(t))[n:].reshape(n, -1)  # type: ignore[operator]
-                return found
+                return tangent(t)
         raise ValueError(f"t = {t!r} s is outside the run")
 
 
@@ -311,12 +313,21 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     modes, switches = _modes(run), _Switches.of(run)
     block = np.hstack([np.eye(n), np.zeros((n, k))])
     changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]
-    pieces, crossings = [], []
+    pieces: list[tuple[float, float, Callable[[float], np.ndarray]]] = []
+    crossings = []
+    affine = not params and _affine(data.arrays)
     for a, b in itertools.pairwise(changes):
-        solution = None
-        if t[b - 1] > t[a]:
-            solution, block = _along_piece(data, modes[a], (t[a], t[b - 1]), states[a], block, rtol)
-        pieces.append((float(t[a]), float(t[b - 1]), solution, block.copy()))
+        span = (float(t[a]), float(t[b - 1]))
+        if span[1] <= span[0]:
+            tangent: Callable[[float], np.ndarray] = functools.partial(_held, block.copy())
+        elif affine:  # a constant Jacobian in the mode: the exponential, exact
+            jacobian, rate = np.empty((n, n)), np.empty(n)
+            chain_jacobian(span[0], states[a], data.of(modes[a])[0], jacobian, rate)
+            tangent = functools.partial(_exponential, span[0], jacobian, block.copy())
+        else:
+            tangent = _along_piece(data, modes[a], span, states[a], block, rtol)
+        block = tangent(span[1])
+        pieces.append((*span, tangent))
         if b < len(t):
             first = switches.first_at(t[b])
             switch = (switches.rows[first], switches.kinds[first], switches.after[first])
@@ -330,10 +341,27 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     return _ended(run, data, params, block, tuple(crossings), tuple(pieces), modes[-1])
 
 
+def _affine(arrays: ChainArrays) -> bool:
+    """Whether the chain's field is affine in the state in every mode (no cubic spring or damper):
+    its Jacobian is then constant in a mode."""
+    cubic = np.isin(arrays.kind, (SPRING, DAMPER)) & (arrays.value[:, 1] != 0.0)
+    return not bool(cubic.any())
+
+
+def _held(block: np.ndarray, t: float) -> np.ndarray:
+    return block
+
+
+def _exponential(start: float, jacobian: np.ndarray, block: np.ndarray, t: float) -> np.ndarray:
+    moved: np.ndarray = scipy.linalg.expm(jacobian * (t - start)) @ block
+    return moved
+
+
 def _along_piece(
     data: _Data, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray, rtol: float
-) -> tuple[object, np.ndarray]:
-    """The tangent equations over one piece in ``mode``: the dense solution and the block at its end."""
+) -> Callable[[float], np.ndarray]:
+    """The tangent equations over one piece in ``mode``: the block at any time of it (the dense
+    solution's)."""
     d, plus, minus = data.of(mode)
     n = len(start)
     found = solve_ivp(
@@ -345,7 +373,13 @@ def _along_piece(
         atol=rtol * ATOL / RTOL,
         dense_output=True,
     )
-    return found.sol, found.y[n:, -1].reshape(block.shape)
+    solution, shape = found.sol, block.shape
+
+    def tangent(t: float) -> np.ndarray:
+        moved: np.ndarray = np.asarray(solution(t))[n:].reshape(shape)
+        return moved
+
+    return tangent
 
 
 def _big_rates(
@@ -362,7 +396,7 @@ def _ended(
     params: tuple[str, ...],
     block: np.ndarray,
     crossings: tuple[Crossing, ...],
-    pieces: tuple[tuple[float, float, object, np.ndarray], ...],
+    pieces: tuple[tuple[float, float, Callable[[float], np.ndarray]], ...],
     mode: np.ndarray,
 ) -> ChainPass:
     """The pass's end: ``dP/dOmega`` takes ``f(t1) dt1/dOmega`` (``t1 = s + N 2 pi/Omega``)."""

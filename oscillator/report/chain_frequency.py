@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.designing.chain_design import ChainDesign
 
-__all__ = ["design_figure", "sweep_figure", "write_chain_sweeps"]
+__all__ = ["design_figure", "sweep_figure", "write_chain_design", "write_chain_sweeps"]
 
 #: How each direction is drawn: line style and marker.
 _STYLE = {"up": ("-", "o"), "down": ("--", "s")}
@@ -151,3 +151,36 @@ def design_figure(design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | No
         ax.legend(fontsize=8)
     fig.suptitle(f"{plain_label(design.chain.title or 'friction chain')}: {plain_label(design.summary)}", fontsize=9)
     return fig
+
+
+def write_chain_design(
+    design: ChainDesign, claim: FolderClaim, *, band: tuple[str, float, float], command: list[str] | None = None
+) -> Path:
+    """Write a system's design: ``history.parquet`` and ``.csv`` (every value judged),
+    ``system.toml`` (the machine at the best value), ``run.json`` (the problem, the best value,
+    its worst, where, and its derivative) and put the folder in place; on any failure nothing is
+    left behind.  The folder's path."""
+    temporary = claim.temporary
+    try:
+        design.history.to_csv(temporary / "history.csv", index=False)
+        design.history.to_parquet(temporary / "history.parquet", index=False)
+        (temporary / "system.toml").write_text(chain_to_toml(design.chain), encoding="utf-8")
+        worst = design.worst
+        info: dict[str, Any] = {
+            "kind": "system-design",
+            "title": design.chain.title,
+            "vary": design.vary,
+            "over": list(band),
+            "objective": worst.measure,
+            "best": design.value,
+            "worst": worst.value,
+            "at": worst.at,
+            "gradient": worst.gradient,
+            "judged": len(design.history),
+            **run_metadata(command),
+        }
+        (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
