@@ -119,6 +119,8 @@ def shrunk(arguments: list[str]) -> list[str]:
     elif command == "frc":  # two seeds, short branches, the sweeps' two ends, in this process
         for option, value in (("--seeds", "2"), ("--sweep", "2"), ("--max-points", "12"), ("--workers", "1")):
             arguments = _set(arguments, option, value)
+    elif command == "design" and arguments[1].startswith("docs/systems/"):  # a system's design: 5 sweep values
+        arguments = _set(arguments, "--band", "5")
     elif command == "design":  # two band values, one start, three candidates, short runs, in this process
         for option, value in (("--band", "2"), ("--starts", "1"), ("--candidates", "3"), ("--transient", "30"),
                               ("--record", "4"), ("--workers", "1"), ("--front", "2")):  # fmt: skip

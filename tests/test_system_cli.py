@@ -228,3 +228,76 @@ def test_frc_of_a_system_file_refuses_the_options_of_cases_and_bad_spans_creatin
         assert not folder.exists()
     done = _invoke("frc", str(BLADE), "--param", "platform.kt", "-1", "2", "--out", str(folder))
     assert done.exit_code == 2 and "kt" in done.stderr and not folder.exists()
+
+
+OSCILLATOR_FILE = """title = "A forced oscillator"
+
+[system]
+Omega = 1.0
+
+[[mass]]
+name = "m"
+m = 1.0
+
+[[element]]
+type = "spring"
+on = "m"
+k = 1.0
+
+[[element]]
+type = "damper"
+name = "dashpot"
+on = "m"
+c = 0.1
+
+[[element]]
+type = "force"
+on = "m"
+Q = 1.0
+"""
+
+
+@pytest.mark.slow
+def test_design_of_a_system_file_writes_what_chain_design_finds(tmp_path):
+    """``oscillator design FILE --vary dashpot.c=0.05,0.3 --over Omega 0.5 1.5 --objective x_max:m
+    --band 7``: run.json's best value, worst and place are chain_design's (the same problem), the
+    history is its table, system.toml the machine at the best value, the figure drawn."""
+    import json
+
+    import pandas as pd
+
+    from oscillator.designing.chain_design import chain_design
+    from oscillator.io.chains import load_system
+
+    path = tmp_path / "oscillator.toml"
+    path.write_text(OSCILLATOR_FILE, encoding="utf-8")
+    arguments = ["--vary", "dashpot.c=0.05,0.3", "--over", "Omega", "0.5", "1.5", "--objective", "x_max:m"]
+    done = _invoke("design", str(path), *arguments, "--band", "7", "--out", str(tmp_path / "d"))
+    assert done.exit_code == 0, done.stderr
+    found = chain_design(load_system(path), {"dashpot.c": (0.05, 0.3)}, {"Omega": (0.5, 1.5)}, "x_max:m", sweep=7)
+    info = json.loads((tmp_path / "d" / "run.json").read_text())
+    assert (info["kind"], info["vary"], info["objective"], info["over"]) == (
+        "system-design", "dashpot.c", "x_max:m", ["Omega", 0.5, 1.5]
+    )  # fmt: skip
+    assert (info["best"], info["worst"], info["at"]) == (found.value, found.worst.value, found.worst.at)
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "d" / "history.parquet"), found.history)
+    assert load_system(tmp_path / "d" / "system.toml").with_values({"t0": 0.0}) == found.chain
+    assert (tmp_path / "d" / "figures" / "design.png").stat().st_size > 10_000
+    assert found.summary in done.stdout.replace("\n", " ") or found.summary[:40] in done.stdout
+
+
+def test_design_of_a_system_file_refuses_what_it_cannot_take_and_writes_nothing(tmp_path):
+    path = tmp_path / "oscillator.toml"
+    path.write_text(OSCILLATOR_FILE, encoding="utf-8")
+    base = ["design", str(path), "--over", "Omega", "0.5", "1.5", "--objective", "x_max:m"]
+    base += ["--out", str(tmp_path / "d")]
+    for extra, said in (
+        (["--vary", "dashpot.c=0.05,0.3", "--starts", "3"], "--starts applies to the article's cases"),
+        (["--vary", "dashpot.k=0.05,0.3"], "dashpot.k is no number of the system; did you mean 'dashpot.c'"),
+        (["--vary", "dashpot.c=0.05,0.3", "--vary", "spring-1.k=1,2"], "varies one number"),
+        (["--vary", "dashpot.c=0.05,0.3", "--objective", "x_pp:m"], "one --objective"),
+        (["--vary", "dashpot.c=-1,0.3"], "element 'dashpot': c must not be negative, got -1"),
+    ):
+        done = _invoke(*base, *extra)
+        assert done.exit_code == 2 and said in done.stderr, (extra, done.stderr)
+        assert "Traceback" not in done.stderr and not (tmp_path / "d").exists()

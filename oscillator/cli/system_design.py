@@ -56,7 +56,10 @@ def design_system(
         from oscillator.report.runs import claim_output
 
         chain = changed(load_system(path), assignments or [])
-        chain.with_values({name: low}).with_values({name: high})  # the band's ends checked, the field named
+        if len(ranges) != 1:
+            raise InputError("a system's design varies one number (--vary NAME=LOW,HIGH once) for now", field="vary")
+        for number, (lowest, highest) in {**ranges, name: (low, high)}.items():  # each end checked, named
+            chain.with_values({number: lowest}).with_values({number: highest})
         claim = claim_output(out_dir, f"{path.stem}-design")
     except OscillatorError as error:
         raise fail(message(error)) from None

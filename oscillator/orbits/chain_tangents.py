@@ -8,11 +8,12 @@ piece's start): ``J`` is the field's Jacobian in the mode
 number at fixed state and time (central differences of the compiled field in the number's
 direction of the chain's arrays: the arrays are affine in every number, the field affine in all
 but ``Omega``, ``phi`` and the masses, so the differences are exact or second order at a step of
-1e-6).  Where the field is affine in the state (no cubic spring or damper) and no number is
-asked, ``Phi`` over a piece is the exponential ``expm(J tau)`` of the mode's constant Jacobian,
-exact and without integrating.  At a switch the root function ``g`` that CVODE found (the first event of the instant that
-changed a mode, :func:`root_slot`) sets the switch time; with ``f-`` the field before (the old
-mode) and ``f+`` after (the mode the rules settled on, cascades included), the saltation rule
+1e-6). Where the field is affine in the state (no cubic spring or damper) and no number is asked,
+``Phi`` over a piece is the exponential ``expm(J tau)`` of the mode's constant Jacobian, exact and
+without integrating. At a switch the root function ``g`` that CVODE found (the first event of the
+instant that changed a mode, :func:`root_slot`) sets the switch time; with ``f-`` the field before
+(the old mode) and ``f+`` after (the mode the rules settled on, cascades included), the saltation
+rule
 
     dt_s = -(grad g . delta + dg/dc) / (grad g . f- + dg/dt),     delta+ = delta- - (f+ - f-) dt_s
 
