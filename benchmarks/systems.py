@@ -8,8 +8,13 @@
    path) against `simulate_chain(article_chain(...))`, Instance 1 over 200 forcing periods with
    the trajectory at every step (the chain path records it always), and their ratio;
 3. throughput of the three docs/systems/ machines: forcing periods and events per second;
-4. the friction damper's orbit (Newton, differences for the map's derivative) and its frequency
-   sweep over docs/systems.md's band at three normal loads (11 values each), warm, medians of 3.
+4. the friction damper's orbit (Newton with the exact monodromy) and its frequency sweep over
+   docs/systems.md's band at three normal loads (11 values each), warm, medians of 3;
+5. the map's derivative at the damper's orbit and at a vibro-impact orbit with a cubic spring
+   (tests/test_chain_sensitivities.py's): exact (the tangent pass: the exponential of each mode's
+   Jacobian where the field is affine, DOP853 where it is not) against the central differences
+   the orbits used before (two period maps a coordinate), medians of 5 alternating, and their
+   largest difference; the sensitivities in three numbers; docs/damper-design.md's design.
 
 Usage: python benchmarks/systems.py
 """
@@ -112,6 +117,69 @@ def orbits(repeats: int = 3) -> tuple[float, float, int]:
     return statistics.median(found), statistics.median(swept), orbit.iterations
 
 
+def _differences(orbit, free: list[int]):  # type: ignore[no-untyped-def]
+    """The map's derivative over ``free`` by central differences, as the chain orbits took it
+    before the tangent pass: two period maps a coordinate, a step of 1e-6 of its scale."""
+    import numpy as np
+
+    from oscillator.orbits.chain_orbits import chain_period_map
+
+    size, columns = orbit.chain.system.size, []
+    for k in free:
+        h = 1e-6 * max(1.0, abs(orbit.state[k]))
+        ends = []
+        for sign in (1.0, -1.0):
+            start = orbit.state.copy()
+            start[k] += sign * h
+            ends.append(chain_period_map(orbit.chain, orbit.section, start).y_end[:size])
+        columns.append((ends[0] - ends[1])[free] / (2 * h))
+    return np.array(columns).T
+
+
+def derivatives(repeats: int = 5) -> list[tuple[str, float, float, float, float]]:
+    import numpy as np
+
+    import oscillator
+    from oscillator.orbits.chain_orbits import _derivative
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_chain_sensitivities import impact_chain
+
+    rows = []
+    machines = {
+        "blade damper (affine)": (oscillator.load_system(ROOT / "docs" / "systems" / "blade-damper.toml"), 60),
+        "impacts (cubic spring)": (impact_chain(), 150),
+    }
+    for name, (chain, transient) in machines.items():
+        orbit = oscillator.find_orbit(chain, transient=transient)
+        names = list(chain.system.state)
+        free = [names.index(n) for n in orbit.free]
+
+        exact, old = [], []
+        for _ in range(repeats):
+            started = time.perf_counter()
+            matrix = _derivative(orbit.run, free)
+            exact.append(time.perf_counter() - started)
+            started = time.perf_counter()
+            reference = _differences(orbit, free)
+            old.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        orbit.sensitivities(["Omega", *[p for p in chain.parameter_names() if p.endswith((".F", ".K", ".k"))][:2]])
+        sensitivities = time.perf_counter() - started
+        gap = float(np.abs(matrix - reference).max())
+        rows.append((name, statistics.median(exact), statistics.median(old), gap, sensitivities))
+    return rows
+
+
+def design() -> tuple[float, str]:
+    import oscillator
+
+    chain = oscillator.load_system(ROOT / "docs" / "systems" / "blade-damper.toml")
+    started = time.perf_counter()
+    found = oscillator.design(chain, {"platform.F": (0.05, 3.0)}, {"Omega": (0.6, 1.6)}, "x_max:blade")
+    return time.perf_counter() - started, found.summary
+
+
 def main() -> None:
     print(f"friction chains, {dt.date.today()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
     first_run(0)  # fills numba's cache if it is not
@@ -133,6 +201,14 @@ def main() -> None:
     print("4. the blade's friction damper (medians of 3, warm)")
     print(f"   find_orbit after 60 periods' transient: {found:.3f} s ({steps} Newton steps)")
     print(f"   frequency_sweep, 3 normal loads x 11 values of Omega: {swept:.2f} s")
+    print("5. the map's derivative at an orbit: exact tangent pass against central differences (medians of 5)")
+    for name, exact, old, gap, sensitivities in derivatives():
+        print(
+            f"   {name}: exact {exact * 1e3:.1f} ms, differences {old * 1e3:.1f} ms ({old / exact:.1f}x), largest "
+            f"difference {gap:.1e}; sensitivities in 3 numbers {sensitivities * 1e3:.1f} ms"
+        )
+    took, summary = design()
+    print(f"   docs/damper-design.md's design: {took:.1f} s ({summary})")
 
 
 if __name__ == "__main__":
