@@ -3,12 +3,15 @@
 
 :func:`orbit_measures` reads a :class:`~oscillator.orbits.chain_orbits.ChainOrbit`'s return: each
 mass's largest and smallest displacement and its peak-to-peak ``x_pp`` (the extremes exact to the
-solver's tolerance: between two steps where the velocity changes sign, the cubic through both
-ends' positions and velocities has its turn), and each friction element's and Jenkins slider's
-share of the period stuck, from the event times.  :func:`frequency_sweep` follows the orbit over
-values of a parameter (``Omega`` by default), each found by Newton from the one before, as a
-sweep up or down a test rig's band does: where the orbit it follows ends (a fold, a grazing), the
-next value starts again from a transient, and the row says so.  The continuation of every branch
+solver's tolerance: between two steps where the velocity changes sign, the quintic through both
+ends' positions, velocities and accelerations has its turn); each friction element's and Jenkins slider's
+share of the period stuck and its slip distance; each stop's and contact's share closed, its
+closings and its fastest closing speed; each element's work and the energy it dissipates over
+the return (the energy audit's: :attr:`~oscillator.hybrid.chain_run.ChainResult.energy`).
+:func:`frequency_sweep` follows the orbit over values of a parameter (``Omega`` by default),
+each found by Newton from the one before, as a sweep up or down a test rig's band does: where
+the orbit it follows ends (a fold, a grazing), the next value starts again from a transient, and
+the row says so.  The continuation of every branch
 through its folds, as the article's system has, comes next (issue 52).
 """
 
@@ -26,7 +29,7 @@ from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
 
-__all__ = ["frequency_sweep", "orbit_measures", "turning_points", "turns"]
+__all__ = ["closed_spans", "frequency_sweep", "mode_spans", "orbit_measures", "stuck_spans", "turning_points", "turns"]
 
 
 def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -75,8 +78,11 @@ def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
 
 def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     """The measures of one return of ``orbit``: ``x_max:<mass>``, ``x_min:<mass>``,
-    ``x_pp:<mass>`` (m) for each mass; ``stuck:<element>`` for each friction element and Jenkins
-    slider: the share of the return it holds (0 to 1)."""
+    ``x_pp:<mass>`` (m) for each mass; ``stuck:<element>`` (the share of the return it holds, 0 to
+    1) and ``slip:<element>`` (m) for each friction element and Jenkins slider;
+    ``closed:<element>`` (share), ``closings:<element>`` and ``impact_velocity:<element>`` (m/s)
+    for each stop and contact; ``work:<element>`` and ``dissipated:<element>`` (J) for every
+    element."""
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
@@ -98,15 +104,26 @@ def extremes(run: ChainResult) -> dict[str, tuple[float, float, float, float]]:
     return found
 
 
+def mode_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float, int]]:
+    """``(from, to, mode)``: the spans of ``[start, start + span]`` between the switching element's
+    events, each with its mode (a friction element's or slider's slip sign, ``0`` stuck; a stop's
+    or contact's ``1`` closed)."""
+    trajectory, events = run.trajectory, run.events
+    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
+    times = [start, *mine.t.to_numpy(float), start + span]
+    modes = [int(trajectory[f"mode:{element}"].iloc[0]), *mine.mode_after.astype(int).tolist()]
+    return [(a, b, m) for a, b, m in zip(times, times[1:], modes, strict=False)]
+
+
 def stuck_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
     """The spans of ``[start, start + span]`` in which the friction element or Jenkins slider
     ``element`` holds, from its events."""
-    trajectory, events = run.trajectory, run.events
-    mode = trajectory[f"mode:{element}"].to_numpy()
-    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
-    times = [start, *mine.t.to_numpy(float), start + span]
-    held = [mode[0] == 0, *(mine.mode_after.to_numpy() == 0)]
-    return [(a, b) for a, b, h in zip(times, times[1:], held, strict=False) if h]
+    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode == 0]
+
+
+def closed_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
+    """The spans of ``[start, start + span]`` in which the stop or contact ``element`` is closed."""
+    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode != 0]
 
 
 def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
@@ -116,7 +133,45 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
     for element in run.chain.elements:
         if element.type in ("friction", "jenkins"):
             spans = stuck_spans(run, element.name, start, span)
-            found[f"stuck:{element.name}"] = sum(b - a for a, b in spans) / span
+            found[f"stuck:{element.name}"] = float(sum(b - a for a, b in spans) / span)
+        elif element.type in ("stop", "contact"):
+            found |= _contact_measures(run, element.name, start, span)
+    return found | _energy_measures(run, start, span)
+
+
+def _contact_measures(run: ChainResult, name: str, start: float, span: float) -> dict[str, float]:
+    """A stop's or contact's share of the return closed, its closings, and the fastest closing's
+    speed (m/s: the gap's rate as it closes, from the event)."""
+    events = run.events
+    closings = events[(events.element == name) & events.kind.isin(["stop_closes", "contact_closes"])]
+    spans = closed_spans(run, name, start, span)
+    return {
+        f"closed:{name}": float(sum(b - a for a, b in spans) / span),
+        f"closings:{name}": float(len(closings)),
+        f"impact_velocity:{name}": float(closings.G0.abs().max()) if len(closings) else 0.0,
+    }
+
+
+def _energy_measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
+    """Each element's work on the masses over the return and the energy it dissipates (J, the
+    run's energy audit); each friction element's and slider's slip distance (m): the sum over its
+    slips (each of one sign) of how far its mass moved against the belt (``x - w t``), or its
+    ``z`` moved, from the states at the slip's ends."""
+    chain, trajectory = run.chain, run.trajectory
+    table = run.energy.table.set_index("element")
+    found: dict[str, float] = {}
+    for element in chain.elements:
+        name = element.name
+        found[f"work:{name}"] = float(table.work[name])
+        found[f"dissipated:{name}"] = float(table.dissipated[name])
+        if element.type in ("friction", "jenkins"):
+            spans, t = mode_spans(run, name, start, span), trajectory.t.to_numpy(float)
+            if element.type == "friction":  # the place against the belt's: x - w t
+                place = trajectory[chain.system.position(element.on)].to_numpy(float) - element.values["w"] * t
+            else:
+                place = trajectory[f"z:{name}"].to_numpy(float)
+            moves = [abs(np.interp(b, t, place) - np.interp(a, t, place)) for a, b, m in spans if m]
+            found[f"slip:{name}"] = float(sum(moves))
     return found
 
 

@@ -15,7 +15,10 @@ slider holding, the whole period: its place is any nearby one).  Along the orbit
 ``delta(t) = Phi(t) dy*/dc + Psi(t)``; a switch time by ``-(grad g . delta + dg/dc) / (grad g . f-
 + dg/dt)``.  The measures follow: a mass's largest (smallest) displacement moves as its
 position at the turn (the velocity is zero there, so the turn's own shift does not count), a
-stuck share as the times that bound its spans, over the return's span ``N 2 pi / Omega``.
+stuck or closed share as the times that bound its spans, over the return's span
+``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies, slip
+distances and impact speeds of :func:`~oscillator.orbits.chain_response.orbit_measures` have no
+derivative here yet (they need the tangents of the integrals): their rows are left out.
 
 Where a switch of the orbit is a grazing (the flow's speed across the boundary near zero against
 its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the switch.
@@ -31,7 +34,7 @@ import pandas as pd
 
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.orbits.chain_orbits import ChainOrbit
-from oscillator.orbits.chain_response import extremes, orbit_measures, stuck_spans
+from oscillator.orbits.chain_response import closed_spans, extremes, orbit_measures, stuck_spans
 from oscillator.orbits.chain_tangents import ChainPass, check_names, tangent_pass
 
 __all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
@@ -166,16 +169,19 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
     when = {c.t: c.time_derivative(moved) for c in along.crossings}
     start, end = orbit.section, orbit.section + span
     for element in chain.elements:
-        if element.type not in ("friction", "jenkins"):
+        if element.type not in ("friction", "jenkins", "stop", "contact"):
             continue
-        spans = stuck_spans(orbit.run, element.name, start, span)
+        held = element.type in ("friction", "jenkins")
+        spans = (stuck_spans if held else closed_spans)(orbit.run, element.name, start, span)
         share = sum(b - a for a, b in spans) / span
 
         def moves(t: float) -> np.ndarray:
             return stretch if t == end else np.zeros(len(params)) if t == start else when[t]
 
         total = sum((moves(b) - moves(a) for a, b in spans), np.zeros(len(params)))
-        found[f"stuck:{element.name}"] = total / span - share * stretch / span
+        found[f"{'stuck' if held else 'closed'}:{element.name}"] = total / span - share * stretch / span
+        if not held:  # a count: it moves only where the orbit changes (not differentiable there)
+            found[f"closings:{element.name}"] = np.zeros(len(params))
     values = orbit_measures(orbit)
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
