@@ -219,3 +219,24 @@ def test_a_friction_dampers_stuck_share_is_read_from_its_events_and_a_lost_orbit
     conveyor = load_system(SYSTEMS / "conveyor.toml")  # rattles: no period-1 orbit near its motion
     table = frequency_sweep(conveyor, [3.0, 3.1], transient=20, max_iterations=3)
     assert list(table.status) == ["failed", "failed"] and table.message.str.contains("did not converge").all()
+
+
+def test_a_friction_dampers_response_tends_to_its_two_linear_limits():
+    """The blade's damper swept over ``Omega``: with ``F = 0`` the slider never holds and the blade
+    answers as alone (``|X| = Q / |k - m Omega^2 + i c Omega|``); with ``F`` far above any force it
+    holds all period and the blade answers as the two masses coupled by ``kt`` (their linear
+    system's ``|X_blade|``): ``x_pp / 2`` equals each closed form to 1e-8."""
+    from oscillator.orbits.chain_response import frequency_sweep
+
+    machine = load_system(SYSTEMS / "blade-damper.toml")
+    values = np.array([0.6, 0.8, 1.3, 1.6])
+    alone = frequency_sweep(machine.with_values({"platform.F": 0.0}), values, transient=20)
+    stuck = frequency_sweep(machine.with_values({"platform.F": 1e4}), values, transient=20)
+    mass, damping = np.diag([1.0, 0.1]), np.diag([0.02, 0.0])
+    stiffness = np.array([[1.0 + 2.0, -2.0], [-2.0, 2.0 + 0.5]])
+    for k, omega in enumerate(values):
+        single = 0.5 / abs(1.0 - omega**2 + 0.02j * omega)
+        coupled = np.linalg.solve(stiffness - omega**2 * mass + 1j * omega * damping, [0.5, 0.0])
+        assert math.isclose(alone["x_pp:blade"][k] / 2, single, rel_tol=1e-8), omega
+        assert math.isclose(stuck["x_pp:blade"][k] / 2, abs(coupled[0]), rel_tol=1e-8), omega
+        assert stuck["stuck:platform"][k] == 1.0 and alone["stuck:platform"][k] == 0.0
