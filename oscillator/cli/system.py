@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,6 +16,7 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import fail, load, message, out, say
+from oscillator.cli.resumable import with_progress
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
 from oscillator.io.files import check_name, check_new, refuse_link
 from oscillator.text import printable
@@ -312,7 +314,6 @@ def frc_system(
         if out_dir is not None:
             check_new(out_dir, option="--out")
         load("oscillator.orbits.chain_response", notice=not quiet)
-        from oscillator.orbits.chain_response import frequency_sweep
         from oscillator.report.runs import claim_output
 
         chain = changed(load_system(path), assignments or [])
@@ -323,8 +324,10 @@ def frc_system(
     try:
         values = np.linspace(low, high, sweep)
         periods = 100 if transient is None else transient
-        up = frequency_sweep(chain, values, param=name, transient=periods).assign(direction="up")
-        down = frequency_sweep(chain, values[::-1], param=name, transient=periods).assign(direction="down")
+        label = f"{printable(chain.title or path.stem)}: sweeps over {printable(name)}"
+        up, down = with_progress(
+            lambda progress=None: _both_ways(chain, values, name, periods, progress), label, "orbits", quiet
+        )
     except BaseException:
         claim.abandon()
         raise
@@ -342,6 +345,26 @@ def frc_system(
             ) from None
     say("written to ", (printable(str(folder)), "bold"))
     return True
+
+
+def _both_ways(
+    chain: FrictionChain,
+    values: np.ndarray,
+    name: str,
+    periods: int,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The sweep up and the sweep down, ``progress(done, total)`` told over both."""
+    from oscillator.orbits.chain_response import frequency_sweep
+
+    total = 2 * len(values)
+
+    def told(offset: int) -> Callable[[int, int], None] | None:
+        return None if progress is None else (lambda done, _: progress(offset + done, total))
+
+    up = frequency_sweep(chain, values, param=name, transient=periods, progress=told(0))
+    down = frequency_sweep(chain, values[::-1], param=name, transient=periods, progress=told(len(values)))
+    return up.assign(direction="up"), down.assign(direction="down")
 
 
 def _said_sweeps(table: pd.DataFrame, chain: FrictionChain, name: str, quiet: bool) -> None:
