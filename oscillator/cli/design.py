@@ -55,6 +55,43 @@ ConstraintOption = Annotated[
 ]
 
 
+#: The options that apply to the article's cases only, at their defaults (a system file's design
+#: refuses any other value, naming the option).
+_DEFAULTS: dict[str, object] = {
+    "--constraint": None,
+    "--starts": 4,
+    "--candidates": 16,
+    "--front": 5,
+    "--transient": None,
+    "--record": None,
+    "--full-transient": False,
+    "--engine": "dop853",
+    "--workers": None,
+    "--scheduler": None,
+}
+
+
+def _of_system(
+    case: str,
+    assignments: list[str] | None,
+    ranges: dict[str, tuple[float, float]],
+    band: tuple[tuple[str, float, float], int],
+    objectives: list[str],
+    out_dir: Path | None,
+    given: tuple[object, ...],
+    plots: bool,
+    quiet: bool,
+) -> bool:
+    """``design FILE`` for a system file (:func:`~oscillator.cli.system_design.design_system`), the
+    article's options given refused by name; whether ``case`` was one. ``--band`` is the sweep's
+    values there (21 when left at 5)."""
+    from oscillator.cli.system_design import design_system
+
+    case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
+    values = band if band[1] != 5 else (band[0], 21)
+    return design_system(case, assignments, ranges, values, objectives, out_dir, case_only, plots, quiet)
+
+
 def _ranges(texts: list[str]) -> dict[str, tuple[float, float]]:
     """``--vary NAME=LOW,HIGH`` (each) as ``{name: (low, high)}``; the names and ranges are checked
     with the problem."""
@@ -114,19 +151,10 @@ def design(
       oscillator design docs/systems/blade-damper.toml --vary platform.F=0.05,3 --over Omega 0.6 1.6 \
         --objective x_max:blade
     """
-    from oscillator.cli.system_design import design_system
-
-    given = {"--constraint": bool(constraint), "--starts": starts != 4}
-    given |= {"--candidates": candidates != 16, "--front": front != 5, "--transient": transient is not None}
-    given |= {"--record": record is not None, "--full-transient": full_transient, "--engine": engine != "dop853"}
-    given |= {"--workers": workers is not None, "--scheduler": scheduler is not None}
     with refusing():
         ranges = _ranges(vary)
-    plots = not no_plots
-    case_only = [flag for flag, on in given.items() if on]
-    if design_system(
-        case, set_, ranges, (over, band if band != 5 else 21), objective, out_dir, case_only, plots, quiet
-    ):
+    given = (constraint, starts, candidates, front, transient, record, full_transient, engine, workers, scheduler)
+    if _of_system(case, set_, ranges, (over, band), objective, out_dir, given, not no_plots, quiet):
         return
     with refusing():
         resolved = case_from(case, None, set_)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 
@@ -14,6 +15,10 @@ from oscillator.cli.system import changed
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import check_new
 from oscillator.text import printable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.io.files import FolderClaim
+    from oscillator.model.chains import FrictionChain
 
 __all__ = ["design_system"]
 
@@ -31,38 +36,17 @@ def design_system(
 ) -> bool:
     """``oscillator design FILE`` if ``target`` is a system file: the value of ``--vary``'s one
     number that makes the worst ``--objective`` over the ``--over`` band (swept over ``--band``
-    values) smallest; its folder
-    (history.parquet/.csv, system.toml at the best value, run.json, figures/design.png) written;
-    whether it was one."""
-    from oscillator.io.chains import load_system, system_path
+    values) smallest; its folder (history.parquet/.csv, system.toml at the best value, run.json,
+    figures/design.png) written; whether it was one."""
+    from oscillator.io.chains import system_path
 
     path = system_path(target)
     if path is None:
         return False
     (name, low, high), values = band
-    try:
-        if case_only:
-            raise InputError(
-                f"{case_only[0]} applies to the article's cases; a system's design varies one number over one band "
-                "(--vary NAME=LOW,HIGH once, --over, --objective once) for now",
-                field=case_only[0],
-            )
-        if len(objectives) != 1:
-            raise InputError("a system's design takes one --objective for now", field="objective")
-        if out_dir is not None:
-            check_new(out_dir, option="--out")
-        load("oscillator.designing.chain_design", notice=not quiet)
-        from oscillator.designing.chain_design import chain_design
-        from oscillator.report.runs import claim_output
+    chain, claim = _checked(path, assignments, ranges, band[0], objectives, out_dir, case_only, quiet)
+    from oscillator.designing.chain_design import chain_design
 
-        chain = changed(load_system(path), assignments or [])
-        if len(ranges) != 1:
-            raise InputError("a system's design varies one number (--vary NAME=LOW,HIGH once) for now", field="vary")
-        for number, (lowest, highest) in {**ranges, name: (low, high)}.items():  # each end checked, named
-            chain.with_values({number: lowest}).with_values({number: highest})
-        claim = claim_output(out_dir, f"{path.stem}-design")
-    except OscillatorError as error:
-        raise fail(message(error)) from None
     try:
         found = with_progress(
             lambda progress=None: chain_design(
@@ -93,6 +77,45 @@ def design_system(
             ) from None
     say("written to ", (printable(str(folder)), "bold"))
     return True
+
+
+def _checked(
+    path: Path,
+    assignments: list[str] | None,
+    ranges: dict[str, tuple[float, float]],
+    over: tuple[str, float, float],
+    objectives: list[str],
+    out_dir: Path | None,
+    case_only: list[str],
+    quiet: bool,
+) -> tuple[FrictionChain, FolderClaim]:
+    """The machine and the claimed folder, every input checked first (one message naming the
+    field and exit 2 on a refusal, nothing written)."""
+    from oscillator.io.chains import load_system
+
+    name, low, high = over
+    try:
+        if case_only:
+            raise InputError(
+                f"{case_only[0]} applies to the article's cases; a system's design varies one number over one band "
+                "(--vary NAME=LOW,HIGH once, --over, --objective once) for now",
+                field=case_only[0],
+            )
+        if len(objectives) != 1:
+            raise InputError("a system's design takes one --objective for now", field="objective")
+        if out_dir is not None:
+            check_new(out_dir, option="--out")
+        load("oscillator.designing.chain_design", notice=not quiet)
+        from oscillator.report.runs import claim_output
+
+        chain = changed(load_system(path), assignments or [])
+        if len(ranges) != 1:
+            raise InputError("a system's design varies one number (--vary NAME=LOW,HIGH once) for now", field="vary")
+        for number, (lowest, highest) in {**ranges, name: (low, high)}.items():  # each end checked, named
+            chain.with_values({number: lowest}).with_values({number: highest})
+        return chain, claim_output(out_dir, f"{path.stem}-design")
+    except OscillatorError as error:
+        raise fail(message(error)) from None
 
 
 def _figure(folder: Path, found: object) -> None:
