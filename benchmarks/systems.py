@@ -117,25 +117,6 @@ def orbits(repeats: int = 3) -> tuple[float, float, int]:
     return statistics.median(found), statistics.median(swept), orbit.iterations
 
 
-def _differences(orbit, free: list[int]):  # type: ignore[no-untyped-def]
-    """The map's derivative over ``free`` by central differences, as the chain orbits took it
-    before the tangent pass: two period maps a coordinate, a step of 1e-6 of its scale."""
-    import numpy as np
-
-    from oscillator.orbits.chain_orbits import chain_period_map
-
-    size, columns = orbit.chain.system.size, []
-    for k in free:
-        h = 1e-6 * max(1.0, abs(orbit.state[k]))
-        ends = []
-        for sign in (1.0, -1.0):
-            start = orbit.state.copy()
-            start[k] += sign * h
-            ends.append(chain_period_map(orbit.chain, orbit.section, start).y_end[:size])
-        columns.append((ends[0] - ends[1])[free] / (2 * h))
-    return np.array(columns).T
-
-
 def derivatives(repeats: int = 5) -> list[tuple[str, float, float, float, float]]:
     import numpy as np
 
@@ -143,7 +124,7 @@ def derivatives(repeats: int = 5) -> list[tuple[str, float, float, float, float]
     from oscillator.orbits.chain_orbits import _derivative
 
     sys.path.insert(0, str(ROOT / "tests"))
-    from test_chain_sensitivities import impact_chain
+    from test_chain_sensitivities import impact_chain, map_differences
 
     rows = []
     machines = {
@@ -161,7 +142,7 @@ def derivatives(repeats: int = 5) -> list[tuple[str, float, float, float, float]
             matrix = _derivative(orbit.run, free)
             exact.append(time.perf_counter() - started)
             started = time.perf_counter()
-            reference = _differences(orbit, free)
+            reference = map_differences(orbit, free)
             old.append(time.perf_counter() - started)
         started = time.perf_counter()
         orbit.sensitivities(["Omega", *[p for p in chain.parameter_names() if p.endswith((".F", ".K", ".k"))][:2]])

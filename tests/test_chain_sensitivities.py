@@ -87,24 +87,30 @@ def _number(chain: FrictionChain, name: str) -> float:
     return float(next(e.values[key] for e in chain.elements if e.name == owner))
 
 
-def test_the_exact_monodromy_equals_the_period_maps_differences(case):
-    """``M`` through the saltation of every switch the orbit makes equals central differences of
-    the period map (step 1e-6 at CVODE's 1e-12, the differences good to about 1e-7: agreement to 1e-6
-    of M's scale; a missed saltation term is of order one)."""
-    orbit, kinds, _ = case
-    assert kinds <= set(orbit.events.kind), set(orbit.events.kind)
-    chain, names = orbit.chain, list(orbit.chain.system.state)
-    free = [names.index(name) for name in orbit.free]
-    columns = []
+def map_differences(orbit, free: list[int]) -> np.ndarray:
+    """The period map's derivative over the state's indices ``free`` by central differences (a
+    step of 1e-6 of each coordinate's scale): what the chain orbits took before the tangent pass
+    (benchmarks/systems.py times the two)."""
+    size, columns = orbit.chain.system.size, []
     for k in free:
         h = 1e-6 * max(1.0, abs(orbit.state[k]))
         ends = []
         for sign in (1.0, -1.0):
             start = orbit.state.copy()
             start[k] += sign * h
-            ends.append(chain_period_map(chain, orbit.section, start).y_end[: len(names)])
+            ends.append(chain_period_map(orbit.chain, orbit.section, start).y_end[:size])
         columns.append((ends[0] - ends[1])[free] / (2 * h))
-    differences = np.array(columns).T
+    return np.array(columns).T
+
+
+def test_the_exact_monodromy_equals_the_period_maps_differences(case):
+    """``M`` through the saltation of every switch the orbit makes equals central differences of
+    the period map (step 1e-6 at CVODE's 1e-12, the differences good to about 1e-7: agreement to 1e-6
+    of M's scale; a missed saltation term is of order one)."""
+    orbit, kinds, _ = case
+    assert kinds <= set(orbit.events.kind), set(orbit.events.kind)
+    names = list(orbit.chain.system.state)
+    differences = map_differences(orbit, [names.index(name) for name in orbit.free])
     scale = np.abs(differences).max()
     assert np.abs(orbit.monodromy - differences).max() <= 1e-6 * scale
     assert orbit.stable and np.abs(orbit.multipliers).max() < 1.0

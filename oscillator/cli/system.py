@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.chain_orbits import ChainOrbit
 
-__all__ = ["frc_system", "orbit_system", "run_system", "show_system"]
+__all__ = ["finished", "frc_system", "orbit_system", "run_system", "show_system"]
 
 #: Options of ``run`` that act on the article's cases only, and what to do instead.
 _CASE_ONLY = {
@@ -336,15 +336,22 @@ def frc_system(
 
     folder = write_chain_sweeps(table, chain, name, claim, command=["oscillator", *sys.argv[1:]])
     _said_sweeps(table, chain, name, quiet)
-    if plots:
+    finished(folder, (lambda: finish_chain_sweeps(folder, table, chain, name)) if plots else None)
+    return True
+
+
+def finished(folder: Path, draw: Callable[[], None] | None) -> None:
+    """The figures drawn into a folder whose tables are written (``draw``, unless None), then the
+    folder said; a figure that cannot be drawn fails the command (exit 1) naming the folder that
+    keeps the tables."""
+    if draw is not None:
         try:
-            finish_chain_sweeps(folder, table, chain, name)
+            draw()
         except Exception as error:  # the tables are safe
             raise fail(
                 f"the figure could not be drawn ({type(error).__name__}: {error}); the tables are in {folder}", 1
             ) from None
     say("written to ", (printable(str(folder)), "bold"))
-    return True
 
 
 def _both_ways(

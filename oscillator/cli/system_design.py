@@ -3,15 +3,16 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from oscillator.cli.console import fail, load, message, out, say
+from oscillator.cli.console import fail, load, message, out
 from oscillator.cli.resumable import with_progress
-from oscillator.cli.system import changed
+from oscillator.cli.system import changed, finished
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import check_new
 from oscillator.text import printable
@@ -68,14 +69,7 @@ def design_system(
     if not quiet:
         out.print(Text(f"  {found.summary}"))
         out.print(Text(f"  {len(found.history)} values of {found.vary} judged (history.parquet)"))
-    if plots:
-        try:
-            _figure(folder, found)
-        except Exception as error:  # the tables are safe
-            raise fail(
-                f"the figure could not be drawn ({type(error).__name__}: {error}); the tables are in {folder}", 1
-            ) from None
-    say("written to ", (printable(str(folder)), "bold"))
+    finished(folder, functools.partial(_figure, folder, found) if plots else None)
     return True
 
 
