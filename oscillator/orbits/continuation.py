@@ -96,7 +96,8 @@ def continue_orbit(
     progress: Callable[[float], None] | None = None,
     **overrides: float,
 ) -> Branch:
-    """Continue the period-``period`` orbit in ``param`` from ``start`` to ``stop``: a :class:`Branch`.
+    """Continue the period-``period`` orbit in ``param`` from ``start`` to ``stop``: a :class:`Branch`
+    (a system's period-1 orbit: a :class:`~oscillator.orbits.chain_branch.ChainBranch`).
 
     Parameters
     ----------
@@ -146,6 +147,17 @@ def continue_orbit(
     >>> branch.bifurcations[["Q2", "kind"]].round(6).values.tolist()
     [[71.157742, 'sliding_vanish']]
     """
+    from oscillator.model.chains import FrictionChain
+
+    if isinstance(case, FrictionChain):  # a declared machine (oscillator/orbits/chain_branch.py)
+        from oscillator.orbits.chain_branch import continue_chain_orbit
+
+        given = None if guess is None else np.asarray(guess, dtype=float)
+        periods = 100 if transient is None else transient
+        found = continue_chain_orbit(
+            case, param=param, start=start, stop=stop, guess=given, max_points=max_points, transient=periods
+        )
+        return found  # type: ignore[return-value]
     settings = check_settings(
         case,
         param=param,

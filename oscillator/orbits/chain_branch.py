@@ -1,0 +1,233 @@
+"""A friction chain's periodic orbit followed in one of its numbers through folds: pseudo-arclength
+continuation (issue 52), ``oscillator.continue_orbit(chain, "Omega", (0.8, 1.6))``.
+
+The unknowns are the orbit's free coordinates at the section and the number ``lam`` (scaled by the
+span's width); the equations ``P(y, lam) - y = 0`` (:mod:`oscillator.orbits.chain_orbits`) and the
+arclength condition ``t . (u - u_pred) = 0``.  Their Jacobian ``[M - I, dP/dlam]`` is exact: the
+monodromy and the map's derivative in the number, through every switch
+(:mod:`oscillator.orbits.chain_tangents`).  From each point the tangent (the Jacobian's null vector,
+oriented as the last) predicts the next, Newton corrects it; the step grows after an easy
+correction and halves after a hard or failed one.  A fold is where the tangent's ``lam``
+component changes sign, located on the parabola through the three points about it; a change of
+stability says which multiplier left the unit circle (through +1, -1 or as a complex pair).
+The branch ends where it leaves the span, where the coordinates that move at the section change
+(a mass starts or stops sticking there: the branch continues as another kind of orbit), or where
+the corrector fails at the smallest step; the reason is kept.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import InputError, OscillatorError
+from oscillator.model.chains import FrictionChain
+from oscillator.orbits.chain_orbits import ChainOrbit, _still, chain_period_map, find_chain_orbit
+from oscillator.orbits.chain_response import orbit_measures
+from oscillator.orbits.chain_tangents import check_names, tangent_pass
+
+__all__ = ["ChainBranch", "continue_chain_orbit"]
+
+#: The corrector's tolerance on ``|P(y) - y|`` (relative to the state's scale, at least 1).
+TOL = 1e-10
+#: The smallest step, as a fraction of the span's width.
+MIN_STEP = 1e-5
+
+
+@dataclass(frozen=True)
+class ChainBranch:
+    """A followed branch: ``points`` (one row a point in the order followed: the number, ``stable``,
+    ``largest`` (the largest multiplier's modulus), the measures and the state), ``folds`` and
+    ``bifurcations`` (``kind``, the number's value, the point before), and why it ended."""
+
+    chain: FrictionChain
+    param: str
+    points: pd.DataFrame
+    bifurcations: pd.DataFrame
+    ended: str
+
+    @property
+    def folds(self) -> pd.DataFrame:
+        """The folds (turning points in the number)."""
+        return self.bifurcations[self.bifurcations.kind == "fold"]
+
+
+@dataclass(frozen=True)
+class _Point:
+    y: np.ndarray
+    lam: float
+    tangent: np.ndarray
+    orbit: ChainOrbit
+    iterations: int
+
+
+class _Follower:
+    """The branch's equations at a value of the number (the chain, its free coordinates, the scale)."""
+
+    def __init__(self, chain: FrictionChain, param: str, span: tuple[float, float], free: list[int]) -> None:
+        self.chain, self.param, self.free = chain, param, free
+        self.low, self.high = span
+        self.width = span[1] - span[0]
+
+    def system(self, y: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray, ChainOrbit]:
+        """``P(y) - y`` over the free coordinates, ``[M - I, width dP/dlam]`` and the orbit's run."""
+        chain = self.chain.with_values({self.param: lam})
+        image = chain_period_map(chain, chain.t0, y)
+        held, neutral = _still(chain, image)
+        if sorted(set(range(len(y))) - held) != self.free:
+            raise _Changed(lam)
+        along = tangent_pass(image, [self.param])
+        free = self.free
+        ends = np.asarray(image.y_end[: len(y)], dtype=float)
+        residual = (ends - y)[free]
+        jacobian = np.column_stack(
+            [along.monodromy[np.ix_(free, free)] - np.eye(len(free)), self.width * along.derivatives[free, 0]]
+        )
+        names = chain.system.state
+        orbit = ChainOrbit(
+            chain,
+            chain.t0,
+            y,
+            1,
+            tuple(names[k] for k in free),
+            float(np.abs(residual).max(initial=0.0)),
+            0,
+            neutral,
+            image,
+        )
+        orbit.__dict__["monodromy"] = along.monodromy[np.ix_(free, free)]
+        return residual, jacobian, orbit
+
+    def tangent(self, jacobian: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+        t: np.ndarray = np.linalg.svd(jacobian)[2][-1]
+        reference = previous @ t if previous is not None else t[-1]
+        return -t if reference < 0 else t
+
+    def correct(self, guess: _Point, step: float) -> _Point | None:
+        """Newton from the prediction ``guess + step t`` with the arclength condition; None if it fails."""
+        anchor = np.append(guess.y[self.free], guess.lam / self.width) + step * guess.tangent
+        u, y = anchor.copy(), guess.y.copy()
+        for iteration in range(8):
+            y[self.free], lam = u[:-1], u[-1] * self.width
+            try:
+                residual, jacobian, orbit = self.system(y, lam)
+            except OscillatorError:
+                return None
+            scale = max(1.0, float(np.abs(y).max()))
+            constraint = float(guess.tangent @ (u - anchor))
+            if np.abs(residual).max(initial=0.0) <= TOL * scale and abs(constraint) <= 1e-9:
+                return _Point(y.copy(), lam, self.tangent(jacobian, guess.tangent), orbit, iteration)
+            try:
+                u = u + np.linalg.solve(np.vstack([jacobian, guess.tangent]), -np.append(residual, constraint))
+            except np.linalg.LinAlgError:
+                return None
+            if not np.isfinite(u).all():
+                return None
+        return None
+
+
+class _Changed(OscillatorError):
+    """The coordinates that move at the section changed at ``lam``."""
+
+    def __init__(self, lam: float) -> None:
+        super().__init__(f"the coordinates that move at the section change near {lam!r}")
+        self.lam = lam
+
+
+def continue_chain_orbit(
+    chain: FrictionChain,
+    *,
+    param: str,
+    start: float,
+    stop: float,
+    guess: np.ndarray | None = None,
+    step: float = 0.05,
+    max_points: int = 500,
+    transient: int = 100,
+    progress: Callable[[int, int], None] | None = None,
+) -> ChainBranch:
+    """The period-1 orbit of ``chain`` followed in ``param`` from ``start`` towards ``stop`` (its
+    orbit at ``start`` found from ``guess``, or after ``transient`` forcing periods) until it
+    leaves the span between them (module docstring); ``step`` the first and largest arclength step
+    as a fraction of the span's width.  ``oscillator.continue_orbit(chain, param=..., start=...,
+    stop=...)`` calls it."""
+    (param,) = check_names(chain, [param])
+    low, high = sorted((float(start), float(stop)))
+    if not low < high:
+        raise InputError(f"start and stop must differ, got {start!r} and {stop!r}", field="stop")
+    if not 0 < step <= 0.5 or isinstance(max_points, bool) or not 2 <= max_points <= 100_000:
+        raise InputError("step must be in (0, 0.5] and max_points 2 to 100000", field="step")
+    first = find_chain_orbit(chain.with_values({param: float(start)}), guess, transient=transient)
+    names = list(chain.system.state)
+    follower = _Follower(chain, param, (low, high), [names.index(n) for n in first.free])
+    _, jacobian, orbit = follower.system(first.state, float(start))
+    heading = np.zeros(len(follower.free) + 1)
+    heading[-1] = 1.0 if stop > start else -1.0
+    point = _Point(first.state, float(start), follower.tangent(jacobian, heading), orbit, first.iterations)
+    points, ended = _follow(follower, point, step, max_points, progress)
+    return ChainBranch(chain, param, _table(points, param, names), _changes(points, param), ended)
+
+
+def _follow(
+    follower: _Follower, point: _Point, step: float, max_points: int, progress: Callable[[int, int], None] | None
+) -> tuple[list[_Point], str]:
+    """The points from ``point`` on, and why the branch ended."""
+    points, h = [point], step
+    while len(points) < max_points:
+        try:
+            found = follower.correct(point, h)
+        except _Changed as change:
+            return points, str(change)
+        if found is None or (found.iterations > 4 and h > MIN_STEP):
+            h /= 2
+            if h < MIN_STEP:
+                return points, f"the corrector failed at the smallest step near {point.lam!r}"
+            continue
+        points.append(found)
+        point, h = found, min(step, h * 1.5) if found.iterations <= 3 else h
+        if progress is not None:
+            progress(len(points), max_points)
+        if not follower.low <= found.lam <= follower.high:
+            return points, "the end of the span"
+    return points, f"max_points = {max_points} reached"
+
+
+def _table(points: list[_Point], param: str, names: list[str]) -> pd.DataFrame:
+    rows = []
+    for p in points:
+        moduli = np.abs(p.orbit.multipliers)
+        row = {param: p.lam, "stable": bool(np.all(moduli < 1.0)), "largest": float(moduli.max(initial=0.0))}
+        rows.append(row | orbit_measures(p.orbit) | dict(zip(names, p.y.tolist(), strict=True)))
+    return pd.DataFrame(rows)
+
+
+def _changes(points: list[_Point], param: str) -> pd.DataFrame:
+    """Folds (the tangent's ``lam`` component changes sign: the parabola's vertex through the three
+    points about it) and changes of stability (the multiplier that crossed the unit circle)."""
+    rows: list[dict[str, object]] = []
+    for k in range(1, len(points)):
+        a, b = points[k - 1], points[k]
+        if a.tangent[-1] * b.tangent[-1] < 0 and 0 < k < len(points) - 1:
+            lam = _vertex([points[j].lam for j in (k - 1, k, k + 1)])
+            rows.append({"kind": "fold", param: lam, "point": k - 1})
+        stable_a, stable_b = (bool(np.all(np.abs(p.orbit.multipliers) < 1.0)) for p in (a, b))
+        if stable_a != stable_b:
+            crossed = (b if not stable_b else a).orbit.multipliers[0]
+            kind = "fold" if crossed.real > 0 and abs(crossed.imag) < 1e-9 else "period_doubling"
+            if abs(crossed.imag) >= 1e-9:
+                kind = "neimark_sacker"
+            if kind != "fold":
+                rows.append({"kind": kind, param: 0.5 * (a.lam + b.lam), "point": k - 1})
+    return pd.DataFrame(rows, columns=["kind", param, "point"])
+
+
+def _vertex(values: list[float]) -> float:
+    """The extreme of the parabola through three equally weighted values at arclengths -1, 0, 1."""
+    left, middle, right = values
+    curvature = left - 2 * middle + right
+    if curvature == 0:
+        return middle
+    return middle - (right - left) ** 2 / (8 * curvature)
