@@ -301,3 +301,46 @@ def test_design_of_a_system_file_refuses_what_it_cannot_take_and_writes_nothing(
         done = _invoke(*base, *extra)
         assert done.exit_code == 2 and said in done.stderr, (extra, done.stderr)
         assert "Traceback" not in done.stderr and not (tmp_path / "d").exists()
+
+
+@pytest.mark.slow
+def test_continue_of_a_system_file_writes_the_branch_continue_orbit_finds(tmp_path):
+    """``oscillator continue FILE --param Omega --from 0.6 --to 0.8``: branch.parquet is
+    continue_orbit's points, run.json says it reached the end, the figure is drawn; to 0.9 the
+    branch ends where the slider starts to slip at the section: exit 1, said, the branch kept."""
+    import json
+
+    import pandas as pd
+
+    import oscillator
+    from oscillator.io.chains import load_system
+
+    done = _invoke(
+        "continue", str(BLADE), "--param", "Omega", "--from", "0.6", "--to", "0.8", "--out", str(tmp_path / "c")
+    )
+    assert done.exit_code == 0, done.stderr
+    branch = oscillator.continue_orbit(load_system(BLADE), param="Omega", start=0.6, stop=0.8)
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "c" / "branch.parquet"), branch.points)
+    info = json.loads((tmp_path / "c" / "run.json").read_text())
+    assert info["ended"] == "the end of the span" and info["points"] == len(branch.points)
+    assert (tmp_path / "c" / "figures" / "branch.png").stat().st_size > 10_000
+    done = _invoke(
+        "continue", str(BLADE), "--param", "Omega", "--from", "0.6", "--to", "0.9", "--out", str(tmp_path / "d")
+    )
+    assert done.exit_code == 1 and "the coordinates that move at the section change near 0.864" in done.stderr
+    assert json.loads((tmp_path / "d" / "run.json").read_text())["points"] > 2
+
+
+def test_continue_of_a_system_file_refuses_the_articles_options_and_writes_nothing(tmp_path):
+    base = ["continue", str(BLADE), "--param", "Omega", "--from", "0.6", "--to", "0.8", "--out", str(tmp_path / "c")]
+    for extra, said in (
+        (["--period", "2"], "--period applies to the article's cases"),
+        (["--coordinate", "x2"], "--coordinate applies to the article's cases"),
+        (["--guess", "1,2"], "--guess must be 5 numbers"),
+        (["--set", "platform.G=1"], "platform.G is no number of the system"),
+    ):
+        done = _invoke(*base, *extra)
+        assert done.exit_code == 2 and said in done.stderr, (extra, done.stderr)
+        assert not (tmp_path / "c").exists()
+    done = _invoke("continue", str(BLADE), "--param", "platform.Q", "--from", "0.6", "--to", "0.8")
+    assert done.exit_code == 2 and "did you mean" in done.stderr

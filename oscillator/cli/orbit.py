@@ -287,9 +287,19 @@ def continue_(
     kept), 130 if interrupted (likewise).
 
     \b
+    A system file (docs/systems.md) continues its period-1 orbit by its numbers' names: branch.parquet,
+    bifurcations.parquet, run.json, figures/branch.png.
+
+    \b
     Examples:
       oscillator continue instance-1 --param Q2 --from 70.5 --to 71.5 --out runs/q2-branch
+      oscillator continue docs/systems/blade-damper.toml --param Omega --from 0.6 --to 0.8
     """
+    from oscillator.cli.system_branch import continue_system
+
+    article = (period, section, coordinate, over)
+    if continue_system(case, set_, (param, start, stop), (step, max_points, guess, transient), out_dir, article, quiet):
+        return
     try:
         resolved, settings, sweep_points, claim = _prepare_continue(
             case,
@@ -297,17 +307,8 @@ def continue_(
             coordinate,
             over,
             out_dir,
-            {
-                "param": param,
-                "start": start,
-                "stop": stop,
-                "period": period,
-                "step": step,
-                "max_points": max_points,
-                "guess": _guess(guess),
-                "transient": transient,
-                "section": section,
-            },
+            dict(param=param, start=start, stop=stop, period=period, step=step, max_points=max_points)
+            | {"guess": _guess(guess), "transient": transient, "section": section},
         )
     except OscillatorError as error:
         raise fail(message(error), code=_code(error)) from None

@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.chain_orbits import ChainOrbit
 
-__all__ = ["finished", "frc_system", "orbit_system", "run_system", "show_system"]
+__all__ = ["finished", "frc_system", "guessed", "orbit_system", "run_system", "show_system"]
 
 #: Options of ``run`` that act on the article's cases only, and what to do instead.
 _CASE_ONLY = {
@@ -187,7 +187,7 @@ def show_system(path: Path, figure: Path | None) -> None:
     say("schematic written to ", (str(target), "bold"))
 
 
-def _state(text: str | None, names: tuple[str, ...]) -> list[float] | None:
+def guessed(text: str | None, names: tuple[str, ...]) -> list[float] | None:
     """``--guess`` as one number per name of the system's state."""
     from oscillator.io.expressions import parse_value
 
@@ -229,7 +229,7 @@ def orbit_system(
         names = check_names(chain, [n.strip() for n in (sensitivities or "").split(",") if n.strip()])
         if sensitivities is not None and not names:
             raise InputError("--sensitivities needs names of the system's numbers, e.g. platform.F,Omega")
-        start = _state(guess, chain.system.state)
+        start = guessed(guess, chain.system.state)
         found = find_chain_orbit(
             chain,
             None if start is None else np.asarray(start),

@@ -114,6 +114,8 @@ class _Follower:
             y[self.free], lam = u[:-1], u[-1] * self.width
             try:
                 residual, jacobian, orbit = self.system(y, lam)
+            except _Changed:
+                raise
             except OscillatorError:
                 return None
             scale = max(1.0, float(np.abs(y).max()))
@@ -133,7 +135,10 @@ class _Changed(OscillatorError):
     """The coordinates that move at the section changed at ``lam``."""
 
     def __init__(self, lam: float) -> None:
-        super().__init__(f"the coordinates that move at the section change near {lam!r}")
+        super().__init__(
+            f"the coordinates that move at the section change near {lam:.8g} (a mass or slider starts or stops "
+            "sticking there: the orbit goes on as another kind)"
+        )
         self.lam = lam
 
 
@@ -184,7 +189,7 @@ def _follow(
         if found is None or (found.iterations > 4 and h > MIN_STEP):
             h /= 2
             if h < MIN_STEP:
-                return points, f"the corrector failed at the smallest step near {point.lam!r}"
+                return points, f"the corrector failed at the smallest step near {point.lam:.8g}"
             continue
         points.append(found)
         point, h = found, min(step, h * 1.5) if found.iterations <= 3 else h

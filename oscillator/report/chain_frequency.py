@@ -1,4 +1,5 @@
-"""A friction chain's frequency sweeps (``oscillator frc FILE``): the folder and its figure.
+"""A friction chain's frequency sweeps (``oscillator frc FILE``), its branches (``oscillator
+continue FILE``) and its designs (``oscillator design FILE``): their folders and figures.
 
 ::
 
@@ -8,6 +9,10 @@
     run.json                      the parameter, its span, the values, the failed ones
     figures/frequency.png, .svg   each mass's largest displacement up and down the band (unstable
                                   orbits hollow), and each friction element's and slider's stuck share
+
+A branch's folder holds ``branch.parquet``/``.csv`` (its points), ``bifurcations.parquet``/``.csv``,
+``system.toml``, ``run.json`` and ``figures/branch.png``; a design's ``history.parquet``/``.csv``,
+``system.toml`` (at the best value), ``run.json`` and ``figures/design.png``.
 
 The tables and ``run.json`` are written whole, then the folder put in place; the figure after (its
 failure keeps the tables).
@@ -19,6 +24,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pandas as pd
 
 from oscillator.io.chains import chain_to_toml
@@ -31,8 +37,16 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.designing.chain_design import ChainDesign
+    from oscillator.orbits.chain_branch import ChainBranch
 
-__all__ = ["design_figure", "sweep_figure", "write_chain_design", "write_chain_sweeps"]
+__all__ = [
+    "branch_figure",
+    "design_figure",
+    "sweep_figure",
+    "write_chain_branch",
+    "write_chain_design",
+    "write_chain_sweeps",
+]
 
 #: How each direction is drawn: line style and marker.
 _STYLE = {"up": ("-", "o"), "down": ("--", "s")}
@@ -177,6 +191,61 @@ def write_chain_design(
             "at": worst.at,
             "gradient": worst.gradient,
             "judged": len(design.history),
+            **run_metadata(command),
+        }
+        (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
+        return claim.commit()
+    except BaseException:
+        claim.abandon()
+        raise
+
+
+def branch_figure(branch: ChainBranch) -> Figure:
+    """A chain's branch (:class:`~oscillator.orbits.chain_branch.ChainBranch`): each mass's
+    largest displacement against the number along the branch, stable parts solid, unstable
+    dashed red, each fold and change of stability marked."""
+    from matplotlib.figure import Figure
+
+    chain, param, points = branch.chain, branch.param, branch.points
+    masses = chain.system.masses
+    fig = Figure(figsize=(8, 2.6 * len(masses) + 0.6), layout="constrained")
+    axes = fig.subplots(len(masses), 1, sharex=True, squeeze=False)[:, 0]
+    stable = points.stable.to_numpy(bool)
+    for ax, mass in zip(axes, masses, strict=True):
+        x, y = points[param].to_numpy(float), points[f"x_max:{mass}"].to_numpy(float)
+        ax.plot(x, np.where(stable, y, np.nan), "-", color="tab:blue", lw=1.5, label="stable")
+        ax.plot(x, np.where(~stable, y, np.nan), "--", color="tab:red", lw=1.2, label="unstable")
+        for _, row in branch.bifurcations.iterrows():
+            k = int(row.point)
+            ax.plot([row[param]], [y[k]], "o", mfc="white", color="black", ms=6)
+            ax.annotate(
+                plain_label(str(row.kind)), (row[param], y[k]), fontsize=7, xytext=(4, 4), textcoords="offset points"
+            )
+        ax.set_ylabel(f"x_max of {plain_label(str(mass))} (m)")
+        ax.legend(fontsize=8, loc="upper left")
+    axes[-1].set_xlabel(plain_label(param))
+    fig.suptitle(f"{plain_label(chain.title or 'friction chain')}: the branch over {plain_label(param)}", fontsize=10)
+    return fig
+
+
+def write_chain_branch(branch: ChainBranch, claim: FolderClaim, *, command: list[str] | None = None) -> Path:
+    """Write a chain's branch: ``branch.parquet`` and ``.csv`` (its points), ``bifurcations.parquet``
+    and ``.csv``, ``system.toml`` and ``run.json`` (the number, the span reached, why it ended),
+    and put the folder in place; on any failure nothing is left behind.  The folder's path."""
+    temporary = claim.temporary
+    try:
+        for name, table in (("branch", branch.points), ("bifurcations", branch.bifurcations)):
+            table.to_csv(temporary / f"{name}.csv", index=False)
+            table.to_parquet(temporary / f"{name}.parquet", index=False)
+        (temporary / "system.toml").write_text(chain_to_toml(branch.chain), encoding="utf-8")
+        values = branch.points[branch.param]
+        info: dict[str, Any] = {
+            "kind": "system-branch",
+            "title": branch.chain.title,
+            "param": branch.param,
+            "reached": [float(values.min()), float(values.max())],
+            "points": len(branch.points),
+            "ended": branch.ended,
             **run_metadata(command),
         }
         (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
