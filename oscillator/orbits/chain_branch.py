@@ -9,7 +9,8 @@ monodromy and the map's derivative in the number, through every switch
 oriented as the last) predicts the next, Newton corrects it; the step grows after an easy
 correction and halves after a hard or failed one.  A fold is where the tangent's ``lam``
 component changes sign, located on the parabola through the three points about it; a change of
-stability says which multiplier left the unit circle (through +1, -1 or as a complex pair).
+stability says which multiplier left the unit circle (:meth:`~oscillator.orbits.branch.
+Bifurcation.of_multiplier`: through -1 a period doubling, as a complex pair a torus).
 The branch ends where it leaves the span, where the coordinates that move at the section change
 (a mass starts or stops sticking there: the branch continues as another kind of orbit), or where
 the corrector fails at the smallest step; the reason is kept.
@@ -25,6 +26,7 @@ import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.model.chains import FrictionChain
+from oscillator.orbits.branch import Bifurcation
 from oscillator.orbits.chain_orbits import ChainOrbit, _still, chain_period_map, find_chain_orbit
 from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_tangents import check_names, tangent_pass
@@ -52,7 +54,7 @@ class ChainBranch:
     @property
     def folds(self) -> pd.DataFrame:
         """The folds (turning points in the number)."""
-        return self.bifurcations[self.bifurcations.kind == "fold"]
+        return self.bifurcations[self.bifurcations.kind == Bifurcation.FOLD]
 
 
 @dataclass(frozen=True)
@@ -217,14 +219,11 @@ def _changes(points: list[_Point], param: str) -> pd.DataFrame:
         a, b = points[k - 1], points[k]
         if a.tangent[-1] * b.tangent[-1] < 0 and 0 < k < len(points) - 1:
             lam = _vertex([points[j].lam for j in (k - 1, k, k + 1)])
-            rows.append({"kind": "fold", param: lam, "point": k - 1})
+            rows.append({"kind": Bifurcation.FOLD, param: lam, "point": k - 1})
         stable_a, stable_b = (bool(np.all(np.abs(p.orbit.multipliers) < 1.0)) for p in (a, b))
         if stable_a != stable_b:
-            crossed = (b if not stable_b else a).orbit.multipliers[0]
-            kind = "fold" if crossed.real > 0 and abs(crossed.imag) < 1e-9 else "period_doubling"
-            if abs(crossed.imag) >= 1e-9:
-                kind = "neimark_sacker"
-            if kind != "fold":
+            kind = Bifurcation.of_multiplier(complex((b if not stable_b else a).orbit.multipliers[0]))
+            if kind is not Bifurcation.FOLD:  # a fold is found by the branch's turn
                 rows.append({"kind": kind, param: 0.5 * (a.lam + b.lam), "point": k - 1})
     return pd.DataFrame(rows, columns=["kind", param, "point"])
 
