@@ -1,10 +1,16 @@
 """The frequency response (issue 38): the branches over a span with their measures, and the slow
-sweeps up and down with their jumps, against a hardening Duffing oscillator's folds."""
+sweeps up and down with their jumps, against a hardening Duffing oscillator's folds.
+
+The Duffing example runs end to end as docs/frequency.md shows it (about 24 s on one worker, the
+default tier's longest setup): these tests are in the slow tier, which CI runs, until the
+frequency response runs on the compiled path (issue 53)."""
 
 import numpy as np
 import pytest
 
 from oscillator import InputError, frequency_response
+
+pytestmark = pytest.mark.slow
 
 
 def test_the_branch_folds_twice_and_is_measured_at_every_point(duffing):

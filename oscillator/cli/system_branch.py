@@ -65,7 +65,7 @@ def continue_system(
             start=start,
             stop=stop,
             guess=None if given is None else np.asarray(given),
-            step=0.05 if step is None else step,
+            step=0.1 if step is None else step,
             max_points=max_points,
             transient=100 if transient is None else transient,
         )

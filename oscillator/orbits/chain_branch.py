@@ -151,7 +151,7 @@ def continue_chain_orbit(
     start: float,
     stop: float,
     guess: np.ndarray | None = None,
-    step: float = 0.05,
+    step: float = 0.1,
     max_points: int = 500,
     transient: int = 100,
     progress: Callable[[int, int], None] | None = None,

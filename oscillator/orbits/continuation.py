@@ -97,7 +97,8 @@ def continue_orbit(
     **overrides: float,
 ) -> Branch:
     """Continue the period-``period`` orbit in ``param`` from ``start`` to ``stop``: a :class:`Branch`
-    (a system's period-1 orbit: a :class:`~oscillator.orbits.chain_branch.ChainBranch`).
+    (a system's period-1 orbit: a :class:`~oscillator.orbits.chain_branch.ChainBranch`, ``step``
+    its largest arclength step as a fraction of the span, 0.1 by default).
 
     Parameters
     ----------
@@ -155,7 +156,14 @@ def continue_orbit(
         given = None if guess is None else np.asarray(guess, dtype=float)
         periods = 100 if transient is None else transient
         found = continue_chain_orbit(
-            case, param=param, start=start, stop=stop, guess=given, max_points=max_points, transient=periods
+            case,
+            param=param,
+            start=start,
+            stop=stop,
+            guess=given,
+            step=0.1 if step is None else step,
+            max_points=max_points,
+            transient=periods,
         )
         return found  # type: ignore[return-value]
     settings = check_settings(
