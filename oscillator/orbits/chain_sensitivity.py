@@ -16,9 +16,10 @@ slider holding, the whole period: its place is any nearby one).  Along the orbit
 + dg/dt)``.  The measures follow: a mass's largest (smallest) displacement moves as its
 position at the turn (the velocity is zero there, so the turn's own shift does not count), a
 stuck or closed share as the times that bound its spans, over the return's span
-``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies, slip
-distances and impact speeds of :func:`~oscillator.orbits.chain_response.orbit_measures` have no
-derivative here yet (they need the tangents of the integrals): their rows are left out.
+``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies and slip
+distances of :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet
+(they need the tangents of the integrals): their rows are left out.  A fastest closing speed
+moves as the gap's rate at that closing, at the closing's moving time.
 
 Where a switch of the orbit is a grazing (the flow's speed across the boundary near zero against
 its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the switch.
@@ -148,6 +149,25 @@ def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> Chain
     )
 
 
+def _impact_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray) -> np.ndarray:
+    """The derivative of a stop's or contact's fastest closing speed: the gap's rate at that
+    closing, at its moving time (``delta- + f- dt_s``, the rate's row), signed as the speed."""
+    chain, events = orbit.chain, orbit.events
+    closings = events[(events.element == name) & events.kind.isin(["stop_closes", "contact_closes"])]
+    if closings.empty:
+        return np.zeros(len(along.params))
+    fastest = closings.loc[closings.G0.abs().idxmax()]
+    crossing = next(c for c in along.crossings if c.t == fastest.t)
+    element = next(e for e in chain.elements if e.name == name)
+    names = list(chain.system.state)
+    rate = np.zeros(len(names))
+    rate[names.index(chain.system.velocity(element.on))] = 1.0
+    if element.with_ is not None:
+        rate[names.index(chain.system.velocity(element.with_))] = -1.0
+    found: np.ndarray = np.sign(fastest.G0) * (rate @ crossing.state_derivative(moved))
+    return found
+
+
 def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.DataFrame:
     chain, names = orbit.chain, list(orbit.chain.system.state)
     n, params = len(names), along.params
@@ -182,6 +202,7 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
         found[f"{'stuck' if held else 'closed'}:{element.name}"] = total / span - share * stretch / span
         if not held:  # a count: it moves only where the orbit changes (not differentiable there)
             found[f"closings:{element.name}"] = np.zeros(len(params))
+            found[f"impact_velocity:{element.name}"] = _impact_derivative(orbit, element.name, along, moved)
     values = orbit_measures(orbit)
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])

@@ -105,9 +105,9 @@ def tangent_rates(
 class Crossing:
     """One switch of a run: its time, the element whose root set it, that root's gradient
     ``normal`` and ``moved`` (its derivative in each number), the ``speed`` ``grad g . f- + dg/dt``
-    at which the flow crossed it, the field's ``jump`` ``f+ - f-``, the tangent block
-    ``[Phi | Psi]`` just before, and ``margin``: the speed relative to its terms (0 at a
-    grazing)."""
+    at which the flow crossed it, the field ``rates`` ``f-`` before it and its ``jump``
+    ``f+ - f-``, the tangent block ``[Phi | Psi]`` just before, and ``margin``: the speed relative
+    to its terms (0 at a grazing)."""
 
     t: float
     element: str
@@ -115,9 +115,18 @@ class Crossing:
     normal: np.ndarray
     moved: np.ndarray
     speed: float
+    rates: np.ndarray
     jump: np.ndarray
     before: np.ndarray
     margin: float
+
+    def state_derivative(self, start: np.ndarray) -> np.ndarray:
+        """How the state just before the switch moves at its own (moving) time, for a start
+        moving by ``start``: ``delta- + f- dt_s``."""
+        n = len(self.normal)
+        delta = self.before[:, :n] @ start + self.before[:, n:]
+        moved: np.ndarray = delta + np.outer(self.rates, self.time_derivative(start))
+        return moved
 
     def time_derivative(self, start: np.ndarray) -> np.ndarray:
         """``dt_s/dc`` for a start moving by ``start`` (``dy0/dc``, one column a number)."""
@@ -285,7 +294,7 @@ def _crossing(
         moved[k] = (high - g[index]) / (2.0 * data.steps[k])
     scale = float(np.abs(normal) @ np.abs(rates) + abs(dt))
     margin = abs(speed) / scale if scale > 0 else 0.0
-    return Crossing(t, element, kind, normal, moved, speed, jump, block.copy(), margin)
+    return Crossing(t, element, kind, normal, moved, speed, rates, jump, block.copy(), margin)
 
 
 def _modes(run: ChainResult) -> np.ndarray:
