@@ -1,5 +1,5 @@
 """A friction chain's periodic orbit followed in one of its numbers through folds: pseudo-arclength
-continuation (issue 52), ``oscillator.continue_orbit(chain, "Omega", (0.8, 1.6))``.
+continuation (issue 52), ``oscillator.continue_orbit(chain, param="Omega", start=0.8, stop=1.6)``.
 
 The unknowns are the orbit's free coordinates at the section and the number ``lam`` (scaled by the
 span's width); the equations ``P(y, lam) - y = 0`` (:mod:`oscillator.orbits.chain_orbits`) and the
@@ -27,7 +27,7 @@ import pandas as pd
 from oscillator.errors import InputError, OscillatorError
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.branch import Bifurcation
-from oscillator.orbits.chain_orbits import ChainOrbit, _still, chain_period_map, find_chain_orbit
+from oscillator.orbits.chain_orbits import ChainOrbit, chain_period_map, find_chain_orbit, held_coordinates
 from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_tangents import check_names, tangent_pass
 
@@ -78,7 +78,7 @@ class _Follower:
         """``P(y) - y`` over the free coordinates, ``[M - I, width dP/dlam]`` and the orbit's run."""
         chain = self.chain.with_values({self.param: lam})
         image = chain_period_map(chain, chain.t0, y)
-        held, neutral = _still(chain, image)
+        held, neutral = held_coordinates(chain, image)
         if sorted(set(range(len(y))) - held) != self.free:
             raise _Changed(lam)
         along = tangent_pass(image, [self.param])
@@ -100,7 +100,7 @@ class _Follower:
             neutral,
             image,
         )
-        orbit.__dict__["monodromy"] = along.monodromy[np.ix_(free, free)]
+        orbit.__dict__["monodromy"] = along.monodromy[np.ix_(free, free)]  # known already: the cached value
         return residual, jacobian, orbit
 
     def tangent(self, jacobian: np.ndarray, previous: np.ndarray | None) -> np.ndarray:

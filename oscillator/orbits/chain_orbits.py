@@ -40,7 +40,7 @@ from oscillator.orbits.chain_tangents import RTOL, tangent_pass
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.chain_sensitivity import ChainSensitivities
 
-__all__ = ["ORBIT_OPTIONS", "ChainOrbit", "chain_period_map", "find_chain_orbit"]
+__all__ = ["ORBIT_OPTIONS", "ChainOrbit", "chain_period_map", "find_chain_orbit", "held_coordinates"]
 
 #: CVODE's tolerances for a chain's period map.
 ORBIT_OPTIONS = SolverOptions(rtol=1e-12, atol=1e-12)
@@ -138,7 +138,7 @@ def _ends(result: ChainResult) -> np.ndarray:
     return np.asarray(result.y_end[: result.chain.system.size], dtype=float)
 
 
-def _still(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[str, ...]]:
+def held_coordinates(chain: FrictionChain, result: ChainResult) -> tuple[set[int], tuple[str, ...]]:
     """The state's indices held at the section, and the names neutral in them: the velocity of a
     mass stuck there; the place of one stuck all period (any nearby place is an orbit too); the
     ``z`` of a slider that holds all period (any nearby stretch too) or never can (``F = 0``: its
@@ -219,7 +219,7 @@ def find_chain_orbit(
     history: list[float] = []
     for iteration in range(max_iterations + 1):
         image = chain_period_map(chain, section, y, periods, options)
-        held, neutral = _still(chain, image)
+        held, neutral = held_coordinates(chain, image)
         free = [k for k in range(len(y)) if k not in held]
         residual = (_ends(image) - y)[free]
         history.append(float(np.max(np.abs(residual), initial=0.0)))
