@@ -12,8 +12,9 @@ component changes sign, located on the parabola through the three points about i
 stability says which multiplier left the unit circle (:meth:`~oscillator.orbits.branch.
 Bifurcation.of_multiplier`: through -1 a period doubling, as a complex pair a torus).
 The branch ends where it leaves the span, where the coordinates that move at the section change
-(a mass starts or stops sticking there: the branch continues as another kind of orbit), or where
-the corrector fails at the smallest step; the reason is kept.
+(a mass starts or stops sticking there: the branch continues as another kind of orbit; the steps
+shorten to :data:`MIN_STEP` first, so that the branch ends at the change), or where the corrector
+fails at the smallest step; the reason is kept.
 """
 
 from __future__ import annotations
@@ -137,10 +138,7 @@ class _Changed(OscillatorError):
     """The coordinates that move at the section changed at ``lam``."""
 
     def __init__(self, lam: float) -> None:
-        super().__init__(
-            f"the coordinates that move at the section change near {lam:.8g} (a mass or slider starts or stops "
-            "sticking there: the orbit goes on as another kind)"
-        )
+        super().__init__(f"the coordinates that move at the section change at {lam:.8g}")
         self.lam = lam
 
 
@@ -184,14 +182,15 @@ def _follow(
     """The points from ``point`` on, and why the branch ended."""
     points, h = [point], step
     while len(points) < max_points:
+        changed: _Changed | None = None
         try:
             found = follower.correct(point, h)
-        except _Changed as change:
-            return points, str(change)
+        except _Changed as change:  # shorter steps approach where it changes
+            found, changed = None, change
         if found is None or (found.iterations > 4 and h > MIN_STEP):
             h /= 2
             if h < MIN_STEP:
-                return points, f"the corrector failed at the smallest step near {point.lam:.8g}"
+                return points, _why(point.lam, changed)
             continue
         points.append(found)
         point, h = found, min(step, h * 1.5) if found.iterations <= 3 else h
@@ -200,6 +199,17 @@ def _follow(
         if not follower.low <= found.lam <= follower.high:
             return points, "the end of the span"
     return points, f"max_points = {max_points} reached"
+
+
+def _why(last: float, changed: _Changed | None) -> str:
+    """Why the branch ended at its last point ``last``, the steps shortened to the smallest."""
+    if changed is None:
+        return f"the corrector failed at the smallest step near {last:.8g}"
+    low, high = sorted((last, changed.lam))
+    return (
+        f"the coordinates that move at the section change between {low:.8g} and {high:.8g} (a mass or slider "
+        "starts or stops sticking there: the orbit goes on as another kind)"
+    )
 
 
 def _table(points: list[_Point], param: str, names: list[str]) -> pd.DataFrame:
