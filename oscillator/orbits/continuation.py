@@ -38,7 +38,8 @@ from oscillator.orbits.shooting import MAX_TRANSIENT, STATE, check_guess, check_
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
-    pass
+    from oscillator.model.chains import FrictionChain
+    from oscillator.orbits.chain_branch import ChainBranch
 
 __all__ = ["ContinuationSettings", "check_settings", "continue_orbit"]
 
@@ -77,6 +78,30 @@ def _check_range(
             field="stop",
         )
     return values
+
+
+def _of_chain(
+    chain: FrictionChain,
+    param: str,
+    span: tuple[float, float],
+    guess: Sequence[float] | np.ndarray | None,
+    step: float | None,
+    max_points: int,
+    transient: int | None,
+) -> ChainBranch:
+    """:func:`continue_orbit` for a friction chain: its period-1 orbit's branch."""
+    from oscillator.orbits.chain_branch import continue_chain_orbit
+
+    return continue_chain_orbit(
+        chain,
+        param=param,
+        start=span[0],
+        stop=span[1],
+        guess=None if guess is None else np.asarray(guess, dtype=float),
+        step=0.1 if step is None else step,
+        max_points=max_points,
+        transient=100 if transient is None else transient,
+    )
 
 
 def continue_orbit(
@@ -148,24 +173,10 @@ def continue_orbit(
     >>> branch.bifurcations[["Q2", "kind"]].round(6).values.tolist()
     [[71.157742, 'sliding_vanish']]
     """
-    from oscillator.model.chains import FrictionChain
+    from oscillator.model.chains import FrictionChain as Chain
 
-    if isinstance(case, FrictionChain):  # a declared machine (oscillator/orbits/chain_branch.py)
-        from oscillator.orbits.chain_branch import continue_chain_orbit
-
-        given = None if guess is None else np.asarray(guess, dtype=float)
-        periods = 100 if transient is None else transient
-        found = continue_chain_orbit(
-            case,
-            param=param,
-            start=start,
-            stop=stop,
-            guess=given,
-            step=0.1 if step is None else step,
-            max_points=max_points,
-            transient=periods,
-        )
-        return found  # type: ignore[return-value]
+    if isinstance(case, Chain):  # a declared machine (oscillator/orbits/chain_branch.py)
+        return _of_chain(case, param, (start, stop), guess, step, max_points, transient)  # type: ignore[return-value]
     settings = check_settings(
         case,
         param=param,
