@@ -136,3 +136,30 @@ def test_periods_out_of_range_are_refused(periods):
 
     with pytest.raises(InputError, match="periods"):
         chain_scene_of(conveyor(), periods)
+
+
+def test_a_stopping_server_ends_every_pages_job_before_the_interpreter_does():
+    """``close_all`` (called as the server stops): a job running in a page's thread is told to stop
+    and its thread has ended when it returns, so that no job is left in compiled code while the
+    interpreter shuts down (a Ctrl-C during a page's check once ended the explorer with SIGSEGV)."""
+    import threading
+    import time
+
+    from oscillator.exploring.runner import Job, Runner, close_all
+
+    started = threading.Event()
+
+    def work(stopped):
+        started.set()
+        while not stopped():
+            time.sleep(0.01)
+        return "stopped"
+
+    delivered = []
+    runner = Runner(lambda job, result, error: delivered.append(result), on_loop=lambda call: call(), quiet=0.0)
+    runner.ask(Job(work, 1), change=False)
+    assert started.wait(10)
+    thread = runner._thread
+    assert thread is not None and thread.is_alive()
+    close_all(timeout=10)
+    assert not thread.is_alive() and runner.latest == 0

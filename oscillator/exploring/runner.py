@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import threading
 import time
+import weakref
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["QUIET", "Job", "Runner"]
+__all__ = ["QUIET", "Job", "Runner", "close_all"]
 
 #: Changes closer together than this (s) are one burst: its first runs at once, its last once it rests.
 QUIET = 0.15
@@ -44,6 +45,24 @@ class Job:
     wait: float = 0.0
     kind: str = "draw"  #: what it is, for the count of :attr:`Runner.ran`
     asked: float = field(default_factory=time.monotonic)
+
+
+#: Every runner alive, so that a stopping server can end their threads (:func:`close_all`).
+_LIVE: weakref.WeakSet[Runner] = weakref.WeakSet()
+
+
+def close_all(timeout: float = 10.0) -> None:
+    """Close every runner and wait (at most ``timeout`` s in all) for its thread to end: a job
+    still running in compiled code while the interpreter shuts down can crash it (the explorer
+    stopped by Ctrl-C while a page's check ran exited with SIGSEGV after saying "stopped")."""
+    runners = list(_LIVE)
+    for runner in runners:
+        runner.close()
+    deadline = time.monotonic() + timeout
+    for runner in runners:
+        thread = runner._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(max(0.0, deadline - time.monotonic()))
 
 
 class Runner:
@@ -69,6 +88,7 @@ class Runner:
         #: The bursts of changes seen: a change that came when none had for :attr:`quiet` s began
         #: one (each runs at most twice: its first change and its last).
         self.bursts = 0
+        _LIVE.add(self)
 
     @property
     def latest(self) -> int:

@@ -36,6 +36,7 @@ from tornado.routing import Router
 from tornado.web import RequestHandler
 
 from oscillator.errors import InputError
+from oscillator.exploring.runner import close_all
 
 __all__ = ["LOOPBACK", "MAX_PAGES", "ROUTES", "Guard", "check_address", "is_loopback", "serve"]
 
@@ -221,3 +222,4 @@ def serve(
         pass
     finally:
         server.stop()
+        close_all()  # no page's job left running in compiled code as the interpreter ends
