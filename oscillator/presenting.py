@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -63,6 +64,8 @@ class Presenter(Protocol):
     def global_html(self, found: object) -> str: ...
 
     def plot_system(self, chain: FrictionChain) -> Figure: ...
+
+    def plot_chain_basins(self, basins: ChainBasins) -> Figure: ...
 
     def plot_chain_result(self, result: ChainResult) -> Figure: ...
 

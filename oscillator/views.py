@@ -13,6 +13,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -103,6 +104,11 @@ class Views:
         from oscillator.report.chain_frequency import design_figure
 
         return design_figure(design, sweeps)
+
+    def plot_chain_basins(self, basins: ChainBasins) -> Figure:
+        from oscillator.report.attractors import basins_figure
+
+        return basins_figure(basins)
 
     def plot_chain_result(self, result: ChainResult) -> Figure:
         from oscillator.report.chain_figures import motion_figure

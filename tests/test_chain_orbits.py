@@ -130,13 +130,13 @@ def test_bad_input_and_a_motion_without_an_orbit_are_refused():
 
 def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, capsys):
     """docs/systems.md's ```python blocks run as shown (in a fresh folder holding docs/systems/, as
-    the repository does), and the orbit's, its sensitivities' and the sweeps' printed lines are
-    those the page says."""
+    the repository does), and the orbit's, its sensitivities', the sweeps', the branch's and the
+    attractors' and spectrum's printed lines are those the page says."""
     import shutil
 
     text = (SYSTEMS.parent / "systems.md").read_text(encoding="utf-8")
     blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
-    assert len(blocks) == 5
+    assert len(blocks) == 6
     shutil.copytree(SYSTEMS, tmp_path / "docs" / "systems")
     monkeypatch.chdir(tmp_path)
     for block in blocks:
@@ -147,9 +147,10 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
     derivative = next(line.removeprefix("# ") for line in blocks[2].splitlines() if line.startswith("# {"))
     assert derivative in printed
     said = [line.removeprefix("# ") for line in blocks[3].splitlines() if line.startswith("# F = ")]
-    assert printed[-5:-2] == said and len(said) == 3
+    assert printed[-8:-5] == said and len(said) == 3
     folds = next(line.removeprefix("# ") for line in blocks[4].splitlines() if line.startswith("# ["))
-    assert printed[-2] == folds and printed[-1].startswith("the end of the span")
+    said = [line.removeprefix("# ") for line in blocks[5].splitlines() if line.startswith("# ")]
+    assert printed[-5:] == [folds, printed[-4], *said] and printed[-4].startswith("the end of the span")
 
 
 def _den_hartog_amplitude(omega: float, friction: float = 0.2) -> float:

@@ -344,3 +344,87 @@ def test_continue_of_a_system_file_refuses_the_articles_options_and_writes_nothi
         assert not (tmp_path / "c").exists()
     done = _invoke("continue", str(BLADE), "--param", "platform.Q", "--from", "0.6", "--to", "0.8")
     assert done.exit_code == 2 and "did you mean" in done.stderr
+
+
+HARDENING = ROOT / "docs" / "systems" / "hardening.toml"
+SLICE = ("--x", "x:m", "-2", "2", "4", "--y", "v:m", "-2", "2", "3", "--transient", "200", "--record", "8")
+
+
+def test_basins_of_a_system_file_writes_what_find_basins_finds_and_resumes(tmp_path):
+    import oscillator
+    from oscillator import AttractorSettings, Axis
+
+    folder = tmp_path / "basins"
+    done = _invoke("basins", str(HARDENING), *SLICE, "--out", str(folder))
+    assert done.exit_code == 0, done.stderr
+    assert {"basins.parquet", "attractors.parquet", "system.toml", "basins.json", "report.html"} <= {
+        p.name for p in folder.iterdir()
+    }
+    assert (folder / "figures" / "basins.png").stat().st_size > 0
+    found = oscillator.find_basins(
+        oscillator.load_system(HARDENING),
+        Axis("x:m", -2, 2, 4),
+        Axis("v:m", -2, 2, 3),
+        settings=AttractorSettings(transient=200, record=8),
+    )
+    cells = pd.read_parquet(folder / "basins.parquet")
+    assert list(cells.columns[:3]) == ["x:m", "v:m", "attractor"]
+    assert cells.attractor.to_numpy().reshape(3, 4).tolist() == found.grid.tolist()
+    table = pd.read_parquet(folder / "attractors.parquet")
+    assert table["x_pp:m"].tolist() == pytest.approx([a.measures["x_pp:m"] for a in found.found.attractors], rel=1e-9)
+    assert table["stable"].tolist() == [True, True] and "A0: period-1" in done.stdout
+    again = _invoke("basins", str(HARDENING), *SLICE, "--out", str(folder))
+    assert again.exit_code == 0, again.stderr
+    assert "resumed: 12 of the 12 starts read" in " ".join(again.stderr.split() + again.stdout.split())
+    assert pd.read_parquet(folder / "basins.parquet").equals(cells)
+    refused = _invoke("report", str(folder))
+    assert refused.exit_code == 2 and "declared system's basins" in refused.stderr
+
+
+def test_basins_and_lyapunov_of_a_system_file_refuse_what_they_cannot_take_creating_nothing(tmp_path):
+    for arguments, said in (
+        (("--x", "x1", "0", "1", "3", "--y", "v:m", "0", "1", "3"), "give one of x:m, v:m"),
+        (("--x", "x:m", "0", "1", "3", "--y", "v:m", "0", "1", "3", "--engine", "cvode"), "--engine applies"),
+        (("--x", "x:m", "0", "1", "3", "--y", "v:m", "0", "1", "3", "--set", "m.k=1"), "is no number of the system"),
+    ):
+        done = _invoke("basins", str(HARDENING), *arguments, "--out", str(tmp_path / "b"))
+        assert done.exit_code == 2 and said in done.stderr, done.stderr
+        assert not (tmp_path / "b").exists()
+    done = _invoke("lyapunov", str(HARDENING), "--periods", "0", "--out", str(tmp_path / "l"))
+    assert done.exit_code == 2 and "--periods" in done.stderr and not (tmp_path / "l").exists()
+    done = _invoke("atlas", str(HARDENING), "--x", "Omega", "1", "2", "3", "--y", "Q", "1", "2", "3")
+    assert done.exit_code == 2 and "is a system file" in done.stderr and "basins, lyapunov" in done.stderr
+
+
+def test_lyapunov_of_a_system_file_prints_and_writes_the_spectrum(tmp_path):
+    import oscillator
+
+    done = _invoke("lyapunov", str(HARDENING), "--periods", "30", "--transient", "20", "--out", str(tmp_path / "l"))
+    assert done.exit_code == 0, done.stderr
+    spectrum = oscillator.lyapunov(oscillator.load_system(HARDENING), periods=30, transient=20)
+    exponents = ", ".join(f"{value:.6g}" for value in spectrum.exponents)
+    assert f"Hardening oscillator between its folds: Lyapunov exponents (1/s), 30 periods: {exponents}" in done.stdout
+    back = oscillator.read_run(tmp_path / "l")
+    assert list(back.exponents) == list(spectrum.exponents) and back.case == oscillator.load_system(HARDENING)
+
+
+def test_basins_of_a_system_file_show_hostile_names_as_text(tmp_path):
+    hostile = "<script>alert(1)</script> **bold** $x^2$"
+    path = tmp_path / "hostile.toml"
+    path.write_text(
+        f'title = "{hostile}"\n[system]\nOmega = 0.6\n[[mass]]\nname = "{hostile}"\nm = 1\n[[element]]\n'
+        f'type = "spring"\non = "{hostile}"\nk = 1\n[[element]]\ntype = "damper"\non = "{hostile}"\nc = 0.05\n'
+        f'[[element]]\ntype = "friction"\nname = "[link](http://x)"\non = "{hostile}"\nmu_s = 0.4\nmu_k = 0.25\n'
+        f'N = 1.0\nw = 0.3\n[[element]]\ntype = "force"\non = "{hostile}"\nQ = 0.4\n',
+        encoding="utf-8",
+    )
+    axes = ("--x", f"x:{hostile}", "-1", "1", "2", "--y", f"v:{hostile}", "-1", "1", "2", "--transient", "100")
+    done = _invoke("basins", str(path), *axes, "--record", "4", "--out", str(tmp_path / "out"))
+    assert done.exit_code == 0, done.stderr
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "<script>" not in page and "&lt;script&gt;" in page
+    assert "<a " not in page and "<td>[link](http://x): slips, sticks</td>" in page  # shown as text, no link
+    markdown = (tmp_path / "out" / "report.md").read_text()
+    assert "[link](http://x)" not in markdown and "<script>" not in markdown
+    table = pd.read_parquet(tmp_path / "out" / "attractors.parquet")
+    assert table.signature.iloc[0].startswith("[link](http://x): ") and f"rests:{hostile}" in table

@@ -44,9 +44,10 @@ class Axis:
     count: int
 
     def __post_init__(self) -> None:
-        if self.name not in STATE and self.name not in Parameters.names():
+        if self.name not in STATE and self.name not in Parameters.names() and not _system_state(self.name):
             raise InputError(
-                f"axis {shown(self.name)} is neither a state component ({', '.join(STATE)}) nor a parameter",
+                f"axis {shown(self.name)} is neither a state component ({', '.join(STATE)}; a declared system's "
+                "x:<mass>, v:<mass> or z:<slider>) nor a parameter",
                 field="axis",
             )
         for end in (self.low, self.high):
@@ -70,6 +71,12 @@ class Axis:
         return np.linspace(self.low, self.high, self.count)
 
 
+def _system_state(name: object) -> bool:
+    """Whether ``name`` reads as a declared system's state component (``x:<mass>``, ``v:<mass>``,
+    ``z:<slider>``; which system has it is checked where the axis is used)."""
+    return isinstance(name, str) and name[:2] in ("x:", "v:", "z:") and len(name) > 2
+
+
 def _check_pair(x: object, y: object) -> tuple[Axis, Axis]:
     for field, axis in (("x", x), ("y", y)):
         if not isinstance(axis, Axis):
@@ -80,12 +87,13 @@ def _check_pair(x: object, y: object) -> tuple[Axis, Axis]:
     return x, y
 
 
-def state_plane(x: object, y: object) -> tuple[Axis, Axis]:
-    """Two axes of state components (a slice of the state space), checked."""
+def state_plane(x: object, y: object, state: tuple[str, ...] = STATE) -> tuple[Axis, Axis]:
+    """Two axes of components of ``state`` (a slice of the state space; the article's system's by
+    default, a friction chain's ``system.state``), checked."""
     for field, axis in (("x", x), ("y", y)):
-        if isinstance(axis, Axis) and axis.name not in STATE:
+        if isinstance(axis, Axis) and axis.name not in state:
             raise InputError(
-                f"{field}: axis {shown(axis.name)} is not a state component; give one of {', '.join(STATE)}",
+                f"{field}: axis {shown(axis.name)} is not a state component; give one of {', '.join(state)}",
                 field=field,
             )
     return _check_pair(x, y)

@@ -31,12 +31,16 @@ MAX_MARKER = 1 << 20
 
 
 def identity(case: Any, **pieces: Any) -> dict[str, Any]:
-    """A computation's identity, as its folder's marker keeps it: the case as TOML and each piece
-    (an axis, the settings: dataclasses; arrays; plain values), so that two computations are the
-    same exactly when their identities are equal."""
+    """A computation's identity, as its folder's marker keeps it: the case as TOML (a friction
+    chain's system file, under ``system``) and each piece (an axis, the settings: dataclasses;
+    arrays; plain values), so that two computations are the same exactly when their identities
+    are equal."""
     from oscillator.io.cases import case_to_toml
+    from oscillator.io.chains import chain_to_toml
+    from oscillator.model.chains import FrictionChain
 
-    return {"case": case_to_toml(case), **{name: _plain(value) for name, value in pieces.items()}}
+    system = {"system": chain_to_toml(case)} if isinstance(case, FrictionChain) else {"case": case_to_toml(case)}
+    return {**system, **{name: _plain(value) for name, value in pieces.items()}}
 
 
 def _plain(value: Any) -> Any:
@@ -113,13 +117,15 @@ class ResumableFolder:
         """Refuse parts that are not this computation's (a subclass's own checks; none here)."""
 
     def open(self, **extra: Any) -> None:
-        """Create the folder (appearing whole: parts/, case.toml, the marker), unless resuming."""
+        """Create the folder (appearing whole: parts/, case.toml or a declared system's
+        system.toml, the marker), unless resuming."""
         if self.resuming:
             return
+        source = "case" if "case" in self.identity else "system"
         try:
             with atomic_folder(self.folder) as temporary:
                 (temporary / "parts").mkdir()
-                (temporary / "case.toml").write_text(str(self.identity["case"]), encoding="utf-8")
+                (temporary / f"{source}.toml").write_text(str(self.identity[source]), encoding="utf-8")
                 (temporary / self.marker).write_text(self._status("running", **extra), encoding="utf-8")
         except OSError as exc:
             raise InputError(

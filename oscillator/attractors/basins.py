@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 import pandas as pd
@@ -23,16 +23,19 @@ from oscillator.analysis.axes import STATE, Axis, state_plane
 from oscillator.analysis.execution import Executor
 from oscillator.analysis.store import identity
 from oscillator.attractors.finding import Attractors, assemble
-from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing, land
+from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing, check_settings, land
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
+from oscillator.model.chains import FrictionChain
 from oscillator.presenting import Presented, presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["Basins", "basin_store", "find_basins", "grid_starts"]
+    from oscillator.attractors.chain_attractors import ChainBasins
+
+__all__ = ["Basins", "basin_store", "find_basins", "grid_landings", "grid_starts"]
 #: Landings written per part file.
 BATCH = 64
 
@@ -90,46 +93,95 @@ class Basins(Presented):
         return presenter().plot_global(self)
 
 
-def basin_store(folder: Path, case: Case, x: Axis, y: Axis, settings: AttractorSettings) -> LandingStore:
-    """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`)."""
-    return LandingStore(folder, "basins.json", identity(case, x=x, y=y, settings=settings), name=case.name)
+def basin_store(
+    folder: Path, case: Case | FrictionChain, x: Axis, y: Axis, settings: AttractorSettings
+) -> LandingStore:
+    """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`):
+    a case's, or a declared system's (its state and masses its own)."""
+    known = identity(case, x=x, y=y, settings=settings)
+    if isinstance(case, FrictionChain):
+        state, masses = case.system.state, len(case.masses)
+        return LandingStore(folder, "basins.json", known, name=case.title, state=state, masses=masses)
+    return LandingStore(folder, "basins.json", known, name=case.name)
 
 
+@overload
 def find_basins(
     case: Case,
     x: Axis,
     y: Axis,
-    store: LandingStore,
+    store: LandingStore | None = None,
     *,
-    settings: AttractorSettings,
+    settings: AttractorSettings | None = None,
     workers: int = 1,
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
-) -> Basins:
+) -> Basins: ...
+
+
+@overload
+def find_basins(
+    case: FrictionChain,
+    x: Axis,
+    y: Axis,
+    store: LandingStore | None = None,
+    *,
+    settings: AttractorSettings | None = None,
+    workers: int = 1,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> ChainBasins: ...
+
+
+def find_basins(
+    case: Case | FrictionChain,
+    x: Axis,
+    y: Axis,
+    store: LandingStore | None = None,
+    *,
+    settings: AttractorSettings | None = None,
+    workers: int = 1,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Basins | ChainBasins:
     """Compute the starts not yet in ``store`` (checked), keep them as they finish, and group all.
 
     ``progress(done, total)`` after every start.  On an interrupt or an error the landings
-    finished so far are in the folder (the batch in hand is written first)."""
+    finished so far are in the folder (the batch in hand is written first).  Without a
+    ``store`` nothing is kept.  A declared system's basins (over two of its ``system.state``,
+    ``Axis("x:blade", -1, 1, 40)``) are :func:`~oscillator.attractors.chain_attractors.find_chain_basins`'s."""
+    settings = check_settings(settings)
+    if isinstance(case, FrictionChain):
+        from oscillator.attractors.chain_attractors import find_chain_basins
+
+        return find_chain_basins(
+            case, x, y, store, settings=settings, workers=workers, client=client, progress=progress
+        )
     executor = Executor(workers, client, progress)
     starts = grid_starts(case, x, y)
-    store.open()
+    if store is not None:
+        store.open()
     with executor:
-        landings = _landings(case, settings, starts, store, executor, progress)
-        store.write_status("computed", starts=len(starts), failed=sum(not item.ok for item in landings))
+        landings = grid_landings(case, settings, starts, store, executor, progress)
+        if store is not None:
+            store.write_status("computed", starts=len(starts), failed=sum(not item.ok for item in landings))
         return Basins(assemble(case, settings, landings, executor=executor), x, y)
 
 
-def _landings(
-    case: Case,
+def grid_landings(
+    system: Case | FrictionChain,
     settings: AttractorSettings,
     starts: np.ndarray,
-    store: LandingStore,
+    store: LandingStore | None,
     executor: Executor,
     progress: Callable[[int, int], None] | None,
+    land_one: Callable[..., Landing] = land,
 ) -> list[Landing]:
-    """Every start's landing: those in ``store`` read back, the others computed and kept in
-    batches as they finish (the batch in hand written first on an interrupt or an error)."""
-    landings = store.read(starts)
+    """Every start's landing (``land_one(system, settings, index, start)``: the article's
+    :func:`~oscillator.attractors.mapping.land` or a chain's): those in ``store`` read back, the
+    others computed and kept in batches as they finish (the batch in hand written first on an
+    interrupt or an error)."""
+    landings = [] if store is None else store.read(starts)
     done = {item.index for item in landings}
     tasks = [(index, tuple(row)) for index, row in enumerate(starts) if index not in done]
     total = len(starts)
@@ -137,14 +189,16 @@ def _landings(
         progress(len(landings), total)
     pending: list[Landing] = []
     try:
-        for landing in executor.map(land, tasks, shared=(case, settings)):
+        for landing in executor.map(land_one, tasks, shared=(system, settings)):
             pending.append(landing)
             if len(pending) >= BATCH:
-                store.write(pending)
+                if store is not None:
+                    store.write(pending)
                 landings += pending
                 pending = []
             if progress is not None:
                 progress(len(landings) + len(pending), total)
     finally:
-        store.write(pending)
+        if store is not None:
+            store.write(pending)
     return landings + pending

@@ -15,7 +15,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar, overload
 
 import numpy as np
 import pandas as pd
@@ -26,9 +26,26 @@ from oscillator.attractors.lyapunov import lyapunov
 from oscillator.attractors.mapping import STATE, AttractorSettings, Landing, check_settings, check_states, land
 from oscillator.errors import OscillatorError
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chains import FrictionChain
 from oscillator.orbits.shooting import Orbit, find_orbit
 
-__all__ = ["Attractors", "Refined", "assemble", "find_attractors", "labelled", "share_interval", "share_text"]
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.attractors.chain_attractors import ChainAttractors
+
+__all__ = [
+    "Attractors",
+    "Refined",
+    "assemble",
+    "described_landings",
+    "find_attractors",
+    "fractions_of",
+    "labelled",
+    "share_interval",
+    "share_text",
+]
+
+#: A system a describer takes: a case, or a friction chain.
+S = TypeVar("S", Case, FrictionChain)
 
 
 def largest_exponent(multipliers: np.ndarray, span: float) -> float:
@@ -103,14 +120,19 @@ class Attractors:
     def fractions(self, confidence: float = 0.95) -> pd.DataFrame:
         """Each attractor's share of the starts (failed ones counted, as ``-1``), with its
         :func:`share_interval`: ``attractor, name, starts, fraction, low, high``."""
-        total = len(self.labels)
-        rows = []
-        names = {a.id: a.name for a in self.attractors}
-        counts = self.labels.attractor.value_counts()
-        for ident in [a.id for a in self.attractors] + ([-1] if (self.labels.attractor == -1).any() else []):
-            k = int(counts.get(ident, 0))
-            rows.append((ident, names.get(ident, "failed"), k, k / total, *share_interval(k, total, confidence)))
-        return pd.DataFrame(rows, columns=["attractor", "name", "starts", "fraction", "low", "high"])
+        return fractions_of(self.attractors, self.labels, confidence)
+
+
+def fractions_of(attractors: Sequence[Attractor], labels: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
+    """:meth:`Attractors.fractions` of the ``attractors`` and the starts' ``labels``."""
+    total = len(labels)
+    rows = []
+    names = {a.id: a.name for a in attractors}
+    counts = labels.attractor.value_counts()
+    for ident in [a.id for a in attractors] + ([-1] if (labels.attractor == -1).any() else []):
+        k = int(counts.get(ident, 0))
+        rows.append((ident, names.get(ident, "failed"), k, k / total, *share_interval(k, total, confidence)))
+    return pd.DataFrame(rows, columns=["attractor", "name", "starts", "fraction", "low", "high"])
 
 
 def share_interval(k: int, total: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -132,8 +154,16 @@ def share_text(fraction: float, low: float, high: float) -> str:
     return f"{fraction:.1%} [{low:.1%}, {high:.1%}]"
 
 
+@overload
+def find_attractors(case: FrictionChain, **options: Any) -> ChainAttractors: ...
+
+
+@overload
+def find_attractors(case: Case | str, **options: Any) -> Attractors: ...
+
+
 def find_attractors(
-    case: Case | str,
+    case: Case | FrictionChain | str,
     *,
     states: Sequence[Sequence[float]] | np.ndarray | None = None,
     transient: int | None = None,
@@ -143,15 +173,17 @@ def find_attractors(
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
     **overrides: float,
-) -> Attractors:
+) -> Attractors | ChainAttractors:
     """Every attractor the starts reach, and which start reaches which.
 
     Parameters
     ----------
-    case : Case or str
-        A case or a shipped case's name.
+    case : Case, FrictionChain or str
+        A case or a shipped case's name; or a declared system
+        (:func:`oscillator.attractors.chain_attractors.find_chain_attractors`).
     states : array of shape (N, 4), optional
-        The starts ``(x1, v1, x2, v2)`` at the case's ``t0``; the case's own start by default.
+        The starts ``(x1, v1, x2, v2)`` at the case's ``t0`` (a chain's ``system.state``); the
+        case's own start by default.
     transient, record : int, optional
         Forcing periods run before recording, and recorded (``settings``' by default).
     settings : AttractorSettings, optional
@@ -166,7 +198,8 @@ def find_attractors(
     progress : callable, optional
         ``progress(done, total)`` after every start.
     **overrides
-        Any parameter or solver option, as for :func:`oscillator.simulate`.
+        Any parameter or solver option, as for :func:`oscillator.simulate`; a chain's numbers by
+        their names (``Omega=1.2``, ``**{"platform.F": 0.5}``).
 
     Examples
     --------
@@ -181,6 +214,11 @@ def find_attractors(
         name: value for name, value in (("transient", transient), ("record", record)) if value is not None
     }
     settings = dataclasses.replace(settings, **chosen) if chosen else settings
+    if isinstance(case, FrictionChain):
+        from oscillator.attractors.chain_attractors import find_chain_attractors
+
+        chain = case.with_values(overrides) if overrides else case
+        return find_chain_attractors(chain, states, settings=settings, executor=executor, progress=progress)
     case = resolve_case(case, **overrides)
     starts = check_states(case.initial.y if states is None else states)
     landings = []
@@ -204,18 +242,35 @@ def assemble(
     """The :class:`Attractors` of finished landings: grouped, described (by ``describe``, the
     :class:`Refined` of ``settings`` by default; on ``executor``, in this process by default),
     each start labelled."""
-    describe = describe or Refined(settings.lyapunov_periods)
+    described, table, warnings = described_landings(
+        case, settings, landings, describe or Refined(settings.lyapunov_periods), executor
+    )
+    return Attractors(case, settings, described, table, warnings)
+
+
+def described_landings(
+    system: S,
+    settings: AttractorSettings,
+    landings: list[Landing],
+    describe: Callable[[S, Attractor], Attractor],
+    executor: Executor | None = None,
+) -> tuple[tuple[Attractor, ...], pd.DataFrame, tuple[str, ...]]:
+    """The landings grouped (:func:`~oscillator.attractors.grouping.group`), each attractor
+    described by ``describe(system, attractor)`` (on ``executor``, in this process by default),
+    each start labelled (:func:`labelled`, the system's state as its columns), and the warnings
+    where the grouping is not settled."""
     found, labels = group(landings, settings)
     run = executor.map if executor is not None else Executor().map
-    described = sorted(run(describe, [(case, attractor) for attractor in found]), key=lambda a: a.id)
-    return Attractors(case, settings, tuple(described), labelled(landings, labels), tuple(unsettled(found)))
+    described = sorted(run(describe, [(system, attractor) for attractor in found]), key=lambda a: a.id)
+    table = labelled(landings, labels, system.system.state)
+    return tuple(described), table, tuple(unsettled(found))
 
 
-def labelled(landings: Sequence[Landing], labels: dict[int, int]) -> pd.DataFrame:
-    """One row per start (in the starts' order): ``index``, the start, its ``attractor`` (-1 for
-    a failed start), ``status``, ``reason``, ``message``, ``period``."""
+def labelled(landings: Sequence[Landing], labels: dict[int, int], state: Sequence[str] = STATE) -> pd.DataFrame:
+    """One row per start (in the starts' order): ``index``, the start (its ``state`` columns),
+    its ``attractor`` (-1 for a failed start), ``status``, ``reason``, ``message``, ``period``."""
     rows = [
         (item.index, *item.start, labels.get(item.index, -1), item.status, item.reason or "", item.message, item.period)
         for item in sorted(landings, key=lambda item: item.index)
     ]
-    return pd.DataFrame(rows, columns=["index", *STATE, "attractor", "status", "reason", "message", "period"])
+    return pd.DataFrame(rows, columns=["index", *state, "attractor", "status", "reason", "message", "period"])

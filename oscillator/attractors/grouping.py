@@ -17,12 +17,15 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from oscillator.attractors.mapping import AttractorSettings, Landing
 from oscillator.orbits.shooting import Orbit
+
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.orbits.chain_orbits import ChainOrbit
 
 __all__ = [
     "CHAOTIC",
@@ -61,17 +64,18 @@ class Attractor:
     period : int
         Forcing periods per return; 0 for an aperiodic set.
     points : ndarray
-        Its section points ``(x1, v1, x2, v2)``: the ``period`` points of the cycle, or the
-        recorded points of the set.
+        Its section points (the system's state: ``x1, v1, x2, v2`` for the article's): the
+        ``period`` points of the cycle, or the recorded points of the set.
     signature : str
-        Each mass's cycle of switches over one return (periodic attractors).
+        Each mass's cycle of switches over one return (periodic attractors; each switching
+        element's for a friction chain).
     rests : tuple of float
-        Rest intervals per forcing period of m1 and of m2.
+        Rest intervals per forcing period of each mass of :attr:`masses`.
     contacts : float
-        Contact onsets (either stop) per forcing period.
+        Contact onsets (either stop; a friction chain's stops and contacts) per forcing period.
     starts : int
         How many starts reached it.
-    orbit : Orbit or None
+    orbit : Orbit, ChainOrbit or None
         The periodic orbit refined by Newton from its cycle (multipliers, stability); None for an
         aperiodic set or when Newton failed (``note`` says why).
     lyapunov : float
@@ -84,28 +88,32 @@ class Attractor:
     forcing_period : float
         ``T`` of the case it was found in.
     rest_time : tuple of float
-        The fraction of the time m1 and m2 rest (1: a mass that rests throughout, with no rest
+        The fraction of the time each mass rests (1: a mass that rests throughout, with no rest
         interval beginning).
     measures : dict
         The measures a describer added (:class:`~oscillator.attractors.finding.Refined`: the
         response measures of the refined orbit, :data:`~oscillator.orbits.response.COLUMNS`;
         :data:`~oscillator.attractors.features.MEASURES`: the
         largest impact velocity, ...), by name.
+    masses : tuple of str
+        The masses' names, in the order of ``rests`` and ``rest_time`` (a friction chain's own;
+        a mass of a chain rests while it sticks to its floor or belt).
     """
 
     id: int
     period: int
     points: np.ndarray = field(repr=False)
     signature: str
-    rests: tuple[float, float]
+    rests: tuple[float, ...]
     contacts: float
     starts: int
-    orbit: Orbit | None = field(default=None, repr=False)
+    orbit: Orbit | ChainOrbit | None = field(default=None, repr=False)
     lyapunov: float = math.nan
     note: str = ""
     forcing_period: float = math.nan
-    rest_time: tuple[float, float] = (0.0, 0.0)
+    rest_time: tuple[float, ...] = (0.0, 0.0)
     measures: dict[str, float] = field(default_factory=dict)
+    masses: tuple[str, ...] = ("m1", "m2")
 
     @classmethod
     def of_landing(cls, ident: int, landing: Landing) -> Attractor:
@@ -149,8 +157,8 @@ class Attractor:
         """A label for legends and tables: ``"A0: period-1, m2 rests 2/period"``."""
         what = f"period-{self.period}" if self.period else self.kind
         parts = [
-            f"m{mass} rests {rate:g}/period" if rate else f"m{mass} rests throughout"
-            for mass, rate, share in zip((1, 2), self.rests, self.rest_time, strict=True)
+            f"{mass} rests {rate:g}/period" if rate else f"{mass} rests throughout"
+            for mass, rate, share in zip(self.masses, self.rests, self.rest_time, strict=True)
             if rate or share > 0
         ]
         if self.contacts:

@@ -19,7 +19,7 @@ contracts a direction to nothing in finite time.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -28,6 +28,7 @@ import pandas as pd
 
 from oscillator.analysis.execution import check_progress
 from oscillator.io.cases import Case, resolve_case, section_times
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import check_count
 from oscillator.orbits.shooting import check_guess, period_map, settled
 from oscillator.presenting import Presented, presenter
@@ -51,20 +52,22 @@ class LyapunovSpectrum(Presented):
 
     Attributes
     ----------
-    case : Case
-        The case, with the overrides.
+    case : Case or FrictionChain
+        The case, with the overrides; or the friction chain.
     exponents : ndarray
-        The four exponents (1/s), largest first; ``-inf`` for a direction the flow annihilates.
+        The exponents (1/s), one per state coordinate (four for the article's system), largest
+        first; ``-inf`` for a direction the flow annihilates.
     periods : int
         Forcing periods averaged over (after the transient and the frame's alignment).
     start : ndarray
-        ``(x1, v1, x2, v2)`` where the averaging began, at ``t0 + (transient + frame) T``.
+        The state (``x1, v1, x2, v2``; a chain's ``system.state``) where the averaging began, at
+        ``t0 + (transient + frame) T``.
     convergence : DataFrame
         The running averages after each period: ``period``, ``t`` (s of averaging) and
-        ``lambda1`` ... ``lambda4``, the frame's columns in the order of the exponents.
+        ``lambda1`` ... ``lambda<n>``, the frame's columns in the order of the exponents.
     """
 
-    case: Case
+    case: Case | FrictionChain
     exponents: np.ndarray
     periods: int
     start: np.ndarray
@@ -109,7 +112,7 @@ def _qr_step(monodromy: np.ndarray, frame: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def lyapunov(
-    case: Case | str,
+    case: Case | FrictionChain | str,
     *,
     periods: int = 500,
     transient: int = 100,
@@ -121,8 +124,9 @@ def lyapunov(
 
     Parameters
     ----------
-    case : Case or str
-        A case or a shipped case's name.
+    case : Case, FrictionChain or str
+        A case, a shipped case's name, or a declared system (its spectrum over its own state:
+        :func:`oscillator.attractors.chain_attractors.chain_lyapunov`).
     periods : int
         Forcing periods averaged over (1 to 10^7).
     transient : int
@@ -144,18 +148,44 @@ def lyapunov(
     periods = check_count(periods, "periods", 1, MAX_PERIODS)
     transient = check_count(transient, "transient", 0, MAX_PERIODS)
     check_progress(progress)
+    if isinstance(case, FrictionChain):
+        from oscillator.attractors.chain_attractors import chain_lyapunov
+
+        chain = case.with_values(overrides) if overrides else case
+        return chain_lyapunov(chain, periods=periods, transient=transient, guess=guess, progress=progress)
     case = resolve_case(case, **overrides)
     for k in (0, transient + periods - 1):  # the period resolved beside the first and the last section times
         section_times(case, k, k + 1)
     t, y = _start(case, guess, transient)
-    start_state, frame = y, np.eye(4)
-    sums, rows = np.zeros(4), []
-    period = case.parameters.period
+
+    def maps() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        nonlocal t, y
+        while True:
+            image = period_map(case, t, y, 1, derivative=True)
+            assert image.monodromy is not None
+            t, y = image.t1, image.end
+            yield image.monodromy, y
+
+    return qr_average(case, maps(), case.parameters.period, periods, progress)
+
+
+def qr_average(
+    system: Case | FrictionChain,
+    maps: Iterator[tuple[np.ndarray, np.ndarray]],
+    period: float,
+    periods: int,
+    progress: Callable[[int, int], None] | None = None,
+) -> LyapunovSpectrum:
+    """The spectrum of the period maps' derivatives ``maps`` yields (each with the state after
+    it), one forcing period of ``period`` seconds each: the frame aligned over :data:`FRAME`
+    maps, then the QR average over ``periods`` more (module docstring)."""
+    start_state, frame = np.empty(0), np.empty((0, 0))
+    sums, rows = np.zeros(0), []
     for k in range(-FRAME, periods):
-        image = period_map(case, t, y, 1, derivative=True)
-        assert image.monodromy is not None
-        frame, logs = _qr_step(image.monodromy, frame)
-        t, y = image.t1, image.end
+        monodromy, y = next(maps)
+        if k == -FRAME:
+            frame, sums = np.eye(len(monodromy)), np.zeros(len(monodromy))
+        frame, logs = _qr_step(monodromy, frame)
         if k < 0:
             start_state = y
             continue
@@ -168,10 +198,10 @@ def lyapunov(
     table = np.array(rows)
     convergence = pd.DataFrame(
         np.column_stack([table[:, :2], table[:, 2:][:, order]]),
-        columns=["period", "t", "lambda1", "lambda2", "lambda3", "lambda4"],
+        columns=["period", "t", *(f"lambda{k}" for k in range(1, len(order) + 1))],
     )
     convergence["period"] = convergence["period"].astype(int)
-    return LyapunovSpectrum(case, exponents[order], periods, start_state, convergence)
+    return LyapunovSpectrum(system, exponents[order], periods, start_state, convergence)
 
 
 def separation_exponent(

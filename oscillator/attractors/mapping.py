@@ -116,7 +116,7 @@ class Landing:
     """Where one start went: what :func:`land` returns for it."""
 
     index: int
-    start: tuple[float, float, float, float]
+    start: tuple[float, ...]  #: the state it started from (the system's ``state`` order)
     status: Literal["ok", "failed"] = "ok"
     reason: Reason | None = None  #: why it failed, for a program
 
@@ -124,10 +124,10 @@ class Landing:
     period: int = 0  #: period-n of its section points, 0 if none up to ``max_period``
     points: np.ndarray = field(default_factory=lambda: np.empty((0, 4)), repr=False)  #: recorded section points
     signature: str = ""  #: each mass's cycle of switches over one period (periodic landings)
-    rests: tuple[float, float] = (0.0, 0.0)  #: rest intervals per forcing period, of m1 and m2
+    rests: tuple[float, ...] = (0.0, 0.0)  #: rest intervals per forcing period, of each mass (m1 and m2)
     contacts: float = 0.0  #: contact onsets (either stop; a contact between the masses once) per forcing period
     wall_time: float = 0.0
-    rest_time: tuple[float, float] = (0.0, 0.0)  #: the fraction of the time m1 and m2 rest (1: throughout)
+    rest_time: tuple[float, ...] = (0.0, 0.0)  #: the fraction of the time each mass rests (1: throughout)
     transient: int = 0  #: forcing periods run before the recorded window (fewer than asked where it settled)
 
     @property

@@ -13,6 +13,7 @@ point.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal
 
@@ -36,43 +37,42 @@ _MAX_JSON = 1_000_000
 FORMAT = 4
 
 
-def landing_row(landing: Landing) -> dict[str, Any]:
-    """A landing as one row of a part (its section points flattened)."""
+def landing_row(landing: Landing, state: Sequence[str] = STATE) -> dict[str, Any]:
+    """A landing as one row of a part (its section points flattened; its start in the ``state``
+    columns, each mass's rests in ``rests1``, ``rests2``, ... and ``rest_time1``, ...)."""
     return {
         "index": landing.index,
-        **dict(zip(STATE, landing.start, strict=True)),
+        **dict(zip(state, landing.start, strict=True)),
         "status": landing.status,
         "reason": "" if landing.reason is None else landing.reason.value,
         "message": landing.message,
         "period": landing.period,
         "signature": landing.signature,
-        "rests1": landing.rests[0],
-        "rests2": landing.rests[1],
+        **{f"rests{k}": value for k, value in enumerate(landing.rests, start=1)},
         "contacts": landing.contacts,
         "wall_time": landing.wall_time,
-        "rest_time1": landing.rest_time[0],
-        "rest_time2": landing.rest_time[1],
+        **{f"rest_time{k}": value for k, value in enumerate(landing.rest_time, start=1)},
         "transient": landing.transient,
         "points": landing.points.ravel().tolist(),
     }
 
 
-def landing_of(row: Any) -> Landing:
-    """:func:`landing_row` read back."""
+def landing_of(row: Mapping[str, Any], state: Sequence[str] = STATE, masses: int = 2) -> Landing:
+    """:func:`landing_row` read back (a row of a part, by column)."""
     return Landing(
-        int(row.index),
-        (float(row.x1), float(row.v1), float(row.x2), float(row.v2)),
-        _status(str(row.status)),
-        _reason(str(row.reason)),
-        str(row.message),
-        int(row.period),
-        np.asarray(row.points, dtype=float).reshape(-1, 4),
-        str(row.signature),
-        (float(row.rests1), float(row.rests2)),
-        float(row.contacts),
-        float(row.wall_time),
-        (float(row.rest_time1), float(row.rest_time2)),
-        int(row.transient),
+        int(row["index"]),
+        tuple(float(row[name]) for name in state),
+        _status(str(row["status"])),
+        _reason(str(row["reason"])),
+        str(row["message"]),
+        int(row["period"]),
+        np.asarray(row["points"], dtype=float).reshape(-1, len(state)),
+        str(row["signature"]),
+        tuple(float(row[f"rests{k}"]) for k in range(1, masses + 1)),
+        float(row["contacts"]),
+        float(row["wall_time"]),
+        tuple(float(row[f"rest_time{k}"]) for k in range(1, masses + 1)),
+        int(row["transient"]),
     )
 
 
@@ -107,8 +107,19 @@ class LandingStore(ResumableFolder):
 
     FORMAT = FORMAT
 
-    def __init__(self, folder: Path, marker: str, identity: dict[str, Any], *, name: str = "") -> None:
+    def __init__(
+        self,
+        folder: Path,
+        marker: str,
+        identity: dict[str, Any],
+        *,
+        name: str = "",
+        state: Sequence[str] = STATE,
+        masses: int = 2,
+    ) -> None:
         super().__init__(folder, marker, identity, name=name)
+        #: The system's state (the starts' columns) and its number of masses (a friction chain's own).
+        self.state, self.masses = tuple(state), masses
         #: What was read back from earlier runs: landings, and the batches of points they came in.
         self.reused = {"landings": 0, "batches": 0}
 
@@ -125,7 +136,7 @@ class LandingStore(ResumableFolder):
             self.plain(part)
             try:
                 frame = pq.read_table(part).to_pandas()
-                landings = [landing_of(row) for row in frame.itertuples(index=False)]
+                landings = [landing_of(row, self.state, self.masses) for row in frame.to_dict("records")]
             except Exception as exc:  # pyarrow raises many types for a damaged file
                 if isinstance(exc, MemoryError):
                     raise
@@ -141,7 +152,9 @@ class LandingStore(ResumableFolder):
 
     def write_batch(self, landings: dict[int, list[Landing]], name: str) -> None:
         """One part holding the landings of a batch of points (``point -> its landings``)."""
-        rows = [{"point": point, **landing_row(item)} for point, items in landings.items() for item in items]
+        rows = [
+            {"point": point, **landing_row(item, self.state)} for point, items in landings.items() for item in items
+        ]
         with atomic_path(self.parts / f"{name}.parquet") as temporary:
             pd.DataFrame(rows).to_parquet(temporary, index=False)
 
@@ -154,7 +167,9 @@ class LandingStore(ResumableFolder):
         self.plain(part)
         try:
             frame = pq.read_table(part).to_pandas()
-            landings = [(int(row.point), landing_of(row)) for row in frame.itertuples(index=False)]
+            landings = [
+                (int(row["point"]), landing_of(row, self.state, self.masses)) for row in frame.to_dict("records")
+            ]
         except Exception as exc:  # pyarrow raises many types for a damaged file
             if isinstance(exc, MemoryError):
                 raise
@@ -181,4 +196,4 @@ class LandingStore(ResumableFolder):
         if name is None:
             name = f"{min(item.index for item in landings):08d}-{len(landings):04d}"
         with atomic_path(self.parts / f"{name}.parquet") as temporary:
-            pd.DataFrame([landing_row(item) for item in landings]).to_parquet(temporary, index=False)
+            pd.DataFrame([landing_row(item, self.state) for item in landings]).to_parquet(temporary, index=False)

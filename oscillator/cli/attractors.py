@@ -82,7 +82,12 @@ def landing_settings(**given: int | bool | str | None) -> AttractorSettings:
 def basins(
     case: CaseArgument,
     x: Annotated[
-        AxisOption, typer.Option("--x", metavar="NAME LOW HIGH N", help="The slice's first axis: x1, v1, x2 or v2.")
+        AxisOption,
+        typer.Option(
+            "--x",
+            metavar="NAME LOW HIGH N",
+            help="The slice's first axis: x1, v1, x2 or v2 (a system file's x:<mass>, v:<mass> or z:<slider>).",
+        ),
     ],
     y: Annotated[AxisOption, typer.Option("--y", metavar="NAME LOW HIGH N", help="The slice's second axis.")],
     transient: TransientOption = None,
@@ -109,16 +114,26 @@ def basins(
     with the same --out resumes where it stopped.
 
     \b
+    A system file (docs/systems.md) takes its own state's names as axes (x:blade, v:blade, ...,
+    z:platform) and --set by its names; its starts run on CVODE.
+
+    \b
     Examples:
       oscillator basins instance-1 --set Q2=71.165 --x x2 3 6 16 --y v2 -4 4 16 --out runs/basins
       oscillator basins instance-1 --set Omega=1.85 --x x1 2 5 4 --y v1 -3 3 4 --transient 100 --record 8
+      oscillator basins docs/systems/blade-damper.toml --x x:blade -2 2 4 --y v:blade -2 2 3 --transient 100 --record 8
     """
     with refusing():
-        resolved = case_from(case, None, set_)
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
-        refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         chosen = {"transient": transient, "record": record, "max_period": max_period, "engine": engine}
         settings = landing_settings(**chosen, settle=not full_transient)
+    from oscillator.cli.system_attractors import basins_system
+
+    if basins_system(case, (x_axis, y_axis), settings, (workers, scheduler, out_dir), set_, no_plots, quiet):
+        return
+    with refusing():
+        resolved = case_from(case, None, set_)
+        refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         store, lock, client, count = _open_basins(resolved, x_axis, y_axis, settings, out_dir, workers, scheduler)
     with computing(store, "starts", lock, client):
         from oscillator.attractors.basins import find_basins
@@ -199,15 +214,20 @@ def lyapunov(
     """The Lyapunov spectrum of the motion from the case's start: variational equations with the
     saltation matrix at every switch, re-orthonormalised every forcing period (QR).
 
+    A system file (docs/systems.md) takes --set by its names; its spectrum has one exponent per
+    coordinate of its state.
+
     \b
     Examples:
       oscillator lyapunov instance-1 --set Omega=1.85 --periods 200
       oscillator lyapunov instance-1 --set Omega=1.85 --periods 100 --out runs/lyapunov
+      oscillator lyapunov docs/systems/blade-damper.toml --set platform.F=0.5 --periods 50
     """
+    from oscillator.cli.system_attractors import spectrum_target
     from oscillator.io.files import check_new, claim_folder
 
     try:
-        resolved = case_from(case, None, set_)
+        resolved, name = spectrum_target(case, set_)
         if out_dir is not None:
             check_new(out_dir, option="--out")
         load("oscillator.attractors.lyapunov", notice=True)
@@ -220,7 +240,7 @@ def lyapunov(
     except OscillatorError as error:
         raise fail(message(error)) from None
     try:
-        bar, report = progress_bar(f"{resolved.name}: Lyapunov exponents", "periods")
+        bar, report = progress_bar(f"{printable(name)}: Lyapunov exponents", "periods")
         with bar:
             spectrum = spectrum_of(resolved, periods=periods, transient=transient, progress=report)
     except BaseException as error:
@@ -232,7 +252,7 @@ def lyapunov(
             raise fail("interrupted; nothing was written", 130) from None
         raise
     exponents = ", ".join(f"{value:.6g}" for value in spectrum.exponents)
-    out.print(Text(f"{printable(resolved.name)}: Lyapunov exponents (1/s), {periods} periods: {exponents}"))
+    out.print(Text(f"{printable(name)}: Lyapunov exponents (1/s), {periods} periods: {exponents}"))
     out.print(Text(f"  largest {spectrum.largest:.6g} 1/s; Kaplan-Yorke dimension of the map {spectrum.dimension:.4g}"))
     if claim is not None:
         _write_lyapunov(spectrum, claim, no_plots)

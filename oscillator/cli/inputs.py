@@ -52,7 +52,19 @@ def overrides(assignments: list[str]) -> dict[str, Any]:
 def case_from(
     case: str, t_end: float | None = None, assignments: list[str] | None = None, keep_events_from: float | None = None
 ) -> Case:
+    from oscillator.io.chains import system_path
+
+    if system_path(case) is not None:
+        raise InputError(
+            f"{printable(case)} is a system file (a declared machine); this command takes the article's cases. The "
+            f"commands that take a system file: {', '.join(SYSTEM_COMMANDS)} (docs/systems.md)",
+            field="case",
+        )
     return resolve_case(load_case(case), t_end=t_end, keep_events_from=keep_events_from, **overrides(assignments or []))
+
+
+#: The commands that take a system file where they take a case.
+SYSTEM_COMMANDS = ("run", "show", "check", "orbit", "continue", "frc", "design", "basins", "lyapunov", "explore")
 
 
 def refuse_taken(assignments: list[str] | None, taken: Mapping[str, str]) -> None:

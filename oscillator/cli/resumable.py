@@ -146,14 +146,16 @@ def say_reused(store: Any, reused: int, what: str, quiet: bool) -> None:
         say(f"resumed: {reused} {what} read from {printable(str(store.folder))}, the rest computed")
 
 
-def new_folder(case: Case, kind: str) -> Path:
-    """The default output folder of a resumable command (no ``--out``): ``runs/CASE-KIND-TIME``,
+def new_folder(case: Case | str, kind: str) -> Path:
+    """The default output folder of a resumable command (no ``--out``): ``runs/CASE-KIND-TIME``
+    (``case`` a case, or the name of a system file's stem),
     or with ``-2``, ``-3``, ... where a command of the same second has taken that name (without
     ``--out`` nothing is resumed: two commands a second apart resumed each other's folder, or
     refused it as another computation)."""
     from oscillator.io.files import default_name
 
-    base = Path("runs") / f"{default_name(case.name)}-{kind}-{time.strftime('%Y%m%d-%H%M%S')}"
+    name = case if isinstance(case, str) else case.name
+    base = Path("runs") / f"{default_name(name)}-{kind}-{time.strftime('%Y%m%d-%H%M%S')}"
     folder, count = base, 1
     while os.path.lexists(folder):
         count += 1

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, TypeVar
 
 import pandas as pd
 
@@ -15,7 +15,15 @@ from oscillator.model.events import EventKind
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.shooting import PeriodMap
 
-__all__ = ["Signature", "cyclic_signature", "event_signature", "signature_of", "signature_text"]
+
+class _Named(Protocol):
+    @property
+    def value(self) -> str: ...
+
+
+K = TypeVar("K", bound=_Named)
+
+__all__ = ["Signature", "cyclic_signature", "event_signature", "own_cycle", "signature_of", "signature_text"]
 
 
 def event_signature(events: pd.DataFrame) -> tuple[tuple[int, EventKind], ...]:
@@ -65,12 +73,18 @@ def signature_of(events: Sequence[tuple[float, int, EventKind]], span: float) ->
     Each mass's switches are read as a cycle (a switch at both ends of the return, there because
     the orbit is on a boundary at the section, counted once).
     """
-    cycles = []
-    for mass in (1, 2):
-        own = [(t, kind) for t, m, kind in events if m == mass and kind.switches]
-        kinds = [kind for _, kind in own]
-        if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((own[-1][0] - own[0][0]) - span) <= 1e-6 * span:
-            kinds.pop()
-        rotations = [tuple(kinds[k:] + kinds[:k]) for k in range(len(kinds))]
-        cycles.append(min(rotations, key=lambda cycle: [kind.value for kind in cycle], default=()))
+    cycles = [own_cycle([(t, kind) for t, m, kind in events if m == mass and kind.switches], span) for mass in (1, 2)]
     return Signature((cycles[0], cycles[1]))
+
+
+def own_cycle(own: Sequence[tuple[float, K]], span: float) -> tuple[K, ...]:
+    """One owner's switches ``(t, kind)`` over one return of length ``span``, as a cycle: a
+    switch at both ends of the return (the orbit on a boundary at the section) counted once, and
+    written from the rotation whose text sorts first, so that where the section cuts the orbit
+    does not change it.  (A mass's cycle here; an element's in a friction chain's
+    :func:`oscillator.attractors.chain_attractors.chain_signature`.)"""
+    kinds = [kind for _, kind in own]
+    if len(kinds) > 1 and kinds[0] == kinds[-1] and abs((own[-1][0] - own[0][0]) - span) <= 1e-6 * span:
+        kinds.pop()
+    rotations = [tuple(kinds[k:] + kinds[:k]) for k in range(len(kinds))]
+    return min(rotations, key=lambda cycle: [kind.value for kind in cycle], default=())

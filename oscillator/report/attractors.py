@@ -20,12 +20,16 @@ import pandas as pd
 
 from oscillator.analysis.axes import STATE
 from oscillator.attractors.basins import Basins
+from oscillator.attractors.chain_attractors import ChainBasins
 from oscillator.attractors.finding import share_text
 from oscillator.attractors.following import AttractorsOver
 from oscillator.attractors.grouping import Attractor
 from oscillator.attractors.lyapunov import LyapunovSpectrum
-from oscillator.io.cases import case_to_toml
+from oscillator.io.cases import Case, case_to_toml
+from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import atomic_path
+from oscillator.model.chain_fields import state_of
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import labelled
 from oscillator.orbits.response import COLUMNS
 from oscillator.report import markup as mk
@@ -39,9 +43,9 @@ from oscillator.report.outputs import (
     save_into,
     state_label,
     unit_of,
-    wrapped_title,
     write_folder,
 )
+from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -120,15 +124,17 @@ def attractor_table(basins: Basins) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=ATTRACTOR_COLUMNS)
 
 
-def basins_figure(basins: Basins) -> Figure:
+def basins_figure(basins: Basins | ChainBasins) -> Figure:
     """The slice coloured by attractor, a legend naming each with its share, and each
-    attractor's own section points (projected on the slice's plane) drawn on top."""
+    attractor's own section points (projected on the slice's plane) drawn on top (a case's or a
+    declared system's)."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     grid, x, y = basins.grid, basins.x, basins.y
+    state, start, t0, title = _slice_of(basins)
     idents = sorted(set(np.unique(grid).tolist()))
     colormap = ListedColormap([color_of(i) for i in idents])
     codes = np.searchsorted(idents, grid)
@@ -147,29 +153,43 @@ def basins_figure(basins: Basins) -> Figure:
             )
         else:  # its basin's colour; its points are the black dots
             handles.append(Patch(facecolor=color_of(attractor.id), edgecolor="black", label=f"{label} (dots: its set)"))
-        _draw_points(ax, attractor, x.name, y.name)
+        _draw_points(ax, attractor, state.index(x.name), state.index(y.name))
     if -1 in shares.index:
         handles.append(Patch(color=FAILED, label=f"failed — {shares.loc[-1].fraction:.1%}"))
     ax.set_xlabel(state_label(x.name))
     ax.set_ylabel(state_label(y.name))
-    fixed = [
-        f"{name} = {value:g} {unit_of(name)}"
-        for name, value in zip(STATE, basins.found.case.initial.y, strict=True)
-        if name not in (x.name, y.name)
-    ]
-    what = f"basins at t0 = {basins.found.case.initial.t0:g} s, {', '.join(fixed)}"
-    ax.set_title(wrapped_title(basins.found.case, what), parse_math=False, fontsize=9)
+    fixed = [f"{name} = {value:g} {unit_of(name)}" for name, value in zip(state, start, strict=True)]
+    kept = [f for f, n in zip(fixed, state, strict=True) if n not in (x.name, y.name)]
+    what = ", ".join([f"basins at t0 = {t0:g} s", *kept])
+    ax.set_title(textwrap.fill(f"{title}: {what}", width=100), parse_math=False, fontsize=9)
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=1, frameon=False)
     return fig
 
 
-def _draw_points(ax: Any, attractor: Attractor, xname: str, yname: str) -> None:
+def _slice_of(basins: Basins | ChainBasins) -> tuple[tuple[str, ...], np.ndarray, float, str]:
+    """The slice's state names, the start it varies two of, its section time and its title."""
+    if isinstance(basins, ChainBasins):
+        chain = basins.found.chain
+        return chain.system.state, state_of(chain), chain.t0, title_of(chain)
+    case = basins.found.case
+    return STATE, np.asarray(case.initial.y), case.initial.t0, title_of(case)
+
+
+def title_of(system: Case | FrictionChain) -> str:
+    """A figure's title for the case (what its overrides changed) or the declared system (its
+    title, as plain text)."""
+    if isinstance(system, FrictionChain):
+        return printable(system.title or "friction chain")
+    return figure_title(system)
+
+
+def _draw_points(ax: Any, attractor: Attractor, i: int, j: int) -> None:
     """The attractor's section points projected on the slice's plane.  A periodic attractor's few
     points: black-edged markers of its colour, one shape per attractor, smaller for each later
     attractor so that coinciding points of two attractors both show; an aperiodic set's many
     points: small black dots that draw its shape."""
     points = attractor.points
-    xs, ys = points[:, STATE.index(xname)], points[:, STATE.index(yname)]
+    xs, ys = points[:, i], points[:, j]
     if not attractor.period:
         ax.scatter(xs, ys, s=2, marker=".", color="black", linewidths=0, alpha=0.6, zorder=4, rasterized=True)
         return
@@ -186,13 +206,13 @@ def _draw_points(ax: Any, attractor: Attractor, xname: str, yname: str) -> None:
 
 
 def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
-    """The running averages of the four exponents against the averaging time."""
+    """The running averages of the exponents against the averaging time."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.add_subplot()
     table = spectrum.convergence
-    for k in range(1, 5):
+    for k in range(1, len(spectrum.exponents) + 1):
         values = table[f"lambda{k}"].to_numpy()
         if np.isfinite(values).any():
             ax.plot(table.t, values, label=f"lambda{k} -> {values[-1]:.4g} 1/s")
@@ -202,7 +222,7 @@ def lyapunov_figure(spectrum: LyapunovSpectrum) -> Figure:
     ax.set_xscale("log")
     ax.set_xlabel("averaging time (s)")
     ax.set_ylabel("exponent (1/s)")
-    title = textwrap.fill(f"Lyapunov exponents of {figure_title(spectrum.case)}", 90)
+    title = textwrap.fill(f"Lyapunov exponents of {title_of(spectrum.case)}", 90)
     ax.set_title(title, parse_math=False, fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
@@ -262,9 +282,14 @@ def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = Tr
     problems = []
     with atomic_path(folder / "lyapunov.parquet") as temporary:
         spectrum.convergence.to_parquet(temporary, index=False)
+    system = spectrum.case
+    if isinstance(system, FrictionChain):  # a declared system: its own file beside the spectrum
+        name, modified, source, text = system.title, [], "system.toml", chain_to_toml(system)
+    else:
+        name, modified, source, text = system.name, list(system.modified), "case.toml", case_to_toml(system)
     info = {
-        "case": spectrum.case.name,
-        "modified": list(spectrum.case.modified),
+        "case": name,
+        "modified": modified,
         "periods": spectrum.periods,
         "exponents": [float(v) if np.isfinite(v) else str(v) for v in spectrum.exponents],
         "start": spectrum.start.tolist(),
@@ -272,9 +297,9 @@ def write_lyapunov(spectrum: LyapunovSpectrum, folder: Path, *, plots: bool = Tr
     }
     with atomic_path(folder / "lyapunov.json") as temporary:
         temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
-    if not (folder / "case.toml").exists():
-        with atomic_path(folder / "case.toml") as temporary:
-            temporary.write_text(case_to_toml(spectrum.case), encoding="utf-8")
+    if not (folder / source).exists():
+        with atomic_path(folder / source) as temporary:
+            temporary.write_text(text, encoding="utf-8")
     if plots:
         try:
             save_into(lyapunov_figure(spectrum), folder / "figures", "lyapunov")

@@ -28,6 +28,7 @@ from oscillator.attractors.mapping import AttractorSettings
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
 from oscillator.io.files import atomic_path, read_untrusted
+from oscillator.orbits.shooting import Orbit
 from oscillator.report.orbit_folders import orbit_info, orbit_of
 from oscillator.text import printable
 
@@ -43,7 +44,7 @@ LABEL_COLUMNS = ["index", *STATE, "attractor", "status", "reason", "message", "p
 def _record(attractor: Attractor) -> dict[str, Any]:
     fields = {f.name: getattr(attractor, f.name) for f in dataclasses.fields(attractor) if f.name != "orbit"}
     fields["points"] = np.asarray(attractor.points, dtype=float).tolist()
-    fields["orbit"] = None if attractor.orbit is None else orbit_info(attractor.orbit)
+    fields["orbit"] = orbit_info(attractor.orbit) if isinstance(attractor.orbit, Orbit) else None
     return fields
 
 

@@ -17,6 +17,7 @@ from oscillator.attractors.following import AttractorsOver, End
 from oscillator.attractors.lyapunov import LyapunovSpectrum
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import resolve_case
+from oscillator.io.chains import load_system
 from oscillator.io.files import read_untrusted
 from oscillator.model.parameters import Parameters
 from oscillator.report.global_folders import read_found
@@ -95,6 +96,14 @@ def read_lyapunov(folder: Path) -> LyapunovSpectrum:
         raise InputError(
             f"{printable(str(folder))} holds no Lyapunov spectrum, or a damaged one ({error})", field="folder"
         ) from None
-    if exponents.shape != (4,) or start.shape != (4,) or np.isnan(exponents).any() or not np.isfinite(start).all():
+    declared = folder / "system.toml"  # a declared system's spectrum (the folder's own file)
+    system = load_system(declared) if declared.is_file() else folder_case(folder, "lyapunov.json", key="case")
+    size = system.system.size
+    if (
+        exponents.shape != (size,)
+        or start.shape != (size,)
+        or np.isnan(exponents).any()
+        or not np.isfinite(start).all()
+    ):
         raise InputError(f"{printable(str(where))} is damaged: its exponents or start", field="folder")
-    return LyapunovSpectrum(folder_case(folder, "lyapunov.json", key="case"), exponents, periods, start, convergence)
+    return LyapunovSpectrum(system, exponents, periods, start, convergence)

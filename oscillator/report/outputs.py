@@ -54,8 +54,9 @@ def color_of(ident: int) -> str:
 
 
 def unit_of(name: str) -> str:
-    """The unit of a state component: ``m`` for a displacement, ``m/s`` for a velocity."""
-    return "m" if name.startswith("x") else "m/s"
+    """The unit of a state component: ``m`` for a displacement (``x1``, ``x:<mass>``) or a
+    slider's stretch (``z:<slider>``), ``m/s`` for a velocity."""
+    return "m" if name.startswith(("x", "z")) else "m/s"
 
 
 def state_label(name: str) -> str:
@@ -138,6 +139,13 @@ def folder_case(folder: Path, marker: str, *, key: str = "case_name") -> Case:
     from oscillator.io.cases import load_case
     from oscillator.io.files import read_untrusted
 
+    if not (folder / "case.toml").exists() and (folder / "system.toml").exists():
+        raise InputError(
+            f"{printable(str(folder))} holds a declared system's {marker.removesuffix('.json')} (system.toml), which "
+            "is not read back yet: its tables and report are in it; to write them again, run the same command "
+            "with --out naming it (it resumes, nothing computed twice)",
+            field="folder",
+        )
     try:
         case = load_case(folder / "case.toml")
     except OscillatorError as error:
