@@ -121,6 +121,9 @@ def test_a_damaged_sweep_or_frequency_response_folder_is_refused_naming_the_file
     assert "did you mean 'Omega'" in result.stderr and "Traceback" not in result.stderr
 
 
+# The Duffing fixture (docs/frequency.md's example, 20 s) is the slow tier's, as tests/test_frequency.py
+# is, until its frequency response runs on the compiled path (issue 53).
+@pytest.mark.slow
 def test_a_click_on_an_unstable_branch_point_finds_the_attractors_on_either_side_of_it(tmp_path, duffing):
     """The Duffing oscillator between its folds: a click on the unstable orbit draws the motion
     from it, and find_attractors, started on either side of it, finds the two stable orbits that
