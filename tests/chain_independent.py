@@ -205,9 +205,13 @@ def _apply(machine, watched, y, mode, arrived, log, t):
     log.append((t, name, mode[name]))
 
 
-def run(masses, elements, omega, g, t0, t_end, *, rtol=1e-12, atol=1e-12, max_step=0.01):
-    """The switches ``(t, element, to_mode)`` of a chain from ``t0`` to ``t_end``."""
+def run(masses, elements, omega, g, t0, t_end, *, rtol=1e-12, atol=1e-12, max_step=0.01, pieces=None):
+    """The switches ``(t, element, to_mode)`` of a chain from ``t0`` to ``t_end``; with a list
+    ``pieces``, each smooth piece appended to it as ``(t_from, t_to, dense solution, mode)`` and
+    the machine as its first item."""
     machine = Machine(masses, [dict(e) for e in elements], omega, g)
+    if pieces is not None:
+        pieces.append(machine)
     y, mode = machine.start(t0)
     log: list[tuple[float, str, int]] = []
     machine.settle(t0, y, mode, {}, log)
@@ -222,8 +226,12 @@ def run(masses, elements, omega, g, t0, t_end, *, rtol=1e-12, atol=1e-12, max_st
         settings = {"rtol": rtol, "atol": atol, "max_step": max_step, "dense_output": True}
         solution = solve_ivp(field, (t, t_end), y, method="DOP853", events=[w[0] for w in watched], **settings)
         if solution.status != 1:
+            if pieces is not None and solution.status == 0:  # the last piece, to t_end
+                pieces.append((t, t_end, solution.sol, frozen))
             break
         hits = [(float(te[0]), k) for k, te in enumerate(solution.t_events) if len(te)]
+        if pieces is not None:
+            pieces.append((t, min(h[0] for h in hits), solution.sol, frozen))
         t = min(h[0] for h in hits)
         t += 1e-12  # just past the crossings (brentq may stop on either side of a root)
         y = solution.sol(t).copy()

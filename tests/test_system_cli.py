@@ -347,7 +347,24 @@ def test_continue_of_a_system_file_refuses_the_articles_options_and_writes_nothi
 
 
 HARDENING = ROOT / "docs" / "systems" / "hardening.toml"
-SLICE = ("--x", "x:m", "-2", "2", "3", "--y", "v:m", "-2", "2", "2", "--transient", "200", "--record", "8", "--workers", "1")
+SLICE = (
+    "--x",
+    "x:m",
+    "-2",
+    "2",
+    "3",
+    "--y",
+    "v:m",
+    "-2",
+    "2",
+    "2",
+    "--transient",
+    "200",
+    "--record",
+    "8",
+    "--workers",
+    "1",
+)
 
 
 def test_basins_of_a_system_file_writes_what_find_basins_finds_and_resumes(tmp_path):

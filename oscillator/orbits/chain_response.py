@@ -28,6 +28,7 @@ from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
+from oscillator.orbits.chain_peaks import peaks, row_modes
 
 __all__ = ["closed_spans", "frequency_sweep", "mode_spans", "orbit_measures", "stuck_spans", "turning_points", "turns"]
 
@@ -63,15 +64,11 @@ def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
     elsewhere), from the chain's field in the row's mode."""
     chain, trajectory = run.chain, run.trajectory
     arrays, system = arrays_of(chain), chain.system
-    states = trajectory[list(system.state)].to_numpy(float)
-    switching = [(k, f"mode:{e.name}") for k, e in enumerate(chain.elements) if f"mode:{e.name}" in trajectory]
-    modes = trajectory[[name for _, name in switching]].to_numpy()
+    states, modes = trajectory[list(system.state)].to_numpy(float), row_modes(run)
     found = np.full((len(trajectory), len(system.masses)), math.nan)
     rate = np.empty(arrays.size)
     for row in rows.tolist():
-        mode = np.zeros(len(chain.elements))
-        mode[[k for k, _ in switching]] = modes[row]
-        chain_derivative(float(trajectory.t.iloc[row]), states[row], rate, pack(arrays, mode))
+        chain_derivative(float(trajectory.t.iloc[row]), states[row], rate, pack(arrays, modes[row]))
         found[row] = rate[1 : 2 * len(system.masses) : 2]
     return found
 
@@ -80,9 +77,11 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     """The measures of one return of ``orbit``: ``x_max:<mass>``, ``x_min:<mass>``,
     ``x_pp:<mass>`` (m) for each mass; ``stuck:<element>`` (the share of the return it holds, 0 to
     1) and ``slip:<element>`` (m) for each friction element and Jenkins slider;
-    ``closed:<element>`` (share), ``closings:<element>`` and ``impact_velocity:<element>`` (m/s)
-    for each stop and contact; ``work:<element>`` and ``dissipated:<element>`` (J) for every
-    element."""
+    ``closed:<element>`` (share), ``closings:<element>``, ``impact_velocity:<element>`` (m/s)
+    and ``force_max:<element>`` (N, the largest force while closed) for each stop and contact;
+    ``a_max:<mass>`` (m/s^2, the largest acceleration) for each mass
+    (:func:`~oscillator.orbits.chain_peaks.peaks`); ``work:<element>`` and
+    ``dissipated:<element>`` (J) for every element."""
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
@@ -136,7 +135,7 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
             found[f"stuck:{element.name}"] = float(sum(b - a for a, b in spans) / span)
         elif element.type in ("stop", "contact"):
             found |= _contact_measures(run, element.name, start, span)
-    return found | _energy_measures(run, start, span)
+    return found | peaks(run) | _energy_measures(run, start, span)
 
 
 def _contact_measures(run: ChainResult, name: str, start: float, span: float) -> dict[str, float]:

@@ -18,7 +18,8 @@ position at the turn (the velocity is zero there, so the turn's own shift does n
 stuck or closed share as the times that bound its spans, over the return's span
 ``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies and slip
 distances of :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet
-(they need the tangents of the integrals): their rows are left out.  A fastest closing speed
+(they need the tangents of the integrals), nor the peaks ``a_max`` and ``force_max`` (they need
+the field's derivative in each number at the peak): their rows are left out.  A fastest closing speed
 moves as the gap's rate at that closing, at the closing's moving time.
 
 Where a switch of the orbit is a grazing (the flow's speed across the boundary near zero against

@@ -1,0 +1,132 @@
+"""The peaks of a chain's orbit (issue 52's measures ``a_max:<mass>`` and ``force_max:<element>``):
+against closed forms of linear chains (1e-9), against the stop's largest penetration where it has
+no damping, and against an independent implementation's field sampled densely along its own
+solution (tests/chain_independent.py) on an orbit with a stop, a contact, a floor and a passing."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from oscillator import FrictionChain
+from oscillator.orbits.chain_orbits import find_chain_orbit
+from oscillator.orbits.chain_peaks import hermite_turns, peaks, quintic
+from oscillator.orbits.chain_response import orbit_measures
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def test_a_linear_oscillators_largest_acceleration_is_omega_squared_times_its_amplitude():
+    m, k, c, q, omega = 2.0, 3.0, 0.2, 0.5, 1.3
+    chain = FrictionChain(Omega=omega).mass("m", m).spring("m", k=k).damper("m", c=c).force("m", Q=q)
+    amplitude = q / math.hypot(k - m * omega**2, c * omega)
+    measured = orbit_measures(find_chain_orbit(chain, transient=50))
+    assert measured["a_max:m"] == pytest.approx(omega**2 * amplitude, rel=1e-9)
+
+
+def test_a_stop_that_stays_closed_pushes_with_its_static_and_its_dynamic_force():
+    """A left stop at 1 m holding a spring's mass at K/(k + K): the motion is linear with stiffness
+    k + K and damping c + C, and the stop's force ``K (at - x) - C v`` peaks at
+    ``K (at - x0) + X sqrt(K^2 + C^2 Omega^2)``."""
+    k, big_k, big_c, c, q, omega = 1.0, 4.0, 0.2, 0.1, 0.3, 1.0
+    x0 = big_k / (k + big_k)
+    chain = FrictionChain(Omega=omega).mass("m", 1.0, x=x0).spring("m", k=k).damper("m", c=c).force("m", Q=q)
+    chain = chain.stop("m", name="stop", side="left", at=1.0, K=big_k, C=big_c)
+    orbit = find_chain_orbit(chain, transient=50)
+    assert orbit.events.empty  # closed throughout
+    amplitude = q / math.hypot(k + big_k - omega**2, (c + big_c) * omega)
+    measured = orbit_measures(orbit)
+    assert measured["force_max:stop"] == pytest.approx(
+        big_k * (1.0 - x0) + amplitude * math.hypot(big_k, big_c * omega), rel=1e-9
+    )
+    assert measured["a_max:m"] == pytest.approx(omega**2 * amplitude, rel=1e-9)
+
+
+def test_an_undamped_stops_largest_force_is_its_stiffness_times_the_largest_penetration():
+    chain = FrictionChain(Omega=0.8).mass("m", 1.0).spring("m", k=1.0).damper("m", c=0.05).force("m", Q=0.4)
+    chain = chain.stop("m", name="wall", side="right", at=0.5, K=50.0)
+    orbit = find_chain_orbit(chain, transient=100)
+    assert set(orbit.events.kind) == {"stop_closes", "stop_opens"}
+    measured = orbit_measures(orbit)
+    assert measured["force_max:wall"] == pytest.approx(50.0 * (measured["x_max:m"] - 0.5), rel=1e-9)
+
+
+def impact_chain() -> FrictionChain:
+    """tests/test_chain_sensitivities.py's: a stop, a contact, a floor, a cubic spring."""
+    return (
+        FrictionChain(Omega=0.7)
+        .mass("a", 1.0)
+        .mass("b", 0.6)
+        .spring("a", k=1.0)
+        .spring("b", "a", k=0.8, k3=0.2)
+        .damper("a", c=0.04)
+        .damper("b", c=0.03)
+        .friction("a", name="floor", mu_s=0.12, mu_k=0.08, N=1.0)
+        .stop("a", name="wall", side="right", at=0.45, K=40.0, C=0.2)
+        .contact("b", "a", name="gap", side="right", gap=0.3, K=30.0, C=0.1)
+        .force("a", Q=0.5)
+    )
+
+
+def test_the_peaks_are_an_independent_implementations_sampled_densely():
+    import chain_independent
+    from test_chain_runs import _as_dicts
+
+    chain = impact_chain()
+    orbit = find_chain_orbit(chain, transient=100)
+    masses, elements = _as_dicts(chain)
+    for mass, (x, v) in zip(masses, orbit.state.reshape(-1, 2), strict=True):
+        mass["x"], mass["v"] = float(x), float(v)
+    pieces: list = []
+    chain_independent.run(
+        masses, elements, chain.Omega, chain.g, orbit.section, orbit.section + chain.period, pieces=pieces
+    )
+    machine, quantities = pieces[0], {}
+    for i, mass in enumerate(machine.names):
+        quantities[f"a_max:{mass}"] = lambda t, y, mode, i=i: abs(machine.rhs(t, y, mode)[2 * i + 1])
+    for e in machine.elements:
+        if e["type"] in ("stop", "contact"):
+            quantities[f"force_max:{e['name']}"] = lambda t, y, mode, e=e: abs(machine.force(e, t, y, mode))
+    found = {name: max(_piece_peak(piece, of) for piece in pieces[1:]) for name, of in quantities.items()}
+    measured = peaks(orbit.run)
+    assert set(measured) == set(found) == {"a_max:a", "a_max:b", "force_max:wall", "force_max:gap"}
+    for name, value in found.items():
+        assert measured[name] == pytest.approx(value, rel=1e-8), (name, measured[name] / value - 1)
+
+
+def _piece_peak(piece, of) -> float:
+    """The largest ``of(t, y, mode)`` over one smooth piece of the independent run: sampled, then
+    refined about the largest sample on the piece's dense solution (or an end of the piece)."""
+    from scipy.optimize import minimize_scalar
+
+    start, end, solution, mode = piece
+    times = np.linspace(start, end, 400)
+    values = [of(t, solution(t), mode) for t in times]
+    k = int(np.argmax(values))
+    if k in (0, len(times) - 1):
+        return float(values[k])
+    best = minimize_scalar(
+        lambda t: -of(t, solution(t), mode),
+        bounds=(times[k - 1], times[k + 1]),
+        method="bounded",
+        options={"xatol": 1e-13},
+    )
+    return max(float(values[k]), -float(best.fun))
+
+
+def test_the_interpolants_are_exact_on_polynomials_of_their_degree():
+    s, h = 0.3, 0.7
+    cubic = np.polynomial.Polynomial([0.0, 0.5, -1.5, 1.0])  # turns at (3 -+ sqrt(3)) / 6 in (0, 1)
+    rate = cubic.deriv()
+    turns = hermite_turns(cubic(0), rate(0), cubic(1), rate(1))
+    assert sorted(turns) == pytest.approx([(3 - math.sqrt(3)) / 6, (3 + math.sqrt(3)) / 6], abs=1e-14)
+    p = np.polynomial.Polynomial([0.5, -1.0, 2.0, 0.3, -0.7, 0.2])  # in t over a step of length h
+    d1, d2 = p.deriv(), p.deriv(2)
+    ends = tuple(np.array([f(t)]) for t in (0.0, h) for f in (p, d1, d2))
+    assert quintic(s, h, (ends[0], ends[1], ends[2], ends[3], ends[4], ends[5]))[0] == pytest.approx(
+        p(s * h), abs=1e-14
+    )
