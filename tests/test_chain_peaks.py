@@ -5,9 +5,8 @@ solution (tests/chain_independent.py) on an orbit with a stop, a contact, a floo
 
 from __future__ import annotations
 
+import itertools
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,8 +15,6 @@ from oscillator import FrictionChain
 from oscillator.orbits.chain_orbits import find_chain_orbit
 from oscillator.orbits.chain_peaks import hermite_turns, peaks, quintic
 from oscillator.orbits.chain_response import orbit_measures
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
 def test_a_linear_oscillators_largest_acceleration_is_omega_squared_times_its_amplitude():
@@ -130,3 +127,44 @@ def test_the_interpolants_are_exact_on_polynomials_of_their_degree():
     assert quintic(s, h, (ends[0], ends[1], ends[2], ends[3], ends[4], ends[5]))[0] == pytest.approx(
         p(s * h), abs=1e-14
     )
+
+
+@pytest.mark.slow
+def test_a_sweeps_points_are_where_the_independent_implementation_settles():
+    """At two points of a frequency sweep (stop, contact, floor), the independent implementation
+    (tests/chain_independent.py), started 1e-4 away from the sweep's orbit and run 40 periods,
+    settles on it (1e-7), with the same largest displacements, shares of the period stuck and
+    closed, and fastest closing speeds (1e-7), these read from its own events and dense solution."""
+    import chain_independent
+    from oscillator.orbits.chain_response import frequency_sweep
+    from test_chain_runs import _as_dicts
+
+    table = frequency_sweep(impact_chain(), [0.6, 0.7], transient=100)
+    assert list(table.status) == ["followed", "followed"] and table.stable.all()
+    for row in table.to_dict("records"):
+        chain = impact_chain().with_values({"Omega": row["Omega"]})
+        state = np.array([row[name] for name in chain.system.state])
+        masses, elements = _as_dicts(chain)
+        for mass, (x, v) in zip(masses, (state + 1e-4).reshape(-1, 2), strict=True):
+            mass["x"], mass["v"] = float(x), float(v)
+        pieces: list = []
+        periods, period = 40, chain.period
+        chain_independent.run(masses, elements, chain.Omega, chain.g, 0.0, periods * period, pieces=pieces)
+        machine, start = pieces[0], (periods - 1) * period
+        assert np.max(np.abs(pieces[-1][2](periods * period) - state)) < 1e-7
+        last = [(max(a, start), b, sol, mode) for a, b, sol, mode in pieces[1:] if b > start]
+        for i, mass in enumerate(machine.names):
+            found = max(_piece_peak(piece, lambda t, y, mode, i=i: y[2 * i]) for piece in last)
+            assert found == pytest.approx(row[f"x_max:{mass}"], abs=1e-7)
+        for name, wanted in (("floor", 0), ("wall", 1), ("gap", 1)):
+            share = sum(b - a for a, b, _, mode in last if mode[name] == wanted) / period
+            assert share == pytest.approx(row[f"{'stuck' if name == 'floor' else 'closed'}:{name}"], abs=1e-7)
+        for name in ("wall", "gap"):
+            e = next(e for e in machine.elements if e["name"] == name)
+            closings = [
+                abs(machine.u(e, before[2](before[1]))[1])
+                for before, after in itertools.pairwise(last)
+                if before[3][name] == 0 and after[3][name] == 1
+            ]
+            assert max(closings) == pytest.approx(row[f"impact_velocity:{name}"], abs=1e-7)
+            assert len(closings) == row[f"closings:{name}"]
