@@ -126,3 +126,20 @@ def test_the_articles_basins_run_without_a_folder_too(tmp_path, monkeypatch):
     assert isinstance(basins, oscillator.Basins) and basins.grid.shape == (2, 2)
     assert [a.period for a in basins.found.attractors] == [1] and (basins.grid == 0).all()
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda chain: oscillator.frequency_response(chain),
+        lambda chain: oscillator.follow_attractors(chain, "Omega", [1.0, 1.1]),
+        lambda chain: oscillator.regime_atlas(chain, Axis("Omega", 1, 2, 2), Axis("Q2", 60, 70, 2)),
+        lambda chain: oscillator.response(chain),
+    ],
+)
+def test_an_analysis_of_the_articles_cases_refuses_a_declared_system_naming_those_that_take_one(call):
+    with pytest.raises(
+        InputError,
+        match="takes the article's cases .* not a declared system; the ones that take a system: simulate, find_orbit",
+    ):
+        call(hardening())

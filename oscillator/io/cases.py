@@ -37,7 +37,17 @@ from oscillator.model.parameters import (
 from oscillator.model.system import ARTICLE, System
 from oscillator.text import printable, shown, unsafe_characters
 
-__all__ = ["Case", "ExpectedEvent", "case_names", "case_to_toml", "load_case", "resolve_case", "section_times"]
+__all__ = [
+    "TAKES_A_SYSTEM",
+    "Case",
+    "ExpectedEvent",
+    "case_names",
+    "case_to_toml",
+    "load_case",
+    "not_a_case",
+    "resolve_case",
+    "section_times",
+]
 
 #: The largest case file read (bytes); the article's cases are about 2 kB.
 MAX_CASE_BYTES = 1 << 20
@@ -384,6 +394,26 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
     )
 
 
+#: What takes a declared system (a :class:`~oscillator.model.chains.FrictionChain`) where a case goes.
+TAKES_A_SYSTEM = (
+    "simulate, find_orbit, continue_orbit, sensitivities, frequency_sweep, worst_over, design, "
+    "find_attractors, find_basins, lyapunov, explore"
+)
+
+
+def not_a_case(value: object) -> str:
+    """Why ``value`` is no case: a declared system where the analysis takes the article's cases
+    only (and what takes one), or another object."""
+    from oscillator.model.chains import FrictionChain
+
+    if isinstance(value, FrictionChain):
+        return (
+            f"this analysis takes the article's cases (a name, a case file or a Case), not a declared system; the "
+            f"ones that take a system: {TAKES_A_SYSTEM} (docs/systems.md)"
+        )
+    return f"case must be a case's name, a case file's path or a Case, got {shown(value)}"
+
+
 def load_case(name_or_path: str | Path) -> Case:
     """Load a shipped case by name (``"instance-3"``) or a case file by path.
 
@@ -396,6 +426,8 @@ def load_case(name_or_path: str | Path) -> Case:
         Unknown name (with the closest names), unreadable or malformed file (with line and
         column), unknown or invalid fields (naming the field and the fix).
     """
+    if not isinstance(name_or_path, str | Path):
+        raise InputError(not_a_case(name_or_path), field="case")
     text_name = str(name_or_path)
     path = Path(text_name)
     if not (path.suffix == ".toml" or os.path.lexists(path)):

@@ -46,7 +46,7 @@ from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
-from oscillator.io.cases import Case, resolve_case
+from oscillator.io.cases import Case, not_a_case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.kernels import rates
@@ -124,6 +124,8 @@ def response(case: Case, periods: int = 1) -> Response:
     """The response measures of the case's motion from its start over ``periods`` forcing periods
     (module docstring): of an orbit, over its return (:meth:`oscillator.Orbit.response`); of
     another start, ``response(resolve_case(case, x1=..., v1=..., x2=..., v2=...), periods)``."""
+    if not isinstance(case, Case):  # a declared system's measures: orbit_measures(find_orbit(chain))
+        raise InputError(not_a_case(case), field="case")
     check_count(periods, "periods", 1, 100_000)
     p = case.parameters
     span = periods * p.period
