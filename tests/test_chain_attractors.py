@@ -140,6 +140,6 @@ def test_the_articles_basins_run_without_a_folder_too(tmp_path, monkeypatch):
 def test_an_analysis_of_the_articles_cases_refuses_a_declared_system_naming_those_that_take_one(call):
     with pytest.raises(
         InputError,
-        match="takes the article's cases .* not a declared system; the ones that take a system: simulate, find_orbit",
+        match=r"takes the article's cases .* not a declared system; the ones that take a system: simulate, find_orbit",
     ):
         call(hardening())

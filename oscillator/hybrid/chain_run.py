@@ -77,6 +77,17 @@ class ChainResult:
         """Write the run as ``oscillator run FILE`` does into ``folder`` (a new one)."""
         return presenter().save_chain_result(self, folder, figures=figures, report=report)
 
+    def modes(self) -> np.ndarray:
+        """Each trajectory row's mode of every element, ``(rows, elements)`` (0 for an element
+        that does not switch): what the field takes at that row with
+        :func:`~oscillator.model.chain_fields.pack`."""
+        modes = np.zeros((len(self.trajectory), len(self.chain.elements)))
+        for k, element in enumerate(self.chain.elements):
+            column = f"mode:{element.name}"
+            if column in self.trajectory:
+                modes[:, k] = self.trajectory[column].to_numpy(float)
+        return modes
+
     @property
     def energy(self) -> ChainEnergy:
         """The work-energy balance over the run (:func:`~oscillator.model.chain_energy.audit`)."""

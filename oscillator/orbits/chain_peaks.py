@@ -23,22 +23,10 @@ import numpy as np
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["hermite_turns", "peaks", "row_modes"]
+__all__ = ["hermite_turns", "peaks", "quintic"]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
-
-
-def row_modes(run: ChainResult) -> np.ndarray:
-    """Each trajectory row's mode of every element, ``(rows, elements)`` (0 for an element that
-    does not switch)."""
-    chain, trajectory = run.chain, run.trajectory
-    modes = np.zeros((len(trajectory), len(chain.elements)))
-    for k, element in enumerate(chain.elements):
-        column = f"mode:{element.name}"
-        if column in trajectory:
-            modes[:, k] = trajectory[column].to_numpy(float)
-    return modes
 
 
 def hermite_turns(f0: float, d0: float, f1: float, d1: float) -> list[float]:
@@ -91,7 +79,7 @@ def peaks(run: ChainResult) -> dict[str, float]:
     chain, trajectory = run.chain, run.trajectory
     t = trajectory.t.to_numpy(float)
     states = trajectory[list(chain.system.state)].to_numpy(float)
-    modes, field = row_modes(run), _Field(run)
+    modes, field = run.modes(), _Field(run)
     contacts = [(k, e.name) for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
     best = {f"a_max:{m.name}": 0.0 for m in chain.masses} | {f"force_max:{name}": 0.0 for _, name in contacts}
     own = [pack(field.arrays, modes[k]) for k in range(len(t))]

@@ -28,7 +28,7 @@ from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
-from oscillator.orbits.chain_peaks import peaks, row_modes
+from oscillator.orbits.chain_peaks import peaks
 
 __all__ = ["closed_spans", "frequency_sweep", "mode_spans", "orbit_measures", "stuck_spans", "turning_points", "turns"]
 
@@ -64,7 +64,7 @@ def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
     elsewhere), from the chain's field in the row's mode."""
     chain, trajectory = run.chain, run.trajectory
     arrays, system = arrays_of(chain), chain.system
-    states, modes = trajectory[list(system.state)].to_numpy(float), row_modes(run)
+    states, modes = trajectory[list(system.state)].to_numpy(float), run.modes()
     found = np.full((len(trajectory), len(system.masses)), math.nan)
     rate = np.empty(arrays.size)
     for row in rows.tolist():

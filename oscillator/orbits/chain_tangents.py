@@ -297,17 +297,6 @@ def _crossing(
     return Crossing(t, element, kind, normal, moved, speed, rates, jump, block.copy(), margin)
 
 
-def _modes(run: ChainResult) -> np.ndarray:
-    """Each trajectory row's mode, one integer per element."""
-    chain, trajectory = run.chain, run.trajectory
-    modes = np.zeros((len(trajectory), len(chain.elements)))
-    for k, element in enumerate(chain.elements):
-        column = f"mode:{element.name}"
-        if column in trajectory:
-            modes[:, k] = trajectory[column].to_numpy()
-    return modes
-
-
 def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = RTOL) -> ChainPass:
     """The tangents along ``run`` (a period map's: :func:`~oscillator.orbits.chain_orbits.
     chain_period_map`), from ``Phi = I``, ``Psi = 0`` at its start, in the numbers ``params``
@@ -320,7 +309,7 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     trajectory = run.trajectory
     t = trajectory.t.to_numpy(float)
     states = trajectory[list(chain.system.state)].to_numpy(float)
-    modes, switches = _modes(run), _Switches.of(run)
+    modes, switches = run.modes(), _Switches.of(run)
     block = np.hstack([np.eye(n), np.zeros((n, k))])
     changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]
     pieces: list[tuple[float, float, Callable[[float], np.ndarray]]] = []
