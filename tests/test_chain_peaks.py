@@ -15,6 +15,7 @@ from oscillator import FrictionChain
 from oscillator.orbits.chain_orbits import find_chain_orbit
 from oscillator.orbits.chain_peaks import hermite_turns, peaks, quintic
 from oscillator.orbits.chain_response import orbit_measures
+from test_chain_sensitivities import impact_chain
 
 
 def test_a_linear_oscillators_largest_acceleration_is_omega_squared_times_its_amplitude():
@@ -50,23 +51,6 @@ def test_an_undamped_stops_largest_force_is_its_stiffness_times_the_largest_pene
     assert set(orbit.events.kind) == {"stop_closes", "stop_opens"}
     measured = orbit_measures(orbit)
     assert measured["force_max:wall"] == pytest.approx(50.0 * (measured["x_max:m"] - 0.5), rel=1e-9)
-
-
-def impact_chain() -> FrictionChain:
-    """tests/test_chain_sensitivities.py's: a stop, a contact, a floor, a cubic spring."""
-    return (
-        FrictionChain(Omega=0.7)
-        .mass("a", 1.0)
-        .mass("b", 0.6)
-        .spring("a", k=1.0)
-        .spring("b", "a", k=0.8, k3=0.2)
-        .damper("a", c=0.04)
-        .damper("b", c=0.03)
-        .friction("a", name="floor", mu_s=0.12, mu_k=0.08, N=1.0)
-        .stop("a", name="wall", side="right", at=0.45, K=40.0, C=0.2)
-        .contact("b", "a", name="gap", side="right", gap=0.3, K=30.0, C=0.1)
-        .force("a", Q=0.5)
-    )
 
 
 def test_the_peaks_are_an_independent_implementations_sampled_densely():

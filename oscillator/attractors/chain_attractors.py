@@ -225,13 +225,8 @@ def find_chain_attractors(
     which start reaches which (module docstring)."""
     chain = chain.checked()
     starts = check_chain_states(chain, state_of(chain) if states is None else states)
-    landings = []
-    tasks = [(index, tuple(row)) for index, row in enumerate(starts)]
     with executor:
-        for landing in executor.map(land_chain, tasks, shared=(chain, settings)):
-            landings.append(landing)
-            if progress is not None:
-                progress(len(landings), len(tasks))
+        landings = grid_landings(chain, settings, starts, None, executor, progress, land_chain)
         described, table, warnings = described_landings(
             chain, settings, landings, ChainRefined(settings.lyapunov_periods), executor
         )

@@ -48,11 +48,12 @@ from oscillator.text import printable
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.analysis.axes import Axis
     from oscillator.attractors.basins import Basins
+    from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.attractors.mapping import AttractorSettings
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
 
-__all__ = ["attractors", "basins", "landing_settings", "lyapunov"]
+__all__ = ["attractors", "basins", "finish_basins", "landing_settings", "lyapunov"]
 
 
 def axis_of(values: AxisOption, flag: str) -> Axis:
@@ -140,7 +141,7 @@ def basins(
 
         run = functools.partial(find_basins, resolved, x_axis, y_axis, store, settings=settings, workers=count)
         found = with_progress(functools.partial(run, client=client), f"{resolved.name}: basins", "starts", quiet)
-    _finish_basins(found, store, no_plots, quiet)
+    finish_basins(found, store, no_plots, quiet)
 
 
 def _open_basins(
@@ -166,30 +167,38 @@ def _open_basins(
     return store, lock, client, count
 
 
-def _finish_basins(found: Basins, store: Any, no_plots: bool, quiet: bool) -> None:
+def finish_basins(found: Basins | ChainBasins, store: Any, no_plots: bool, quiet: bool) -> None:
+    """Write a computed basins folder (a case's or a declared system's), print its attractors
+    and say what could not be written or drawn (exit 1; the tables are kept)."""
     say_reused(store, store.reused["landings"], f"of the {found.x.count * found.y.count} starts", quiet)
     folder = store.folder
+    from oscillator.attractors.basins import Basins
     from oscillator.attractors.finding import share_text
     from oscillator.report.attractors import attractor_table, write_basins
+    from oscillator.report.chain_attractors import chain_attractor_table, write_chain_basins
 
-    problems = outputs(folder, "starts", lambda: write_basins(found, folder, plots=not no_plots))
+    if isinstance(found, Basins):
+        table, write = attractor_table(found), functools.partial(write_basins, found)
+    else:
+        table, write = chain_attractor_table(found), functools.partial(write_chain_basins, found)
+    problems = outputs(folder, "starts", lambda: write(folder, plots=not no_plots))
     if not quiet:
-        table = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+        shown = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
         for column in ("attractor", "share of starts [95 %]", "orbit", "largest |multiplier|"):
-            table.add_column(column)
-        for row in attractor_table(found).itertuples(index=False):
-            orbit = "" if row.kind != "periodic" or row.stable is None else ("stable" if row.stable else "unstable")
-            largest = "" if row.kind != "periodic" else f"{row.largest_multiplier:.4g}"
-            share = share_text(row.fraction, row.low, row.high)
-            table.add_row(Text(str(row.name)), share, orbit, largest)
-        out.print(table)
+            shown.add_column(column)
+        for row in table.to_dict("records"):
+            periodic = row["kind"] == "periodic"
+            orbit = "" if not periodic or row["stable"] is None else ("stable" if row["stable"] else "unstable")
+            largest = f"{row['largest_multiplier']:.4g}" if periodic else ""
+            shown.add_row(Text(str(row["name"])), share_text(row["fraction"], row["low"], row["high"]), orbit, largest)
+        out.print(shown)
     for warning in found.found.warnings:
         warn(warning)
     say(f"written to {printable(str(folder))}")
     if not found.found.attractors:
         labels = found.found.labels
         raise fail(
-            f"every start failed ({labels.message.iloc[0]}); the starts' reasons are in "
+            f"every start failed ({printable(str(labels.message.iloc[0]))}); the starts' reasons are in "
             f"{printable(str(folder))}/basins.parquet",
             1,
         )

@@ -8,20 +8,15 @@ import functools
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rich import box
-from rich.table import Table
-from rich.text import Text
-
 from oscillator.analysis.execution import check_workers
-from oscillator.cli.console import fail, load, out, say, warn
-from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, say_reused, with_progress
+from oscillator.cli.console import load
+from oscillator.cli.resumable import computing, locked, new_folder, refusing, with_progress
 from oscillator.cli.system import changed
 from oscillator.errors import InputError
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.analysis.axes import Axis
-    from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.attractors.mapping import AttractorSettings
     from oscillator.model.chains import FrictionChain
 
@@ -74,39 +69,10 @@ def basins_system(
         compute = functools.partial(find_chain_basins, chain, x, y, store, settings=settings, workers=count)
         title = printable(chain.title or stem)
         basins = with_progress(functools.partial(compute, client=client), f"{title}: basins", "starts", quiet)
-    _finish(basins, store, no_plots, quiet)
+    from oscillator.cli.attractors import finish_basins
+
+    finish_basins(basins, store, no_plots, quiet)
     return True
-
-
-def _finish(basins: ChainBasins, store: Any, no_plots: bool, quiet: bool) -> None:
-    from oscillator.attractors.finding import share_text
-    from oscillator.report.chain_attractors import chain_attractor_table, write_chain_basins
-
-    say_reused(store, store.reused["landings"], f"of the {basins.x.count * basins.y.count} starts", quiet)
-    folder = store.folder
-    problems = outputs(folder, "starts", lambda: write_chain_basins(basins, folder, plots=not no_plots))
-    if not quiet:
-        table = Table(title="attractors", title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
-        for column in ("attractor", "share of starts [95 %]", "orbit", "largest |multiplier|"):
-            table.add_column(column)
-        for row in chain_attractor_table(basins).to_dict("records"):
-            periodic = row["kind"] == "periodic" and row.get("stable") is not None
-            orbit = ("stable" if row["stable"] else "unstable") if periodic else ""
-            largest = f"{row['largest_multiplier']:.4g}" if periodic else ""
-            table.add_row(Text(str(row["name"])), share_text(row["fraction"], row["low"], row["high"]), orbit, largest)
-        out.print(table)
-    for warning in basins.found.warnings:
-        warn(warning)
-    say(f"written to {printable(str(folder))}")
-    if not basins.found.attractors:
-        labels = basins.found.labels
-        raise fail(
-            f"every start failed ({printable(str(labels.message.iloc[0]))}); the starts' reasons are in "
-            f"{printable(str(folder))}/basins.parquet",
-            1,
-        )
-    if problems:
-        raise fail("; ".join(problems) + f"; the tables are in {folder}", 1)
 
 
 def spectrum_target(target: str, assignments: list[str] | None) -> tuple[Any, str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -79,49 +80,40 @@ ATTRACTOR_COLUMNS = [
 
 def attractor_table(basins: Basins) -> pd.DataFrame:
     """One row per attractor (and one for failed starts, if any): what it is and its share."""
-    shares = basins.found.fractions().set_index("attractor")
     rows = []
-    for attractor in basins.found.attractors:
-        share = shares.loc[attractor.id]
-        orbit = attractor.orbit
-        rows.append(
-            {
-                "attractor": attractor.id,
-                "name": attractor.name,
-                "kind": attractor.kind,
-                "period": attractor.period,
-                "signature": attractor.signature,
-                "rests_m1": attractor.rests[0],
-                "rests_m2": attractor.rests[1],
-                "contacts": attractor.contacts,
-                "rest_time_m1": attractor.rest_time[0],
-                "rest_time_m2": attractor.rest_time[1],
-                "starts": int(share.starts),
-                "fraction": float(share.fraction),
-                "low": float(share.low),
-                "high": float(share.high),
-                "stable": None if orbit is None else bool(orbit.stable),
-                "largest_multiplier": np.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
-                "lyapunov": attractor.lyapunov,
-                **attractor.response_columns(),
-                "points": json.dumps(attractor.points.tolist()),
-                "note": attractor.note,
-            }
-        )
-    if -1 in shares.index:
-        share = shares.loc[-1]
-        rows.append(
-            {
-                "attractor": -1,
-                "name": "failed",
-                "kind": "failed",
-                "starts": int(share.starts),
-                "fraction": float(share.fraction),
-                "low": float(share.low),
-                "high": float(share.high),
-            }
-        )
-    return pd.DataFrame(rows, columns=ATTRACTOR_COLUMNS)
+    for attractor, row in attractor_rows(basins.found.attractors, basins.found.fractions()):
+        masses = {"rests_m1": attractor.rests[0], "rests_m2": attractor.rests[1], "contacts": attractor.contacts}
+        masses |= {"rest_time_m1": attractor.rest_time[0], "rest_time_m2": attractor.rest_time[1]}
+        rows.append(row | masses | attractor.response_columns())
+    return pd.DataFrame(rows + failed_rows(basins.found.fractions()), columns=ATTRACTOR_COLUMNS)
+
+
+def attractor_rows(attractors: Sequence[Attractor], fractions: pd.DataFrame) -> list[tuple[Attractor, dict[str, Any]]]:
+    """Each attractor with the columns every attractor table has: ``attractor, name, kind,
+    period, signature, starts, fraction, low, high, stable, largest_multiplier, lyapunov,
+    points`` (JSON) and ``note`` (its share from ``fractions``)."""
+    shares = fractions.set_index("attractor")
+    found = []
+    for attractor in attractors:
+        share, orbit = shares.loc[attractor.id], attractor.orbit
+        largest = np.nan if orbit is None else float(np.max(np.abs(orbit.multipliers), initial=0.0))
+        row = {"attractor": attractor.id, "name": attractor.name, "kind": attractor.kind, "period": attractor.period}
+        row |= {"signature": attractor.signature, "starts": int(share.starts), "fraction": float(share.fraction)}
+        row |= {"low": float(share.low), "high": float(share.high)}
+        row |= {"stable": None if orbit is None else bool(orbit.stable), "largest_multiplier": largest}
+        row |= {"lyapunov": attractor.lyapunov, "points": json.dumps(attractor.points.tolist()), "note": attractor.note}
+        found.append((attractor, row))
+    return found
+
+
+def failed_rows(fractions: pd.DataFrame) -> list[dict[str, Any]]:
+    """The row of the starts that failed (none if none did)."""
+    shares = fractions.set_index("attractor")
+    if -1 not in shares.index:
+        return []
+    share = shares.loc[-1]
+    row = {"attractor": -1, "name": "failed", "kind": "failed", "starts": int(share.starts)}
+    return [row | {"fraction": float(share.fraction), "low": float(share.low), "high": float(share.high)}]
 
 
 def basins_figure(basins: Basins | ChainBasins) -> Figure:

@@ -4,12 +4,8 @@ name), the figure and the report; every text from the system file escaped by the
 
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
-from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from oscillator.attractors.chain_attractors import ChainBasins
@@ -17,7 +13,7 @@ from oscillator.attractors.finding import share_text
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import atomic_path
 from oscillator.report import markup as mk
-from oscillator.report.attractors import basins_figure
+from oscillator.report.attractors import attractor_rows, basins_figure, failed_rows
 from oscillator.report.outputs import write_folder
 
 __all__ = ["chain_attractor_table", "write_chain_basins"]
@@ -29,37 +25,12 @@ def chain_attractor_table(basins: ChainBasins) -> pd.DataFrame:
     ``rest_time:<mass>``, the refined orbit's measures (``x_pp:<mass>``, ``stuck:<element>``, ...),
     its section ``points`` (JSON) and ``note``; a ``failed`` row for the starts that failed."""
     found = basins.found
-    shares = found.fractions().set_index("attractor")
-    rows: list[dict[str, Any]] = []
-    for attractor in found.attractors:
-        share, orbit = shares.loc[attractor.id], attractor.orbit
-        rows.append(
-            {
-                "attractor": attractor.id,
-                "name": attractor.name,
-                "kind": attractor.kind,
-                "period": attractor.period,
-                "signature": attractor.signature,
-                "starts": attractor.starts,
-                "fraction": float(share.fraction),
-                "low": float(share.low),
-                "high": float(share.high),
-                "stable": None if orbit is None else bool(orbit.stable),
-                "largest_multiplier": math.nan
-                if orbit is None
-                else float(np.max(np.abs(orbit.multipliers), initial=0)),
-                "lyapunov": attractor.lyapunov,
-                **{f"rests:{m}": r for m, r in zip(attractor.masses, attractor.rests, strict=True)},
-                **{f"rest_time:{m}": r for m, r in zip(attractor.masses, attractor.rest_time, strict=True)},
-                **attractor.measures,
-                "points": json.dumps(attractor.points.tolist()),
-                "note": attractor.note,
-            }
-        )
-    if -1 in shares.index:
-        share = shares.loc[-1]
-        rows.append({"attractor": -1, "name": "failed", "kind": "failed", "starts": int(share.starts)})
-        rows[-1] |= {"fraction": float(share.fraction), "low": float(share.low), "high": float(share.high)}
+    rows = []
+    for attractor, row in attractor_rows(found.attractors, found.fractions()):
+        row |= {f"rests:{m}": r for m, r in zip(attractor.masses, attractor.rests, strict=True)}
+        row |= {f"rest_time:{m}": r for m, r in zip(attractor.masses, attractor.rest_time, strict=True)}
+        rows.append(row | attractor.measures)
+    rows += failed_rows(found.fractions())
     return pd.DataFrame(rows)
 
 
