@@ -13,7 +13,7 @@ import pytest
 
 from oscillator import FrictionChain
 from oscillator.orbits.chain_orbits import find_chain_orbit
-from oscillator.orbits.chain_peaks import hermite_turns, peaks, quintic
+from oscillator.orbits.chain_peaks import peak_places, peaks, quintic
 from oscillator.orbits.chain_response import orbit_measures
 from test_chain_sensitivities import impact_chain
 
@@ -99,18 +99,37 @@ def _piece_peak(piece, of) -> float:
     return max(float(values[k]), -float(best.fun))
 
 
-def test_the_interpolants_are_exact_on_polynomials_of_their_degree():
+def test_a_peak_on_a_switch_moves_with_the_switch():
+    """A soft, strongly damped stop pushes hardest as it closes: both peaks sit on the closing
+    (the acceleration's and the force's jump there), and their derivatives, which ride the
+    switch (its moving time and state), equal Richardson differences of the orbits at c +- h
+    (h 1e-4 relative) to 1e-7; so do the peaks inside a piece, in tests/test_chain_sensitivities.py."""
+    chain = FrictionChain(Omega=0.8).mass("m", 1.0).spring("m", k=1.0).damper("m", c=0.05).force("m", Q=0.5)
+    chain = chain.stop("m", name="wall", side="right", at=0.5, K=1.0, C=2.0)
+    orbit = find_chain_orbit(chain, transient=100, tol=1e-13)
+    closing = float(orbit.events.t[orbit.events.kind == "stop_closes"].iloc[0])
+    assert {peak.t for peak in peak_places(orbit.run).values()} == {closing}
+    names, rows = ["wall.C", "wall.at", "Omega", "spring-1.k"], ["force_max:wall", "a_max:m"]
+    found = orbit.sensitivities(names).measures.loc[rows]
+
+    def seen(name: str, value: float) -> np.ndarray:
+        moved = find_chain_orbit(chain.with_values({name: value}), orbit.state, transient=0, tol=1e-13)
+        return np.array([orbit_measures(moved)[row] for row in rows])
+
+    for name, value in zip(names, (2.0, 0.5, 0.8, 1.0), strict=True):
+        h = 1e-4 * max(1.0, value)
+        wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
+        narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
+        exact = found[f"d/d{name}"].to_numpy()
+        assert np.abs((4 * narrow - wide) / 3 - exact).max() <= 1e-7 * np.abs(exact).max(), name
+
+
+def test_the_quintic_is_exact_on_polynomials_of_its_degree():
     s, h = 0.3, 0.7
-    cubic = np.polynomial.Polynomial([0.0, 0.5, -1.5, 1.0])  # turns at (3 -+ sqrt(3)) / 6 in (0, 1)
-    rate = cubic.deriv()
-    turns = hermite_turns(cubic(0), rate(0), cubic(1), rate(1))
-    assert sorted(turns) == pytest.approx([(3 - math.sqrt(3)) / 6, (3 + math.sqrt(3)) / 6], abs=1e-14)
     p = np.polynomial.Polynomial([0.5, -1.0, 2.0, 0.3, -0.7, 0.2])  # in t over a step of length h
     d1, d2 = p.deriv(), p.deriv(2)
     ends = tuple(np.array([f(t)]) for t in (0.0, h) for f in (p, d1, d2))
-    assert quintic(s, h, (ends[0], ends[1], ends[2], ends[3], ends[4], ends[5]))[0] == pytest.approx(
-        p(s * h), abs=1e-14
-    )
+    assert quintic(s, h, ends)[0] == pytest.approx(p(s * h), abs=1e-14)
 
 
 @pytest.mark.slow

@@ -41,6 +41,7 @@ __all__ = [
     "chain_derivative",
     "chain_jacobian",
     "element_force",
+    "element_gradient",
     "element_rate",
     "forces_on",
     "pack",
@@ -359,11 +360,20 @@ def _gradient(
 
 
 @njit(cache=True)
+def element_gradient(t: float, y: Vector, d: Vector, row: int, grad: Vector) -> float:  # pragma: no cover
+    """Fill ``grad`` with the gradient in the state of :func:`element_force` of element ``row``
+    in the data's mode; return its derivative in ``t``."""
+    for k in range(grad.shape[0]):
+        grad[k] = 0.0
+    return _gradient(t, y, d, row, _offsets(d), 1.0, grad)
+
+
+@njit(cache=True)
 def element_rate(t: float, y: Vector, yp: Vector, d: Vector, row: int) -> float:  # pragma: no cover - compiled
     """The rate of :func:`element_force` of element ``row`` (N/s) along the motion ``y' = yp``, in
     the data's mode: its gradient in the state times ``yp``, and its derivative in ``t``."""
     grad = np.zeros(y.shape[0])
-    rate = _gradient(t, y, d, row, _offsets(d), 1.0, grad)
+    rate = element_gradient(t, y, d, row, grad)
     for k in range(y.shape[0]):
         rate += grad[k] * yp[k]
     return rate

@@ -7,35 +7,31 @@ rate ``f'`` are known at both rows of each step from the chain's field in the le
 (:func:`~oscillator.model.chain_fields.chain_derivative`, its derivative
 :func:`~oscillator.model.chain_fields.chain_jacobian`: ``y'' = J y' + df/dt``;
 :func:`~oscillator.model.chain_fields.element_rate`); where ``f'`` changes sign inside a step,
-the cubic through both rows' values and rates has its turn there (Hermite: exact to the step's
-fourth power).  The peak is the largest ``|f|`` over the rows (the left and the right limit of a
-switch both: an impact with damping, a mass that sticks, change the acceleration at once) and
-over those turns.
+the turn is the root of ``f'`` along the quintic through both rows' states, rates and second
+rates (Hermite: exact to the step's sixth power), found by Brent's method, and ``f`` is valued
+there from the field.  The peak is the largest ``|f|`` over the rows (the left and the right
+limit of a switch both: an impact with damping, a mass that sticks, change the acceleration at
+once) and over those turns.  The turn is located as well as the value (``f' = 0`` there to the
+interpolant's accuracy), so that a peak's derivative in a number is the quantity's at that fixed
+time (:mod:`oscillator.orbits.chain_sensitivity`).
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["hermite_turns", "peaks", "quintic"]
+__all__ = ["Peak", "peak_places", "peaks", "quintic"]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
-
-
-def hermite_turns(f0: float, d0: float, f1: float, d1: float) -> list[float]:
-    """Where inside ``(0, 1)`` the cubic with values ``f0``, ``f1`` and rates ``d0``, ``d1`` (per
-    unit of ``s``) at ``s = 0, 1`` turns."""
-    step = f1 - f0
-    a, b, c = 3.0 * (d0 + d1 - 2.0 * step), 2.0 * (3.0 * step - 2.0 * d0 - d1), d0  # p'(s) = a s^2 + b s + c
-    roots = np.roots([a, b, c]) if abs(a) > 1e-300 or abs(b) > 1e-300 else np.empty(0)
-    return [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) < 1e-12 and 0.0 < r.real < 1.0]
 
 
 def quintic(s: float, h: float, ends: tuple[np.ndarray, ...]) -> np.ndarray:
@@ -72,26 +68,43 @@ class _Field:
         return first, self.jacobian @ first + self.partial
 
 
+@dataclass(frozen=True)
+class Peak:
+    """Where a peak is: the quantity's signed ``value`` there, the time, the state and the mode
+    (one number per element) whose field gives it (at a switch: the side it is on)."""
+
+    value: float
+    t: float
+    y: np.ndarray
+    mode: np.ndarray
+
+
 def peaks(run: ChainResult) -> dict[str, float]:
     """``a_max:<mass>`` (m/s^2: the largest ``|x''|`` of each mass) and ``force_max:<element>`` (N:
     the largest ``|force|`` of each stop and contact while closed, 0 if it never closes) over
     ``run`` (module docstring)."""
+    return {name: abs(peak.value) for name, peak in peak_places(run).items()}
+
+
+def peak_places(run: ChainResult) -> dict[str, Peak]:
+    """:func:`peaks` with where each is (a stop or contact that never closes: value 0 at the
+    run's start)."""
     chain, trajectory = run.chain, run.trajectory
     t = trajectory.t.to_numpy(float)
     states = trajectory[list(chain.system.state)].to_numpy(float)
     modes, field = run.modes(), _Field(run)
     contacts = [(k, e.name) for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
-    best = {f"a_max:{m.name}": 0.0 for m in chain.masses} | {f"force_max:{name}": 0.0 for _, name in contacts}
+    names = [f"a_max:{m.name}" for m in chain.masses] + [f"force_max:{name}" for _, name in contacts]
+    best = {name: Peak(0.0, float(t[0]), states[0], modes[0]) for name in names}
     own = [pack(field.arrays, modes[k]) for k in range(len(t))]
     values = [field.at(t[k], states[k], own[k]) for k in range(len(t))]
     for k in range(len(t) - 1):
         left, data = values[k], own[k]
         right = values[k + 1] if np.array_equal(modes[k], modes[k + 1]) else field.at(t[k + 1], states[k + 1], data)
-        step = _Step(t[k], t[k + 1] - t[k], (states[k], *left, states[k + 1], *right), data, field)
+        step = _Step((t[k], t[k + 1]), (states[k], *left, states[k + 1], *right), modes[k], data, field)
         for i, mass in enumerate(chain.masses):
             ends = (left[0][2 * i + 1], left[1][2 * i + 1], right[0][2 * i + 1], right[1][2 * i + 1])
-            key = f"a_max:{mass.name}"
-            best[key] = max(best[key], *step.magnitudes(ends, functools.partial(_acceleration, i)))
+            _keep(best, f"a_max:{mass.name}", step.candidates(ends, functools.partial(_acceleration, i)))
         for row, name in contacts:
             if modes[k, row] != 0.0:
                 ends = (
@@ -100,39 +113,63 @@ def peaks(run: ChainResult) -> dict[str, float]:
                     element_force(t[k + 1], states[k + 1], data, row),
                     element_rate(t[k + 1], states[k + 1], right[0], data, row),
                 )
-                key = f"force_max:{name}"
-                best[key] = max(best[key], *step.magnitudes(ends, functools.partial(_contact_force, row)))
+                _keep(best, f"force_max:{name}", step.candidates(ends, functools.partial(_contact_force, row)))
     return best
 
 
-def _acceleration(i: int, t: float, y: np.ndarray, rate: np.ndarray, data: np.ndarray) -> float:
-    """Mass ``i``'s acceleration, from the field's ``rate`` at ``(t, y)``."""
-    return float(rate[2 * i + 1])
+def _keep(best: dict[str, Peak], name: str, candidates: list[Peak]) -> None:
+    for candidate in candidates:
+        if abs(candidate.value) > abs(best[name].value):
+            best[name] = candidate
 
 
-def _contact_force(row: int, t: float, y: np.ndarray, rate: np.ndarray, data: np.ndarray) -> float:
-    """Element ``row``'s force at ``(t, y)`` in the mode ``data``."""
-    return float(element_force(t, y, data, row))
+def _acceleration(
+    i: int, t: float, y: np.ndarray, rate: np.ndarray, second: np.ndarray, data: np.ndarray
+) -> tuple[float, float]:
+    """Mass ``i``'s acceleration and its rate, from the field's ``rate`` and ``second`` rate at
+    ``(t, y)``."""
+    return float(rate[2 * i + 1]), float(second[2 * i + 1])
+
+
+def _contact_force(
+    row: int, t: float, y: np.ndarray, rate: np.ndarray, second: np.ndarray, data: np.ndarray
+) -> tuple[float, float]:
+    """Element ``row``'s force at ``(t, y)`` in the mode ``data``, and its rate along ``rate``."""
+    return float(element_force(t, y, data, row)), float(element_rate(t, y, rate, data, row))
 
 
 class _Step:
-    """One solver step of a smooth piece: its start ``t0``, length ``h``, its ends' states, rates
-    and second rates, and its mode's data."""
+    """One solver step of a smooth piece: its ends' times, states, rates and second rates, and
+    its mode (and the mode's data)."""
 
-    def __init__(self, t0: float, h: float, ends: tuple[np.ndarray, ...], data: np.ndarray, field: _Field) -> None:
-        self.t0, self.h, self.ends, self.data, self.field = t0, h, ends, data, field
+    def __init__(
+        self,
+        times: tuple[float, float],
+        ends: tuple[np.ndarray, ...],
+        mode: np.ndarray,
+        data: np.ndarray,
+        field: _Field,
+    ) -> None:
+        self.times, self.h, self.ends = times, times[1] - times[0], ends
+        self.mode, self.data, self.field = mode, data, field
 
-    def magnitudes(self, ends: tuple[float, float, float, float], value: Callable[..., float]) -> list[float]:
-        """``|f|`` at both ends (values and rates ``ends``), and at the turn where the rate changes
-        sign inside the step: found on the cubic through both ends, its value
-        ``value(t, y, y', data)`` at the quintic's state there (a step of length 0, at an event,
-        has no turn; two turns in one solver step, where the rate keeps its sign, would be a
-        wiggle the solver's tolerance does not resolve)."""
+    def candidates(
+        self, ends: tuple[float, float, float, float], quantity: Callable[..., tuple[float, float]]
+    ) -> list[Peak]:
+        """The quantity at both ends (values and rates ``ends``), and where its rate changes sign
+        inside the step: the root of ``quantity(t, y, y', y'', data)``'s rate along the quintic's
+        state, by Brent's method to the last bit (a step of length 0, at an event, has none; two
+        turns in one solver step, where the rate keeps its sign, would be a wiggle the solver's
+        tolerance does not resolve)."""
         f0, r0, f1, r1 = ends
-        found = [abs(f0), abs(f1)]
+        found = [Peak(f0, self.times[0], self.ends[0], self.mode), Peak(f1, self.times[1], self.ends[3], self.mode)]
         if self.h > 0.0 and r0 * r1 < 0.0:
-            for s in hermite_turns(f0, r0 * self.h, f1, r1 * self.h):
-                tt = self.t0 + s * self.h
-                y = quintic(s, self.h, self.ends)
-                found.append(abs(value(tt, y, self.field.at(tt, y, self.data)[0], self.data)))
+            s = brentq(lambda s: self._at(s, quantity)[1], 0.0, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+            tt, y = self.times[0] + s * self.h, quintic(s, self.h, self.ends)
+            found.append(Peak(self._at(s, quantity)[0], tt, y, self.mode))
         return found
+
+    def _at(self, s: float, quantity: Callable[..., tuple[float, float]]) -> tuple[float, float]:
+        """The quantity and its rate at ``s`` (0 to 1) of the step, at the quintic's state."""
+        t, y = self.times[0] + s * self.h, quintic(s, self.h, self.ends)
+        return quantity(t, y, *self.field.at(t, y, self.data), self.data)

@@ -18,9 +18,11 @@ position at the turn (the velocity is zero there, so the turn's own shift does n
 stuck or closed share as the times that bound its spans, over the return's span
 ``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies and slip
 distances of :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet
-(they need the tangents of the integrals), nor the peaks ``a_max`` and ``force_max`` (they need
-the field's derivative in each number at the peak): their rows are left out.  A fastest closing speed
-moves as the gap's rate at that closing, at the closing's moving time.
+(they need the tangents of the integrals): their rows are left out.  A fastest closing speed
+moves as the gap's rate at that closing, at the closing's moving time.  A peak (``a_max``,
+``force_max``: :func:`~oscillator.orbits.chain_peaks.peak_places`) moves as the quantity at its
+time: inside a piece its rate is zero there, so ``grad f . delta(t*) + df/dc``; on a switch it
+rides the switch, ``grad f . dy_s + f_t dt_s + df/dc``.
 
 Where a switch of the orbit is a grazing (the flow's speed across the boundary near zero against
 its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the switch.
@@ -28,16 +30,18 @@ its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_orbits import ChainOrbit
+from oscillator.orbits.chain_peaks import Peak, peak_places
 from oscillator.orbits.chain_response import closed_spans, extremes, orbit_measures, stuck_spans
-from oscillator.orbits.chain_tangents import ChainPass, check_names, tangent_pass
+from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 
 __all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
 
@@ -169,6 +173,48 @@ def _impact_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np
     return found
 
 
+def _peak_derivative(
+    orbit: ChainOrbit, along: ChainPass, peak: Peak, name: str, point: Callable[[float], np.ndarray]
+) -> np.ndarray:
+    """The derivative of a peak (:func:`~oscillator.orbits.chain_peaks.peak_places`) in the
+    numbers: ``grad f . dy + df/dt dt + df/dc`` at the peak, its sign the peak's.  At a turn inside
+    a piece ``f' = 0`` and the state moves as ``point`` says; at a switch the peak rides the
+    switch, whose state moves as :meth:`Crossing.state_derivative` and its time as
+    :meth:`Crossing.time_derivative`; ``df/dc`` by the central difference of
+    :class:`~oscillator.orbits.chain_tangents.NumberData` in the peak's mode."""
+    chain, n = orbit.chain, orbit.chain.system.size
+    data = NumberData(chain, along.params)
+    d, ahead, behind = data.of(peak.mode)
+    kind, _, owner = name.partition(":")
+    grad = np.zeros(n)
+    if kind == "a_max":
+        i = chain.system.masses.index(owner)
+        jacobian, partial = np.empty((n, n)), np.empty(n)
+        chain_jacobian(peak.t, peak.y, d, jacobian, partial)
+        grad, rate = jacobian[2 * i + 1], partial[2 * i + 1]
+
+        def value(data_: np.ndarray) -> float:
+            out = np.empty(data.arrays.size)
+            chain_derivative(peak.t, peak.y, out, data_)
+            return float(out[2 * i + 1])
+    else:
+        row = next(k for k, e in enumerate(chain.elements) if e.name == owner)
+        rate = element_gradient(peak.t, peak.y, d, row, grad)
+
+        def value(data_: np.ndarray) -> float:
+            return float(element_force(peak.t, peak.y, data_, row))
+
+    by_number = np.array([(value(ahead[k]) - value(behind[k])) / (2 * step) for k, step in enumerate(data.steps)])
+    crossing = next((c for c in along.crossings if c.t == peak.t), None)
+    if crossing is None:
+        total = grad @ point(peak.t)[:n] + by_number
+    else:
+        start = point(orbit.section)
+        total = grad @ crossing.state_derivative(start)[:n] + rate * crossing.time_derivative(start) + by_number
+    found: np.ndarray = np.sign(peak.value) * total
+    return found
+
+
 def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.DataFrame:
     chain, names = orbit.chain, list(orbit.chain.system.state)
     n, params = len(names), along.params
@@ -204,6 +250,9 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
         if not held:  # a count: it moves only where the orbit changes (not differentiable there)
             found[f"closings:{element.name}"] = np.zeros(len(params))
             found[f"impact_velocity:{element.name}"] = _impact_derivative(orbit, element.name, along, moved)
+    places = peak_places(orbit.run)
+    for name, peak in places.items():
+        found[name] = _peak_derivative(orbit, along, peak, name, point)
     values = orbit_measures(orbit)
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])

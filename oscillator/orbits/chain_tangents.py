@@ -60,7 +60,17 @@ from oscillator.model.chains import FrictionChain
 from oscillator.model.types import Vector
 from oscillator.text import printable
 
-__all__ = ["ATOL", "RTOL", "STEP", "ChainPass", "Crossing", "check_names", "root_slot", "tangent_pass"]
+__all__ = [
+    "ATOL",
+    "RTOL",
+    "STEP",
+    "ChainPass",
+    "Crossing",
+    "NumberData",
+    "check_names",
+    "root_slot",
+    "tangent_pass",
+]
 
 #: The step of the field's differences in a number, relative to the number (at least 1).
 STEP = 1e-6
@@ -217,8 +227,10 @@ def _steps(chain: FrictionChain, params: tuple[str, ...]) -> np.ndarray:
     return STEP * np.maximum(1.0, np.abs(values))
 
 
-class _Data:
-    """The chain's packed data in a mode, and with each number stepped either way."""
+class NumberData:
+    """The chain's packed data in a mode, and with each of the numbers ``params`` stepped either
+    way (by :data:`STEP` of its size): a central difference of the field over them is its
+    derivative in each number (exact where the field is affine in it, to ``STEP^2`` else)."""
 
     def __init__(self, chain: FrictionChain, params: tuple[str, ...]) -> None:
         self.arrays = arrays_of(chain)
@@ -267,7 +279,7 @@ class _Switches:
 
 
 def _crossing(
-    data: _Data,
+    data: NumberData,
     t: float,
     states: tuple[np.ndarray, np.ndarray],
     modes: tuple[np.ndarray, np.ndarray],
@@ -304,7 +316,7 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     less than the orbit's multipliers)."""
     chain = run.chain
     params = check_names(chain, params)
-    data = _Data(chain, params)
+    data = NumberData(chain, params)
     n, k = data.arrays.size, len(params)
     trajectory = run.trajectory
     t = trajectory.t.to_numpy(float)
@@ -357,7 +369,7 @@ def _exponential(start: float, jacobian: np.ndarray, block: np.ndarray, t: float
 
 
 def _along_piece(
-    data: _Data, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray, rtol: float
+    data: NumberData, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray, rtol: float
 ) -> Callable[[float], np.ndarray]:
     """The tangent equations over one piece in ``mode``: the block at any time of it (the dense
     solution's)."""
@@ -391,7 +403,7 @@ def _big_rates(
 
 def _ended(
     run: ChainResult,
-    data: _Data,
+    data: NumberData,
     params: tuple[str, ...],
     block: np.ndarray,
     crossings: tuple[Crossing, ...],
