@@ -143,3 +143,13 @@ def test_an_analysis_of_the_articles_cases_refuses_a_declared_system_naming_thos
         match=r"takes the article's cases .* not a declared system; the ones that take a system: simulate, find_orbit",
     ):
         call(hardening())
+
+
+def test_a_basins_figure_shows_a_systems_names_as_text_not_mathtext():
+    name = "$x^2$ **m**"
+    chain = FrictionChain(Omega=0.6).mass(name, 1.0).spring(name, k=1.0).damper(name, c=0.05)  # stick_slip()'s
+    chain = chain.friction(name, name="belt", mu_s=0.4, mu_k=0.25, N=1.0, w=0.3).force(name, Q=0.4)
+    basins = find_chain_basins(chain, Axis(f"x:{name}", -1.5, 1.5, 2), Axis(f"v:{name}", -1.5, 1.5, 2), settings=QUICK)
+    ax = basins.plot().axes[0]
+    texts = [ax.xaxis.label, ax.yaxis.label, *ax.get_legend().get_texts()]
+    assert all("$x^2$" in t.get_text() for t in texts) and not any(t.get_parse_math() for t in texts)

@@ -148,13 +148,15 @@ def basins_figure(basins: Basins | ChainBasins) -> Figure:
         _draw_points(ax, attractor, state.index(x.name), state.index(y.name))
     if -1 in shares.index:
         handles.append(Patch(color=FAILED, label=f"failed — {shares.loc[-1].fraction:.1%}"))
-    ax.set_xlabel(state_label(x.name))
-    ax.set_ylabel(state_label(y.name))
+    ax.set_xlabel(state_label(x.name), parse_math=False)  # a declared system's names are its file's text
+    ax.set_ylabel(state_label(y.name), parse_math=False)
     fixed = [f"{name} = {value:g} {unit_of(name)}" for name, value in zip(state, start, strict=True)]
     kept = [f for f, n in zip(fixed, state, strict=True) if n not in (x.name, y.name)]
     what = ", ".join([f"basins at t0 = {t0:g} s", *kept])
     ax.set_title(textwrap.fill(f"{title}: {what}", width=100), parse_math=False, fontsize=9)
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=1, frameon=False)
+    legend = ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, frameon=False)
+    for text in legend.get_texts():  # the attractors' names carry a declared system's mass names
+        text.set_parse_math(False)
     return fig
 
 
