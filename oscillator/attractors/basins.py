@@ -98,11 +98,7 @@ def basin_store(
 ) -> LandingStore:
     """The resumable folder of these basins (:class:`~oscillator.attractors.store.LandingStore`):
     a case's, or a declared system's (its state and masses its own)."""
-    known = identity(case, x=x, y=y, settings=settings)
-    if isinstance(case, FrictionChain):
-        state, masses = case.system.state, len(case.masses)
-        return LandingStore(folder, "basins.json", known, name=case.title, state=state, masses=masses)
-    return LandingStore(folder, "basins.json", known, name=case.name)
+    return LandingStore.of(folder, "basins.json", identity(case, x=x, y=y, settings=settings), case)
 
 
 @overload

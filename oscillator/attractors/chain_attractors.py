@@ -59,6 +59,7 @@ __all__ = [
     "ChainAttractors",
     "ChainBasins",
     "ChainRefined",
+    "chain_columns",
     "chain_grid",
     "chain_lyapunov",
     "chain_signature",
@@ -194,6 +195,15 @@ class ChainRefined:
         except OscillatorError as error:
             return dataclasses.replace(named, note=f"no Lyapunov exponent: {error}")
         return dataclasses.replace(named, lyapunov=spectrum.largest)
+
+
+def chain_columns(attractor: Attractor) -> dict[str, float]:
+    """A chain attractor's own columns in a table: each mass's ``rests:<mass>`` and
+    ``rest_time:<mass>``, then its orbit's measures (``x_pp:<mass>``, ``stuck:<element>``, ...;
+    none for an aperiodic set)."""
+    columns = {f"rests:{m}": r for m, r in zip(attractor.masses, attractor.rests, strict=True)}
+    columns |= {f"rest_time:{m}": r for m, r in zip(attractor.masses, attractor.rest_time, strict=True)}
+    return columns | attractor.measures
 
 
 def check_chain_states(chain: FrictionChain, states: object) -> np.ndarray:

@@ -5,12 +5,13 @@ difference between single or multi parameter global continuation": the attractor
 values (:mod:`~oscillator.attractors.following`) and over a plane (:mod:`~oscillator.attractors.atlas`)
 are the same loop over :class:`Point` s, composed of swappable pieces:
 
-* the **mapper**: :func:`~oscillator.attractors.mapping.land` with the settings of a
+* the **mapper**: :func:`~oscillator.attractors.mapping.land` (a declared system's
+  :func:`~oscillator.attractors.chain_attractors.land_chain`) with the settings of a
   :class:`Mapper` (a fresh start's, a seed's);
 * the **grouper**: :func:`~oscillator.attractors.grouping.group`;
 * the **describer**: what each attractor is told by (:class:`~oscillator.attractors.finding.Refined`:
   Newton's orbit and multipliers; :class:`~oscillator.attractors.features.Measured`: the exponent
-  from one monodromy and the measures);
+  from one monodromy and the measures; a chain's :class:`~oscillator.attractors.chain_attractors.ChainRefined`);
 * the **seeding** rule (:mod:`~oscillator.attractors.seeding`): the starts a point takes from the
   attractors of the points that seed it;
 * the **matcher** (:mod:`~oscillator.attractors.matching`): which attractor continues which,
@@ -29,11 +30,13 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from oscillator.analysis.axes import Axis
 from oscillator.analysis.execution import Executor
+from oscillator.attractors.chain_attractors import ChainAttractors, land_chain
 from oscillator.attractors.finding import Attractors, labelled
 from oscillator.attractors.grouping import Attractor, group, unsettled
 from oscillator.attractors.mapping import AttractorSettings, Landing, land
@@ -41,11 +44,25 @@ from oscillator.attractors.matching import Matcher, NearestSame, renumbered
 from oscillator.attractors.seeding import Seeding
 from oscillator.attractors.store import LandingStore
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import Parameters
 
-__all__ = ["Continued", "Mapper", "Point", "continue_attractors", "line_points", "path_points", "plane_points"]
+__all__ = [
+    "Continued",
+    "Mapper",
+    "Point",
+    "Subject",
+    "at_point",
+    "continue_attractors",
+    "land_at",
+    "line_points",
+    "path_points",
+    "plane_points",
+]
 
-Describer = Callable[[Case, Attractor], Attractor]
+Describer = Callable[[Any, Attractor], Attractor]
+#: What the loop runs: the article's case, or a declared system.
+Subject = Case | FrictionChain
 
 
 @dataclass(frozen=True)
@@ -116,14 +133,38 @@ class Continued:
     ids: tuple[dict[int, int], ...]
 
 
+def at_point(system: Subject, values: Mapping[str, float]) -> Subject:
+    """The system at a parameter point: a case resolved with ``values``, or a chain with its
+    numbers changed by name (each checked, the name refused with the closest one)."""
+    if isinstance(system, FrictionChain):
+        return system.with_values(values)
+    return resolve_case(system, **values)
+
+
+def land_at(system: Subject, settings: AttractorSettings, index: int, start: Sequence[float]) -> Landing:
+    """One start's landing: :func:`~oscillator.attractors.mapping.land` for a case,
+    :func:`~oscillator.attractors.chain_attractors.land_chain` for a chain."""
+    if isinstance(system, FrictionChain):
+        return land_chain(system, settings, index, start)
+    return land(system, settings, index, tuple(start))
+
+
 def _land(
-    case: Case, settings: AttractorSettings, point: int, index: int, start: tuple[float, ...]
+    system: Subject, settings: AttractorSettings, point: int, index: int, start: tuple[float, ...]
 ) -> tuple[int, Landing]:
-    return point, land(case, settings, index, start)
+    return point, land_at(system, settings, index, start)
 
 
-def _describe(describe: Describer, case: Case, point: int, attractor: Attractor) -> tuple[int, Attractor]:
+def _describe(describe: Describer, case: Subject, point: int, attractor: Attractor) -> tuple[int, Attractor]:
     return point, describe(case, attractor)
+
+
+def _found_type(system: Subject) -> type[Any]:
+    """What a point's attractors are held in: :class:`~oscillator.attractors.finding.Attractors`,
+    or a chain's :class:`~oscillator.attractors.chain_attractors.ChainAttractors` (same fields)."""
+    if isinstance(system, FrictionChain):
+        return ChainAttractors
+    return Attractors
 
 
 class _Loop:
@@ -131,7 +172,7 @@ class _Loop:
 
     def __init__(
         self,
-        case: Case,
+        case: Subject,
         points: Sequence[Point],
         mapper: Mapper,
         describe: Describer,
@@ -155,7 +196,7 @@ class _Loop:
     def batch(self, batch: list[int], executor: Executor, store: LandingStore | None) -> list[int]:
         """Run one batch: its landings (read back from ``store`` when there), grouped, described
         and matched.  Returns the batch's points, for progress."""
-        cases = {k: resolve_case(self.case, **dict(self.points[k].values)) for k in batch}
+        cases = {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
         starts = {k: self.starts(k) for k in batch}
         name = f"batch-{self.points[batch[0]].batch:05d}"
         landings = store.read_batch(name, {k: s for k, (s, _) in starts.items()}) if store is not None else None
@@ -178,8 +219,9 @@ class _Loop:
         for k in batch:
             found, labels = grouped[k]
             attractors = tuple(sorted(described[k], key=lambda a: a.id))
-            here = Attractors(
-                cases[k], self.mapper.seed_settings, attractors, labelled(landings[k], labels), tuple(unsettled(found))
+            table = labelled(landings[k], labels, cases[k].system.state)
+            here = _found_type(cases[k])(
+                cases[k], self.mapper.seed_settings, attractors, table, tuple(unsettled(found))
             )
             self.match(k, here, starts[k][1])
         return batch
@@ -205,7 +247,7 @@ class _Loop:
 
 
 def continue_attractors(
-    case: Case,
+    case: Subject,
     points: Sequence[Point],
     mapper: Mapper,
     *,

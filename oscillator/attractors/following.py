@@ -33,14 +33,17 @@ import pandas as pd
 from oscillator.analysis.axes import Axis
 from oscillator.analysis.execution import Executor
 from oscillator.analysis.store import identity
-from oscillator.attractors.continuing import Mapper, continue_attractors, line_points
-from oscillator.attractors.finding import Attractors, Refined, share_interval
+from oscillator.attractors.chain_attractors import ChainRefined, chain_columns, check_chain_states
+from oscillator.attractors.continuing import Mapper, Subject, at_point, continue_attractors, land_at, line_points
+from oscillator.attractors.finding import Refined, share_interval
 from oscillator.attractors.grouping import Attractor
-from oscillator.attractors.mapping import AttractorSettings, Landing, check_settings, check_states, land
+from oscillator.attractors.mapping import AttractorSettings, Landing, check_settings, check_states
 from oscillator.attractors.seeding import LastPoints
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chain_fields import state_of
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import Parameters
 from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
@@ -49,6 +52,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_branch import ChainBranch
 
 __all__ = ["AttractorsOver", "End", "check_values", "follow_attractors", "following_store", "local_branches"]
 
@@ -86,10 +90,12 @@ class AttractorsOver(Presented):
 
     Attributes
     ----------
-    case : Case
+    case : Case or FrictionChain
+        The article's case, or a declared system.
     param : str
+        A parameter's name (a chain's number by its name: ``platform.F``, ``Omega``).
     values : ndarray
-    found : tuple of Attractors
+    found : tuple of Attractors or ChainAttractors
         At each value, the attractors (with ids local to that value) and the starts' labels.
     ids : tuple of dict
         At each value, local id -> the id kept over the parameter.
@@ -97,10 +103,10 @@ class AttractorsOver(Presented):
         The located appearances and ends.
     """
 
-    case: Case
+    case: Subject
     param: str
     values: np.ndarray
-    found: tuple[Attractors, ...] = field(repr=False)
+    found: tuple[Any, ...] = field(repr=False)
     ids: tuple[dict[int, int], ...] = field(repr=False)
     fresh: int = 1
     ends: tuple[End, ...] = ()
@@ -108,21 +114,28 @@ class AttractorsOver(Presented):
     def table(self) -> pd.DataFrame:
         """One row per value and attractor: the value, ``id``, name, period, cycle of switches,
         share of the fresh starts with its confidence interval, stability, largest multiplier,
-        largest Lyapunov exponent, section points (JSON)."""
+        largest Lyapunov exponent, the response measures of its orbit (a chain's: each mass's
+        ``rests:<mass>``, ``rest_time:<mass>`` and the measures of
+        :func:`~oscillator.orbits.chain_response.orbit_measures`), section points (JSON)."""
+        chain = isinstance(self.case, FrictionChain)
         rows = []
         for value, found, ids in zip(self.values, self.found, self.ids, strict=True):
             fresh = found.labels[found.labels["index"] < self.fresh]
             for attractor in found.attractors:
                 k = int((fresh.attractor == attractor.id).sum())
                 interval = share_interval(k, len(fresh))
-                rows.append(_row(self.param, float(value), ids[attractor.id], attractor, k, len(fresh), interval))
+                measured = chain_columns(attractor) if chain else attractor.response_columns()
+                row = _row(self.param, float(value), ids[attractor.id], attractor, k, len(fresh), interval)
+                rows.append(row | measured | {"points": json.dumps(attractor.points.tolist())})
         return pd.DataFrame(rows)
 
-    def plot(self, coordinate: str = "x2", *, branches: bool = True) -> Figure:
-        """Each attractor's section points (``coordinate``) and share against the parameter, where
-        each appears or ends, and with ``branches`` the periodic orbits' branches (continued here:
-        :func:`local_branches`), as ``oscillator attractors`` draws it."""
-        return presenter().plot_global(self, coordinate=coordinate, branches=local_branches(self) if branches else [])
+    def plot(self, coordinate: str | None = None, *, branches: bool = True) -> Figure:
+        """Each attractor's section points (``coordinate``: ``x2`` by default, a chain's first
+        mass's ``x:<mass>``) and share against the parameter, where each appears or ends, and
+        with ``branches`` the periodic orbits' branches (continued here: :func:`local_branches`),
+        as ``oscillator attractors`` draws it."""
+        chosen = default_coordinate(self.case) if coordinate is None else coordinate
+        return presenter().plot_global(self, coordinate=chosen, branches=local_branches(self) if branches else [])
 
     def ends_table(self) -> pd.DataFrame:
         """One row per end: ``id, name, change`` (``appears`` or ``ends`` along the values, from the
@@ -151,16 +164,21 @@ def _row(
         "stable": None if orbit is None else bool(orbit.stable),
         "largest_multiplier": math.nan if orbit is None else float(np.max(np.abs(orbit.multipliers))),
         "lyapunov": attractor.lyapunov,
-        **attractor.response_columns(),
-        "points": json.dumps(attractor.points.tolist()),
     }
 
 
-def check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, tol: float) -> np.ndarray:
-    """The values of ``param`` to follow the attractors over, checked: a parameter, 2 to
-    :data:`MAX_VALUES` finite numbers increasing or decreasing, both ends admitted by the model,
-    ``tol`` at least :data:`MIN_TOL`."""
-    Parameters.check_name(param)
+def default_coordinate(system: Subject) -> str:
+    """The section coordinate drawn by default: the article's ``x2``, a chain's first mass's
+    displacement."""
+    return system.system.state[0] if isinstance(system, FrictionChain) else "x2"
+
+
+def check_values(case: Subject, param: str, values: Sequence[float] | np.ndarray, tol: float) -> np.ndarray:
+    """The values of ``param`` to follow the attractors over, checked: a parameter (a chain's
+    number by its name), 2 to :data:`MAX_VALUES` finite numbers increasing or decreasing, both
+    ends admitted by the model, ``tol`` at least :data:`MIN_TOL`."""
+    if not isinstance(case, FrictionChain):
+        Parameters.check_name(param)
     try:
         array: np.ndarray = np.asarray(values, dtype=float)
     except (TypeError, ValueError):  # text, a generator, a ragged list
@@ -172,13 +190,13 @@ def check_values(case: Case, param: str, values: Sequence[float] | np.ndarray, t
     if not (isinstance(tol, (int, float)) and MIN_TOL <= tol):
         raise InputError(f"tol must be a number >= {MIN_TOL:g}, got {shown(tol)}", field="tol")
     for end in (array[0], array[-1]):
-        resolve_case(case, **{param: float(end)})  # both ends valid: the constraints are intervals
+        at_point(case, {param: float(end)})  # both ends valid: the constraints are intervals
     return array
 
 
 def following_store(
     folder: Path,
-    case: Case,
+    case: Subject,
     param: str,
     values: np.ndarray,
     slice_: tuple[Axis, Axis] | None,
@@ -188,11 +206,11 @@ def following_store(
     or a slice's starts (its axes, not its starts, in the identity)."""
     states = None if slice_ is None else list(slice_)
     known = identity(case, param=param, values=values, states=states, settings=settings)
-    return LandingStore(folder, "attractors.json", known, name=case.name)
+    return LandingStore.of(folder, "attractors.json", known, case)
 
 
 def follow_attractors(
-    case: Case | str,
+    case: Case | FrictionChain | str,
     param: str,
     values: Sequence[float] | np.ndarray,
     *,
@@ -210,13 +228,17 @@ def follow_attractors(
 
     Parameters
     ----------
-    case : Case or str
+    case : Case, FrictionChain or str
+        A case or a shipped case's name, or a declared system (its starts run by
+        :func:`~oscillator.attractors.chain_attractors.land_chain`, its periodic attractors
+        refined by :class:`~oscillator.attractors.chain_attractors.ChainRefined`).
     param : str
-        The parameter varied.
+        The parameter varied (a chain's number by its name: ``"platform.F"``, ``"Omega"``).
     values : sequence of float
         Its values, increasing or decreasing (2 to 10,000).
     states : array of shape (N, 4), optional
-        The fresh starts at every value (the case's start by default).
+        The fresh starts at every value (the case's start by default; rows of a chain's
+        ``system.state``).
     settings : AttractorSettings, optional
     tol : float
         The width to which each appearance and end is bisected.
@@ -229,17 +251,25 @@ def follow_attractors(
     progress : callable, optional
         ``progress(done, total)`` after every value.
     **overrides
-        Parameters and solver options, as for :func:`oscillator.simulate`.
+        Parameters and solver options, as for :func:`oscillator.simulate` (a chain's numbers by
+        their names).
     """
     settings = check_settings(settings)
     executor = Executor(workers, client, progress)
     if store is not None and not isinstance(store, LandingStore):
         raise InputError(f"store must be a LandingStore or None, got {shown(store)}", field="store")
-    case = resolve_case(case, **overrides)
-    array = check_values(case, param, values, tol)
-    fresh = check_states(case.initial.y if states is None else states)
+    describe: Callable[[Any, Attractor], Attractor]
+    if isinstance(case, FrictionChain):
+        case = (case.with_values(overrides) if overrides else case).checked()
+        array = check_values(case, param, values, tol)
+        fresh = check_chain_states(case, state_of(case) if states is None else states)
+        describe = ChainRefined(settings.lyapunov_periods)
+    else:
+        case = resolve_case(case, **overrides)
+        array = check_values(case, param, values, tol)
+        fresh = check_states(case.initial.y if states is None else states)
+        describe = Refined(settings.lyapunov_periods)
     mapper = Mapper(fresh, settings, settings)
-    describe = Refined(settings.lyapunov_periods)
     with executor:
         continued = continue_attractors(
             case,
@@ -256,7 +286,8 @@ def follow_attractors(
 
 
 def _ends(over: AttractorsOver, settings: AttractorSettings, tol: float) -> list[End]:
-    """Each attractor's appearance or end between two values where it is present at one only."""
+    """Each attractor's appearance or end between two values where it is present at one only
+    (none where its seed still reaches it at the other: the fresh starts there missed it)."""
     ends = []
     for k in range(len(over.values) - 1):
         here = {over.ids[k][a.id]: a for a in over.found[k].attractors}
@@ -265,7 +296,7 @@ def _ends(over: AttractorsOver, settings: AttractorSettings, tol: float) -> list
             ends.append(_bisect(over, settings, ident, here[ident], over.values[k], over.values[k + 1], tol))
         for ident in sorted(set(there) - set(here)):
             ends.append(_bisect(over, settings, ident, there[ident], over.values[k + 1], over.values[k], tol))
-    return ends
+    return [end for end in ends if end is not None]
 
 
 def _bisect(
@@ -276,60 +307,68 @@ def _bisect(
     inside: float,
     outside: float,
     tol: float,
-) -> End:
+) -> End | None:
     """Halve ``[inside, outside]`` until shorter than ``tol``: at the midpoint, does a run from
-    the attractor's last point land on one with its period and cycle of switches?"""
+    the attractor's last point land on one with its period and cycle of switches?  None where
+    the run reaches it at ``outside`` too: it is there, the fresh starts missed it."""
     seed = attractor.points[-1]
-    becomes = ""
+    landing = land_at(at_point(over.case, {over.param: float(outside)}), settings, 0, tuple(seed))
+    if landing.ok and landing.period == attractor.period and landing.signature == attractor.signature:
+        return None  # there too: the fresh starts there missed it
+    becomes = _described(landing, attractor.masses)
     while abs(outside - inside) > tol:
         middle = 0.5 * (inside + outside)
-        point = resolve_case(over.case, **{over.param: float(middle)})
-        landing = land(point, settings, 0, tuple(seed))
+        landing = land_at(at_point(over.case, {over.param: float(middle)}), settings, 0, tuple(seed))
         if landing.ok and landing.period == attractor.period and landing.signature == attractor.signature:
             inside, seed = middle, landing.points[-1]
         else:
-            outside = middle
-            becomes = _described(landing)
-    if not becomes:
-        point = resolve_case(over.case, **{over.param: float(outside)})
-        becomes = _described(land(point, settings, 0, tuple(seed)))
+            outside, becomes = middle, _described(landing, attractor.masses)
     return End(ident, attractor.name.split(": ", 1)[-1], float(inside), float(outside), becomes)
 
 
-def _described(landing: Landing) -> str:
+def _described(landing: Landing, masses: tuple[str, ...]) -> str:
     if not landing.ok:
         return f"failed: {landing.message}"
-    return Attractor.of_landing(0, landing).name.split(": ", 1)[-1]
+    return dataclasses.replace(Attractor.of_landing(0, landing), masses=masses).name.split(": ", 1)[-1]
 
 
-def local_branches(over: AttractorsOver) -> list[tuple[int, Branch]]:
+def local_branches(over: AttractorsOver) -> list[tuple[int, Branch | ChainBranch]]:
     """The branch of periodic orbits through each periodic attractor (:func:`~oscillator.continue_orbit`
     from the first value where it was found, to either end of the values): it shows where the
     orbit goes on beyond the attractor's end (an unstable part, a fold, another cycle of
-    switches).  A continuation that fails is left out."""
+    switches).  A continuation that fails is left out; a chain's period-1 orbits only
+    (:func:`~oscillator.orbits.chain_branch.continue_chain_orbit`)."""
+    from oscillator.orbits.chain_branch import continue_chain_orbit
     from oscillator.orbits.continuation import continue_orbit
 
+    chain = isinstance(over.case, FrictionChain)
     branches = []
     seen: set[int] = set()
     for value, found, ids in zip(over.values, over.found, over.ids, strict=True):
         for attractor in found.attractors:
             ident = ids[attractor.id]
-            if ident in seen or attractor.orbit is None:
+            if ident in seen or attractor.orbit is None or (chain and attractor.period != 1):
                 continue
             seen.add(ident)
             for stop in (over.values[0], over.values[-1]):
                 if stop == value:
                     continue
+                value_, stop_, guess = float(value), float(stop), attractor.orbit.state
                 try:
-                    branch = continue_orbit(
-                        over.case,
-                        param=over.param,
-                        start=float(value),
-                        stop=float(stop),
-                        period=attractor.period,
-                        guess=attractor.orbit.state,
-                        transient=0,
-                    )
+                    if isinstance(over.case, FrictionChain):
+                        branch: Branch | ChainBranch = continue_chain_orbit(
+                            over.case, param=over.param, start=value_, stop=stop_, guess=guess, transient=0
+                        )
+                    else:
+                        branch = continue_orbit(
+                            over.case,
+                            param=over.param,
+                            start=value_,
+                            stop=stop_,
+                            period=attractor.period,
+                            guess=guess,
+                            transient=0,
+                        )
                 except OscillatorError:
                     continue
                 branches.append((ident, branch))

@@ -24,7 +24,9 @@ import pyarrow.parquet as pq
 from oscillator.analysis.store import ResumableFolder
 from oscillator.attractors.mapping import STATE, Landing
 from oscillator.errors import InputError, Reason
+from oscillator.io.cases import Case
 from oscillator.io.files import atomic_path
+from oscillator.model.chains import FrictionChain
 
 __all__ = ["LandingStore"]
 
@@ -122,6 +124,15 @@ class LandingStore(ResumableFolder):
         self.state, self.masses = tuple(state), masses
         #: What was read back from earlier runs: landings, and the batches of points they came in.
         self.reused = {"landings": 0, "batches": 0}
+
+    @classmethod
+    def of(cls, folder: Path, marker: str, identity: dict[str, Any], system: Case | FrictionChain) -> LandingStore:
+        """The folder of a computation on the article's ``system`` (a case: its name) or on a
+        declared one (its title, its state and its masses)."""
+        if isinstance(system, FrictionChain):
+            state, masses = system.system.state, len(system.masses)
+            return cls(folder, marker, identity, name=system.title, state=state, masses=masses)
+        return cls(folder, marker, identity, name=system.name)
 
     def _damaged(self, part: Path, why: str) -> InputError:
         return self.damaged(part, why, "delete it and run the same command to compute its starts again")

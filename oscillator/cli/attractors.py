@@ -52,6 +52,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.mapping import AttractorSettings
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
+    from oscillator.model.chains import FrictionChain
 
 __all__ = ["attractors", "basins", "finish_basins", "landing_settings", "lyapunov"]
 
@@ -293,8 +294,14 @@ def attractors(
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
     coordinate: Annotated[
-        str, typer.Option("--coordinate", metavar="NAME", help="The section coordinate drawn: x1, v1, x2 or v2.")
-    ] = "x2",
+        str | None,
+        typer.Option(
+            "--coordinate",
+            metavar="NAME",
+            help="The section coordinate drawn: x1, v1, x2 or v2 (x2 by default; a system file's state names, its "
+            "first mass's x:<mass> by default).",
+        ),
+    ] = None,
     branches: Annotated[
         bool, typer.Option("--branches/--no-branches", help="Draw the periodic orbits' branches (continue_orbit).")
     ] = True,
@@ -314,16 +321,23 @@ def attractors(
     the same command with the same --out resumes at the value it stopped at.
 
     \b
+    A system file (docs/systems.md) takes its own names: --param and --set its numbers
+    (platform.F, wall.at, Omega), --x and --y its state's (x:<mass>, v:<mass>, z:<slider>); its
+    starts run on CVODE, and the branches drawn are its period-1 orbits'.
+
+    \b
     Examples:
       oscillator attractors instance-1 --param Q2 --from 71.10 --to 71.20 --steps 5 --x x2 3 6 3 --y v2 -4 4 3
       oscillator attractors instance-1 --param Q2 --from 71.10 --to 71.20 --steps 3 --no-branches --out runs/q2
+      oscillator attractors docs/systems/impacts.toml --param Omega --from 1.6 --to 1.0 --steps 7 --tol 1e-4
     """
     with refusing():
-        resolved = case_from(case, None, set_)
+        resolved, stem, title = _subject(case, set_)
         refuse_taken(set_, {param: "--param"} | {axis[0]: option for axis, option in ((x, "--x"), (y, "--y")) if axis})
         given = {"transient": transient, "record": record, "settle": not full_transient, "engine": engine}
-        plan = _open_following(resolved, param, start, stop, steps, x, y, tol, given, coordinate, out_dir)
-        values, states, settings, store = plan
+        name = stem if stem is not None else title  # the default folder's
+        plan = _open_following(resolved, param, (start, stop, steps), (x, y), tol, given, coordinate, out_dir, name)
+        values, states, settings, store, coordinate = plan
         count = check_workers(workers)
         lock, client = locked(store.folder, scheduler)
     with computing(store, "values", lock, client):
@@ -332,52 +346,76 @@ def attractors(
         store.open()
         options = {"states": states, "settings": settings, "tol": tol, "store": store}
         run = functools.partial(follow_attractors, resolved, param, values, workers=count, client=client, **options)
-        over = with_progress(run, f"{resolved.name}: attractors over {param}", "values", quiet)
+        over = with_progress(run, f"{title}: attractors over {printable(param)}", "values", quiet)
         store.write_status("computed", values=len(values))
-        found = local_branches(over) if branches and not no_plots else []
-    _finish_following(over, store, coordinate, found, no_plots, quiet)
+        drawn = local_branches(over) if branches and not no_plots else []
+    _finish_following(over, store, coordinate, drawn, no_plots, quiet)
+
+
+def _subject(target: str, assignments: list[str] | None) -> tuple[Case | FrictionChain, str | None, str]:
+    """A system file's chain, its stem and title (printable); or the case, None and its name."""
+    from oscillator.cli.system_attractors import chain_at
+
+    declared = chain_at(target, assignments)
+    if declared is not None:
+        chain, stem = declared
+        return chain, stem, printable(chain.title or stem)
+    article = case_from(target, None, assignments)
+    return article, None, article.name
 
 
 def _open_following(
-    case: Case,
+    case: Case | FrictionChain,
     param: str,
-    start: float,
-    stop: float,
-    steps: int,
-    x: AxisOption | None,
-    y: AxisOption | None,
+    span: tuple[float, float, int],
+    slice_: tuple[AxisOption | None, AxisOption | None],
     tol: float,
     given: dict[str, Any],
-    coordinate: str,
+    coordinate: str | None,
     out_dir: Path | None,
-) -> tuple[Any, Any, AttractorSettings, Any]:
-    """Everything refused before work: the values, the slice, the settings, the folder."""
+    name: str,
+) -> tuple[Any, Any, AttractorSettings, Any, str]:
+    """Everything refused before work: the values, the slice, the settings, the folder (by
+    default ``runs/<name>-attractors-<time>``), the coordinate drawn."""
 
     import numpy as np
 
-    from oscillator.analysis.axes import STATE
+    from oscillator.model.chains import FrictionChain
 
-    if coordinate not in STATE:
-        raise InputError(f"--coordinate must be one of {', '.join(STATE)}, got {coordinate!r}", field="--coordinate")
+    start, stop, steps = span
+    x, y = slice_
+    state = case.system.state
+    load("oscillator.attractors.following", notice=True)
+    from oscillator.attractors.following import check_values, default_coordinate, following_store
+
+    coordinate = default_coordinate(case) if coordinate is None else coordinate
+    if coordinate not in state:
+        names = ", ".join(state)
+        raise InputError(
+            f"--coordinate must be one of {printable(names)}, got {printable(coordinate)}", field="--coordinate"
+        )
+    declared = isinstance(case, FrictionChain)
+    if declared and given["engine"] != "dop853":
+        raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
     if isinstance(steps, bool) or not 2 <= steps <= 10_000:
         raise InputError(f"--steps must be a whole number from 2 to 10000, got {steps!r}", field="--steps")
     if (x is None) != (y is None):
         raise InputError("give both --x and --y for a slice of fresh starts, or neither", field="--x")
     settings = landing_settings(**given)
-    load("oscillator.attractors.following", notice=True)
     from oscillator.attractors.basins import grid_starts
-    from oscillator.attractors.following import check_values, following_store
+    from oscillator.attractors.chain_attractors import chain_grid
 
     if not (np.isfinite(start) and np.isfinite(stop)):
         raise InputError(f"--from and --to must be finite numbers, got {start!r} and {stop!r}", field="--to")
     values = np.linspace(start, stop, steps)
     check_values(case, param, values, tol)
     axes = (axis_of(x, "--x"), axis_of(y, "--y")) if x is not None and y is not None else None
-    states = grid_starts(case, *axes) if axes is not None else None
-    folder = out_dir if out_dir is not None else new_folder(case, "attractors")
+    grid = chain_grid if declared else grid_starts
+    states = grid(case, *axes) if axes is not None else None  # type: ignore[arg-type]
+    folder = out_dir if out_dir is not None else new_folder(name, "attractors")
     store = following_store(folder, case, param, values, axes, settings)
     store.check()
-    return values, states, settings, store
+    return values, states, settings, store, coordinate
 
 
 def _finish_following(over: Any, store: Any, coordinate: str, branches: list[Any], no_plots: bool, quiet: bool) -> None:

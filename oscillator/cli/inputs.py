@@ -64,7 +64,19 @@ def case_from(
 
 
 #: The commands that take a system file where they take a case.
-SYSTEM_COMMANDS = ("run", "show", "check", "orbit", "continue", "frc", "design", "basins", "lyapunov", "explore")
+SYSTEM_COMMANDS = (
+    "run",
+    "show",
+    "check",
+    "orbit",
+    "continue",
+    "frc",
+    "design",
+    "attractors",
+    "basins",
+    "lyapunov",
+    "explore",
+)
 
 
 def refuse_taken(assignments: list[str] | None, taken: Mapping[str, str]) -> None:

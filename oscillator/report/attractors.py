@@ -41,6 +41,7 @@ from oscillator.report.outputs import (
     FAILED,
     MARKERS,
     color_of,
+    plain_label,
     save_into,
     state_label,
     unit_of,
@@ -60,6 +61,7 @@ __all__ = [
     "following_blocks",
     "following_figure",
     "lyapunov_figure",
+    "name_of",
     "write_basins",
     "write_following",
     "write_lyapunov",
@@ -167,6 +169,11 @@ def _slice_of(basins: Basins | ChainBasins) -> tuple[tuple[str, ...], np.ndarray
         return chain.system.state, state_of(chain), chain.t0, title_of(chain)
     case = basins.found.case
     return STATE, np.asarray(case.initial.y), case.initial.t0, title_of(case)
+
+
+def name_of(system: Case | FrictionChain) -> str:
+    """The case's name, or the declared system's title (as written: escape it where it is shown)."""
+    return system.name if isinstance(system, Case) else (system.title or "friction chain")
 
 
 def title_of(system: Case | FrictionChain) -> str:
@@ -311,12 +318,13 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
 
     fig = Figure(figsize=(8.0, 7.0), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
-    column = STATE.index(coordinate)
+    state = over.case.system.state
+    column = state.index(coordinate)
     table = over.table()
     signatures = table.drop_duplicates("id").set_index("id").signature
     for ident, branch in branches:  # each only where the orbit keeps its attractor's cycle of switches
-        points = branch.points
-        own = (points.signature == signatures.get(ident)).to_numpy(bool)
+        points = branch.points  # a chain's branch keeps no cycles of switches: drawn whole
+        own = (points.signature == signatures.get(ident)).to_numpy(bool) if "signature" in points else True
         stable = points.stable.to_numpy(bool)
         values, ys = points[over.param].to_numpy(float), points[coordinate].to_numpy(float)
         for where, style in ((own & stable, "-"), (own & ~stable, ":")):  # solid where stable, dotted where not
@@ -325,9 +333,9 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
     for ident, rows in table.groupby("id"):
         color = color_of(int(ident))
         for value, points in zip(rows[over.param], rows.points, strict=True):
-            cloud = np.asarray(json.loads(points), dtype=float).reshape(-1, 4)
+            cloud = np.asarray(json.loads(points), dtype=float).reshape(-1, len(state))
             top.scatter(np.full(len(cloud), value), cloud[:, column], s=14, color=color, zorder=4)
-        label = f"A{int(ident)}: {rows.name.iloc[0]}"
+        label = plain_label(f"A{int(ident)}: {rows.name.iloc[0]}")
         # a share is measured at each value, not between them: steps, with each value's interval
         bottom.step(rows[over.param], rows.fraction, where="mid", color=color, lw=1.2, label=label)
         bottom.errorbar(
@@ -344,25 +352,33 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
     for end in over.ends:
         for ax in (top, bottom):
             ax.axvline(end.at, color=color_of(end.id), ls="--", lw=0.8)
-        label = f"A{end.id} {end.change(start, stop)} at {over.param} = {end.at:.7g}"
+        label = plain_label(f"A{end.id} {end.change(start, stop)} at {over.param} = {end.at:.7g}")
         bottom.plot([], [], color=color_of(end.id), ls="--", lw=0.8, label=label)
-    top.set_ylabel(f"{coordinate} at the section ({unit_of(coordinate)})")
+    top.set_ylabel(plain_label(f"{coordinate} at the section ({unit_of(coordinate)})"))
     bottom.set_ylabel("share of the fresh starts")
-    bottom.set_xlabel(labelled(over.param))
+    bottom.set_xlabel(_number_label(over.case, over.param))
     bottom.ticklabel_format(useOffset=False)
     bottom.set_ylim(-0.05, 1.05)
     bottom.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2, frameon=False)
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
-    top.set_title(f"{figure_title(over.case)}: attractors over {over.param}", parse_math=False, fontsize=9)
+    top.set_title(f"{title_of(over.case)}: attractors over {over.param}", parse_math=False, fontsize=9)
     return fig
+
+
+def _number_label(system: Case | FrictionChain, name: str) -> str:
+    """An axis label for a parameter with its unit: the article's, or a chain's number's."""
+    if isinstance(system, FrictionChain):
+        unit = FrictionChain.unit(name)
+        return plain_label(f"{name} ({unit})" if unit else name)
+    return labelled(name)
 
 
 def following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block]:
     case, param = over.case, over.param
     values = over.values
     blocks: list[mk.Block] = [
-        mk.Heading(1, (f"{case.name}: attractors over {param}",)),
+        mk.Heading(1, (f"{name_of(case)}: attractors over {param}",)),
         mk.Paragraph(
             (
                 f"{len(values)} values of {param} from {values[0]:.10g} to {values[-1]:.10g}, {over.fresh} fresh "
@@ -371,7 +387,7 @@ def following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block
             )
         ),
     ]
-    blocks += modified_blocks(case)
+    blocks += modified_blocks(case) if isinstance(case, Case) else []
     start, stop = float(values[0]), float(values[-1])
     ends = tuple(
         (f"A{e.id}", e.name, e.change(start, stop), f"{e.inside:.10g}", f"{e.outside:.10g}", e.becomes)
@@ -401,10 +417,12 @@ def following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block
 def write_following(
     over: AttractorsOver, folder: Path, *, coordinate: str, branches: list[tuple[int, Branch]], plots: bool = True
 ) -> list[str]:
-    """``attractors.parquet``, ``ends.parquet``, the figure and the report, into ``folder``."""
+    """``attractors.parquet``, ``ends.parquet``, the figure and the report, into ``folder``; the
+    attractors kept for :func:`oscillator.read_run` too (the article's case: ``found.json``)."""
     table = over.table()
     figure = [("attractors", lambda: following_figure(over, coordinate, branches))] if plots else []
-    title = f"{over.case.name}: attractors over {over.param}"
+    title = f"{title_of(over.case)}: attractors over {over.param}"
     tables = {"attractors": table, "ends": over.ends_table()}
-    write_found(folder, over.found, [{"ids": sorted(ids.items()), "fresh": over.fresh} for ids in over.ids])
+    if not isinstance(over.case, FrictionChain):
+        write_found(folder, over.found, [{"ids": sorted(ids.items()), "fresh": over.fresh} for ids in over.ids])
     return write_folder(folder, tables, figure, following_blocks(over, table), title)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from oscillator.attractors.chain_attractors import ChainBasins
+from oscillator.attractors.chain_attractors import ChainBasins, chain_columns
 from oscillator.attractors.finding import share_text
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import atomic_path
@@ -27,9 +27,7 @@ def chain_attractor_table(basins: ChainBasins) -> pd.DataFrame:
     found = basins.found
     rows = []
     for attractor, row in attractor_rows(found.attractors, found.fractions()):
-        row |= {f"rests:{m}": r for m, r in zip(attractor.masses, attractor.rests, strict=True)}
-        row |= {f"rest_time:{m}": r for m, r in zip(attractor.masses, attractor.rest_time, strict=True)}
-        rows.append(row | attractor.measures)
+        rows.append(row | chain_columns(attractor))
     rows += failed_rows(found.fractions())
     return pd.DataFrame(rows)
 

@@ -14,22 +14,17 @@ from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from oscillator.model.chains import FrictionChain
-from oscillator.text import printable
+from oscillator.report.outputs import plain_label
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
     from oscillator.hybrid.chain_run import ChainResult
 
-__all__ = ["motion_figure", "plain_label", "schematic_figure"]
+__all__ = ["motion_figure", "schematic_figure"]
 
 #: Colours: each quantity's, and the shading of stuck and closed intervals.
 _X, _V, _STUCK, _CLOSED = "#1f4e9c", "#c4512b", "#d9d9d9", "#f4c7c3"
-
-
-def plain_label(text: str) -> str:
-    """A name as plain text for matplotlib (no mathtext)."""
-    return printable(text).replace("$", r"\$")
 
 
 def _spans(ax: Axes, t: np.ndarray, on: np.ndarray, color: str, label: str) -> None:

@@ -30,7 +30,7 @@ import pandas as pd
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.model.chains import FrictionChain
-from oscillator.report.chain_figures import plain_label
+from oscillator.report.outputs import plain_label
 from oscillator.report.runs import json_text, run_metadata
 
 if TYPE_CHECKING:  # pragma: no cover

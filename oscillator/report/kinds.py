@@ -67,14 +67,16 @@ _HERE = __name__
 
 def _marker(folder: Path, marker: str, known: dict[str, Any], name: str, layout: int | None = None) -> None:
     """A saved folder's marker (the identity, status ``saved``, the format of the parts its
-    command keeps: the attractors' store's by default) and ``case.toml``."""
+    command keeps: the attractors' store's by default) and ``case.toml`` (a declared system's
+    ``system.toml``)."""
     from oscillator.attractors.store import FORMAT
     from oscillator.io.files import atomic_path
 
     layout = FORMAT if layout is None else layout
     kept = {"identity": known, "format": layout, "case_name": name}
     text = json.dumps(kept | {"status": "saved"}, indent=2, default=str)
-    for file, content in ((marker, text), ("case.toml", str(known["case"]))):
+    source = ("system.toml", known["system"]) if "system" in known else ("case.toml", known["case"])
+    for file, content in ((marker, text), (source[0], str(source[1]))):
         with atomic_path(folder / file) as temporary:
             temporary.write_text(content, encoding="utf-8")
 
@@ -89,15 +91,15 @@ def _write_basins(found: Basins, folder: Path) -> list[str]:
 
 
 def _write_following(found: AttractorsOver, folder: Path) -> list[str]:
-    from oscillator.analysis.axes import STATE
     from oscillator.analysis.store import identity
-    from oscillator.report.attractors import write_following
+    from oscillator.attractors.following import default_coordinate
+    from oscillator.report.attractors import name_of, write_following
 
-    fresh = found.found[0].labels[list(STATE)].to_numpy()[: found.fresh]
+    fresh = found.found[0].labels[list(found.case.system.state)].to_numpy()[: found.fresh]
     settings = found.found[0].settings
     known = identity(found.case, param=found.param, values=found.values, states=fresh, settings=settings)
-    _marker(folder, "attractors.json", known, found.case.name)
-    return write_following(found, folder, coordinate="x2", branches=[])
+    _marker(folder, "attractors.json", known, name_of(found.case))
+    return write_following(found, folder, coordinate=default_coordinate(found.case), branches=[])
 
 
 def _write_atlas(found: Atlas, folder: Path) -> list[str]:

@@ -29,6 +29,7 @@ __all__ = [
     "MARKERS",
     "color_of",
     "folder_case",
+    "plain_label",
     "quantity_label",
     "save_into",
     "state_label",
@@ -57,6 +58,11 @@ def unit_of(name: str) -> str:
     """The unit of a state component: ``m`` for a displacement (``x1``, ``x:<mass>``) or a
     slider's stretch (``z:<slider>``), ``m/s`` for a velocity."""
     return "m" if name.startswith(("x", "z")) else "m/s"
+
+
+def plain_label(text: str) -> str:
+    """A name as plain text for matplotlib (no mathtext)."""
+    return printable(text).replace("$", r"\$")
 
 
 def state_label(name: str) -> str:
