@@ -132,7 +132,6 @@ def test_the_articles_basins_run_without_a_folder_too(tmp_path, monkeypatch):
     "call",
     [
         lambda chain: oscillator.frequency_response(chain),
-        lambda chain: oscillator.regime_atlas(chain, Axis("Omega", 1, 2, 2), Axis("Q2", 60, 70, 2)),
         lambda chain: oscillator.response(chain),
     ],
 )

@@ -136,7 +136,7 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
 
     text = (SYSTEMS.parent / "systems.md").read_text(encoding="utf-8")
     blocks = [part.split("```", 1)[0] for part in text.split("```python\n")[1:]]
-    assert len(blocks) == 7
+    assert len(blocks) == 8
     shutil.copytree(SYSTEMS, tmp_path / "docs" / "systems")
     monkeypatch.chdir(tmp_path)
     for block in blocks:
@@ -147,12 +147,13 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
     derivative = next(line.removeprefix("# ") for line in blocks[2].splitlines() if line.startswith("# {"))
     assert derivative in printed
     said = [line.removeprefix("# ") for line in blocks[3].splitlines() if line.startswith("# F = ")]
-    assert printed[-10:-7] == said and len(said) == 3
+    assert printed[-12:-9] == said and len(said) == 3
     folds = next(line.removeprefix("# ") for line in blocks[4].splitlines() if line.startswith("# ["))
     said = [line.removeprefix("# ") for line in blocks[5].splitlines() if line.startswith("# ")]
-    assert printed[-7:-2] == [folds, printed[-6], *said] and printed[-6].startswith("the end of the span")
+    assert printed[-9:-4] == [folds, printed[-8], *said] and printed[-8].startswith("the end of the span")
     ends = [line.removeprefix("# ") for line in blocks[6].splitlines() if line.startswith("# period")]
-    assert printed[-2:] == ends and len(ends) == 2
+    regimes = [line.removeprefix("# ") for line in blocks[7].splitlines() if line.startswith("# ")]
+    assert printed[-4:] == [*ends, *regimes] and len(ends) == 2 and len(regimes) == 2
 
 
 def _den_hartog_amplitude(omega: float, friction: float = 0.2) -> float:

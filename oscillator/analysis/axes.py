@@ -21,11 +21,12 @@ import numpy as np
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import Parameters
 from oscillator.model.system import ARTICLE
-from oscillator.text import shown
+from oscillator.text import printable, shown
 
-__all__ = ["MAX_COUNT", "STATE", "Axis", "admitted_box", "parameter_plane", "state_plane"]
+__all__ = ["MAX_COUNT", "STATE", "Axis", "admitted_box", "chain_plane", "parameter_plane", "state_plane"]
 
 #: The state components, in the order of a state vector.
 STATE: tuple[str, ...] = ARTICLE.state
@@ -44,10 +45,10 @@ class Axis:
     count: int
 
     def __post_init__(self) -> None:
-        if self.name not in STATE and self.name not in Parameters.names() and not _system_state(self.name):
+        if self.name not in STATE and self.name not in Parameters.names() and not _of_a_system(self.name):
             raise InputError(
                 f"axis {shown(self.name)} is neither a state component ({', '.join(STATE)}; a declared system's "
-                "x:<mass>, v:<mass> or z:<slider>) nor a parameter",
+                "x:<mass>, v:<mass> or z:<slider>) nor a parameter (a declared system's <element>.<field>)",
                 field="axis",
             )
         for end in (self.low, self.high):
@@ -71,10 +72,13 @@ class Axis:
         return np.linspace(self.low, self.high, self.count)
 
 
-def _system_state(name: object) -> bool:
+def _of_a_system(name: object) -> bool:
     """Whether ``name`` reads as a declared system's state component (``x:<mass>``, ``v:<mass>``,
-    ``z:<slider>``; which system has it is checked where the axis is used)."""
-    return isinstance(name, str) and name[:2] in ("x:", "v:", "z:") and len(name) > 2
+    ``z:<slider>``) or number (``<element>.<field>``, ``<mass>.m``); which system has it is
+    checked where the axis is used."""
+    if not isinstance(name, str):
+        return False
+    return (name[:2] in ("x:", "v:", "z:") and len(name) > 2) or "." in name.strip(".")
 
 
 def _check_pair(x: object, y: object) -> tuple[Axis, Axis]:
@@ -84,6 +88,24 @@ def _check_pair(x: object, y: object) -> tuple[Axis, Axis]:
     assert isinstance(x, Axis) and isinstance(y, Axis)
     if x.name == y.name:
         raise InputError(f"y: both axes are {x.name}; give two different ones", field="y")
+    return x, y
+
+
+def chain_plane(chain: FrictionChain, x: object, y: object) -> tuple[Axis, Axis]:
+    """Two axes of a friction chain's numbers (:meth:`~oscillator.model.chains.FrictionChain.parameter_names`),
+    checked: both its numbers, different, and every corner admitted (the chain with the two values:
+    its checks are intervals, so the whole rectangle is admitted)."""
+    known = chain.parameter_names()
+    for field, axis in (("x", x), ("y", y)):
+        if isinstance(axis, Axis) and axis.name not in known:
+            raise InputError(
+                f"{field}: axis {shown(axis.name)} is no number of the system; "
+                f"give one of {printable(', '.join(known))}",
+                field=field,
+            )
+    x, y = _check_pair(x, y)
+    for a, b in itertools.product((x.low, x.high), (y.low, y.high)):
+        chain.with_values({x.name: a, y.name: b}).checked()
     return x, y
 
 

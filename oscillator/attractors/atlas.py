@@ -30,48 +30,74 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.axes import Axis, parameter_plane
+from oscillator.analysis.axes import STATE, Axis, chain_plane, parameter_plane
 from oscillator.analysis.execution import Executor
 from oscillator.analysis.store import identity
-from oscillator.attractors.continuing import Continued, Mapper, continue_attractors, plane_points
+from oscillator.attractors.chain_attractors import ChainRefined
+from oscillator.attractors.continuing import Continued, Mapper, Subject, continue_attractors, plane_points
 from oscillator.attractors.features import MEASURES, Measured
-from oscillator.attractors.grouping import regime_of
+from oscillator.attractors.grouping import Attractor, regime_of
 from oscillator.attractors.mapping import AttractorSettings
 from oscillator.attractors.seeding import OnePerRegime
 from oscillator.attractors.store import LandingStore
 from oscillator.engines import check_engine
 from oscillator.errors import InputError
 from oscillator.io.cases import Case
+from oscillator.model.chain_fields import state_of
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import check_count
+from oscillator.orbits.chain_response import measure_names
 from oscillator.presenting import Presented, presenter
-from oscillator.text import shown
+from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["COLUMNS", "Atlas", "AtlasSettings", "atlas_store", "check_measures", "fresh_starts", "regime_atlas"]
+__all__ = [
+    "COLUMNS",
+    "Atlas",
+    "AtlasSettings",
+    "atlas_settings",
+    "atlas_store",
+    "check_measures",
+    "columns_of",
+    "fresh_starts",
+    "measures_of",
+    "regime_atlas",
+]
 
-COLUMNS = {
-    "row": "int64",
-    "column": "int64",
-    "attractor": "int64",
-    "attractor_id": "int64",
-    "coexisting": "int64",
-    "regime": "str",
-    "period": "int64",
-    "rests_m1": "float64",
-    "rests_m2": "float64",
-    "contacts": "float64",
-    **{name: "float64" for name in MEASURES},
-    "lyapunov": "float64",
-    "starts": "int64",
-    "status": "str",
-    "message": "str",
-    "x1": "float64",
-    "v1": "float64",
-    "x2": "float64",
-    "v2": "float64",
-}
+
+def _columns(rests: Sequence[str], measures: Sequence[str], state: Sequence[str]) -> dict[str, str]:
+    """An atlas table's columns and their types: each mass's rests, the fixed measures, the state."""
+    return {
+        "row": "int64",
+        "column": "int64",
+        "attractor": "int64",
+        "attractor_id": "int64",
+        "coexisting": "int64",
+        "regime": "str",
+        "period": "int64",
+        **{name: "float64" for name in rests},
+        "contacts": "float64",
+        **{name: "float64" for name in measures},
+        "lyapunov": "float64",
+        "starts": "int64",
+        "status": "str",
+        "message": "str",
+        **{name: "float64" for name in state},
+    }
+
+
+#: The article's atlas table's columns and their types.
+COLUMNS = _columns(("rests_m1", "rests_m2"), tuple(MEASURES), STATE)
+
+
+def columns_of(system: Subject) -> dict[str, str]:
+    """The columns of an atlas of ``system``: :data:`COLUMNS`, or a chain's (each mass's
+    ``rests:<mass>``, its own state; the measures asked for follow)."""
+    if isinstance(system, FrictionChain):
+        return _columns([f"rests:{m.name}" for m in system.masses], (), system.system.state)
+    return COLUMNS
 
 
 @dataclass(frozen=True)
@@ -126,26 +152,40 @@ class AtlasSettings:
         )
 
 
-def fresh_starts(case: Case, count: int) -> np.ndarray:
-    """``count`` starts ``(x1, v1, x2, v2)``: the case's own start first, then the points of a
-    Halton sequence (unscrambled: the same starts every time) in the box centred on it whose
-    half-width in every component is ``max(1, max |start|)`` (in m and m/s)."""
+#: A declared system's transients (its damping is its own: a lightly damped one takes long to
+#: settle; each run ends where it has settled).
+CHAIN_TRANSIENTS = {"fresh_transient": 200, "seed_transient": 100}
+
+
+def atlas_settings(system: Subject, **given: Any) -> AtlasSettings:
+    """The atlas settings for ``system`` with ``given`` ones: :class:`AtlasSettings`' defaults,
+    a declared system's transients :data:`CHAIN_TRANSIENTS`."""
+    defaults = CHAIN_TRANSIENTS if isinstance(system, FrictionChain) else {}
+    return AtlasSettings(**(defaults | given))
+
+
+def fresh_starts(case: Subject, count: int) -> np.ndarray:
+    """``count`` starts ``(x1, v1, x2, v2)`` (a chain's ``system.state``): the case's own start
+    first, then the points of a Halton sequence (unscrambled: the same starts every time) in the
+    box centred on it whose half-width in every component is ``max(1, max |start|)`` (in m and
+    m/s)."""
     from scipy.stats import qmc
 
-    start = np.array(case.initial.y, dtype=float)
+    start = np.array(state_of(case) if isinstance(case, FrictionChain) else case.initial.y, dtype=float)
     if count == 1:
         return start[None, :]
     width = max(1.0, float(np.max(np.abs(start))))
-    unit = qmc.Halton(d=4, scramble=False).random(count)[1:]  # the first point is the box's corner
+    unit = qmc.Halton(d=len(start), scramble=False).random(count)[1:]  # the first point is the box's corner
     return np.vstack([start, start - width + 2.0 * width * unit])
 
 
 @dataclass(frozen=True)
 class Atlas(Presented):
     """The atlas of a plane: ``table`` has one row per attractor of each point (``row``,
-    ``column`` and the two parameters' values first)."""
+    ``column`` and the two parameters' values first); ``case`` the article's case or a declared
+    system."""
 
-    case: Case
+    case: Subject
     x: Axis
     y: Axis
     table: pd.DataFrame
@@ -161,7 +201,8 @@ class Atlas(Presented):
         """The response measures the table has a column for (``regime_atlas``'s ``measures``)."""
         from oscillator.orbits.response import COLUMNS
 
-        return tuple(name for name in self.table.columns if name in COLUMNS)
+        known = measure_names(self.case) if isinstance(self.case, FrictionChain) else COLUMNS
+        return tuple(name for name in self.table.columns if name in known)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(codes, coexisting, regimes)``: at each point the code of its regime (the regime of
@@ -192,31 +233,40 @@ class Atlas(Presented):
 
 
 def atlas_store(
-    folder: Path, case: Case, x: Axis, y: Axis, settings: AtlasSettings, measures: Sequence[str] = ()
+    folder: Path, case: Subject, x: Axis, y: Axis, settings: AtlasSettings, measures: Sequence[str] = ()
 ) -> LandingStore:
     """The resumable folder of this atlas (:class:`~oscillator.attractors.store.LandingStore`);
     the response ``measures`` are part of its identity where there are any."""
-    extra = {"measures": list(check_measures(measures))} if measures else {}
-    return LandingStore(folder, "atlas.json", identity(case, x=x, y=y, settings=settings, **extra), name=case.name)
+    extra = {"measures": list(check_measures(measures, known=measures_of(case)))} if measures else {}
+    return LandingStore.of(folder, "atlas.json", identity(case, x=x, y=y, settings=settings, **extra), case)
 
 
-def check_measures(measures: object, field: str = "measures") -> tuple[str, ...]:
-    """Response measures by column name (:data:`~oscillator.orbits.response.COLUMNS`), each once;
-    a bad one refused for ``field``."""
+def measures_of(system: Subject) -> Sequence[str]:
+    """The response measures an atlas of ``system`` can carry: the article's columns, or the
+    measures of a chain's orbits."""
     from oscillator.orbits.response import COLUMNS
 
+    return measure_names(system) if isinstance(system, FrictionChain) else COLUMNS
+
+
+def check_measures(measures: object, field: str = "measures", known: Sequence[str] | None = None) -> tuple[str, ...]:
+    """Response measures by column name (:data:`~oscillator.orbits.response.COLUMNS`, or the
+    ``known`` names: a chain's), each once; a bad one refused for ``field``."""
+    from oscillator.orbits.response import COLUMNS
+
+    known = COLUMNS if known is None else known
     names = (measures,) if isinstance(measures, str) else tuple(measures)  # type: ignore[arg-type]
     for name in names:
-        if name not in COLUMNS:
+        if name not in known:
             raise InputError(
-                f"{field}: {shown(name)} is not a response measure; give names of {', '.join(COLUMNS)}",
+                f"{field}: {shown(name)} is not a response measure; give names of {printable(', '.join(known))}",
                 field=field,
             )
     return tuple(dict.fromkeys(names))
 
 
 def regime_atlas(
-    case: Case,
+    case: Case | FrictionChain,
     x: Axis,
     y: Axis,
     *,
@@ -232,10 +282,15 @@ def regime_atlas(
 
     Parameters
     ----------
-    case : Case
+    case : Case or FrictionChain
+        The article's case, or a declared system: its axes two of its numbers by name
+        (``Omega``, ``platform.F``), its starts run by
+        :func:`~oscillator.attractors.chain_attractors.land_chain` on CVODE, each periodic
+        attractor refined by Newton (:class:`~oscillator.attractors.chain_attractors.ChainRefined`).
     x, y : Axis
         Two parameters' axes (every corner admitted by the model, else refused before any work).
     settings : AtlasSettings, optional
+        :class:`AtlasSettings`' defaults; a declared system's with :data:`CHAIN_TRANSIENTS`.
     store : LandingStore, optional
         Keep each row's landings as it finishes, and read back the rows already there (a run that
         resumes).
@@ -244,16 +299,25 @@ def regime_atlas(
     measures : sequence of str
         Response measures (:data:`~oscillator.orbits.response.COLUMNS`: ``x_pp_m2``,
         ``impact_max_right``, ...) each periodic attractor gets as a column, over one return from
-        its last section point; NaN for an aperiodic one.  About 20 ms an attractor.
+        its last section point; NaN for an aperiodic one.  About 20 ms an attractor.  A chain's:
+        names of :func:`~oscillator.orbits.chain_response.measure_names` (``x_max:blade``,
+        ``impact_velocity:wall``), of its refined orbit.
     progress : callable, optional
         ``progress(done, total)`` in points, after every row.
     """
-    settings = settings or AtlasSettings()
-    responses = check_measures(measures)
+    settings = settings or atlas_settings(case)
     if not isinstance(settings, AtlasSettings):
         raise InputError(f"settings must be an AtlasSettings or None, got {shown(settings)}", field="settings")
+    responses = check_measures(measures, known=measures_of(case))
+    describe: Callable[[Any, Attractor], Attractor]
+    if isinstance(case, FrictionChain):
+        case = case.checked()
+        x, y = chain_plane(case, x, y)
+        describe = ChainRefined(settings.lyapunov_periods)
+    else:
+        x, y = parameter_plane(case, x, y)
+        describe = Measured(settings.lyapunov_periods, responses=responses)
     executor = Executor(workers, client, progress)
-    x, y = parameter_plane(case, x, y)
     mapper = Mapper(
         fresh_starts(case, settings.starts),
         settings.landing(settings.fresh_transient),
@@ -264,27 +328,30 @@ def regime_atlas(
             case,
             plane_points(x, y),
             mapper,
-            describe=Measured(settings.lyapunov_periods, responses=responses),
+            describe=describe,
             seeding=OnePerRegime(),
             executor=executor,
             store=store,
             progress=progress,
         )
-    frame = _table(continued, x.count, responses)
+    frame = _table(continued, x.count, responses, case)
     frame.insert(2, x.name, x.values[frame.column.to_numpy()])
     frame.insert(3, y.name, y.values[frame.row.to_numpy()])
     return Atlas(case, x, y, frame)
 
 
-def _table(continued: Continued, columns: int, responses: tuple[str, ...]) -> pd.DataFrame:
+def _table(continued: Continued, columns: int, responses: tuple[str, ...], system: Subject) -> pd.DataFrame:
     """One row per attractor of each point, in the points' order (or one failed row for a point
     where every start failed)."""
+    types = columns_of(system)
+    rests = [name for name in types if name.startswith("rests")]
+    fixed = MEASURES if not isinstance(system, FrictionChain) else ()
     parts = []
     for k, (found, ids) in enumerate(zip(continued.found, continued.ids, strict=True)):
         row, column = divmod(k, columns)
         if not found.attractors:
             messages = [m for m in found.labels.message if m]
-            parts.append(_failed(row, column, messages[0] if messages else "every start failed"))
+            parts.append(_failed(row, column, messages[0] if messages else "every start failed", types))
             continue
         rows = [
             {
@@ -295,19 +362,18 @@ def _table(continued: Continued, columns: int, responses: tuple[str, ...]) -> pd
                 "coexisting": len(found.attractors),
                 "regime": regime_of(a),
                 "period": a.period,
-                "rests_m1": a.rests[0],
-                "rests_m2": a.rests[1],
+                **dict(zip(rests, a.rests, strict=True)),
                 "contacts": a.contacts,
-                **{name: a.measures.get(name, math.nan) for name in MEASURES},
+                **{name: a.measures.get(name, math.nan) for name in fixed},
                 "lyapunov": a.lyapunov,
                 "starts": a.starts,
                 "status": "ok",
                 "message": "",
-                **dict(zip(found.case.system.state, (float(v) for v in a.points[-1]), strict=True)),
+                **dict(zip(system.system.state, (float(v) for v in a.points[-1]), strict=True)),
             }
             for a in found.attractors
         ]
-        parts.append(pd.DataFrame(rows).astype(COLUMNS))
+        parts.append(pd.DataFrame(rows).astype(types))
     table = pd.concat(parts, ignore_index=True)
     for name in responses:  # after the fixed columns, in the order asked
         by_point = [[a.measures.get(name, math.nan) for a in f.attractors] or [math.nan] for f in continued.found]
@@ -315,9 +381,9 @@ def _table(continued: Continued, columns: int, responses: tuple[str, ...]) -> pd
     return table
 
 
-def _failed(row: int, column: int, message: str) -> pd.DataFrame:
-    values: dict[str, Any] = {name: (math.nan if kind == "float64" else 0) for name, kind in COLUMNS.items()}
+def _failed(row: int, column: int, message: str, types: dict[str, str]) -> pd.DataFrame:
+    values: dict[str, Any] = {name: (math.nan if kind == "float64" else 0) for name, kind in types.items()}
     values.update(
         row=row, column=column, attractor=-1, attractor_id=-1, regime="failed", status="failed", message=message
     )
-    return pd.DataFrame([values]).astype(COLUMNS)
+    return pd.DataFrame([values]).astype(types)

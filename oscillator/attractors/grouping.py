@@ -308,11 +308,11 @@ def unsettled(attractors: Sequence[Attractor]) -> list[str]:
 
 def regime_of(attractor: Attractor) -> str:
     """The regime's label: ``P<n>`` (or its :attr:`~Attractor.kind`: ``chaotic``,
-    ``quasi-periodic``, ``aperiodic``), then ``m1 rests`` / ``m2 rests`` (rest intervals, or at
-    rest throughout) and ``contact`` when they happen."""
+    ``quasi-periodic``, ``aperiodic``), then ``m1 rests`` / ``m2 rests`` (a chain's masses by
+    name: rest intervals, or at rest throughout) and ``contact`` when they happen."""
     label = f"P{attractor.period}" if attractor.period else attractor.kind
-    resting = zip((1, 2), attractor.rests, attractor.rest_time, strict=True)
-    parts = [label] + [f"m{mass} rests" for mass, rate, share in resting if rate or share > 0]
+    resting = zip(attractor.masses, attractor.rests, attractor.rest_time, strict=True)
+    parts = [label] + [f"{mass} rests" for mass, rate, share in resting if rate or share > 0]
     if attractor.contacts:
         parts.append("contact")
     return " ".join(parts)

@@ -332,7 +332,7 @@ def attractors(
       oscillator attractors docs/systems/impacts.toml --param Omega --from 1.6 --to 1.0 --steps 7 --tol 1e-4
     """
     with refusing():
-        resolved, stem, title = _subject(case, set_)
+        resolved, stem, title = subject_of(case, set_)
         refuse_taken(set_, {param: "--param"} | {axis[0]: option for axis, option in ((x, "--x"), (y, "--y")) if axis})
         given = {"transient": transient, "record": record, "settle": not full_transient, "engine": engine}
         name = stem if stem is not None else title  # the default folder's
@@ -352,7 +352,7 @@ def attractors(
     _finish_following(over, store, coordinate, drawn, no_plots, quiet)
 
 
-def _subject(target: str, assignments: list[str] | None) -> tuple[Case | FrictionChain, str | None, str]:
+def subject_of(target: str, assignments: list[str] | None) -> tuple[Case | FrictionChain, str | None, str]:
     """A system file's chain, its stem and title (printable); or the case, None and its name."""
     from oscillator.cli.system_attractors import chain_at
 

@@ -73,6 +73,7 @@ SYSTEM_COMMANDS = (
     "frc",
     "design",
     "attractors",
+    "atlas",
     "basins",
     "lyapunov",
     "explore",

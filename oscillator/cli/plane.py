@@ -11,7 +11,7 @@ import typer
 from rich.text import Text
 
 from oscillator.analysis.execution import check_workers
-from oscillator.cli.attractors import axis_of
+from oscillator.cli.attractors import axis_of, subject_of
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import case_from, check_engine, refuse_taken
@@ -94,26 +94,39 @@ def atlas(
     Rows are kept as they finish: the same command with the same --out resumes.
 
     \b
+    A system file (docs/systems.md) takes two of its numbers as axes (Omega, wall.at,
+    platform.F) and its orbits' measures in --measures (x_max:<mass>, impact_velocity:<stop>);
+    its starts run on CVODE, 200 forcing periods at most (100 for a seed), and each periodic
+    attractor is refined by Newton.
+
+    \b
     Examples:
       oscillator atlas instance-1 --x Omega 1.3 1.85 12 --y Q2 68.5 72 8 --out runs/atlas
       oscillator atlas instance-1 --x Omega 1.59 1.61 3 --y Q2 71.1 71.2 3 --starts 4 --transient 60 --record 16
       oscillator atlas instance-1 --x Omega 1.3 1.85 6 --y d1 3.3 4 4 --measures impact_max_right,x_pp_m1
+      oscillator atlas docs/systems/impacts.toml --x Omega 1.0 1.6 7 --y wall.at 0.3 0.9 4 --measures x_max:m
     """
     with refusing():
-        resolved = case_from(case, None, set_)
-        from oscillator.analysis.axes import parameter_plane
+        resolved, stem, title = subject_of(case, set_)
+        from oscillator.analysis.axes import chain_plane, parameter_plane
+        from oscillator.model.chains import FrictionChain
 
-        x_axis, y_axis = parameter_plane(resolved, axis_of(x, "--x"), axis_of(y, "--y"))
+        declared = isinstance(resolved, FrictionChain)
+        plane = chain_plane if declared else parameter_plane
+        x_axis, y_axis = plane(resolved, axis_of(x, "--x"), axis_of(y, "--y"))  # type: ignore[arg-type]
         refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
-        from oscillator.attractors.atlas import AtlasSettings, atlas_store, check_measures
+        from oscillator.attractors.atlas import atlas_settings, atlas_store, check_measures, measures_of
 
         count = check_workers(workers)
         given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
         chosen = {name: value for name, value in given.items() if value is not None}
         check_engine(engine, LANDING_ENGINES)
-        settings = AtlasSettings(**chosen, settle=not full_transient, engine=engine)
-        folder = out_dir if out_dir is not None else new_folder(resolved, "atlas")
-        responses = check_measures([] if measures is None else [n.strip() for n in measures.split(",") if n.strip()])
+        if declared and engine != "dop853":
+            raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
+        settings = atlas_settings(resolved, **chosen, settle=not full_transient, engine=engine)
+        folder = out_dir if out_dir is not None else new_folder(stem if stem is not None else title, "atlas")
+        names = [] if measures is None else [n.strip() for n in measures.split(",") if n.strip()]
+        responses = check_measures(names, "--measures", known=measures_of(resolved))
         store = atlas_store(folder, resolved, x_axis, y_axis, settings, responses)
         store.check()
         load("oscillator.attractors.atlas", notice=True)
@@ -124,7 +137,7 @@ def atlas(
         store.open()
         options: dict[str, Any] = {"settings": settings, "store": store, "measures": responses}
         run = functools.partial(regime_atlas, resolved, x_axis, y_axis, workers=count, client=client, **options)
-        found = with_progress(run, f"{resolved.name}: atlas", "points", quiet)
+        found = with_progress(run, f"{title}: atlas", "points", quiet)
         store.write_status("computed", points=x_axis.count * y_axis.count)
     _finish_atlas(found, store, no_plots, quiet)
 

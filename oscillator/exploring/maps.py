@@ -177,6 +177,8 @@ def _starts(case: Case, *held: np.ndarray) -> np.ndarray:
 
 # -- atlas and basins ---------------------------------------------------------------------------
 def _atlas(atlas: Atlas) -> Picture:
+    if not isinstance(atlas.case, Case):  # a declared system's atlas folder is not read back yet
+        raise InputError("the explorer shows the article's atlases; a system's atlas is in its folder", field="folder")
     x, y = atlas.x.name, atlas.y.name
     table = atlas.table
     first = table[table.attractor <= 0].drop_duplicates(["row", "column"])

@@ -30,7 +30,36 @@ from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
 from oscillator.orbits.chain_peaks import peaks
 
-__all__ = ["closed_spans", "frequency_sweep", "mode_spans", "orbit_measures", "stuck_spans", "turning_points", "turns"]
+__all__ = [
+    "MEASURE_UNITS",
+    "closed_spans",
+    "frequency_sweep",
+    "measure_names",
+    "measure_unit",
+    "mode_spans",
+    "orbit_measures",
+    "stuck_spans",
+    "turning_points",
+    "turns",
+]
+
+#: Each measure's unit by its kind (the part of its name before ``:``); ``""``: a share or a count.
+MEASURE_UNITS = {
+    "x_max": "m",
+    "x_min": "m",
+    "x_pp": "m",
+    "stuck": "",
+    "closed": "",
+    "closings": "",
+    "impact_velocity": "m/s",
+    "a_max": "m/s^2",
+    "force_max": "N",
+    "work": "J",
+    "dissipated": "J",
+    "slip": "m",
+}
+_SLIDING = ("friction", "jenkins")
+_CLOSING = ("stop", "contact")
 
 
 def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -85,6 +114,29 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
+def measure_names(chain: FrictionChain) -> tuple[str, ...]:
+    """The names :func:`orbit_measures` gives the orbits of ``chain``, in its order: known before
+    any orbit is found, to check a measure asked for."""
+    names = [f"{kind}:{m.name}" for m in chain.masses for kind in ("x_max", "x_min", "x_pp")]
+    for element in chain.elements:
+        if element.type in _SLIDING:
+            names.append(f"stuck:{element.name}")
+        elif element.type in _CLOSING:
+            names += [f"{kind}:{element.name}" for kind in ("closed", "closings", "impact_velocity")]
+    names += [f"a_max:{m.name}" for m in chain.masses]
+    names += [f"force_max:{e.name}" for e in chain.elements if e.type in _CLOSING]
+    for element in chain.elements:
+        names += [f"work:{element.name}", f"dissipated:{element.name}"]
+        names += [f"slip:{element.name}"] if element.type in _SLIDING else []
+    return tuple(names)
+
+
+def measure_unit(name: str) -> str:
+    """The unit of a measure of :func:`orbit_measures` (``force_max:wall``: ``N``; ``""`` for a
+    share or a count)."""
+    return MEASURE_UNITS[name.partition(":")[0]]
+
+
 def extremes(run: ChainResult) -> dict[str, tuple[float, float, float, float]]:
     """Each mass's ``(t_max, x_max, t_min, x_min)`` over ``run``: its largest and smallest
     displacement and when (the run's ends, and every turn: :func:`turns`)."""
@@ -130,10 +182,10 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
     for mass, (_, high, _, low) in extremes(run).items():
         found[f"x_max:{mass}"], found[f"x_min:{mass}"], found[f"x_pp:{mass}"] = high, low, high - low
     for element in run.chain.elements:
-        if element.type in ("friction", "jenkins"):
+        if element.type in _SLIDING:
             spans = stuck_spans(run, element.name, start, span)
             found[f"stuck:{element.name}"] = float(sum(b - a for a, b in spans) / span)
-        elif element.type in ("stop", "contact"):
+        elif element.type in _CLOSING:
             found |= _contact_measures(run, element.name, start, span)
     return found | peaks(run) | _energy_measures(run, start, span)
 
@@ -163,7 +215,7 @@ def _energy_measures(run: ChainResult, start: float, span: float) -> dict[str, f
         name = element.name
         found[f"work:{name}"] = float(table.work[name])
         found[f"dissipated:{name}"] = float(table.dissipated[name])
-        if element.type in ("friction", "jenkins"):
+        if element.type in _SLIDING:
             spans, t = mode_spans(run, name, start, span), trajectory.t.to_numpy(float)
             if element.type == "friction":  # the place against the belt's: x - w t
                 place = trajectory[chain.system.position(element.on)].to_numpy(float) - element.values["w"] * t

@@ -62,6 +62,7 @@ __all__ = [
     "following_figure",
     "lyapunov_figure",
     "name_of",
+    "number_label",
     "write_basins",
     "write_following",
     "write_lyapunov",
@@ -356,7 +357,7 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
         bottom.plot([], [], color=color_of(end.id), ls="--", lw=0.8, label=label)
     top.set_ylabel(plain_label(f"{coordinate} at the section ({unit_of(coordinate)})"))
     bottom.set_ylabel("share of the fresh starts")
-    bottom.set_xlabel(_number_label(over.case, over.param))
+    bottom.set_xlabel(number_label(over.case, over.param))
     bottom.ticklabel_format(useOffset=False)
     bottom.set_ylim(-0.05, 1.05)
     bottom.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2, frameon=False)
@@ -366,7 +367,7 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
     return fig
 
 
-def _number_label(system: Case | FrictionChain, name: str) -> str:
+def number_label(system: Case | FrictionChain, name: str) -> str:
     """An axis label for a parameter with its unit: the article's, or a chain's number's."""
     if isinstance(system, FrictionChain):
         unit = FrictionChain.unit(name)

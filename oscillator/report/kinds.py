@@ -104,9 +104,10 @@ def _write_following(found: AttractorsOver, folder: Path) -> list[str]:
 
 def _write_atlas(found: Atlas, folder: Path) -> list[str]:
     from oscillator.analysis.store import identity
+    from oscillator.report.attractors import name_of
     from oscillator.report.plane import write_atlas
 
-    _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y), found.case.name)
+    _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y), name_of(found.case))
     return write_atlas(found, folder)
 
 

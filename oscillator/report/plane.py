@@ -5,7 +5,9 @@ file read checked."""
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
+import re
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -16,19 +18,20 @@ import pandas as pd
 
 from oscillator.attractors.atlas import Atlas
 from oscillator.errors import InputError, OscillatorError
+from oscillator.io.cases import Case
 from oscillator.io.files import atomic_path
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import labelled
 from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
-from oscillator.report.figures import figure_title
+from oscillator.report.attractors import name_of, number_label, title_of
 from oscillator.report.orbits import modified_blocks
-from oscillator.report.outputs import COLORS, FAILED, folder_case, write_folder
+from oscillator.report.outputs import COLORS, FAILED, folder_case, plain_label, write_folder
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-    from oscillator.io.cases import Case
 
 __all__ = [
     "ATLAS_MEASURES",
@@ -55,12 +58,16 @@ ATLAS_MEASURES = {
 
 
 def atlas_measures(atlas: Atlas) -> dict[str, str]:
-    """What this atlas can be coloured by, and how each is named: :data:`ATLAS_MEASURES` and the
-    response measures it was computed with (their largest value over a point's attractors)."""
+    """What this atlas can be coloured by, and how each is named: :data:`ATLAS_MEASURES` that its
+    table has (a chain's has no fixed impact velocity) and the response measures it was computed
+    with (their largest value over a point's attractors)."""
+    from oscillator.orbits.chain_response import measure_unit
     from oscillator.orbits.response import unit_of
 
-    units = {name: f" ({unit_of(name)})" if unit_of(name) else "" for name in atlas.measures}
-    return ATLAS_MEASURES | {name: f"largest {name} over the attractors{units[name]}" for name in atlas.measures}
+    unit = measure_unit if isinstance(atlas.case, FrictionChain) else unit_of
+    units = {name: f" ({unit(name)})" if unit(name) else "" for name in atlas.measures}
+    fixed = {by: what for by, what in ATLAS_MEASURES.items() if by in atlas.table}
+    return fixed | {name: f"largest {name} over the attractors{units[name]}" for name in atlas.measures}
 
 
 def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
@@ -85,11 +92,11 @@ def atlas_figure(atlas: Atlas, by: str = "regime") -> Figure:
         ax.pcolormesh(atlas.x.values, atlas.y.values, failed, cmap=ListedColormap([FAILED]), shading="nearest")
         handles.append(Patch(color=FAILED, label="failed"))
     handles += _hatch_coexisting(ax, atlas, coexisting > 1)
-    handles += _fig_14_marks(ax, atlas)
-    ax.set_xlabel(labelled(atlas.x.name))
-    ax.set_ylabel(labelled(atlas.y.name))
+    handles += _fig_14_marks(ax, atlas) if isinstance(atlas.case, Case) else []  # the article's figure
+    ax.set_xlabel(number_label(atlas.case, atlas.x.name))
+    ax.set_ylabel(number_label(atlas.case, atlas.y.name))
     ax.ticklabel_format(useOffset=False)
-    title = f"{figure_title(atlas.case)}: {named[by]} over {atlas.x.name} and {atlas.y.name}"
+    title = f"{title_of(atlas.case)}: {named[by]} over {atlas.x.name} and {atlas.y.name}"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
     if handles:
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
@@ -110,7 +117,7 @@ def _atlas_values(fig: Figure, ax: Any, atlas: Atlas, by: str) -> list[Any]:
         values[cells.index.get_level_values(0), cells.index.get_level_values(1)] = cells.to_numpy()
         finite = np.ma.masked_invalid(np.where(np.isfinite(values), values, np.nan))
         mesh = ax.pcolormesh(x, y, finite, cmap="viridis", shading="nearest")
-        fig.colorbar(mesh, ax=ax, label=atlas_measures(atlas)[by])
+        fig.colorbar(mesh, ax=ax, label=plain_label(atlas_measures(atlas)[by]))
         return []
     first = table[table.attractor <= 0].drop_duplicates(["row", "column"])
     labels = first.regime if by == "regime" else first[by].astype(int)
@@ -121,7 +128,10 @@ def _atlas_values(fig: Figure, ax: Any, atlas: Atlas, by: str) -> list[Any]:
     shown = np.ma.masked_less(codes, 0)
     ax.pcolormesh(x, y, shown, cmap=ListedColormap(palette), vmin=-0.5, vmax=len(categories) - 0.5, shading="nearest")
     name = {"regime": "", "period": "period ", "coexisting": "attractors: "}[by]
-    return [Patch(color=color, label=f"{name}{value}") for color, value in zip(palette, categories, strict=True)]
+    return [
+        Patch(color=color, label=plain_label(f"{name}{value}"))
+        for color, value in zip(palette, categories, strict=True)
+    ]
 
 
 def _hatch_coexisting(ax: Any, atlas: Atlas, several: np.ndarray) -> list[Any]:
@@ -168,7 +178,7 @@ def atlas_blocks(atlas: Atlas) -> list[mk.Block]:
     rows = tuple((str(regime), str(int(count)), f"{count / len(first):.1%}") for regime, count in counts.items())
     several = int((first.coexisting > 1).sum())
     blocks: list[mk.Block] = [
-        mk.Heading(1, (f"{case.name}: regime atlas over {x.name} and {y.name}",)),
+        mk.Heading(1, (f"{name_of(case)}: regime atlas over {x.name} and {y.name}",)),
         mk.Paragraph(
             (
                 f"{x.count} x {y.count} points, {x.name} from {x.low:g} to {x.high:g} and {y.name} from {y.low:g} to "
@@ -176,7 +186,7 @@ def atlas_blocks(atlas: Atlas) -> list[mk.Block]:
             )
         ),
     ]
-    blocks += modified_blocks(case)
+    blocks += modified_blocks(case) if isinstance(case, Case) else []
     blocks += [mk.Table(("regime (first attractor)", "points", "share"), rows)]
     blocks += [
         mk.Figure(atlas_figure_name(by), f"the {what} over the plane; hatched where several attractors coexist")
@@ -187,8 +197,15 @@ def atlas_blocks(atlas: Atlas) -> list[mk.Block]:
 
 def atlas_figure_name(by: str) -> str:
     """The file name of the atlas's figure coloured by ``by``: ``atlas`` for the regimes,
-    ``atlas-lyapunov`` and so on for the others."""
-    return "atlas" if by == "regime" else f"atlas-{by.replace('_', '-')}"
+    ``atlas-lyapunov`` and so on for the others (``x_max:blade``: ``atlas-x-max-blade``; a name
+    with other characters than ``a-z0-9_:`` gets 8 hex digits of its hash, so that two names never
+    share a file)."""
+    if by == "regime":
+        return "atlas"
+    slug = re.sub(r"[^a-z0-9]+", "-", by.lower()).strip("-")
+    if not re.fullmatch(r"[a-z0-9_:]+", by) or not slug:
+        slug = f"{slug}-{hashlib.sha256(by.encode('utf-8')).hexdigest()[:8]}".lstrip("-")
+    return f"atlas-{slug}"
 
 
 def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
@@ -196,7 +213,7 @@ def write_atlas(atlas: Atlas, folder: Path, *, plots: bool = True) -> list[str]:
     :func:`atlas_measures` and the report."""
     measures = atlas_measures(atlas) if plots else {}
     figure = [(atlas_figure_name(by), functools.partial(atlas_figure, atlas, by)) for by in measures]
-    title = f"{atlas.case.name}: regime atlas"
+    title = f"{name_of(atlas.case)}: regime atlas"
     return write_folder(folder, {"atlas": atlas.table}, figure, atlas_blocks(atlas), title)
 
 
@@ -241,7 +258,7 @@ def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) ->
     kinds = " and ".join(dict.fromkeys(curve.kind for curve in several))
     title = f"{kinds} curve in {first.x} and {first.y}"
     if atlas is not None:
-        title = f"{figure_title(atlas.case)}: {title}, over the regime of the first attractor"
+        title = f"{title_of(atlas.case)}: {title}, over the regime of the first attractor"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=2, frameon=False)
     return fig
