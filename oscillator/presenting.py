@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     from matplotlib.figure import Figure
 
     from oscillator.attractors.chain_attractors import ChainBasins
+    from oscillator.attractors.chain_frequency import ChainFrequencyResponse
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -66,6 +67,8 @@ class Presenter(Protocol):
     def plot_system(self, chain: FrictionChain) -> Figure: ...
 
     def plot_chain_basins(self, basins: ChainBasins) -> Figure: ...
+
+    def plot_chain_frequency(self, response: ChainFrequencyResponse, measure: str | None) -> Figure: ...
 
     def plot_chain_result(self, result: ChainResult) -> Figure: ...
 

@@ -14,6 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.attractors.chain_attractors import ChainBasins
+    from oscillator.attractors.chain_frequency import ChainFrequencyResponse
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -109,6 +110,11 @@ class Views:
         from oscillator.report.attractors import basins_figure
 
         return basins_figure(basins)
+
+    def plot_chain_frequency(self, response: ChainFrequencyResponse, measure: str | None) -> Figure:
+        from oscillator.report.chain_frequency import sweep_figure
+
+        return sweep_figure(response.sweeps, response.chain, response.param, response, measure)
 
     def plot_chain_result(self, result: ChainResult) -> Figure:
         from oscillator.report.chain_figures import motion_figure

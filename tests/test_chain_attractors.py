@@ -131,7 +131,6 @@ def test_the_articles_basins_run_without_a_folder_too(tmp_path, monkeypatch):
 @pytest.mark.parametrize(
     "call",
     [
-        lambda chain: oscillator.frequency_response(chain),
         lambda chain: oscillator.response(chain),
     ],
 )

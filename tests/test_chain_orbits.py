@@ -156,6 +156,17 @@ def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, caps
     assert printed[-4:] == [*ends, *regimes] and len(ends) == 2 and len(regimes) == 2
 
 
+def den_hartog_chain() -> FrictionChain:
+    """Den Hartog's forced Coulomb oscillator ``x'' + x + 0.2 sgn(x') = sin(Omega t)``."""
+    return (
+        FrictionChain(Omega=0.55)
+        .mass("m", m=1.0)
+        .spring("m", k=1.0)
+        .force("m", Q=1.0)
+        .friction("m", mu_s=0.2, mu_k=0.2, N=1.0, name="floor")
+    )
+
+
 def _den_hartog_amplitude(omega: float, friction: float = 0.2) -> float:
     """Den Hartog's amplitude of the continuous motion of ``x'' + x + F sgn(x') = sin(Omega t)``."""
     u = math.sin(math.pi / omega) / (omega * (1 + math.cos(math.pi / omega)))
@@ -185,13 +196,7 @@ def test_a_sweep_gives_den_hartogs_amplitude_along_a_band():
     sticks): ``x_max = -x_min = X(Omega)`` of Den Hartog's closed form to 1e-8."""
     from oscillator.orbits.chain_response import frequency_sweep
 
-    chain = (
-        FrictionChain(Omega=0.55)
-        .mass("m", m=1.0)
-        .spring("m", k=1.0)
-        .force("m", Q=1.0)
-        .friction("m", mu_s=0.2, mu_k=0.2, N=1.0, name="floor")
-    )
+    chain = den_hartog_chain()
     values = [0.55, 0.6, 0.65, 0.7, 0.75]
     table = frequency_sweep(chain, values, transient=40)
     for value, (_, row) in zip(values, table.iterrows(), strict=True):

@@ -220,9 +220,10 @@ def test_frc_of_a_system_file_sweeps_up_and_down_and_writes_its_folder(tmp_path)
 
 def test_frc_of_a_system_file_refuses_the_options_of_cases_and_bad_spans_creating_nothing(tmp_path):
     folder = tmp_path / "frc"
-    for extra, said in ((["--seeds", "3"], "--seeds applies to the article's cases"),
+    for extra, said in ((["--max-points", "30"], "--max-points applies to the article's cases"),
                         (["--sweep", "1"], "--sweep must be 2 to 100000"),
-                        (["--set", "platform.F=-1"], "F must not be negative")):  # fmt: skip
+                        (["--set", "platform.F=-1"], "F must not be negative"),
+                        (["--starts", "3"], "--starts goes with --seeds")):  # fmt: skip
         done = _invoke("frc", str(BLADE), "--param", "Omega", "0.9", "1.1", *extra, "--out", str(folder))
         assert done.exit_code == 2 and said in done.stderr, (extra, done.stderr)
         assert not folder.exists()

@@ -32,7 +32,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 import pandas as pd
@@ -54,6 +54,7 @@ from oscillator.attractors.mapping import STATE, AttractorSettings, check_settin
 from oscillator.attractors.responding import continued, distinct, doubled, measured, on_branch, seed_orbits, sweep
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch
 from oscillator.presenting import Presented, presenter
@@ -61,6 +62,8 @@ from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
+
+    from oscillator.attractors.chain_frequency import ChainFrequencyResponse
 
 __all__ = [
     "FrequencyResponse",
@@ -150,8 +153,41 @@ class FrequencyResponse(Presented):
         return [float(value) for value in rows[self.param]]
 
 
+@overload
+def frequency_response(
+    case: FrictionChain,
+    param: str = ...,
+    span: tuple[float, float] = ...,
+    *,
+    period: int = ...,
+    seeds: int = ...,
+    states: Sequence[Sequence[float]] | np.ndarray | None = ...,
+    sweep: int = ...,
+    progress: Callable[[int, int], None] | None = ...,
+) -> ChainFrequencyResponse: ...
+
+
+@overload
 def frequency_response(
     case: Case | str,
+    param: str = ...,
+    span: tuple[float, float] = ...,
+    *,
+    period: int = ...,
+    seeds: int = ...,
+    states: Sequence[Sequence[float]] | np.ndarray | None = ...,
+    sweep: int = ...,
+    settings: AttractorSettings | None = ...,
+    max_points: int = ...,
+    workers: int | None = ...,
+    client: Any = ...,
+    store: FrequencyStore | None = ...,
+    progress: Callable[[int, int], None] | None = ...,
+) -> FrequencyResponse: ...
+
+
+def frequency_response(
+    case: Case | FrictionChain | str,
     param: str = "Omega",
     span: tuple[float, float] = (1.3, 1.85),
     *,
@@ -165,7 +201,7 @@ def frequency_response(
     client: Any = None,
     store: FrequencyStore | None = None,
     progress: Callable[[int, int], None] | None = None,
-) -> FrequencyResponse:
+) -> FrequencyResponse | ChainFrequencyResponse:
     """The branches of period-``period`` orbits over ``span`` of ``param`` with their response
     measures, and the sweeps up and down (module docstring).
 
@@ -175,7 +211,11 @@ def frequency_response(
     each branch.  ``workers`` (None: every core) or a Dask ``client`` run the tasks; ``store``
     keeps them as they finish (:func:`frequency_store`); ``progress(done, total)`` is told after
     each task, in seeds, branch points and sweep values (the total grows as the branches are
-    found)."""
+    found).  A declared system's: :func:`~oscillator.attractors.chain_frequency.chain_frequency_response`
+    (its period-1 branches; ``settings``, ``store``, ``client`` and ``max_points`` are the
+    article's)."""
+    if isinstance(case, FrictionChain):
+        return _of_chain(case, param, span, period, seeds, states, sweep, progress, settings, store, client)
     base = resolve_case(case) if isinstance(case, str) else case
     if store is not None and not isinstance(store, FrequencyStore):
         raise InputError(
@@ -193,6 +233,28 @@ def frequency_response(
         branches = job.doublings(branches + job.from_sweeps(sweeps, branches))
         points = job.measures(branches)
     return FrequencyResponse(param, tuple(branches), points, sweeps, base, period)
+
+
+def _of_chain(
+    chain: FrictionChain,
+    param: str,
+    span: tuple[float, float],
+    period: int,
+    seeds: int,
+    states: Any,
+    sweep: int,
+    progress: Callable[[int, int], None] | None,
+    *articles: Any,
+) -> ChainFrequencyResponse:
+    """:func:`frequency_response` of a declared system; the article's options refused."""
+    from oscillator.attractors.chain_frequency import chain_frequency_response
+
+    if period != 1:
+        raise InputError("period: a declared system's branches are of period-1 orbits", field="period")
+    for name, value in zip(("settings", "store", "client"), articles, strict=True):
+        if value is not None:
+            raise InputError(f"{name} applies to the article's cases, not a declared system", field=name)
+    return chain_frequency_response(chain, param, span, seeds=seeds, states=states, sweep=sweep, progress=progress)
 
 
 def check_frequency(

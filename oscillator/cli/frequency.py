@@ -35,13 +35,16 @@ __all__ = ["frc"]
 
 #: ``--param NAME LOW HIGH``: the parameter and its span.
 SpanOption = tuple[str, float, float]
+#: ``--seeds N``: where attractors are sought (5 by default; a system file's branches only with it).
+SeedsOption = Annotated[
+    int | None,
+    typer.Option("--seeds", metavar="N", help="Values where attractors are sought (5; a system file: none)."),
+]
 
 
 #: The options of ``frc`` for the article's cases, at their defaults, in the order ``frc`` reads them
 #: (a system file takes none of them).
 _DEFAULTS: dict[str, object] = {
-    "--seeds": 5,
-    "--starts": 1,
     "--max-points": 3000,
     "--record": None,
     "--full-transient": False,
@@ -60,7 +63,7 @@ def frc(
         SpanOption, typer.Option("--param", metavar="NAME LOW HIGH", help="The parameter and its span, e.g. Omega.")
     ],
     period: Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return.")] = 1,
-    seeds: Annotated[int, typer.Option("--seeds", metavar="N", help="Values where attractors are sought.")] = 5,
+    seeds: SeedsOption = None,
     sweep: Annotated[int, typer.Option("--sweep", metavar="N", help="Values of each slow sweep.")] = 41,
     measure: Annotated[
         str, typer.Option("--measure", metavar="NAME", help="The measure drawn: x_pp, x_max, v_peak, impact_max, ...")
@@ -81,16 +84,17 @@ def frc(
     quiet: QuietOption = False,
 ) -> None:
     """The frequency response over a parameter's span: the periodic attractors at --seeds values
-    (from the case's start, or --starts around it),
-    each orbit continued both ways through folds and unstable stretches, every branch point
-    measured (amplitudes, peak velocity, RMS acceleration, rests, impact velocities, contact
-    forces, energies), and slow sweeps up and down with their jumps.
+    (from the case's start, or --starts around it), each orbit continued both ways through folds
+    and unstable stretches, every branch point measured (amplitudes, peak velocity, RMS
+    acceleration, rests, impact velocities, contact forces, energies), and slow sweeps up and
+    down with their jumps.
 
     Writes points.parquet, bifurcations.parquet, sweeps.parquet, figures/frequency-*.png (the
     --measure of each mass, and the impact velocities where there are contacts) and a report.
     Parts are kept as they finish: the same command with the same --out resumes.  A system file
     (docs/systems.md) is swept up and down over --sweep values, its orbit followed from value to
-    value: sweeps.parquet, figures/frequency.png.
+    value (sweeps.parquet, figures/frequency.png); with --seeds N (and --starts) every period-1
+    branch its attractors at N values and its sweeps reach, through folds (branches.parquet).
 
     \b
     Examples:
@@ -98,23 +102,24 @@ def frc(
       oscillator frc instance-1 --param Omega 1.5 1.7 --seeds 3 --sweep 21 --measure v_peak
       oscillator frc instance-1 --set Q2=71.165 --param Omega 1.5999 1.6001 --starts 16 --out runs/frc-window
       oscillator frc docs/systems/blade-damper.toml --param Omega 0.6 1.6 --sweep 21 --out runs/blade-frc
+      oscillator frc docs/systems/impacts.toml --param Omega 1.0 1.6 --seeds 3 --sweep 21 --out runs/impacts-frc
     """
     from oscillator.cli.system import frc_system
 
-    given = (seeds, starts, max_points, record, full_transient, engine, workers, scheduler, period, measure)
+    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure)
     case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
-    if frc_system(case, set_, param, sweep, transient, out_dir, case_only, not no_plots, quiet):
+    if frc_system(case, set_, param, (sweep, seeds, starts), transient, out_dir, case_only, not no_plots, quiet):
         return
     with refusing():
         resolved = case_from(case, None, set_)
         name, low, high = param
         refuse_taken(set_, {name: "--param"})
         settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
-        options: dict[str, Any] = {"period": period, "seeds": seeds, "sweep": sweep, "max_points": max_points}
+        seeded = 5 if seeds is None else seeds
+        options: dict[str, Any] = {"period": period, "seeds": seeded, "sweep": sweep, "max_points": max_points}
         store = _opened(resolved, (name, low, high), measure, starts, settings, options, out_dir)
         count = check_workers(workers)
-        folder = store.folder
-        lock, client = locked(folder, scheduler)
+        lock, client = locked(store.folder, scheduler)
     with computing(store, "parts", lock, client):
         from oscillator.attractors.frequency import frequency_response
 

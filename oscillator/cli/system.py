@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +23,7 @@ from oscillator.io.files import check_name, check_new, refuse_link
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.attractors.chain_frequency import ChainFrequencyResponse
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.chain_orbits import ChainOrbit
@@ -285,7 +287,7 @@ def frc_system(
     target: str,
     assignments: list[str] | None,
     param: tuple[str, float, float],
-    sweep: int,
+    counts: tuple[int, int | None, int],
     transient: int | None,
     out_dir: Path | None,
     case_only: list[str],
@@ -294,21 +296,26 @@ def frc_system(
 ) -> bool:
     """``oscillator frc FILE`` if ``target`` is a system file: the chain's period-1 orbit swept up
     and down ``param``'s span over ``sweep`` values (:func:`~oscillator.orbits.chain_response.
-    frequency_sweep`), the folder written (:mod:`oscillator.report.chain_frequency`), the jumps
-    and the failed values said; whether it was one."""
+    frequency_sweep`), and with ``seeds`` every branch (``counts = (sweep, seeds, starts)``:
+    :func:`~oscillator.attractors.chain_frequency.chain_frequency_response`), the folder written
+    (:mod:`oscillator.report.chain_frequency`), the jumps and the failed values said; whether it
+    was one."""
     from oscillator.io.chains import load_system, system_path
 
     path = system_path(target)
     if path is None:
         return False
     name, low, high = param
+    sweep, seeds, starts = counts
     try:
         if case_only:
             raise InputError(
                 f"{case_only[0]} applies to the article's cases; a system file's frequency response is a sweep up "
-                "and down (--sweep N values) for now",
+                "and down (--sweep N values) and, with --seeds N, its period-1 branches",
                 field=case_only[0],
             )
+        if seeds is None and starts != 1:
+            raise InputError("--starts goes with --seeds N: the starts at each seed value", field="--starts")
         if not (2 <= sweep <= 100_000) or not low < high:
             raise InputError(f"--sweep must be 2 to 100000 values over LOW < HIGH, got {sweep} over {low:g}..{high:g}")
         if out_dir is not None:
@@ -322,22 +329,55 @@ def frc_system(
     except OscillatorError as error:
         raise fail(message(error)) from None
     try:
-        values = np.linspace(low, high, sweep)
         periods = 100 if transient is None else transient
         label = f"{printable(chain.title or path.stem)}: sweeps over {printable(name)}"
-        up, down = with_progress(
-            lambda progress=None: _both_ways(chain, values, name, periods, progress), label, "orbits", quiet
-        )
+        compute = functools.partial(_swept, chain, (name, low, high), (sweep, seeds, starts), periods)
+        table, response = with_progress(compute, label, "orbits", quiet)
     except BaseException:
         claim.abandon()
         raise
-    table = pd.concat([up, down], ignore_index=True)
     from oscillator.report.chain_frequency import finish_chain_sweeps, write_chain_sweeps
 
-    folder = write_chain_sweeps(table, chain, name, claim, command=["oscillator", *sys.argv[1:]])
+    command = ["oscillator", *sys.argv[1:]]
+    folder = write_chain_sweeps(table, chain, name, claim, command=command, response=response)
     _said_sweeps(table, chain, name, quiet)
-    finished(folder, (lambda: finish_chain_sweeps(folder, table, chain, name)) if plots else None)
+    _said_branches(response, quiet)
+    finished(folder, (lambda: finish_chain_sweeps(folder, table, chain, name, response)) if plots else None)
     return True
+
+
+def _swept(
+    chain: FrictionChain,
+    span: tuple[str, float, float],
+    counts: tuple[int, int | None, int],
+    periods: int,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple[pd.DataFrame, ChainFrequencyResponse | None]:
+    """The sweeps' table, and with seeds the response with its branches (None without)."""
+    name, low, high = span
+    sweep, seeds, starts = counts
+    if seeds is None:
+        up, down = _both_ways(chain, np.linspace(low, high, sweep), name, periods, progress)
+        return pd.concat([up, down], ignore_index=True), None
+    from oscillator.attractors.atlas import fresh_starts
+    from oscillator.attractors.chain_frequency import chain_frequency_response
+    from oscillator.model.parameters import check_count
+
+    states = fresh_starts(chain, check_count(starts, "--starts", 1, 1000))
+    options = {"seeds": seeds, "states": states, "sweep": sweep, "transient": periods, "progress": progress}
+    response = chain_frequency_response(chain, name, (low, high), **options)  # type: ignore[arg-type]
+    return response.sweeps, response
+
+
+def _said_branches(response: ChainFrequencyResponse | None, quiet: bool) -> None:
+    """How many branches, and each fold and change of stability."""
+    if quiet or response is None:
+        return
+    out.print(Text(f"  {len(response.branches)} branch(es) of period-1 orbits"))
+    for row in response.bifurcations().itertuples(index=False):
+        out.print(Text(f"  branch {row[0]}: {row[1]} at {printable(response.param)} = {row[2]:.8g}"))
+    for why in response.skipped:
+        out.print(Text(f"  no branch from {printable(why)}"))
 
 
 def finished(folder: Path, draw: Callable[[], None] | None) -> None:

@@ -397,7 +397,7 @@ def _expected(item: Any, source: str) -> ExpectedEvent:
 #: What takes a declared system (a :class:`~oscillator.model.chains.FrictionChain`) where a case goes.
 TAKES_A_SYSTEM = (
     "simulate, find_orbit, continue_orbit, sensitivities, frequency_sweep, worst_over, design, "
-    "find_attractors, find_basins, follow_attractors, regime_atlas, lyapunov, explore"
+    "frequency_response, find_attractors, find_basins, follow_attractors, regime_atlas, lyapunov, explore"
 )
 
 

@@ -14,7 +14,10 @@ Bifurcation.of_multiplier`: through -1 a period doubling, as a complex pair a to
 The branch ends where it leaves the span, where the coordinates that move at the section change
 (a mass starts or stops sticking there: the branch continues as another kind of orbit; the steps
 shorten to :data:`MIN_STEP` first, so that the branch ends at the change), or where the corrector
-fails at the smallest step; the reason is kept.
+fails at the smallest step; the reason is kept.  Where the orbit's cycle of switches changes
+between two points (a stop or a contact starts or stops closing: a grazing, where the branch may
+turn as sharply as at a fold), the step across is shortened to :data:`CROSS_STEP`, so that the
+branch passes the grazing within that much of the span.
 """
 
 from __future__ import annotations
@@ -38,6 +41,9 @@ __all__ = ["ChainBranch", "continue_chain_orbit"]
 TOL = 1e-10
 #: The smallest step, as a fraction of the span's width.
 MIN_STEP = 1e-5
+#: The longest step across a point where the orbit's cycle of switches changes (a grazing: the
+#: branch turns sharply there, and a long step would cut the corner).
+CROSS_STEP = 1e-4
 
 
 @dataclass(frozen=True)
@@ -152,17 +158,23 @@ def continue_chain_orbit(
     step: float = 0.1,
     max_points: int = 500,
     transient: int = 100,
+    within: tuple[float, float] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> ChainBranch:
     """The period-1 orbit of ``chain`` followed in ``param`` from ``start`` towards ``stop`` (its
     orbit at ``start`` found from ``guess``, or after ``transient`` forcing periods) until it
-    leaves the span between them (module docstring); ``step`` the first and largest arclength step
+    leaves the span between them, or ``within`` (a wider span holding both: a branch that turns
+    at a fold goes on inside it; module docstring); ``step`` the first and largest arclength step
     as a fraction of the span's width.  ``oscillator.continue_orbit(chain, param=..., start=...,
     stop=...)`` calls it."""
     (param,) = check_names(chain, [param])
     low, high = sorted((float(start), float(stop)))
     if not low < high:
         raise InputError(f"start and stop must differ, got {start!r} and {stop!r}", field="stop")
+    if within is not None:
+        if not within[0] <= low < high <= within[1]:
+            raise InputError(f"within {within} must hold {start!r} and {stop!r}", field="within")
+        low, high = float(within[0]), float(within[1])
     if not 0 < step <= 0.5 or isinstance(max_points, bool) or not 2 <= max_points <= 100_000:
         raise InputError("step must be in (0, 0.5] and max_points 2 to 100000", field="step")
     first = find_chain_orbit(chain.with_values({param: float(start)}), guess, transient=transient)
@@ -187,7 +199,8 @@ def _follow(
             found = follower.correct(point, h)
         except _Changed as change:  # shorter steps approach where it changes
             found, changed = None, change
-        if found is None or (found.iterations > 4 and h > MIN_STEP):
+        crossed = found is not None and _cycle(found.orbit) != _cycle(point.orbit) and h > CROSS_STEP
+        if found is None or (found.iterations > 4 and h > MIN_STEP) or crossed:
             h /= 2
             if h < MIN_STEP:
                 return points, _why(point.lam, changed)
@@ -199,6 +212,17 @@ def _follow(
         if not follower.low <= found.lam <= follower.high:
             return points, "the end of the span"
     return points, f"max_points = {max_points} reached"
+
+
+def _cycle(orbit: ChainOrbit) -> tuple[tuple[str, str, int], ...]:
+    """The orbit's switches inside its return, counted by element and kind (not at its ends: the
+    run's start sets its modes there): where it changes between two points, a switch appeared or
+    went between them (a grazing)."""
+    span = orbit.period * orbit.chain.period
+    t = orbit.events.t - orbit.section
+    inside = orbit.events[(t > 1e-9 * span) & (t < span * (1.0 - 1e-9))]
+    counts = inside.groupby(["element", "kind"]).size()
+    return tuple((str(element), str(kind), int(n)) for (element, kind), n in counts.items())
 
 
 def _why(last: float, changed: _Changed | None) -> str:

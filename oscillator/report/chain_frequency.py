@@ -5,10 +5,15 @@ continue FILE``) and its designs (``oscillator design FILE``): their folders and
 
     sweeps.csv / sweeps.parquet   one row per value and direction (up, down): the orbit's status,
                                   stability, largest multiplier, measures and state
+    branches.csv / .parquet       with --seeds: one row per point of every period-1 branch
+                                  (``branch``, the number, ``stable``, ``largest``, measures, state)
+    bifurcations.csv / .parquet   with --seeds: each branch's folds and changes of stability
     system.toml                   the system as swept
     run.json                      the parameter, its span, the values, the failed ones
     figures/frequency.png, .svg   each mass's largest displacement up and down the band (unstable
-                                  orbits hollow), and each friction element's and slider's stuck share
+                                  orbits hollow) over the branches (solid where stable, dotted where
+                                  not, folds marked), and each friction element's and slider's stuck
+                                  share
 
 A branch's folder holds ``branch.parquet``/``.csv`` (its points), ``bifurcations.parquet``/``.csv``,
 ``system.toml``, ``run.json`` and ``figures/branch.png``; a design's ``history.parquet``/``.csv``,
@@ -27,15 +32,19 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from oscillator.errors import InputError
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.model.chains import FrictionChain
+from oscillator.orbits.chain_response import measure_unit
 from oscillator.report.outputs import plain_label
 from oscillator.report.runs import json_text, run_metadata
+from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from oscillator.attractors.chain_frequency import ChainFrequencyResponse
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.orbits.chain_branch import ChainBranch
 
@@ -60,15 +69,21 @@ def write_chain_sweeps(
     *,
     formats: str = "both",
     command: list[str] | None = None,
+    response: ChainFrequencyResponse | None = None,
 ) -> Path:
-    """Write the sweeps' table, ``system.toml`` and ``run.json`` and put the folder in place; on
-    any failure nothing is left behind.  The folder's path."""
+    """Write the sweeps' table (and the ``response``'s branches and bifurcations), ``system.toml``
+    and ``run.json`` and put the folder in place; on any failure nothing is left behind.  The
+    folder's path."""
     temporary = claim.temporary
+    tables = {"sweeps": table}
+    if response is not None:
+        tables |= {"branches": response.table(), "bifurcations": response.bifurcations()}
     try:
-        if formats in ("csv", "both"):
-            table.to_csv(temporary / "sweeps.csv", index=False)
-        if formats in ("parquet", "both"):
-            table.to_parquet(temporary / "sweeps.parquet", index=False)
+        for name, frame in tables.items():
+            if formats in ("csv", "both"):
+                frame.to_csv(temporary / f"{name}.csv", index=False)
+            if formats in ("parquet", "both"):
+                frame.to_parquet(temporary / f"{name}.parquet", index=False)
         (temporary / "system.toml").write_text(chain_to_toml(chain), encoding="utf-8")
         values = table[table.direction == "up"][param]
         info: dict[str, Any] = {
@@ -78,6 +93,7 @@ def write_chain_sweeps(
             "span": [float(values.min()), float(values.max())],
             "values": len(values),
             "failed": int((table.status == "failed").sum()),
+            "branches": None if response is None else len(response.branches),
             **run_metadata(command),
         }
         (temporary / "run.json").write_text(json_text(info), encoding="utf-8")
@@ -87,25 +103,37 @@ def write_chain_sweeps(
         raise
 
 
-def sweep_figure(table: pd.DataFrame, chain: FrictionChain, param: str) -> Figure:
-    """Each mass's ``x_max`` against ``param`` up and down the band (unstable orbits hollow, failed
-    values left out), and, where the chain has friction elements or sliders, their stuck shares."""
+def sweep_figure(
+    table: pd.DataFrame,
+    chain: FrictionChain,
+    param: str,
+    response: ChainFrequencyResponse | None = None,
+    measure: str | None = None,
+) -> Figure:
+    """Each mass's ``x_max`` (or ``measure``, one panel) against ``param`` up and down the band
+    (unstable orbits hollow, failed values left out) over the ``response``'s branches, and, where
+    the chain has friction elements or sliders, their stuck shares."""
     from matplotlib.figure import Figure
 
+    if measure is not None and measure not in table:
+        raise InputError(f"no measure named {printable(measure)} in the sweeps", field="measure")
     system = chain.system
-    held = [e.name for e in chain.elements if e.type in ("friction", "jenkins")]
-    panels = len(system.masses) + (1 if held else 0)
+    drawn = [f"x_max:{mass}" for mass in system.masses] if measure is None else [measure]
+    held = [e.name for e in chain.elements if e.type in ("friction", "jenkins")] if measure is None else []
+    panels = len(drawn) + (1 if held else 0)
     fig = Figure(figsize=(9, 2.6 * panels + 0.6), layout="constrained")
     axes = fig.subplots(panels, 1, sharex=True, squeeze=False)[:, 0]
-    for ax, mass in zip(axes, system.masses, strict=False):
+    for ax, column in zip(axes, drawn, strict=False):
+        if response is not None:
+            _draw_branches(ax, response, column)
         for direction, rows in table[table.status != "failed"].groupby("direction", sort=False):
             line, marker = _STYLE[str(direction)]
-            ax.plot(rows[param], rows[f"x_max:{mass}"], line, color="tab:blue", lw=1, label=f"sweep {direction}")
+            ax.plot(rows[param], rows[column], line, color="tab:blue", lw=1, label=f"sweep {direction}")
             unstable = rows[~rows.stable.astype(bool)]
-            ax.plot(rows[param], rows[f"x_max:{mass}"], marker, color="tab:blue", ms=4, ls="none")
-            ax.plot(unstable[param], unstable[f"x_max:{mass}"], marker, mfc="white", color="tab:red", ms=6, ls="none")
-        ax.set_ylabel(f"x_max of {plain_label(str(mass))} (m)")
-        ax.set_title(f"{plain_label(str(mass))}: largest displacement over the orbit", loc="left", fontsize=9)
+            ax.plot(rows[param], rows[column], marker, color="tab:blue", ms=4, ls="none")
+            ax.plot(unstable[param], unstable[column], marker, mfc="white", color="tab:red", ms=6, ls="none")
+        unit = measure_unit(column)
+        ax.set_ylabel(plain_label(f"{column} ({unit})" if unit else column))
         ax.legend(fontsize=8, loc="upper right")
     if held:
         ax = axes[-1]
@@ -116,18 +144,42 @@ def sweep_figure(table: pd.DataFrame, chain: FrictionChain, param: str) -> Figur
         ax.set_ylabel("stuck share of the period")
         ax.set_title("friction elements and sliders (sweep up)", loc="left", fontsize=9)
         ax.legend(fontsize=8, loc="upper right")
-    axes[-1].set_xlabel(plain_label(param))
-    fig.suptitle(f"{plain_label(chain.title or 'friction chain')}: sweeps over {plain_label(param)}", fontsize=10)
+    unit = chain.unit(param)
+    axes[-1].set_xlabel(plain_label(f"{param} ({unit})" if unit else param))
+    what = "branches and sweeps" if response is not None else "sweeps"
+    fig.suptitle(f"{plain_label(chain.title or 'friction chain')}: {what} over {plain_label(param)}", fontsize=10)
     return fig
 
 
-def finish_chain_sweeps(folder: Path, table: pd.DataFrame, chain: FrictionChain, param: str) -> None:
+def _draw_branches(ax: Any, response: ChainFrequencyResponse, column: str) -> None:
+    """Each branch's ``column``: black, solid where stable, dotted where not; its folds marked."""
+    param = response.param
+    for k, branch in enumerate(response.branches):
+        points = branch.points
+        values, ys = points[param].to_numpy(float), points[column].to_numpy(float)
+        stable = points.stable.to_numpy(bool)
+        unstable = ~stable
+        unstable[1:] |= unstable[:-1].copy()  # the dotted stretch joined to the solid one after it
+        for where, style, label in ((stable, "-", "stable branch"), (unstable, ":", "unstable branch")):
+            ax.plot(values, np.where(where, ys, np.nan), style, color="black", lw=1.2, label=label if k == 0 else None)
+        for j, lam in enumerate(branch.folds[param]):
+            y = ys[int(np.argmin(np.abs(values - lam)))]
+            ax.plot([lam], [y], "x", color="black", ms=8, mew=1.5, label=None if k or j else "folds", zorder=3)
+
+
+def finish_chain_sweeps(
+    folder: Path,
+    table: pd.DataFrame,
+    chain: FrictionChain,
+    param: str,
+    response: ChainFrequencyResponse | None = None,
+) -> None:
     """The folder's figure (PNG and SVG), each file written whole."""
     from oscillator.report.figures import save_figure
 
     figures = folder / "figures"
     figures.mkdir(exist_ok=True)
-    save_figure(sweep_figure(table, chain, param), figures, "frequency")
+    save_figure(sweep_figure(table, chain, param, response), figures, "frequency")
 
 
 def design_figure(design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None = None) -> Figure:
