@@ -171,3 +171,44 @@ def test_a_sweeps_points_are_where_the_independent_implementation_settles():
             ]
             assert max(closings) == pytest.approx(row[f"impact_velocity:{name}"], abs=1e-7)
             assert len(closings) == row[f"closings:{name}"]
+
+
+def _independent_measures(chain: FrictionChain, state: np.ndarray, periods: int = 4) -> tuple[float, float]:
+    """The independent implementation run ``periods`` periods from ``state``: it must stay on that
+    orbit (1e-8), and its own ``x_max`` of the first mass and share of the period the wall is
+    closed, over the last period, from its dense solution and its modes."""
+    import chain_independent
+    from test_chain_runs import _as_dicts
+
+    masses, elements = _as_dicts(chain)
+    for mass, (x, v) in zip(masses, state.reshape(-1, 2), strict=True):
+        mass["x"], mass["v"] = float(x), float(v)
+    pieces: list = []
+    period = chain.period
+    chain_independent.run(masses, elements, chain.Omega, chain.g, 0.0, periods * period, pieces=pieces)
+    assert np.max(np.abs(pieces[-1][2](periods * period) - state)) < 1e-8
+    start = (periods - 1) * period
+    last = [(max(a, start), b, sol, mode) for a, b, sol, mode in pieces[1:] if b > start]
+    highest = max(_piece_peak(piece, lambda t, y, mode: y[0]) for piece in last)
+    return highest, sum(b - a for a, b, _, mode in last if mode["wall"] == 1) / period
+
+
+@pytest.mark.slow
+def test_the_exact_derivatives_are_the_independent_implementations_differences():
+    """``d x_max:a / d wall.at`` and ``d closed:wall / d wall.at`` of the orbit with a stop, a
+    contact and a floor equal Richardson-extrapolated central differences of the measures the
+    independent implementation (tests/chain_independent.py) reads from its own solution on the
+    orbits at ``wall.at +- h, +- 2h`` (each checked periodic there by that implementation) to 1e-6
+    relative."""
+    chain = impact_chain()
+    orbit = find_chain_orbit(chain, transient=150)
+    found = orbit.sensitivities(["wall.at"])
+    exact = [found.of(name)["d/dwall.at"] for name in ("x_max:a", "closed:wall")]
+    at, h = 0.45, 1e-3
+    measured = {}
+    for step in (-2 * h, -h, h, 2 * h):
+        moved = chain.with_values({"wall.at": at + step})
+        measured[step] = np.array(_independent_measures(moved, find_chain_orbit(moved, orbit.state, transient=0).state))
+    central = {k: (measured[k * h] - measured[-k * h]) / (2 * k * h) for k in (1, 2)}
+    richardson = (4 * central[1] - central[2]) / 3
+    assert richardson == pytest.approx(exact, rel=1e-6)
