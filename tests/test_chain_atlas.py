@@ -5,6 +5,7 @@ a chain's orbits have, known before any orbit."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -108,6 +109,23 @@ def test_the_atlas_command_takes_a_system_file_and_resumes(tmp_path, chain):
     again = CliRunner().invoke(app, [*arguments, *options])
     assert again.exit_code == 0, again.stderr
     assert "resumed" in " ".join(again.stderr.split() + again.stdout.split())
+    shutil.rmtree(folder / "figures")
+    rebuilt = CliRunner().invoke(app, ["report", str(folder)])  # from its landings and its measures
+    assert rebuilt.exit_code == 0, rebuilt.stderr
+    assert (folder / "figures" / "atlas-x-max-m.png").stat().st_size > 0
+    back = oscillator.read_run(folder)
+    assert back.case == chain and back.table.equals(pd.read_parquet(folder / "atlas.parquet"))
+
+
+def test_report_rebuilds_an_articles_atlas_computed_with_measures(tmp_path):
+    folder = tmp_path / "atlas"
+    arguments = ["atlas", "instance-1", "--x", "Omega", "1.59", "1.61", "2", "--y", "Q2", "71.1", "71.2", "2"]
+    done = CliRunner().invoke(app, [*arguments, "--measures", "x_pp_m2", "--workers", "1", "--out", str(folder)])
+    assert done.exit_code == 0, done.stderr
+    table = pd.read_parquet(folder / "atlas.parquet")
+    rebuilt = CliRunner().invoke(app, ["report", str(folder)])  # was refused: its identity has the measures
+    assert rebuilt.exit_code == 0, rebuilt.stderr
+    assert pd.read_parquet(folder / "atlas.parquet").equals(table) and "x_pp_m2" in table
 
 
 @pytest.mark.parametrize(

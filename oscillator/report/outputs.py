@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.io.cases import Case
+    from oscillator.model.chains import FrictionChain
 
 __all__ = [
     "COLORS",
@@ -29,6 +30,7 @@ __all__ = [
     "MARKERS",
     "color_of",
     "folder_case",
+    "folder_system",
     "plain_label",
     "quantity_label",
     "save_into",
@@ -134,6 +136,16 @@ def write_folder(
         with atomic_path(folder / name) as temporary:
             temporary.write_text(text, encoding="utf-8")
     return problems
+
+
+def folder_system(folder: Path, marker: str) -> Case | FrictionChain:
+    """The system a global analysis's folder keeps: a declared system's ``system.toml`` (read as
+    any system file: checked, its text untrusted), else the case (:func:`folder_case`)."""
+    from oscillator.io.chains import load_system
+
+    if not (folder / "case.toml").exists() and (folder / "system.toml").is_file():
+        return load_system(folder / "system.toml")
+    return folder_case(folder, marker)
 
 
 def folder_case(folder: Path, marker: str, *, key: str = "case_name") -> Case:

@@ -26,7 +26,7 @@ from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
 from oscillator.report.attractors import name_of, number_label, title_of
 from oscillator.report.orbits import modified_blocks
-from oscillator.report.outputs import COLORS, FAILED, folder_case, plain_label, write_folder
+from oscillator.report.outputs import COLORS, FAILED, folder_system, plain_label, write_folder
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -279,10 +279,10 @@ def _side_labels(ax: Any, curve: Curve) -> None:
         ax.annotate(text, tuple(where), fontsize=7, ha="center", va="center", bbox=box, zorder=7)
 
 
-def read_atlas(folder: Path, case: Case | None = None) -> Atlas:
+def read_atlas(folder: Path, case: Case | FrictionChain | None = None) -> Atlas:
     """The atlas of a folder ``oscillator atlas`` wrote (its axes from atlas.json, its table from
-    atlas.parquet; the folder's case.toml unless ``case`` is given), every file checked: a folder
-    that holds none, or a damaged one, is refused naming it."""
+    atlas.parquet; the folder's case.toml or a declared system's system.toml unless ``case`` is
+    given), every file checked: a folder that holds none, or a damaged one, is refused naming it."""
     from oscillator.analysis.axes import Axis
     from oscillator.io.files import read_untrusted
 
@@ -292,7 +292,7 @@ def read_atlas(folder: Path, case: Case | None = None) -> Atlas:
         identity = info["identity"]
         x, y = (Axis(**identity[name]) for name in ("x", "y"))
         table = pd.read_parquet(folder / "atlas.parquet")
-        case = case if case is not None else folder_case(folder, "atlas.json")
+        case = case if case is not None else folder_system(folder, "atlas.json")
     except (OSError, ValueError, KeyError, TypeError, OscillatorError) as error:
         raise InputError(f"{shown_folder} holds no finished atlas ({error})", field="folder") from None
     found = Atlas(case, x, y, table)

@@ -12,7 +12,7 @@ import pandas as pd
 from oscillator.errors import InputError
 from oscillator.report.attractors import write_basins
 from oscillator.report.global_results import marker_identity
-from oscillator.report.outputs import folder_case
+from oscillator.report.outputs import folder_case, folder_system
 from oscillator.report.plane import write_atlas
 from oscillator.text import printable
 
@@ -61,9 +61,11 @@ def rebuild_atlas(folder: Path) -> list[str]:
     could not be drawn."""
     from oscillator.attractors.atlas import AtlasSettings, atlas_store, regime_atlas
 
-    case = folder_case(folder, "atlas.json")
-    x, y, settings = _plane(folder, marker_identity(folder / "atlas.json"), AtlasSettings, "atlas.json")
-    store = atlas_store(folder, case, x, y, settings)
+    case = folder_system(folder, "atlas.json")
+    known = marker_identity(folder / "atlas.json")
+    x, y, settings = _plane(folder, known, AtlasSettings, "atlas.json")
+    measures = known.get("measures", [])  # the response measures asked for, part of its identity
+    store = atlas_store(folder, case, x, y, settings, measures)
     store.check()  # this very computation, or refused
     _finished(store, y.count, "rows", batches=True)
-    return write_atlas(regime_atlas(case, x, y, settings=settings, store=store), folder)
+    return write_atlas(regime_atlas(case, x, y, settings=settings, store=store, measures=measures), folder)
