@@ -127,7 +127,7 @@ def test_sensitivities_in_element_fields_equal_richardson_differences(case):
         name
         for name in measures
         if name.split(":")[0]
-        in ("x_max", "x_min", "x_pp", "stuck", "closed", "closings", "impact_velocity", "a_max", "force_max")
+        in ("x_max", "x_min", "x_pp", "stuck", "closed", "closings", "impact_velocity", "a_max", "force_max", "slip")
     ]
     assert list(found.measures.index) == derived
     np.testing.assert_allclose(found.measures.value, [measures[name] for name in derived], rtol=0, atol=0)

@@ -16,9 +16,12 @@ slider holding, the whole period: its place is any nearby one).  Along the orbit
 + dg/dt)``.  The measures follow: a mass's largest (smallest) displacement moves as its
 position at the turn (the velocity is zero there, so the turn's own shift does not count), a
 stuck or closed share as the times that bound its spans, over the return's span
-``N 2 pi / Omega``; a count of closings not at all.  The works, dissipated energies and slip
-distances of :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet
-(they need the tangents of the integrals): their rows are left out.  A fastest closing speed
+``N 2 pi / Omega``; a count of closings not at all.  A slip distance (each slip's ``|place(b) -
+place(a)|``, the place ``x - w t`` of a mass on its belt or a slider's ``z``) moves by the sign of
+each slip times the moves of the places at its ends, each end riding its switch (or the section,
+whose end moves with ``Omega``).  The works and dissipated energies of
+:func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet (they need the
+tangents of the integrals): their rows are left out.  A fastest closing speed
 moves as the gap's rate at that closing, at the closing's moving time.  A peak (``a_max``,
 ``force_max``: :func:`~oscillator.orbits.chain_peaks.peak_places`) moves as the quantity at its
 time: inside a piece its rate is zero there, so ``grad f . delta(t*) + df/dc``; on a switch it
@@ -40,7 +43,7 @@ from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_orbits import ChainOrbit
 from oscillator.orbits.chain_peaks import Peak, peak_places
-from oscillator.orbits.chain_response import closed_spans, extremes, orbit_measures, stuck_spans
+from oscillator.orbits.chain_response import closed_spans, extremes, mode_spans, orbit_measures, stuck_spans
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 
 __all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
@@ -154,6 +157,35 @@ def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> Chain
     )
 
 
+def _slip_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray) -> np.ndarray:
+    """The derivative of the friction element's or slider's slip distance (module docstring)."""
+    chain, params = orbit.chain, along.params
+    element = next(e for e in chain.elements if e.name == name)
+    names, t = list(chain.system.state), orbit.run.trajectory.t.to_numpy(float)
+    span = orbit.period * chain.period
+    start, end = orbit.section, orbit.section + span
+    belt = element.type == "friction"
+    k = names.index(chain.system.position(element.on) if belt else f"z:{name}")
+    w = element.values["w"] if belt else 0.0
+    by_w = np.array([1.0 if belt and p == f"{name}.w" else 0.0 for p in params])
+    place = orbit.run.trajectory[names[k]].to_numpy(float) - w * t
+    riding = {c.t: c for c in along.crossings}
+
+    def moves(at: float) -> np.ndarray:  # d place(at)/dc, the end riding its switch
+        if at in (start, end):  # the section: the orbit's own start (its end moves with Omega)
+            shift = np.array([-span / chain.Omega if p == "Omega" else 0.0 for p in params]) if at == end else 0.0
+            found: np.ndarray = moved[k] - w * shift - by_w * at
+            return found
+        crossing = riding[at]
+        return crossing.state_derivative(moved)[k] - w * crossing.time_derivative(moved) - by_w * at
+
+    total = np.zeros(len(params))
+    for a, b, mode in mode_spans(orbit.run, name, start, span):
+        if mode:
+            total += np.sign(np.interp(b, t, place) - np.interp(a, t, place)) * (moves(b) - moves(a))
+    return total
+
+
 def _impact_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray) -> np.ndarray:
     """The derivative of a stop's or contact's fastest closing speed: the gap's rate at that
     closing, at its moving time (``delta- + f- dt_s``, the rate's row), signed as the speed."""
@@ -253,6 +285,9 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
     places = peak_places(orbit.run)
     for name, peak in places.items():
         found[name] = _peak_derivative(orbit, along, peak, name, point)
+    for element in chain.elements:
+        if element.type in ("friction", "jenkins"):
+            found[f"slip:{element.name}"] = _slip_derivative(orbit, element.name, along, moved)
     values = orbit_measures(orbit)
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
