@@ -19,7 +19,8 @@ stuck or closed share as the times that bound its spans, over the return's span
 ``N 2 pi / Omega``; a count of closings not at all.  A slip distance (each slip's ``|place(b) -
 place(a)|``, the place ``x - w t`` of a mass on its belt or a slider's ``z``) moves by the sign of
 each slip times the moves of the places at its ends, each end riding its switch (or the section,
-whose end moves with ``Omega``).  The works and dissipated energies of
+whose end moves with ``Omega``); a Jenkins slider's dissipated energy, ``F`` times its slip,
+with it.  The works and the other dissipated energies of
 :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet (they need the
 tangents of the integrals): their rows are left out.  A fastest closing speed
 moves as the gap's rate at that closing, at the closing's moving time.  A peak (``a_max``,
@@ -285,10 +286,13 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
     places = peak_places(orbit.run)
     for name, peak in places.items():
         found[name] = _peak_derivative(orbit, along, peak, name, point)
-    for element in chain.elements:
-        if element.type in ("friction", "jenkins"):
-            found[f"slip:{element.name}"] = _slip_derivative(orbit, element.name, along, moved)
     values = orbit_measures(orbit)
+    for element in (e for e in chain.elements if e.type in ("friction", "jenkins")):  # in orbit_measures' order
+        rate = _slip_derivative(orbit, element.name, along, moved)
+        if element.type == "jenkins":  # it dissipates F times its slip
+            by_f = np.array([1.0 if p == f"{element.name}.F" else 0.0 for p in params])
+            found[f"dissipated:{element.name}"] = by_f * values[f"slip:{element.name}"] + element.values["F"] * rate
+        found[f"slip:{element.name}"] = rate
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
     return table
