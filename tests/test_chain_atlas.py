@@ -93,6 +93,7 @@ def test_bad_axes_and_measures_of_a_system_are_refused_with_the_field(chain):
         Axis("wall", 0, 1, 2)
 
 
+@pytest.mark.slow
 def test_the_atlas_command_takes_a_system_file_and_resumes(tmp_path, chain):
     folder = tmp_path / "atlas"
     arguments = ["atlas", str(IMPACTS), "--x", "Omega", "1.2", "1.4", "3", "--y", "wall.at", "0.4", "0.6", "2"]
@@ -117,6 +118,7 @@ def test_the_atlas_command_takes_a_system_file_and_resumes(tmp_path, chain):
     assert back.case == chain and back.table.equals(pd.read_parquet(folder / "atlas.parquet"))
 
 
+@pytest.mark.slow
 def test_report_rebuilds_an_articles_atlas_computed_with_measures(tmp_path):
     folder = tmp_path / "atlas"
     arguments = ["atlas", "instance-1", "--x", "Omega", "1.59", "1.61", "2", "--y", "Q2", "71.1", "71.2", "2"]

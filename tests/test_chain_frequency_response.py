@@ -53,6 +53,7 @@ def hardening():
     return chain, chain_frequency_response(chain, "Omega", (0.8, 1.6), seeds=3, sweep=9)
 
 
+@pytest.mark.slow
 def test_the_hardening_oscillators_one_branch_folds_twice_and_carries_every_sweep(hardening):
     chain, response = hardening
     (branch,) = response.branches
@@ -70,6 +71,7 @@ def test_the_hardening_oscillators_one_branch_folds_twice_and_carries_every_swee
     assert up["x_max:m"].diff().min() < -0.5  # the sweep up jumps down past the upper fold
 
 
+@pytest.mark.slow
 def test_the_impacting_branch_turns_where_the_free_orbit_grazes_the_stop():
     chain = oscillator.load_system(SYSTEMS / "impacts.toml")
     response = chain_frequency_response(chain, "Omega", (1.0, 1.6), seeds=3, sweep=7)
@@ -102,6 +104,7 @@ def test_bad_spans_and_counts_are_refused_with_the_field():
         chain_frequency_response(chain, "wall.K3", (1.0, 1.6))
 
 
+@pytest.mark.slow
 def test_frc_of_a_system_file_with_seeds_writes_its_branches(tmp_path):
     folder = tmp_path / "frc"
     arguments = ["frc", str(SYSTEMS / "impacts.toml"), "--param", "Omega", "1.3", "1.6", "--seeds", "1"]

@@ -197,7 +197,7 @@ def chain_frequency_response(
     chain.with_values({param: low}).with_values({param: high})  # both ends checked, the field named
     seeds, sweep = check_count(seeds, "seeds", 1, 1000), check_count(sweep, "sweep", 2, 100_000)
     starts = check_chain_states(chain, state_of(chain) if states is None else states)
-    settings = AttractorSettings(transient=max(transient, 1), record=8)
+    settings = AttractorSettings(transient=max(transient, 1), record=8, lyapunov_periods=0)  # periodic ones only
     values = np.linspace(low, high, sweep)
     done, total = 0, 2 * sweep + seeds
 
