@@ -178,7 +178,8 @@ def _slip_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.n
             found: np.ndarray = moved[k] - w * shift - by_w * at
             return found
         crossing = riding[at]
-        return crossing.state_derivative(moved)[k] - w * crossing.time_derivative(moved) - by_w * at
+        riding_end: np.ndarray = crossing.state_derivative(moved)[k] - w * crossing.time_derivative(moved) - by_w * at
+        return riding_end
 
     total = np.zeros(len(params))
     for a, b, mode in mode_spans(orbit.run, name, start, span):
