@@ -21,17 +21,11 @@ from oscillator.cli.app import app
 from oscillator.orbits.chain_orbits import find_chain_orbit
 from oscillator.orbits.chain_response import measure_names, measure_unit, orbit_measures
 from oscillator.report.plane import atlas_figure_name
+from test_chain_following import free_amplitude
 from test_chain_sensitivities import belt_chain, blade_chain, impact_chain
 
 IMPACTS = Path(__file__).resolve().parents[1] / "docs" / "systems" / "impacts.toml"
 OMEGA, AT = Axis("Omega", 1.0, 1.6, 7), Axis("wall.at", 0.3, 0.9, 4)
-
-
-def _amplitude(chain: oscillator.FrictionChain, omega: float) -> float:
-    """The steady amplitude of ``m x'' + c x' + k x = Q sin(Omega t)`` without the stop."""
-    values = {element.type: element.values for element in chain.elements}
-    k, c, q = values["spring"]["k"], values["damper"]["c"], values["force"]["Q"]
-    return q / np.hypot(k - chain.masses[0].m * omega**2, c * omega)
 
 
 @pytest.mark.parametrize("make", [belt_chain, impact_chain, blade_chain])
@@ -56,12 +50,12 @@ def test_the_orbit_that_misses_the_stop_is_there_only_short_of_it_with_its_close
     table = atlas.table
     assert (table.status == "ok").all() and set(table.regime) == {"P1", "P1 contact"}
     free = table[table.regime == "P1"]
-    amplitudes = np.array([_amplitude(chain, w) for w in free.Omega])
+    amplitudes = np.array([free_amplitude(chain, w) for w in free.Omega])
     assert free["x_max:m"].to_numpy() == pytest.approx(amplitudes, rel=1e-8)
     assert (amplitudes < free["wall.at"]).all() and (free["impact_velocity:wall"] == 0).all()
     strikes = table[table.regime == "P1 contact"]
     assert (strikes["x_max:m"] > strikes["wall.at"]).all() and (strikes["impact_velocity:wall"] > 0).all()
-    reach = np.array([_amplitude(chain, w) >= at for w, at in zip(table.Omega, table["wall.at"], strict=True)])
+    reach = np.array([free_amplitude(chain, w) >= at for w, at in zip(table.Omega, table["wall.at"], strict=True)])
     assert set(table.regime[reach]) == {"P1 contact"}  # where the free orbit would reach the stop, it is not
     assert table.lyapunov.to_numpy() == pytest.approx(np.full(len(table), -0.05), abs=1e-9)  # det M = exp(-c T)
     several = table[table.coexisting > 1]

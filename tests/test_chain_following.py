@@ -26,7 +26,7 @@ FREE = "period-1, no rest"
 STRIKES = "period-1, 1 contacts/period"
 
 
-def _amplitude(chain: oscillator.FrictionChain, omega: float) -> float:
+def free_amplitude(chain: oscillator.FrictionChain, omega: float) -> float:
     """The steady amplitude of ``m x'' + c x' + k x = Q sin(Omega t)`` without the stop."""
     values = {element.type: element.values for element in chain.elements}
     k, c, q = values["spring"]["k"], values["damper"]["c"], values["force"]["Q"]
@@ -45,7 +45,7 @@ def over(chain):
 
 def test_the_orbit_that_misses_the_stop_ends_where_its_amplitude_reaches_it(chain, over):
     gap = next(e for e in chain.elements if e.name == "wall").values["at"]
-    grazing = brentq(lambda w: _amplitude(chain, w) - gap, 1.05, 1.5)
+    grazing = brentq(lambda w: free_amplitude(chain, w) - gap, 1.05, 1.5)
     (end,) = [e for e in over.ends if e.name == FREE]
     assert end.change(1.6, 1.0) == "ends" and abs(end.inside - end.outside) <= 1e-5
     # the seed's transient overshoots the orbit it settles on: 6e-5 past the grazing measured
@@ -53,7 +53,7 @@ def test_the_orbit_that_misses_the_stop_ends_where_its_amplitude_reaches_it(chai
     assert end.becomes == STRIKES
     table = over.table()
     free = table[table.name == FREE]
-    assert free["x_max:m"].to_numpy() == pytest.approx([_amplitude(chain, w) for w in free.Omega], rel=1e-8)
+    assert free["x_max:m"].to_numpy() == pytest.approx([free_amplitude(chain, w) for w in free.Omega], rel=1e-8)
     assert (free["closings:wall"] == 0).all() and (free["x_max:m"] < gap).all()
 
 

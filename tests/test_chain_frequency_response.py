@@ -18,6 +18,7 @@ import oscillator
 from oscillator import InputError
 from oscillator.attractors.chain_frequency import chain_frequency_response, on_branch
 from oscillator.cli.app import app
+from test_chain_following import free_amplitude
 from test_chain_orbits import _den_hartog_amplitude, den_hartog_chain, linear_chain
 
 SYSTEMS = Path(__file__).resolve().parents[1] / "docs" / "systems"
@@ -76,17 +77,13 @@ def test_the_impacting_branch_turns_where_the_free_orbit_grazes_the_stop():
     chain = oscillator.load_system(SYSTEMS / "impacts.toml")
     response = chain_frequency_response(chain, "Omega", (1.0, 1.6), seeds=3, sweep=7)
     (branch,) = response.branches
-    values = {element.type: element.values for element in chain.elements}
-
-    def amplitude(w: float) -> float:
-        return values["force"]["Q"] / np.hypot(values["spring"]["k"] - w**2, values["damper"]["c"] * w)
-
-    grazing = brentq(lambda w: amplitude(w) - values["stop"]["at"], 1.05, 1.5)
+    gap = next(e for e in chain.elements if e.type == "stop").values["at"]
+    grazing = brentq(lambda w: free_amplitude(chain, w) - gap, 1.05, 1.5)
     low, high = sorted(branch.folds.Omega)
     # the step across a change of the cycle of switches is 1e-4 of the span: the turn within 1e-4
     assert low == pytest.approx(grazing, abs=1e-4) and high == pytest.approx(1.44577, abs=1e-4)
     free = branch.points[branch.points["closings:wall"] == 0]
-    assert free["x_max:m"].to_numpy() == pytest.approx([amplitude(w) for w in free.Omega], rel=1e-8)
+    assert free["x_max:m"].to_numpy() == pytest.approx([free_amplitude(chain, w) for w in free.Omega], rel=1e-8)
     table = response.table()
     assert (table.branch == 0).all() and len(table) == len(branch.points)
     assert set(response.bifurcations().kind) == {"fold"}

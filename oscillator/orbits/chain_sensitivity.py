@@ -158,8 +158,11 @@ def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> Chain
     )
 
 
-def _slip_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray) -> np.ndarray:
-    """The derivative of the friction element's or slider's slip distance (module docstring)."""
+def _slip_derivative(
+    orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray, stretch: np.ndarray
+) -> np.ndarray:
+    """The derivative of the friction element's or slider's slip distance (module docstring);
+    ``stretch`` the return's end's derivative in each number."""
     chain, params = orbit.chain, along.params
     element = next(e for e in chain.elements if e.name == name)
     names, t = list(chain.system.state), orbit.run.trajectory.t.to_numpy(float)
@@ -174,8 +177,7 @@ def _slip_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.n
 
     def moves(at: float) -> np.ndarray:  # d place(at)/dc, the end riding its switch
         if at in (start, end):  # the section: the orbit's own start (its end moves with Omega)
-            shift = np.array([-span / chain.Omega if p == "Omega" else 0.0 for p in params]) if at == end else 0.0
-            found: np.ndarray = moved[k] - w * shift - by_w * at
+            found: np.ndarray = moved[k] - w * (stretch if at == end else 0.0) - by_w * at
             return found
         crossing = riding[at]
         riding_end: np.ndarray = crossing.state_derivative(moved)[k] - w * crossing.time_derivative(moved) - by_w * at
@@ -289,7 +291,7 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
         found[name] = _peak_derivative(orbit, along, peak, name, point)
     values = orbit_measures(orbit)
     for element in (e for e in chain.elements if e.type in ("friction", "jenkins")):  # in orbit_measures' order
-        rate = _slip_derivative(orbit, element.name, along, moved)
+        rate = _slip_derivative(orbit, element.name, along, moved, stretch)
         if element.type == "jenkins":  # it dissipates F times its slip
             by_f = np.array([1.0 if p == f"{element.name}.F" else 0.0 for p in params])
             found[f"dissipated:{element.name}"] = by_f * values[f"slip:{element.name}"] + element.values["F"] * rate

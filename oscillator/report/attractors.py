@@ -31,7 +31,6 @@ from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import atomic_path
 from oscillator.model.chain_fields import state_of
 from oscillator.model.chains import FrictionChain
-from oscillator.model.parameters import labelled
 from oscillator.orbits.response import COLUMNS
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title
@@ -41,6 +40,7 @@ from oscillator.report.outputs import (
     FAILED,
     MARKERS,
     color_of,
+    number_label,
     plain_label,
     save_into,
     state_label,
@@ -62,7 +62,6 @@ __all__ = [
     "following_figure",
     "lyapunov_figure",
     "name_of",
-    "number_label",
     "write_basins",
     "write_following",
     "write_lyapunov",
@@ -365,14 +364,6 @@ def following_figure(over: AttractorsOver, coordinate: str, branches: list[tuple
         ax.grid(alpha=0.3)
     top.set_title(f"{title_of(over.case)}: attractors over {over.param}", parse_math=False, fontsize=9)
     return fig
-
-
-def number_label(system: Case | FrictionChain, name: str) -> str:
-    """An axis label for a parameter with its unit: the article's, or a chain's number's."""
-    if isinstance(system, FrictionChain):
-        unit = FrictionChain.unit(name)
-        return plain_label(f"{name} ({unit})" if unit else name)
-    return labelled(name)
 
 
 def following_blocks(over: AttractorsOver, table: pd.DataFrame) -> list[mk.Block]:

@@ -37,7 +37,7 @@ from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_response import measure_unit
-from oscillator.report.outputs import plain_label
+from oscillator.report.outputs import number_label, plain_label
 from oscillator.report.runs import json_text, run_metadata
 from oscillator.text import printable
 
@@ -144,8 +144,7 @@ def sweep_figure(
         ax.set_ylabel("stuck share of the period")
         ax.set_title("friction elements and sliders (sweep up)", loc="left", fontsize=9)
         ax.legend(fontsize=8, loc="upper right")
-    unit = chain.unit(param)
-    axes[-1].set_xlabel(plain_label(f"{param} ({unit})" if unit else param))
+    axes[-1].set_xlabel(number_label(chain, param))
     what = "branches and sweeps" if response is not None else "sweeps"
     fig.suptitle(f"{plain_label(chain.title or 'friction chain')}: {what} over {plain_label(param)}", fontsize=10)
     return fig

@@ -13,6 +13,8 @@ import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.files import atomic_path, inner_folder
+from oscillator.model.chains import FrictionChain
+from oscillator.model.parameters import labelled
 from oscillator.model.system import ARTICLE
 from oscillator.report import markup as mk
 from oscillator.report.figures import figure_title, save_figure
@@ -22,7 +24,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.io.cases import Case
-    from oscillator.model.chains import FrictionChain
 
 __all__ = [
     "COLORS",
@@ -31,6 +32,7 @@ __all__ = [
     "color_of",
     "folder_case",
     "folder_system",
+    "number_label",
     "plain_label",
     "quantity_label",
     "save_into",
@@ -60,6 +62,15 @@ def unit_of(name: str) -> str:
     """The unit of a state component: ``m`` for a displacement (``x1``, ``x:<mass>``) or a
     slider's stretch (``z:<slider>``), ``m/s`` for a velocity."""
     return "m" if name.startswith(("x", "z")) else "m/s"
+
+
+def number_label(system: Case | FrictionChain, name: str) -> str:
+    """An axis label for a parameter with its unit: the article's, or a declared system's number's
+    (as plain text)."""
+    if isinstance(system, FrictionChain):
+        unit = FrictionChain.unit(name)
+        return plain_label(f"{name} ({unit})" if unit else name)
+    return labelled(name)
 
 
 def plain_label(text: str) -> str:

@@ -24,9 +24,9 @@ from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import labelled
 from oscillator.orbits.curves import Curve
 from oscillator.report import markup as mk
-from oscillator.report.attractors import name_of, number_label, title_of
+from oscillator.report.attractors import name_of, title_of
 from oscillator.report.orbits import modified_blocks
-from oscillator.report.outputs import COLORS, FAILED, folder_system, plain_label, write_folder
+from oscillator.report.outputs import COLORS, FAILED, folder_system, number_label, plain_label, write_folder
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
