@@ -75,7 +75,8 @@ def shown_in_help(names: tuple[str, ...] = COMMANDS) -> list[Shown]:
     for name in names:
         done = subprocess.run([COMMAND, name, "--help"], capture_output=True, text=True, env={**os.environ,
                               "COLUMNS": "200"}, check=True)  # fmt: skip
-        for line in done.stdout.splitlines():
+        joined = re.sub(r" \\\n\s*", " ", done.stdout)  # an example continued on the next line
+        for line in joined.splitlines():
             if line.strip().startswith("oscillator "):
                 found.append(Shown(f"{name} --help: {line.strip()}", line.strip(), []))
     return found

@@ -157,7 +157,8 @@ def _joined(chain: FrictionChain, param: str, halves: list[tuple[float, ChainBra
         ended.append(f"towards {stop:g}: {half.ended}")
     table = pd.concat(points, ignore_index=True)
     found = pd.concat(changes, ignore_index=True).sort_values(param, kind="stable").drop(columns="point")
-    return ChainBranch(chain, param, table, found.reset_index(drop=True), "; ".join(ended))
+    width = halves[0][1].width
+    return ChainBranch(chain, param, table, found.reset_index(drop=True), "; ".join(ended), width)
 
 
 def _candidates(

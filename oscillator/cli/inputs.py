@@ -74,6 +74,7 @@ SYSTEM_COMMANDS = (
     "design",
     "attractors",
     "atlas",
+    "curve",
     "basins",
     "lyapunov",
     "explore",
@@ -83,8 +84,10 @@ SYSTEM_COMMANDS = (
 def refuse_taken(assignments: list[str] | None, taken: Mapping[str, str]) -> None:
     """Refuse ``--set NAME=...`` of a parameter or start value that another option gives (the
     swept or continued parameter, a varied one, an axis: ``taken`` maps it to that option): the
-    value set would be ignored."""
-    for name in overrides(assignments or []):
+    value set would be ignored.  Only the names are read here: the article's case and a declared
+    system check their own (``Omega``, ``wall.at``)."""
+    for item in assignments or []:
+        name = item.partition("=")[0].strip()
         if name in taken:
             raise InputError(
                 f"--set {printable(name)}=...: {printable(name)} is given by {taken[name]}, which would override it; "

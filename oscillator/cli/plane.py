@@ -14,7 +14,7 @@ from oscillator.analysis.execution import check_workers
 from oscillator.cli.attractors import axis_of, subject_of
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, message, out, progress_bar, say
-from oscillator.cli.inputs import case_from, check_engine, refuse_taken
+from oscillator.cli.inputs import check_engine, refuse_taken
 from oscillator.cli.options import (
     LANDING_ENGINES,
     AxisOption,
@@ -46,6 +46,7 @@ from oscillator.text import printable
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
+    from oscillator.model.chains import FrictionChain
     from oscillator.orbits.curves import Curve
 
 __all__ = ["atlas", "curve"]
@@ -193,17 +194,24 @@ def curve(
     inside, until the curve leaves the window or ends (said how).
 
     \b
+    A system file (docs/systems.md) takes two of its numbers (Omega, wall.at) and a kind of its
+    period-1 orbits: fold, grazing (a stop or contact starts or stops closing), period_doubling
+    or torus.
+
+    \b
     Examples:
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --out c1
       oscillator curve instance-1 --kind sliding --at Omega=1.6,Q2=71.16 --x Omega 1.59 1.62 --y Q2 70.9 71.3 --also c1
+      oscillator curve docs/systems/impacts.toml --kind grazing --at Omega=0.6,wall.at=0.31 --x Omega 0.59 0.61 \\
+        --y wall.at 0.25 0.4 --step 0.25 --set m.x=0 --out grazing
     """
     from oscillator.io.files import check_new, claim_folder
 
     with refusing():
-        resolved = case_from(case, None, set_)
+        resolved, stem, title = subject_of(case, set_)
         refuse_taken(set_, {x[0]: "--x and --at", y[0]: "--y and --at"})
         point = _at(at, x[0], y[0])
-        folder = out_dir if out_dir is not None else new_folder(resolved, "curve")
+        folder = out_dir if out_dir is not None else new_folder(stem if stem is not None else title, "curve")
         check_new(folder, option="--out")
         atlas_found = _atlas_over(over, resolved, x[0], y[0]) if over is not None else None
         others = [_read_other_curve(other, x[0], y[0]) for other in also or []]
@@ -214,7 +222,7 @@ def curve(
         options: dict[str, Any] = dict(kind=kind, x=x[0], y=y[0], at=point, window=window, period=period, step=step)
         check_curve(resolved, **options)  # every argument refused here, before any work (exit 2)
         claim = claim_folder(folder, option="--out")  # an unwritable --out is refused before the work too
-    found, interrupted = _trace(trace_curve, resolved, options, claim)
+    found, interrupted = _trace(trace_curve, resolved, title, options, claim)
     for end in found.ends:
         out.print(Text(f"  one end: {end}"))
     _write_curve(found, claim, atlas_found, others, no_plots)
@@ -238,7 +246,7 @@ def _at(text: str, x: str, y: str) -> tuple[float, float]:
     return values[x], values[y]
 
 
-def _atlas_over(folder: Path, case: Case, x: str, y: str) -> Any:
+def _atlas_over(folder: Path, case: Case | FrictionChain, x: str, y: str) -> Any:
     """The atlas to draw the curve over (``--over``): finished, and in the curve's plane."""
     from oscillator.report.plane import read_atlas
 
@@ -255,11 +263,13 @@ def _atlas_over(folder: Path, case: Case, x: str, y: str) -> Any:
     return found
 
 
-def _trace(trace_curve: Any, case: Case, options: dict[str, Any], claim: FolderClaim) -> tuple[Curve, bool]:
+def _trace(
+    trace_curve: Any, case: Case | FrictionChain, title: str, options: dict[str, Any], claim: FolderClaim
+) -> tuple[Curve, bool]:
     """The curve, and whether it was interrupted (the points traced so far); the claim abandoned
     when there is nothing to write."""
     try:
-        bar, report = progress_bar(f"{case.name}: {options['kind']} curve", "points")
+        bar, report = progress_bar(f"{title}: {options['kind']} curve", "points")
         with bar:
             return trace_curve(case, progress=lambda n: report(n, n), **options), False
     except OscillatorError as error:

@@ -290,7 +290,9 @@ def root_values(t: float, y: Vector, d: Vector, g: Vector) -> None:  # pragma: n
     * friction slipping: the velocity against the floor or belt ``v - w`` and the acceleration
       (a velocity extremum: grazing, Thm 5.5); stuck: the flow barrier ``F -+ (mu_s N + P)``
       (Thm 5.4), ``F`` the other forces' sum;
-    * stop: ``x - at``; contact: ``u + gap`` (left) or ``u - gap`` (right);
+    * stop: ``x - at``; contact: ``u + gap`` (left) or ``u - gap`` (right); while open, also the
+      gap's rate ``x'`` (``u'``): at its turn toward the stop CVODE looks inside the step, so that a
+      shallow contact that opens again within one step is not missed (a grazing contact);
     * Jenkins slider stuck: ``kt (u - z) -+ F``; slipping: the stretch's rate ``u'`` (it sticks
       where the motion turns); with ``F = 0`` none (it never holds).
     """
@@ -310,9 +312,13 @@ def root_values(t: float, y: Vector, d: Vector, g: Vector) -> None:  # pragma: n
             g[2 * row], g[2 * row + 1] = d[scratch + on] - static, d[scratch + on] + static
         elif code == STOP:
             g[2 * row] = y[2 * on] - d[v + 1]
+            if s == 0.0:
+                g[2 * row + 1] = y[2 * on + 1]
         elif code == CONTACT:
-            u, _ = _stretch(y, on, int(d[other_at + row]))
+            u, w = _stretch(y, on, int(d[other_at + row]))
             g[2 * row] = u + d[v + 1] if d[v] < 0 else u - d[v + 1]
+            if s == 0.0:
+                g[2 * row + 1] = w
         elif code == JENKINS and d[v + 1] > 0.0:
             u, w = _stretch(y, on, int(d[other_at + row]))
             if s == 0.0:

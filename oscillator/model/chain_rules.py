@@ -140,8 +140,8 @@ def root_directions(arrays: ChainArrays, mode: np.ndarray) -> tuple[int, ...]:
         side = int(arrays.value[row, 0])
         if code == FRICTION or code == JENKINS:
             directions += [-s, s] if s else [1, -1]
-        elif code in (STOP, CONTACT):
-            directions += [side if s == 0 else -side, 0]
+        elif code in (STOP, CONTACT):  # open: closing, and the gap's turn toward the stop
+            directions += [side, -side] if s == 0 else [-side, 0]
         else:
             directions += [0, 0]
     return tuple(directions)
@@ -253,6 +253,16 @@ def _crossed(instant: _Instant, row: int, slot: int, near: float) -> int | None:
     return None
 
 
+def _inside(instant: _Instant, row: int) -> bool:
+    """Whether an open stop or contact is past its edge (its closing was straddled by one step and
+    its turn found first: it closes here)."""
+    arrays, y = instant.arrays, instant.y
+    side, at = arrays.value[row, :2]
+    on = arrays.on[row]
+    u, edge = (y[2 * on], at) if arrays.kind[row] == STOP else (_stretch(arrays, y, row)[0], side * at)
+    return bool(side * (edge - u) < 0.0)
+
+
 def _grazing(instant: _Instant, row: int, acceleration: float) -> ChainEvent:
     arrays, names, s = instant.arrays, instant.names, int(instant.mode[row])
     on = arrays.on[row]
@@ -352,6 +362,8 @@ def switch(
     arrived: dict[int, int] = {}
     for index in fired:
         row, slot = divmod(index, 2)
+        if slot == 1 and arrays.kind[row] in (STOP, CONTACT) and (index - 1 in fired or not _inside(instant, row)):
+            continue  # the gap's turn, outside the stop (or with its closing found too): no event
         side = _crossed(instant, row, slot, near)
         if side is not None:
             arrived[row] = side

@@ -27,15 +27,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import brentq
 
-from oscillator.errors import InputError, OscillatorError
+from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.branch import Bifurcation
 from oscillator.orbits.chain_orbits import ChainOrbit, chain_period_map, find_chain_orbit, held_coordinates
 from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_tangents import check_names, tangent_pass
 
-__all__ = ["ChainBranch", "continue_chain_orbit"]
+__all__ = ["ChainBranch", "continue_chain_orbit", "cycle_text", "locate_change"]
 
 #: The corrector's tolerance on ``|P(y) - y|`` (relative to the state's scale, at least 1).
 TOL = 1e-10
@@ -57,6 +58,8 @@ class ChainBranch:
     points: pd.DataFrame
     bifurcations: pd.DataFrame
     ended: str
+    width: float = 1.0
+    """The span's width, the number's scale in the arclength."""
 
     @property
     def folds(self) -> pd.DataFrame:
@@ -159,14 +162,16 @@ def continue_chain_orbit(
     max_points: int = 500,
     transient: int = 100,
     within: tuple[float, float] | None = None,
+    measures: bool = True,
     progress: Callable[[int, int], None] | None = None,
 ) -> ChainBranch:
     """The period-1 orbit of ``chain`` followed in ``param`` from ``start`` towards ``stop`` (its
     orbit at ``start`` found from ``guess``, or after ``transient`` forcing periods) until it
     leaves the span between them, or ``within`` (a wider span holding both: a branch that turns
     at a fold goes on inside it; module docstring); ``step`` the first and largest arclength step
-    as a fraction of the span's width.  ``oscillator.continue_orbit(chain, param=..., start=...,
-    stop=...)`` calls it."""
+    as a fraction of the span's width; ``measures=False`` leaves the orbits' response measures out
+    of the points (a bifurcation curve's lines need none).  ``oscillator.continue_orbit(chain,
+    param=..., start=..., stop=...)`` calls it."""
     (param,) = check_names(chain, [param])
     low, high = sorted((float(start), float(stop)))
     if not low < high:
@@ -185,7 +190,8 @@ def continue_chain_orbit(
     heading[-1] = 1.0 if stop > start else -1.0
     point = _Point(first.state, float(start), follower.tangent(jacobian, heading), orbit, first.iterations)
     points, ended = _follow(follower, point, step, max_points, progress)
-    return ChainBranch(chain, param, _table(points, param, names), _changes(points, param), ended)
+    table = _table(points, param, names, measures)
+    return ChainBranch(chain, param, table, _changes(points, param), ended, high - low)
 
 
 def _follow(
@@ -225,6 +231,12 @@ def _cycle(orbit: ChainOrbit) -> tuple[tuple[str, str, int], ...]:
     return tuple((str(element), str(kind), int(n)) for (element, kind), n in counts.items())
 
 
+def cycle_text(cycle: tuple[tuple[str, str, int], ...]) -> str:
+    """An orbit's cycle of switches as text (the ``signature`` column): each element's switches by
+    kind and count, ``wall closes x1, wall opens x1``; ``no switches`` for none."""
+    return ", ".join(f"{element} {kind} x{n}" for element, kind, n in cycle) or "no switches"
+
+
 def _why(last: float, changed: _Changed | None) -> str:
     """Why the branch ended at its last point ``last``, the steps shortened to the smallest."""
     if changed is None:
@@ -236,12 +248,18 @@ def _why(last: float, changed: _Changed | None) -> str:
     )
 
 
-def _table(points: list[_Point], param: str, names: list[str]) -> pd.DataFrame:
+def _table(points: list[_Point], param: str, names: list[str], measures: bool) -> pd.DataFrame:
     rows = []
     for p in points:
         moduli = np.abs(p.orbit.multipliers)
-        row = {param: p.lam, "stable": bool(np.all(moduli < 1.0)), "largest": float(moduli.max(initial=0.0))}
-        rows.append(row | orbit_measures(p.orbit) | dict(zip(names, p.y.tolist(), strict=True)))
+        row = {
+            param: p.lam,
+            "stable": bool(np.all(moduli < 1.0)),
+            "largest": float(moduli.max(initial=0.0)),
+            "signature": cycle_text(_cycle(p.orbit)),
+        }
+        found = orbit_measures(p.orbit) if measures else {}
+        rows.append(row | found | dict(zip(names, p.y.tolist(), strict=True)))
     return pd.DataFrame(rows)
 
 
@@ -269,3 +287,58 @@ def _vertex(values: list[float]) -> float:
     if curvature == 0:
         return middle
     return middle - (right - left) ** 2 / (8 * curvature)
+
+
+def locate_change(branch: ChainBranch, k: int, kind: Bifurcation, tol: float = 1e-9) -> tuple[float, np.ndarray]:
+    """Where ``kind`` happens between the branch's points ``k`` and ``k + 1``, to ``tol`` in the
+    number: the number's value there and the orbit's state at the point of the side of ``k``.
+
+    Each trial point is the branch's corrector from point ``k`` at an arclength ``s`` along its
+    tangent (exact Newton, :data:`TOL`).  A fold is where the tangent's number component vanishes,
+    a change of stability where the largest multiplier's modulus crosses 1 (both smooth in ``s``:
+    Brent's method); a grazing is where the cycle of switches changes (not smooth: bisection).
+    A corrector that fails between the two raises :class:`~oscillator.errors.SimulationFailed`.
+    """
+    chain, param, names = branch.chain, branch.param, list(branch.chain.system.state)
+    rows = branch.points.iloc[[k, k + 1]]
+    (ya, yb), (lam_a, lam_b) = rows[names].to_numpy(float), rows[param].to_numpy(float)
+    at_a = chain.with_values({param: float(lam_a)})
+    held, _ = held_coordinates(at_a, chain_period_map(at_a, at_a.t0, ya))
+    follower = _Follower(chain, param, (0.0, branch.width), sorted(set(range(len(names))) - held))
+    _, jacobian, orbit = follower.system(ya, float(lam_a))
+    free = follower.free
+    chord = np.append(yb[free] - ya[free], (lam_b - lam_a) / branch.width)
+    start = _Point(ya, float(lam_a), follower.tangent(jacobian, chord), orbit, 0)
+    reach = float(start.tangent @ chord)
+
+    def at(s: float) -> _Point:
+        found = start if s == 0 else follower.correct(start, s)
+        if found is None:
+            message = f"the corrector failed at {param} near {start.lam:.10g} locating a {kind}"
+            raise SimulationFailed(message, reason=Reason.NO_CONVERGENCE)
+        return found
+
+    if kind is Bifurcation.GRAZING:
+        low, high, cycle = 0.0, reach, _cycle(orbit)
+        while (high - low) * branch.width > tol:
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if _cycle(at(middle).orbit) == cycle else (low, middle)
+        found = at(low)
+        return found.lam, found.y
+    if kind is Bifurcation.FOLD:
+        sign = np.sign(start.tangent[-1])
+
+        def measure(s: float) -> float:
+            return float(sign * at(s).tangent[-1])
+    else:
+
+        def measure(s: float) -> float:
+            return float(np.abs(at(s).orbit.multipliers).max(initial=0.0)) - 1.0
+
+    try:  # the number moves at most ``width`` per unit of arclength
+        s = brentq(measure, 0.0, reach, xtol=tol / branch.width, rtol=4 * np.finfo(float).eps)
+    except ValueError:  # no change of sign between the two points
+        message = f"no {kind} between {param} = {lam_a:.10g} and {lam_b:.10g}"
+        raise SimulationFailed(message, reason=Reason.NO_CONVERGENCE) from None
+    found = at(float(s))
+    return found.lam, found.y

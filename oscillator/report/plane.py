@@ -236,8 +236,9 @@ def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) ->
     else:
         fig = Figure(figsize=(7.0, 5.5), layout="constrained")
         ax = fig.add_subplot()
-        ax.set_xlabel(labelled(first.x))
-        ax.set_ylabel(labelled(first.y))
+        xlabel, ylabel = (labelled(first.x), labelled(first.y)) if first.labels is None else first.labels
+        ax.set_xlabel(plain_label(xlabel))
+        ax.set_ylabel(plain_label(ylabel))
         ax.grid(alpha=0.3)
         handles = []
     for k, curve in enumerate(several):
@@ -256,7 +257,7 @@ def curve_figure(curves: Curve | Sequence[Curve], atlas: Atlas | None = None) ->
             _side_labels(ax, curve)
     ax.ticklabel_format(useOffset=False)
     kinds = " and ".join(dict.fromkeys(curve.kind for curve in several))
-    title = f"{kinds} curve in {first.x} and {first.y}"
+    title = f"{kinds} curve in {printable(first.x)} and {printable(first.y)}"
     if atlas is not None:
         title = f"{title_of(atlas.case)}: {title}, over the regime of the first attractor"
     ax.set_title(textwrap.fill(title, 90), parse_math=False, fontsize=9)
@@ -323,7 +324,10 @@ def read_curve(folder: Path) -> Curve:
     side = info.get("inside_point")
     ok = isinstance(side, list) and len(side) == 2 and all(isinstance(v, (int, float)) for v in side)
     inside_point = (float(side[0]), float(side[1])) if ok and np.isfinite(side).all() else None
-    return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside, inside_point)
+    given = info.get("labels")
+    named = isinstance(given, list) and len(given) == 2 and all(isinstance(label, str) for label in given)
+    labels = (str(given[0]), str(given[1])) if named else None
+    return Curve(kind, x, y, points, (ends[0], ends[1]), (), inside, inside_point, labels)
 
 
 def curve_blocks(curve: Curve) -> list[mk.Block]:
@@ -331,7 +335,9 @@ def curve_blocks(curve: Curve) -> list[mk.Block]:
     rows = tuple((f"{row[0]:.10g}", f"{row[1]:.10g}") for row in curve.points[[curve.x, curve.y]].to_numpy())
     return [
         mk.Heading(1, (f"{curve.kind} curve in {curve.x} and {curve.y}",)),
-        mk.Paragraph((f"The border of the orbit {curve.inside}; {len(curve.points)} points.",)),
+        mk.Paragraph(
+            (f"The border of the orbit whose cycle of switches is: {curve.inside}; {len(curve.points)} points.",)
+        ),
         mk.Bullets(tuple((f"one end: {end}",) for end in curve.ends)),
         mk.Table((curve.x, curve.y), rows),
     ]
@@ -350,6 +356,7 @@ def write_curve(
         "inside_point": None if curve.inside_point is None else list(curve.inside_point),
         "ends": list(curve.ends),
         "folds": [list(f) for f in curve.folds],
+        "labels": None if curve.labels is None else list(curve.labels),
     }
     with atomic_path(folder / "curve.json") as temporary:
         temporary.write_text(json.dumps(info, indent=2), encoding="utf-8")
