@@ -270,7 +270,7 @@ def test_a_sweep_interrupted_with_sigint_resumes_to_the_same_tables(tmp_path):
     assert reference.exit_code == 0, reference.stderr
     folder = tmp_path / "interrupted"
     # interrupted in its third point (in this process: --workers 1), two points finished
-    process = start_reaching("oscillator.analysis.sweeps.run_point", ["sweep", "bifurcation-omega", *arguments,
+    process = start_reaching("oscillator.analysis.sweep_points.run_point", ["sweep", "bifurcation-omega", *arguments,
                              "--out", folder], call=3)  # fmt: skip
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=TIMEOUT)

@@ -73,7 +73,7 @@ def test_a_killed_sweep_resumes_to_the_same_result(case, tmp_path):
     arguments = ["sweep", "bifurcation-omega", "--param", "Omega", "--from", "1.5", "--to", "1.7", "--steps", "10",
                  "--transient", "6", "--record", "3", "--workers", "1", "--quiet", "--no-plots",
                  "--out", folder]  # fmt: skip
-    process = start_reaching("oscillator.analysis.sweeps.run_point", arguments, call=4)  # 3 points done
+    process = start_reaching("oscillator.analysis.sweep_points.run_point", arguments, call=4)  # 3 points done
     process.kill()
     process.communicate()
     finished_before = len(list(folder.glob("parts/*.summary.parquet")))

@@ -410,8 +410,6 @@ def test_basins_and_lyapunov_of_a_system_file_refuse_what_they_cannot_take_creat
         assert not (tmp_path / "b").exists()
     done = _invoke("lyapunov", str(HARDENING), "--periods", "0", "--out", str(tmp_path / "l"))
     assert done.exit_code == 2 and "--periods" in done.stderr and not (tmp_path / "l").exists()
-    done = _invoke("locate", str(HARDENING), "--param", "Omega", "--between", "1", "2")
-    assert done.exit_code == 2 and "is a system file" in done.stderr and "atlas, curve, basins, lyapunov" in done.stderr
 
 
 def test_lyapunov_of_a_system_file_prints_and_writes_the_spectrum(tmp_path):

@@ -2,7 +2,9 @@
 
 Both ends of the bracket are simulated first to see that they differ (sliding, period, or the
 number of switches per period, which changes at a grazing); each bisection step simulates the
-middle, exactly as a sweep would (:func:`oscillator.analysis.sweep_points.run_point`).
+middle, exactly as a sweep would (:func:`oscillator.analysis.sweep_points.run_point`, or for a
+declared system :func:`oscillator.analysis.chain_sweeps.run_chain_point`, where ``sliding`` is
+whether an element sticks: its stickings per period).
 """
 
 from __future__ import annotations
@@ -14,9 +16,10 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.sweep_points import PointTables, run_point
+from oscillator.analysis.sweep_points import PointTables, point_function
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.io.cases import Case
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SweepSettings, is_finite_number
 from oscillator.text import shown
 
@@ -24,6 +27,8 @@ __all__ = ["INDICATORS", "Location", "locate"]
 
 #: What ``locate`` can look for, and the summary column that tells it.
 INDICATORS = {"sliding": "sliding", "period": "period", "grazing": "switches_per_period"}
+#: A declared system's (:func:`~oscillator.analysis.chain_sweeps.chain_sweep_columns`).
+SYSTEM_INDICATORS = INDICATORS | {"sliding": "sticks_per_period"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,7 +56,7 @@ class Location:
 
 
 def locate(
-    case: Case,
+    case: Case | FrictionChain,
     settings: SweepSettings,
     what: str,
     between: tuple[float, float],
@@ -71,7 +76,7 @@ def locate(
     """
     if what not in INDICATORS:
         raise InputError(f"what must be one of {', '.join(INDICATORS)}, got {shown(what)}", field="what")
-    column = INDICATORS[what]
+    column = (SYSTEM_INDICATORS if isinstance(case, FrictionChain) else INDICATORS)[what]
     if len(between) != 2 or not all(is_finite_number(v) for v in between):
         raise InputError(f"between needs two finite values, got {shown(between)}", field="between")
     a, b = float(min(between)), float(max(between))
@@ -85,11 +90,12 @@ def locate(
             field="tolerance",
         )
     steps = 2 + max(0, math.ceil(math.log2((b - a) / tolerance)))
+    run = point_function(case)
 
     def evaluate(value: float, step: int) -> PointTables:
         if progress is not None:
             progress(step, steps, a, b)
-        point = run_point(case, settings, 0, value)
+        point = run(case, settings, 0, value)
         row = point.summary.iloc[0]
         if row.status != "ok":
             raise SimulationFailed(

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ __all__ = [
     "Tasks",
     "frame_of",
     "point_case",
+    "point_function",
     "run_point",
     "sliding_ranges",
     "table_columns",
@@ -280,3 +282,16 @@ TABLES = ("switches", "poincare", "summary")
 
 
 _DTYPES = {"int": "int64", "float": "float64", "bool": "bool", "str": "str"}
+
+
+def point_function(subject: Any) -> Callable[..., PointTables]:
+    """The function that runs one value of a sweep of ``subject``: :func:`run_point` for the
+    article's case, :func:`~oscillator.analysis.chain_sweeps.run_chain_point` for a declared
+    system."""
+    from oscillator.model.chains import FrictionChain
+
+    if isinstance(subject, FrictionChain):
+        from oscillator.analysis.chain_sweeps import run_chain_point
+
+        return run_chain_point
+    return run_point

@@ -3,7 +3,8 @@
 A sweep runs one simulation per value of a parameter: a transient of forcing periods, then a
 recorded window; :mod:`oscillator.analysis.sweep_points` computes a value and the tables it
 gives (switching points, Poincaré points, a summary row), each with the swept parameter as a
-column named after it (e.g. ``Omega``).
+column named after it (e.g. ``Omega``).  A declared system's sweep (issue 52) runs
+:func:`~oscillator.analysis.chain_sweeps.run_chain_point` instead, into the same kind of folder.
 
 Points are computed by :func:`~oscillator.analysis.sweep_points.run_point` (a pure function, so
 the same rows come out serially, in a process pool or on a Dask cluster) and stored by the parent
@@ -32,10 +33,19 @@ import pyarrow.parquet as pq
 from oscillator.analysis.axes import STATE
 from oscillator.analysis.execution import check_workers, connect, run_tasks
 from oscillator.analysis.store import Expected, TableFolder, identity
-from oscillator.analysis.sweep_points import TABLES, PointTables, Tasks, frame_of, point_case, run_point, table_columns
+from oscillator.analysis.sweep_points import (
+    TABLES,
+    PointTables,
+    Tasks,
+    frame_of,
+    point_case,
+    point_function,
+    table_columns,
+)
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case
 from oscillator.io.files import atomic_path, lock_name
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SweepSettings
 from oscillator.text import printable
 
@@ -52,9 +62,19 @@ class _Store(TableFolder):
 
     FORMAT = 2  # 2: each point's parts keyed by the point
 
-    def __init__(self, folder: Path, case: Case, settings: SweepSettings) -> None:
-        super().__init__(folder, "sweep.json", identity(case, settings=settings), name=case.name)
+    def __init__(self, folder: Path, subject: Case | FrictionChain, settings: SweepSettings) -> None:
+        declared = isinstance(subject, FrictionChain)
+        name = (subject.title or "system") if declared else subject.name  # type: ignore[union-attr]
+        super().__init__(folder, "sweep.json", identity(subject, settings=settings), name=name)
         self.settings = settings
+        if isinstance(subject, FrictionChain):
+            from oscillator.analysis.chain_sweeps import chain_sweep_columns
+
+            self.columns = chain_sweep_columns(subject, settings.param)
+            self.ends = tuple(f"end:{name}" for name in subject.system.state)
+        else:
+            self.columns = table_columns(settings.param)
+            self.ends = tuple(f"end_{name}" for name in STATE)
 
     def check_parts(self) -> None:
         """Every part named ``NNNNNN.TABLE.parquet`` for a point of this sweep, a plain file whose
@@ -87,7 +107,7 @@ class _Store(TableFolder):
         every row at its value and its index (the summary one row)."""
         direction, value = self.settings.points[index]
         param = self.settings.param
-        kinds = {column: _KINDS[dtype] for column, dtype in table_columns(param)[name].items()}
+        kinds = {column: _KINDS[dtype] for column, dtype in self.columns[name].items()}
 
         def check(frame: pd.DataFrame, meta: Any) -> str:
             if not ((frame[param] == value) & (frame["index"] == index)).all():
@@ -103,7 +123,7 @@ class _Store(TableFolder):
         if part is None:
             return None
         row = part[0].iloc[0]
-        state = tuple(float(row.get(f"end_{name}", math.nan)) for name in STATE)
+        state = tuple(float(row.get(name, math.nan)) for name in self.ends)
         return state if all(math.isfinite(v) for v in state) else None
 
     def write_point(self, point: PointTables) -> None:
@@ -115,7 +135,7 @@ class _Store(TableFolder):
         """Stream the parts, in parameter order, each checked as its point's, into one Parquet
         file per table."""
         for name in TABLES:
-            columns = table_columns(self.settings.param)[name]
+            columns = self.columns[name]
             schema = pa.Table.from_pandas(frame_of([], columns), preserve_index=False).schema
             with (
                 atomic_path(self.folder / f"{name}.parquet") as temporary,
@@ -145,10 +165,13 @@ def read_sweep(folder: Path) -> dict[str, pd.DataFrame]:
 # --------------------------------------------------------------------------- execution
 
 
-def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: _Store) -> Iterator[PointTables]:
+def _points_following(
+    case: Case | FrictionChain, settings: SweepSettings, tasks: Tasks, store: _Store
+) -> Iterator[PointTables]:
     """A both-ways sweep: each point from the state the point before it ended in (read from
     its stored summary when resuming), the first from the case's start; after a failed point,
     from the case's start again."""
+    point_of = point_function(case)
     directions = dict(enumerate(direction for direction, _ in settings.points))
     ends: dict[int, tuple[float, ...] | None] = {}
     for index, value in tasks:
@@ -157,9 +180,9 @@ def _points_following(case: Case, settings: SweepSettings, tasks: Tasks, store: 
             if index - 1 not in ends:
                 ends[index - 1] = store.end_state(index - 1)
             start = ends[index - 1]
-        point = run_point(case, settings, index, value, from_state=start, direction=directions[index])
+        point = point_of(case, settings, index, value, from_state=start, direction=directions[index])
         row = point.summary.iloc[0]
-        state = tuple(float(row[f"end_{name}"]) for name in case.system.state)
+        state = tuple(float(row[name]) for name in store.ends)
         ends[index] = state if all(math.isfinite(v) for v in state) else None
         yield point
 
@@ -185,7 +208,7 @@ class Sweep:
     """
 
     def __init__(
-        self, case: Case, settings: SweepSettings, store: _Store, workers: int, client: Any, lock: Any
+        self, case: Case | FrictionChain, settings: SweepSettings, store: _Store, workers: int, client: Any, lock: Any
     ) -> None:
         self.case, self.settings, self._store, self.workers = case, settings, store, workers
         self._client, self._lock = client, lock
@@ -219,7 +242,7 @@ class Sweep:
                 points: Iterable[PointTables] = _points_following(self.case, settings, tasks, store)
             else:  # one way: every point from the case's start, in any order, anywhere
                 points = run_tasks(
-                    run_point,
+                    point_function(self.case),
                     tasks,
                     shared=(self.case, settings),
                     keywords={"direction": settings.points[0][0]},
@@ -268,7 +291,7 @@ def _check_values(case: Case, settings: SweepSettings) -> None:
 
 
 def open_sweep(
-    case: Case,
+    case: Case | FrictionChain,
     settings: SweepSettings,
     folder: Path,
     *,
@@ -286,7 +309,12 @@ def open_sweep(
         number of workers out of range, or a scheduler that is not an address or cannot be
         reached.
     """
-    _check_values(case, settings)
+    if isinstance(case, FrictionChain):
+        from oscillator.analysis.chain_sweeps import check_chain_sweep
+
+        check_chain_sweep(case, settings)
+    else:
+        _check_values(case, settings)
     store = _Store(Path(folder), case, settings)
     store.check()
     workers = check_workers(workers)
@@ -305,7 +333,7 @@ def open_sweep(
 
 
 def run_sweep(
-    case: Case,
+    case: Case | FrictionChain,
     settings: SweepSettings,
     folder: Path,
     *,
@@ -317,8 +345,11 @@ def run_sweep(
 
     Parameters
     ----------
-    case : Case
+    case : Case or FrictionChain
         The base case; its start and parameters except the swept one are used for every value.
+        A declared system (issue 52) with :class:`~oscillator.analysis.chain_sweeps.
+        ChainSweepSettings`: its tables are :func:`~oscillator.analysis.chain_sweeps.
+        chain_sweep_columns`'.
     settings : SweepSettings
     folder : Path
         Created if new; if it holds the same sweep, the points already finished are kept.

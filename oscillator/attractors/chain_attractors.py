@@ -41,13 +41,13 @@ from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.batch import SETTLE_CHUNK
-from oscillator.hybrid.chain_run import ChainResult, simulate_chain
+from oscillator.hybrid.chain_run import ChainResult, simulate_chain, stuck_spans
 from oscillator.model.chain_fields import state_of
 from oscillator.model.chain_rules import ChainEventKind
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SolverOptions, check_count
 from oscillator.orbits.chain_orbits import find_chain_orbit
-from oscillator.orbits.chain_response import orbit_measures, stuck_spans
+from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_tangents import tangent_pass
 from oscillator.orbits.signature import own_cycle
 from oscillator.presenting import Presented, presenter

@@ -75,6 +75,8 @@ SYSTEM_COMMANDS = (
     "attractors",
     "atlas",
     "curve",
+    "sweep",
+    "locate",
     "basins",
     "lyapunov",
     "explore",

@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from oscillator.cli.attractors import subject_of
 from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, progress_bar, say
-from oscillator.cli.inputs import case_from, refuse_taken, sweep_settings
+from oscillator.cli.inputs import refuse_taken, sweep_settings
 from oscillator.cli.options import (
     NoPlotsOption,
     QuietOption,
@@ -23,6 +24,7 @@ from oscillator.cli.options import (
 )
 from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, is_shipped
+from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SweepSettings
 from oscillator.text import printable
 
@@ -78,31 +80,130 @@ def sweep(
     --scheduler tcp://HOST:PORT.
 
     \b
+    A system file (docs/systems.md) sweeps one of its numbers (--param, --from and --to given):
+    every event after the transient, the Poincaré points of its state, and per value the period,
+    switches and closings per period, each friction element's fraction of time held.
+
+    \b
     Examples:
       oscillator sweep bifurcation-omega --out runs/omega
       oscillator sweep bifurcation-q2 --steps 36 --workers 2 --out runs/q2
       oscillator sweep instance-1 --param Omega --from 1.5 --to 1.7 --steps 21 --transient 20 --record 10
       oscillator sweep bifurcation-q2 --from 71.15 --to 71.18 --steps 7 --transient 20 --record 4 --both-ways
+      oscillator sweep docs/systems/impacts.toml --param Omega --from 1.0 --to 1.6 --steps 25 --record 10 --both-ways
     """
     try:
-        resolved = case_from(case, None, set_)
-        settings = sweep_settings(resolved, param, start, stop, steps, transient, record, both_ways)
+        resolved, stem, title = subject_of(case, set_)
+        if isinstance(resolved, FrictionChain):
+            settings = _system_settings(param, start, stop, steps, transient, record, both_ways)
+        else:
+            settings = sweep_settings(resolved, param, start, stop, steps, transient, record, both_ways)
         refuse_taken(set_, {settings.param: "--param (or the case's [sweep])"})
-        plan = _open_sweep(resolved, settings, out_dir, workers, scheduler)
+        plan = _open_sweep(resolved, settings, out_dir, workers, scheduler, stem if stem is not None else title)
     except OscillatorError as error:
         raise fail(message(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted; nothing was written", 130) from None
     folder = plan.folder
     try:
-        outcome = _run_with_progress(plan, resolved.name, settings, quiet)
+        outcome = _run_with_progress(plan, title, settings, quiet)
     except OscillatorError as error:
         raise fail(message(error), 1) from None
     except KeyboardInterrupt:
         raise fail("interrupted; the points finished so far are kept: run the same command to resume", 130) from None
     finally:
         plan.close()
-    _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
+    if isinstance(resolved, FrictionChain):
+        _finish_system_sweep(resolved, settings, folder, outcome, (title, no_plots, quiet))
+    else:
+        _finish_sweep(resolved, settings, folder, outcome, no_plots, quiet)
+
+
+def _system_settings(
+    param: str | None,
+    start: float | None,
+    stop: float | None,
+    steps: int | None,
+    transient: int | None,
+    record: int | None,
+    both_ways: bool,
+) -> SweepSettings:
+    """A system file's sweep: ``--param``, ``--from`` and ``--to`` given (it has no [sweep] table)."""
+    from oscillator.analysis.chain_sweeps import ChainSweepSettings
+
+    for option, value in (("--param", param), ("--from", start), ("--to", stop)):
+        if value is None:
+            raise InputError(
+                f"{option}: a system file has no [sweep] table; give --param, --from and --to", field=option
+            )
+    given = {"steps": steps, "transient": transient, "record": record}
+    chosen = {name: value for name, value in given.items() if value is not None}
+    return ChainSweepSettings(param=param, start=start, stop=stop, both_ways=both_ways, **chosen)  # type: ignore[arg-type]
+
+
+def _finish_system_sweep(
+    chain: FrictionChain, settings: SweepSettings, folder: Path, outcome: Any, shown: tuple[str, bool, bool]
+) -> None:
+    """A system's sweep drawn (its tables are safe first), its periods and hysteresis said."""
+    from oscillator.analysis.sweeps import read_sweep
+
+    title, no_plots, quiet = shown
+    tables = read_sweep(folder)
+    if not no_plots:
+
+        def draw() -> None:
+            from oscillator.report.chain_sweep import chain_sweep_figure
+            from oscillator.report.figures import save_figure
+
+            (folder / "figures").mkdir(exist_ok=True)
+            save_figure(chain_sweep_figure(tables, chain, settings.param), folder / "figures", "sweep")
+
+        _drawn(draw, folder)
+    summary = tables["summary"]
+    if _printed_quietly(summary, folder, quiet):
+        return
+    way = " and back" if settings.both_ways else ""
+    say(
+        (title, "bold"),
+        f": {printable(settings.param)} from {settings.start:g} to {settings.stop:g}{way} ({settings.steps} values, "
+        f"{settings.transient} + {settings.record} periods); {outcome.computed} computed, {outcome.resumed} resumed, "
+        f"{outcome.failed} failed, {outcome.wall_time:.1f} s",
+    )
+    ok = summary[summary.status == "ok"]
+    periods = ok.period.value_counts().sort_index()
+    if len(periods):
+        say("periods found: " + ", ".join(f"period-{n}: {c}" if n else f"none: {c}" for n, c in periods.items()))
+    if settings.both_ways:
+        _say_system_hysteresis(ok, settings.param)
+    say("written to ", (str(folder), "bold"))
+    _fail_if_every_point_failed(summary, folder)
+
+
+def _say_system_hysteresis(ok: pd.DataFrame, param: str) -> None:
+    """The values where the two ways end on different motions (their switches per period differ)."""
+    by_way = {
+        way: dict(zip(rows[param], rows.switches_per_period, strict=True)) for way, rows in ok.groupby("direction")
+    }
+    up, down = by_way.get("up", {}), by_way.get("down", {})
+    differ = sorted(v for v in up if v in down and abs(up[v] - down[v]) > 1e-9)
+    if differ:
+        say(
+            f"hysteresis: at {printable(param)} = {', '.join(f'{v:.6g}' for v in differ)} the two ways end on "
+            "different motions (both exist there)"
+        )
+
+
+def _drawn(draw: Any, folder: Path) -> None:
+    """Draw the figures; a failure says the tables are safe (exit 1), Ctrl-C likewise (130)."""
+    try:
+        load("oscillator.report.figures")
+        draw()
+    except KeyboardInterrupt:
+        raise fail(f"interrupted while drawing; the sweep's tables are in {folder}", 130) from None
+    except Exception as error:  # the sweep itself is safe
+        raise fail(
+            f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables are in {folder}", 1
+        ) from None
 
 
 def _run_with_progress(plan: Any, name: str, settings: SweepSettings, quiet: bool) -> Any:
@@ -115,7 +216,12 @@ def _run_with_progress(plan: Any, name: str, settings: SweepSettings, quiet: boo
 
 
 def _open_sweep(
-    case: Case, settings: SweepSettings, out_dir: Path | None, workers: int | None, scheduler: str | None
+    case: Case | FrictionChain,
+    settings: SweepSettings,
+    out_dir: Path | None,
+    workers: int | None,
+    scheduler: str | None,
+    title: str,
 ) -> Any:
     """The sweep checked and its folder locked: ``out_dir``, or a new ``runs/<case>-sweep-<timestamp>``."""
     if settings.both_ways and (scheduler is not None or (workers is not None and workers != 1)):
@@ -132,7 +238,7 @@ def _open_sweep(
 
     if out_dir is not None:
         return open_sweep(case, settings, out_dir, workers=workers, scheduler=scheduler)
-    stamp, name = time.strftime("%Y%m%d-%H%M%S"), default_name(case.name)
+    stamp, name = time.strftime("%Y%m%d-%H%M%S"), default_name(title)
     for n in range(1, 10_000):
         folder = Path("runs") / (f"{name}-sweep-{stamp}" if n == 1 else f"{name}-sweep-{stamp}-{n}")
         if os.path.lexists(folder):
@@ -157,23 +263,15 @@ def _finish_sweep(case: Case, settings: SweepSettings, folder: Path, outcome: An
 
     tables = read_sweep(folder)
     if not no_plots:
-        try:
-            load("oscillator.report.figures")
+
+        def draw() -> None:
             from oscillator.report.sweep_figures import write_sweep_figures
 
             write_sweep_figures(tables, settings.param, settings.mass, folder / "figures", title=case.name)
-        except KeyboardInterrupt:
-            raise fail(f"interrupted while drawing; the sweep's tables are in {folder}", 130) from None
-        except Exception as error:  # the sweep itself is safe
-            raise fail(
-                f"the diagrams could not be drawn ({type(error).__name__}: {error}); the sweep's tables "
-                f"are in {folder}",
-                1,
-            ) from None
+
+        _drawn(draw, folder)
     summary = tables["summary"]
-    if quiet:
-        out.print(printable(str(folder)))
-        _fail_if_every_point_failed(summary, folder)
+    if _printed_quietly(summary, folder, quiet):
         return
     say(
         (case.name, "bold"),
@@ -238,6 +336,14 @@ def _say_both_ways(summary: pd.DataFrame, settings: SweepSettings) -> None:
         )
 
 
+def _printed_quietly(summary: pd.DataFrame, folder: Path, quiet: bool) -> bool:
+    """With ``--quiet`` only the folder is printed (and exit 1 where every point failed); whether so."""
+    if quiet:
+        out.print(printable(str(folder)))
+        _fail_if_every_point_failed(summary, folder)
+    return quiet
+
+
 def _fail_if_every_point_failed(summary: pd.DataFrame, folder: Path) -> None:
     """Exit 1 when no point of the sweep could be computed, with the first point's reason."""
     failed = summary[summary.status == "failed"]
@@ -280,14 +386,23 @@ def locate(
     show the change.
 
     \b
-    Example:
+    A system file (docs/systems.md) takes --param (one of its numbers); --what sliding is whether
+    an element sticks (its stickings per period).
+
+    \b
+    Examples:
       oscillator locate bifurcation-omega --between 1.595 1.600 --what sliding
+      oscillator locate docs/systems/impacts.toml --param Omega --between 0.75 0.8 --what grazing
     """
     try:
-        resolved = case_from(case, None, set_)
+        resolved, _, _ = subject_of(case, set_)
         load("oscillator.analysis.locate", notice=True)
         lo, hi = between
-        settings = sweep_settings(resolved, param, lo, hi, None, transient, record)
+        declared = isinstance(resolved, FrictionChain)
+        if declared:
+            settings = _system_settings(param, lo, hi, None, transient, record, False)
+        else:
+            settings = sweep_settings(resolved, param, lo, hi, None, transient, record)  # type: ignore[arg-type]
         refuse_taken(set_, {settings.param: "--param (or the case's [sweep])"})
         found = _locate_with_progress(resolved, settings, what, (lo, hi), tolerance)
     except OscillatorError as error:
@@ -296,24 +411,27 @@ def locate(
         raise fail("interrupted", 130) from None
     say(
         (what, "bold"),
-        f" changes at {found.param} = {found.value:.10f} (between {found.lower:.10f} and {found.upper:.10f}, "
-        f"width {found.width:.1e}, {found.iterations} bisections)",
+        f" changes at {printable(found.param)} = {found.value:.10f} (between {found.lower:.10f} and "
+        f"{found.upper:.10f}, width {found.width:.1e}, {found.iterations} bisections)",
     )
     for side, summary, events in (
         ("below", found.below, found.evidence_below),
         ("above", found.above, found.evidence_above),
     ):
         row = summary.iloc[0]
-        kinds = ", ".join(f"{k}: {n}" for k, n in events.kind.value_counts().items()) or "none"
+        kinds = ", ".join(f"{printable(str(k))}: {n}" for k, n in events.kind.value_counts().items()) or "none"
+        if declared:
+            said = f"{row.sticks_per_period:g} sticks/period, {row.closings_per_period:g} closings/period"
+        else:
+            said = f"sliding {bool(row.sliding)}, rest {row.rest_time_per_period:.3g} s/period"
         say(
-            f"{side} ({found.param} = {row[found.param]:.10f}): sliding {bool(row.sliding)}, "
-            f"period {int(row.period)}, {row.switches_per_period:g} switches/period, "
-            f"rest {row.rest_time_per_period:.3g} s/period; events: {kinds}"
+            f"{side} ({printable(found.param)} = {row[found.param]:.10f}): period {int(row.period)}, "
+            f"{row.switches_per_period:g} switches/period, {said}; events: {kinds}"
         )
 
 
 def _locate_with_progress(
-    case: Case, settings: SweepSettings, what: str, between: tuple[float, float], tolerance: float
+    case: Case | FrictionChain, settings: SweepSettings, what: str, between: tuple[float, float], tolerance: float
 ) -> Location:
     """``analysis.locate`` with a progress bar (bisection step, bracket width) on a terminal."""
     from oscillator.analysis.locate import locate as locate_change

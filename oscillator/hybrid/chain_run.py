@@ -29,7 +29,7 @@ from oscillator.presenting import presenter
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["ChainResult", "simulate_chain"]
+__all__ = ["ChainResult", "closed_spans", "mode_spans", "simulate_chain", "stuck_spans"]
 
 #: The forcing periods a run lasts when no end is given.
 DEFAULT_PERIODS = 10
@@ -267,3 +267,28 @@ def _supervise(
             run.keep(t, y, mode)
             engine.reset(mode, t, y)
     return t, y
+
+
+# -- the spans of a run in which an element is in a mode (its events between) ----------------------
+
+
+def mode_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float, int]]:
+    """``(from, to, mode)``: the spans of ``[start, start + span]`` between the switching element's
+    events, each with its mode (a friction element's or slider's slip sign, ``0`` stuck; a stop's
+    or contact's ``1`` closed)."""
+    trajectory, events = run.trajectory, run.events
+    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
+    times = [start, *mine.t.to_numpy(float), start + span]
+    modes = [int(trajectory[f"mode:{element}"].iloc[0]), *mine.mode_after.astype(int).tolist()]
+    return [(a, b, m) for a, b, m in zip(times, times[1:], modes, strict=False)]
+
+
+def stuck_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
+    """The spans of ``[start, start + span]`` in which the friction element or Jenkins slider
+    ``element`` holds, from its events."""
+    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode == 0]
+
+
+def closed_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
+    """The spans of ``[start, start + span]`` in which the stop or contact ``element`` is closed."""
+    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode != 0]

@@ -438,7 +438,7 @@ class SweepSettings:
         owner = "sweep"
         if not isinstance(self.both_ways, bool):
             raise InputError(f"{owner}.both_ways must be true or false, got {shown(self.both_ways)}", field="both_ways")
-        Parameters.check_name(self.param, "param", label=f"{owner}.param:")
+        self.check_param()
         for name in ("start", "stop", "period_tolerance"):
             object.__setattr__(self, name, _require_finite(owner, name, getattr(self, name)))
         if self.period_tolerance <= 0:
@@ -467,6 +467,11 @@ class SweepSettings:
             return (self.start,)
         step = (self.stop - self.start) / (self.steps - 1)
         return (*(self.start + i * step for i in range(self.steps - 1)), self.stop)
+
+    def check_param(self) -> None:
+        """The swept parameter is one of the article's (a declared system's sweep checks its own
+        names: :class:`~oscillator.analysis.chain_sweeps.ChainSweepSettings`)."""
+        Parameters.check_name(self.param, "param", label="sweep.param:")
 
     @property
     def points(self) -> tuple[tuple[str, float], ...]:

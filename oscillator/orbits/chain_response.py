@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
-from oscillator.hybrid.chain_run import ChainResult
+from oscillator.hybrid.chain_run import ChainResult, closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
@@ -32,13 +32,10 @@ from oscillator.orbits.chain_peaks import peaks
 
 __all__ = [
     "MEASURE_UNITS",
-    "closed_spans",
     "frequency_sweep",
     "measure_names",
     "measure_unit",
-    "mode_spans",
     "orbit_measures",
-    "stuck_spans",
     "turning_points",
     "turns",
 ]
@@ -153,28 +150,6 @@ def extremes(run: ChainResult) -> dict[str, tuple[float, float, float, float]]:
         high, low = int(np.argmax(places)), int(np.argmin(places))
         found[str(mass)] = (float(times[high]), float(places[high]), float(times[low]), float(places[low]))
     return found
-
-
-def mode_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float, int]]:
-    """``(from, to, mode)``: the spans of ``[start, start + span]`` between the switching element's
-    events, each with its mode (a friction element's or slider's slip sign, ``0`` stuck; a stop's
-    or contact's ``1`` closed)."""
-    trajectory, events = run.trajectory, run.events
-    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
-    times = [start, *mine.t.to_numpy(float), start + span]
-    modes = [int(trajectory[f"mode:{element}"].iloc[0]), *mine.mode_after.astype(int).tolist()]
-    return [(a, b, m) for a, b, m in zip(times, times[1:], modes, strict=False)]
-
-
-def stuck_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
-    """The spans of ``[start, start + span]`` in which the friction element or Jenkins slider
-    ``element`` holds, from its events."""
-    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode == 0]
-
-
-def closed_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float]]:
-    """The spans of ``[start, start + span]`` in which the stop or contact ``element`` is closed."""
-    return [(a, b) for a, b, mode in mode_spans(run, element, start, span) if mode != 0]
 
 
 def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:

@@ -41,10 +41,11 @@ import numpy as np
 import pandas as pd
 
 from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.hybrid.chain_run import closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_orbits import ChainOrbit
 from oscillator.orbits.chain_peaks import Peak, peak_places
-from oscillator.orbits.chain_response import closed_spans, extremes, mode_spans, orbit_measures, stuck_spans
+from oscillator.orbits.chain_response import extremes, orbit_measures
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 
 __all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
