@@ -194,3 +194,16 @@ def test_a_value_another_option_gives_or_an_engine_the_command_does_not_run_is_r
     error = capsys.readouterr().err
     assert done.value.code == 2 and error.startswith("error: ") and said in error, error
     assert list(tmp_path.iterdir()) == []
+
+
+def test_unspecified_workers_are_every_core_except_for_few_starts(monkeypatch):
+    """Without ``workers`` a many-start computation takes every core, but one below
+    ``SERIAL_BELOW`` starts (a pool costs more than it gains there: measured in its comment);
+    given workers are kept, and checked."""
+    from oscillator.analysis.execution import SERIAL_BELOW, check_workers
+
+    monkeypatch.setattr("os.cpu_count", lambda: 4)
+    assert check_workers(None) == 4 and check_workers(None, starts=SERIAL_BELOW) == 4
+    assert check_workers(None, starts=SERIAL_BELOW - 1) == 1 and check_workers(3, starts=10) == 3
+    with pytest.raises(oscillator.InputError, match="workers must be a whole number from 1 to 16"):
+        check_workers(17, starts=10)

@@ -113,7 +113,8 @@ def basins(
     The two other state components and the section t0 are the case's start; each start runs 200
     forcing periods (--transient), then 32 are recorded (--record). Writes basins.parquet,
     attractors.parquet, figures/basins.png and a report. Interrupted or killed, the same command
-    with the same --out resumes where it stopped.
+    with the same --out resumes where it stopped. Without --workers, fewer than 1,000 starts run
+    in this process (a pool costs more than it gains there), more on every core.
 
     \b
     A system file (docs/systems.md) takes its own state's names as axes (x:blade, v:blade, ...,
@@ -155,8 +156,9 @@ def _open_basins(
     scheduler: str | None,
 ) -> tuple[Any, Any, Any, int]:
     """Everything refused before work: the slice, the folder (new, or these basins to resume),
-    the workers, the scheduler; the folder's name locked."""
-    count = check_workers(workers)
+    the workers (by default every core, one below 1,000 starts), the scheduler; the folder's name
+    locked."""
+    count = check_workers(workers, starts=x.count * y.count)
     load("oscillator.attractors.basins", notice=True)
     from oscillator.attractors.basins import basin_store, grid_starts
 
