@@ -246,18 +246,20 @@ class Pool:
         shared: tuple[Any, ...],
         keywords: dict[str, Any],
     ) -> Iterator[T]:
-        """The tasks' results as they finish; at most ``4 workers`` tasks in flight, so that
-        memory stays flat."""
-        pending = iter(tasks)
-        running: set[cf.Future[T]] = set()
+        """The tasks' results as they finish; at most ``4 workers`` chunks in flight, so that
+        memory stays flat.  The tasks go in chunks of :func:`chunk_size` (the shared arguments
+        are sent once a chunk, not once a task)."""
+        size = chunk_size(len(tasks), self.workers)
+        pending = iter([tasks[k : k + size] for k in range(0, len(tasks), size)])
+        running: set[cf.Future[list[T]]] = set()
 
         def fill() -> None:
-            for task in pending:
+            for chunk in pending:
                 # A submit may spawn a worker, which must be born ignoring SIGINT; once all are
                 # running, a Ctrl-C during a submit is the parent's, as anywhere else.
                 spawning = len(getattr(self._executor, "_processes", None) or {}) < self.workers
                 with interrupts_ignored() if spawning else contextlib.nullcontext():
-                    running.add(self._executor.submit(function, *shared, *task, **keywords))
+                    running.add(self._executor.submit(_run_chunk, function, shared, keywords, chunk))
                 if len(running) >= 4 * self.workers:
                     return
 
@@ -267,11 +269,11 @@ class Pool:
             for future in finished:
                 running.discard(future)
                 try:
-                    result = future.result()
+                    results = future.result()
                 except BrokenProcessPool as exc:
                     error = self._broken()
                     raise error from (None if isinstance(error, InputError) else exc)
-                yield result
+                yield from results
             fill()
 
     def _broken(self) -> Exception:
@@ -288,6 +290,24 @@ class Pool:
             "it stopped), with fewer workers if memory is short",
             field="workers",
         )
+
+
+#: The most tasks a chunk of :meth:`Pool.run` holds (a killed run loses at most a chunk in flight
+#: per worker, and progress is told a chunk at a time).
+MAX_CHUNK = 8
+
+
+def chunk_size(tasks: int, workers: int) -> int:
+    """Tasks a chunk: at least 8 chunks a worker where there are tasks enough (the last ones
+    balance the workers' load), at most :data:`MAX_CHUNK`."""
+    return max(1, min(MAX_CHUNK, tasks // (8 * max(1, workers))))
+
+
+def _run_chunk(
+    function: Callable[..., T], shared: tuple[Any, ...], keywords: dict[str, Any], chunk: list[tuple[Any, ...]]
+) -> list[T]:
+    """A chunk's tasks, in a worker, in order."""
+    return [function(*shared, *task, **keywords) for task in chunk]
 
 
 def _on_dask(
