@@ -60,9 +60,9 @@ _UNGUARDED_MESSAGE = (
 
 
 #: Below this many starts a many-start computation whose workers are not given runs in this
-#: process: starting the pool costs more than it gains (the documented basins on Instance 1, 2
-#: cores, 2026-11-28: 100 starts 2.9 s on one worker and 4.5 s on two; 900 starts 6.3 s and 6.2 s;
-#: 2,025 starts 10.6 s and 9.2 s).
+#: process: starting the pool costs as much as it gains, or more (``benchmarks/pool.py``, the
+#: documented basins on 2 cores, 2026-11-28: 100 starts 2.91 s on one worker and 4.09 s on two;
+#: 900 starts 5.98 s and 5.89 s; 2,025 starts 10.80 s and 8.62 s).
 SERIAL_BELOW = 1000
 
 

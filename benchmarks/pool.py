@@ -1,0 +1,78 @@
+"""The local pool's cost against what it gains (issue 56), each pair in one run, alternating:
+
+* the documented basins command (Instance 1, Q2 = 71.165, x2 2..7, v2 -5..5, 100 + 16 periods,
+  landings without a trajectory) at N x N starts on one worker and on two: where one worker is as
+  fast (``SERIAL_BELOW`` in oscillator/analysis/execution.py);
+* the default atlas (80 x 60, ``--starts 3``, 2 workers) with one task a submit (``MAX_CHUNK = 1``,
+  as before issue 56) and with the chunks of ``chunk_size``: the same table both ways.
+
+Each is the command itself (``--no-plots``), in a fresh process, warm (the kernels compiled first).
+
+Usage: python benchmarks/pool.py [--cells 10 30 45] [--no-atlas]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pandas as pd
+
+CHILD = r"""
+import sys
+import oscillator.analysis.execution as execution
+execution.MAX_CHUNK = int(sys.argv[1])
+from oscillator.cli.app import main
+sys.argv = ["oscillator", *sys.argv[2:]]
+main()
+"""
+
+
+def timed(arguments: list[str], chunk: int = 8) -> float:
+    started = time.perf_counter()
+    subprocess.run([sys.executable, "-c", CHILD, str(chunk), *arguments], check=True, capture_output=True)
+    return time.perf_counter() - started
+
+
+def basins(cells: int, workers: int, folder: Path) -> float:
+    axes = ["--x", "x2", "2", "7", str(cells), "--y", "v2", "-5", "5", str(cells)]
+    return timed(["basins", "instance-1", "--set", "Q2=71.165", *axes, "--transient", "100", "--record", "16",
+                  "--workers", str(workers), "--no-plots", "--quiet", "--out", str(folder)])  # fmt: skip
+
+
+def atlas(chunk: int, folder: Path) -> float:
+    return timed(["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "80", "--y", "Q2", "68.5", "72", "60",
+                  "--starts", "3", "--workers", "2", "--no-plots", "--quiet", "--out", str(folder)], chunk)  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cells", type=int, nargs="+", default=[10, 30, 45])
+    parser.add_argument("--no-atlas", action="store_true")
+    options = parser.parse_args()
+    print(f"{datetime.date.today()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
+    with tempfile.TemporaryDirectory() as scratch:
+        root = Path(scratch)
+        basins(5, 1, root / "warm")  # the kernels compiled (or loaded) before anything is timed
+        print("basins (landings, no trajectory): starts, one worker, two workers")
+        for cells in options.cells:
+            one, two = basins(cells, 1, root / f"b{cells}-1"), basins(cells, 2, root / f"b{cells}-2")
+            print(f"  {cells * cells:>6} {one:8.2f} s {two:8.2f} s")
+        if options.no_atlas:
+            return
+        before, after = atlas(1, root / "a1"), atlas(8, root / "a8")
+        same = pd.read_parquet(root / "a1" / "atlas.parquet").equals(pd.read_parquet(root / "a8" / "atlas.parquet"))
+        print("default atlas, --starts 3, 2 workers (landings, no trajectory):")
+        print(f"  one task a submit {before:8.2f} s")
+        print(f"  chunks            {after:8.2f} s   ratio {before / after:.2f}x, the same table: {same}")
+    print(f"load at the end {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
