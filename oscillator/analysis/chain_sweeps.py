@@ -130,13 +130,11 @@ def run_chain_point(
     summary |= {f"end:{name}": float(v) for name, v in zip(chain.system.state, run.y_end, strict=False)}
     events = run.events.assign(**{settings.param: value, "index": index})
     events["phase"] = np.mod(point.Omega * events.t.to_numpy(float), 2 * math.pi)
-    return PointTables(
-        index,
-        value,
-        frame_of(events[list(columns["switches"])].to_dict("records"), columns["switches"]),
-        frame_of(poincare.to_dict("records"), columns["poincare"]),
-        frame_of(summary, columns["summary"]),
+    switches, sections = (
+        table[list(columns[name])].astype(columns[name]).reset_index(drop=True)
+        for name, table in (("switches", events), ("poincare", poincare))
     )
+    return PointTables(index, value, switches, sections, frame_of(summary, columns["summary"]))
 
 
 def _after_transient(chain: FrictionChain, periods: int, state: tuple[float, ...] | None) -> np.ndarray | None:

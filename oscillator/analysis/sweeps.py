@@ -63,18 +63,18 @@ class _Store(TableFolder):
     FORMAT = 2  # 2: each point's parts keyed by the point
 
     def __init__(self, folder: Path, subject: Case | FrictionChain, settings: SweepSettings) -> None:
-        declared = isinstance(subject, FrictionChain)
-        name = (subject.title or "system") if declared else subject.name  # type: ignore[union-attr]
-        super().__init__(folder, "sweep.json", identity(subject, settings=settings), name=name)
-        self.settings = settings
         if isinstance(subject, FrictionChain):
             from oscillator.analysis.chain_sweeps import chain_sweep_columns
 
+            name = subject.title or "system"
             self.columns = chain_sweep_columns(subject, settings.param)
-            self.ends = tuple(f"end:{name}" for name in subject.system.state)
+            self.ends = tuple(f"end:{state}" for state in subject.system.state)
         else:
+            name = subject.name
             self.columns = table_columns(settings.param)
-            self.ends = tuple(f"end_{name}" for name in STATE)
+            self.ends = tuple(f"end_{state}" for state in STATE)
+        super().__init__(folder, "sweep.json", identity(subject, settings=settings), name=name)
+        self.settings = settings
 
     def check_parts(self) -> None:
         """Every part named ``NNNNNN.TABLE.parquet`` for a point of this sweep, a plain file whose
