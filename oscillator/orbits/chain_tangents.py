@@ -2,8 +2,9 @@
 monodromy ``M = dP/dy`` and its derivative ``dP/dc`` in any of the chain's numbers ``c``.
 
 Along each smooth piece of a run (one mode) the tangent equations ``Phi' = J Phi`` and
-``Psi' = J Psi + df/dc`` are integrated with the state (DOP853, from the run's own state at the
-piece's start): ``J`` is the field's Jacobian in the mode
+``Psi' = J Psi + df/dc`` are integrated with the state (DOP853, compiled:
+:func:`~oscillator.orbits.pieces.chain_tangent_rates`, from the run's own state at the piece's
+start): ``J`` is the field's Jacobian in the mode
 (:func:`~oscillator.model.chain_fields.chain_jacobian`, exact), ``df/dc`` its derivative in the
 number at fixed state and time (central differences of the compiled field in the number's
 direction of the chain's arrays: the arrays are affine in every number, the field affine in all
@@ -38,9 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from scipy.integrate import solve_ivp
 
-from oscillator.compiled import njit
 from oscillator.errors import InputError
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import (
@@ -57,7 +56,7 @@ from oscillator.model.chain_fields import (
 )
 from oscillator.model.chain_rules import ChainEventKind
 from oscillator.model.chains import FrictionChain
-from oscillator.model.types import Vector
+from oscillator.orbits.pieces import CHAIN_PIECE, chain_data, integrate_piece
 from oscillator.text import printable
 
 __all__ = [
@@ -87,28 +86,6 @@ def root_slot(kind: ChainEventKind, after: int) -> int:
     ``v - w`` for a mass reaching its belt's speed, the flow barrier's side for a slip, the gap for
     a stop or contact, ``kt (u - z) -+ F`` for a slider's slip, ``u'`` for its stick."""
     return 1 if kind in _SECOND_WHEN_LEFT and after < 0 else 0
-
-
-@njit(cache=True)
-def tangent_rates(
-    t: float, big: Vector, d: Vector, plus: np.ndarray, minus: np.ndarray, steps: Vector, out: Vector
-) -> None:  # pragma: no cover - compiled
-    """``out``: the rates of ``big = (y, [Phi | Psi] by rows)`` in the data's mode (module
-    docstring); ``plus``/``minus`` the data with each number stepped by ``+-steps``."""
-    n = int(d[3])
-    columns = (big.shape[0] - n) // n
-    y = big[:n]
-    chain_derivative(t, y, out[:n], d)
-    jacobian, rate = np.empty((n, n)), np.empty(n)
-    chain_jacobian(t, y, d, jacobian, rate)
-    rates = jacobian @ big[n:].reshape((n, columns))
-    ahead, back = np.empty(n), np.empty(n)
-    for k in range(plus.shape[0]):
-        chain_derivative(t, y, ahead, plus[k])
-        chain_derivative(t, y, back, minus[k])
-        for i in range(n):
-            rates[i, n + k] += (ahead[i] - back[i]) / (2.0 * steps[k])
-    out[n:] = rates.ravel()
 
 
 @dataclass(frozen=True)
@@ -373,32 +350,16 @@ def _along_piece(
 ) -> Callable[[float], np.ndarray]:
     """The tangent equations over one piece in ``mode``: the block at any time of it (the dense
     solution's)."""
-    d, plus, minus = data.of(mode)
-    n = len(start)
-    found = solve_ivp(
-        lambda s, big: _big_rates(s, big, d, plus, minus, data.steps),
-        span,
-        np.concatenate([start, block.ravel()]),
-        method="DOP853",
-        rtol=rtol,
-        atol=rtol * ATOL / RTOL,
-        dense_output=True,
-    )
-    solution, shape = found.sol, block.shape
+    numbers = chain_data(*data.of(mode), data.steps)
+    n, shape = len(start), block.shape
+    big = np.concatenate([start, block.ravel()])
+    solution = integrate_piece(CHAIN_PIECE, numbers, span, big, rtol=rtol, atol=rtol * ATOL / RTOL, dense=True)
 
     def tangent(t: float) -> np.ndarray:
-        moved: np.ndarray = np.asarray(solution(t))[n:].reshape(shape)
+        moved: np.ndarray = solution(t)[n:].reshape(shape)
         return moved
 
     return tangent
-
-
-def _big_rates(
-    s: float, big: np.ndarray, d: np.ndarray, plus: np.ndarray, minus: np.ndarray, steps: np.ndarray
-) -> np.ndarray:
-    out = np.empty(len(big))
-    tangent_rates(s, big, d, plus, minus, steps, out)
-    return out
 
 
 def _ended(

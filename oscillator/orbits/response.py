@@ -3,8 +3,9 @@
 :func:`response` runs one return of the motion from its section point and reads the measures from
 the run's own smooth pieces and events, not from samples: each piece (a mode's flow between two
 switches, :class:`~oscillator.hybrid.record.Segment`) is integrated again from its start with
-the integrals below carried along and the interior extrema located as roots (SciPy's DOP853 at
-``rtol = atol = 1e-12`` with events), and every switch is read where it happened.  With ``T`` the
+the integrals below carried along and the interior extrema located as roots (DOP853 at
+``rtol = atol = 1e-12``, compiled: :mod:`oscillator.orbits.pieces`), and every switch is
+read where it happened.  With ``T`` the
 forcing period and ``nT`` the return's length, per mass ``i``:
 
 * ``x_max``, ``x_min`` (m): the extreme displacements, each at a velocity zero (an event of the
@@ -35,12 +36,10 @@ contact + friction`` (:attr:`Response.balance`, zero to the integration's tolera
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
@@ -49,8 +48,9 @@ from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
-from oscillator.model.kernels import rates
 from oscillator.model.parameters import Parameters, check_count
+from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece
+from oscillator.orbits.tangent import INTEGRALS
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -91,10 +91,6 @@ def unit_of(column: str) -> str:
     """The unit of a measure's column (``impact_max_right``: ``m/s``)."""
     name = column.removeprefix("energy_") if column.startswith("energy_") else column.rsplit("_", 1)[0]
     return UNITS[name]
-
-
-#: The re-integration's tolerances (the run's own are CVODE's 1e-10).
-_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -180,6 +176,8 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
 
 # The integrals carried along a piece: x1^2, x2^2, a1^2, a2^2, then the energies.
 _SQUARES, _ENERGY = 0, 4
+#: The re-integration's tolerances (the run's own are CVODE's 1e-10).
+TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -195,25 +193,18 @@ class _Piece:
     @classmethod
     def of(cls, segment: Segment, p: Parameters) -> _Piece:
         c, mode = coefficients(p), segment.mode
-        flags = (mode.sign(1), mode.sign(2), mode.left, mode.right)
-
-        def field(t: float, y: np.ndarray) -> np.ndarray:
-            return _augmented(t, y, c, flags)
-
-        events = [velocity_extremum(1, c, flags), velocity_extremum(2, c, flags), force_extremum(c, flags)]
-        start = np.concatenate([segment.y0, np.zeros(9)])
-        solved = solve_ivp(
-            field, (segment.t0, segment.t1), start, method="DOP853", rtol=_TOLERANCE, atol=_TOLERANCE, events=events
-        )
-        ends = [(segment.t0, segment.y0), (segment.t1, solved.y[:4, -1])]
-        speeds = [[abs(y[2 * i - 1]) for _, y in ends] for i in (1, 2)]
+        data = article_data((mode.sign(1), mode.sign(2), mode.left, mode.right), np.zeros(0, np.int64), c)
+        start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
+        solved = integrate_piece(ARTICLE_PIECE, data, (segment.t0, segment.t1), start, rtol=TOLERANCE, atol=TOLERANCE)
+        ends = [segment.y0, solved.end[:4]]
+        speeds = [[abs(y[2 * i - 1]) for y in ends] for i in (1, 2)]
         for i in (1, 2):
-            speeds[i - 1] += [abs(y[2 * i - 1]) for y in solved.y_events[i - 1]]
-        forces = [abs(_left_force(y, c)) for _, y in ends] + [abs(_left_force(y, c)) for y in solved.y_events[2]]
-        right = [max(float(p.K6 * (y[0] - p.d1)), 0.0) for _, y in ends]
+            speeds[i - 1] += [abs(y[2 * i - 1]) for y in solved.states[solved.which == i - 1]]
+        forces = [abs(_left_force(y, c)) for y in [*ends, *solved.states[solved.which == 2]]]
+        right = [max(float(p.K6 * (y[0] - p.d1)), 0.0) for y in ends]
         return cls(
             segment,
-            solved.y[4:, -1],
+            solved.end[4:],
             (max(speeds[0]), max(speeds[1])),
             (max(right) if mode.right else 0.0, max(forces) if mode.left else 0.0),
         )
@@ -222,42 +213,6 @@ class _Piece:
 def _left_force(y: np.ndarray, c: np.ndarray) -> float:
     """The force between the masses in contact (N): ``K3 (x1 - x2 + d) + C3 (v1 - v2)``."""
     return float(c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3]))
-
-
-def _augmented(t: float, y: np.ndarray, c: np.ndarray, flags: tuple[int, int, bool, bool]) -> np.ndarray:
-    """The state's field and the integrals' integrands (:func:`~oscillator.model.kernels.rates`)."""
-    s1, s2, left, right = flags
-    v1, a1, v2, a2, forcing, feedback, damping, friction = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
-    contact = c[C3] * (y[1] - y[3]) ** 2 if left else 0.0
-    return np.array(
-        [v1, a1, v2, a2, y[0] ** 2, y[2] ** 2, a1**2, a2**2, forcing, feedback, damping - contact, contact, friction]
-    )
-
-
-def velocity_extremum(
-    mass: int, c: np.ndarray, flags: tuple[int, int, bool, bool]
-) -> Callable[[float, np.ndarray], float]:
-    """An event where mass ``mass``'s acceleration vanishes (its speed is extreme)."""
-    s1, s2, left, right = flags
-
-    def event(t: float, y: np.ndarray) -> float:
-        r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
-        return float(r[2 * mass - 1]) if (s1 if mass == 1 else s2) else 1.0
-
-    return event
-
-
-def force_extremum(c: np.ndarray, flags: tuple[int, int, bool, bool]) -> Callable[[float, np.ndarray], float]:
-    """An event where the force between the masses is extreme: ``K3 zdot1 + C3 (a1 - a2) = 0``."""
-    s1, s2, left, right = flags
-
-    def event(t: float, y: np.ndarray) -> float:
-        if not left:
-            return 1.0
-        r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
-        return float(c[K3] * (y[1] - y[3]) + c[C3] * (r[1] - r[3]))
-
-    return event
 
 
 def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, float]:

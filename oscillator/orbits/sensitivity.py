@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import solve_ivp
 
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.record import Segment
@@ -45,7 +44,8 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
 from oscillator.model.system import ARTICLE
-from oscillator.orbits.tangent import INTEGRALS, force_gradient, tangent_rates, threshold_gradient
+from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece
+from oscillator.orbits.tangent import INTEGRALS, force_gradient, threshold_gradient
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -154,12 +154,6 @@ def mode_flags(mode: Mode) -> tuple[int, int, bool, bool]:
     return mode.sign(1), mode.sign(2), mode.left, mode.right
 
 
-def _rates(t: float, state: np.ndarray, c: np.ndarray, columns: np.ndarray, mode: Mode) -> np.ndarray:
-    out = np.empty_like(state)
-    tangent_rates(t, state, c, columns, *mode_flags(mode), out)
-    return out
-
-
 def _pack(y: np.ndarray, sigma: np.ndarray, k: int) -> np.ndarray:
     return np.concatenate([y, np.zeros(INTEGRALS), sigma.ravel(), np.zeros(INTEGRALS * k)])
 
@@ -240,35 +234,22 @@ def _piece(
     segment: Segment, sigma: np.ndarray, tau0: np.ndarray, c: np.ndarray, columns: np.ndarray, marks: Sequence[float]
 ) -> tuple[Piece, dict[float, np.ndarray]]:
     """One segment integrated again with the tangent system from ``sigma`` at its start."""
-    from oscillator.orbits.response import force_extremum, velocity_extremum
-
     k = len(columns)
     mode = segment.mode
-    flags = mode_flags(mode)
-    events = [velocity_extremum(1, c, flags), velocity_extremum(2, c, flags), force_extremum(c, flags)]
+    data = article_data(mode_flags(mode), columns, c)
     start = _pack(segment.y0, sigma, k)
-    solved = solve_ivp(
-        lambda t, s: _rates(t, s, c, columns, mode),
-        (segment.t0, segment.t1),
-        start,
-        method="DOP853",
-        rtol=_TOLERANCE,
-        atol=_TOLERANCE,
-        events=events if segment.t1 > segment.t0 else None,
-        dense_output=True,
-    )
-    end = solved.y[:, -1]
+    span = (segment.t0, segment.t1)
+    solved = integrate_piece(ARTICLE_PIECE, data, span, start, rtol=_TOLERANCE, atol=_TOLERANCE, dense=True)
+    end = solved.end
     body = 4 + INTEGRALS
     extrema = [
-        (which, float(t), y[:4].copy(), y[body : body + 4 * k].reshape(4, k))
-        for which, times, states in zip(
-            ("v1", "v2", "left"), solved.t_events or [], solved.y_events or [], strict=False
-        )
-        for t, y in zip(times, states, strict=True)
+        (("v1", "v2", "left")[which], float(t), y[:4].copy(), y[body : body + 4 * k].reshape(4, k))
+        for which, t, y in zip(solved.which, solved.times, solved.states, strict=True)
     ]
-    inside = {t: solved.sol(t) for t in marks if segment.t0 <= t < segment.t1} if solved.sol is not None else {}
+    moving = segment.t1 > segment.t0
+    inside = {t: solved(t) for t in marks if segment.t0 <= t < segment.t1} if moving else {}
     grid = np.linspace(segment.t0, segment.t1, 33)
-    samples = solved.sol(grid)[:4].T if solved.sol is not None and segment.t1 > segment.t0 else segment.y0[None, :]
+    samples = solved(grid)[:4].T if moving else segment.y0[None, :]
     piece = Piece(
         mode,
         segment.t0,
