@@ -225,3 +225,33 @@ def test_the_atlas_colours_by_any_response_measure_it_was_computed_with(tmp_path
         regime_atlas(resolve_case("instance-1"), x, y, measures=("loudness",))
     plain = atlas_store(tmp_path / "a", resolve_case("instance-1"), x, y, AtlasSettings())
     assert "measures" not in plain.identity
+
+
+def test_newton_asked_for_less_than_the_maps_accuracy_stops_at_its_best_iterate():
+    """At CVODE's 1e-12 the period map is accurate to about 1e-10: Newton asked for 1e-13 with
+    ``floor`` stops where the residual no longer halves and returns its best iterate (the orbit to
+    the map's accuracy), in a few maps instead of chasing the noise."""
+    from oscillator.orbits.shooting import FLOOR, _scale, newton, tightened
+
+    orbit = find_orbit("instance-1", Omega=1.6)
+    case = tightened(orbit.case, {})
+    state, image, history = newton(case, orbit.section, orbit.state, 1, tol=1e-13, max_iterations=20, floor=True)
+    assert len(history) <= 4 and history[-1] == min(history) <= FLOOR * _scale(case)
+    assert np.max(np.abs(image.end - state)) == history[-1]
+    assert np.max(np.abs(state - find_orbit(case, guess=orbit.state, tol=1e-10).state)) < 1e-9
+
+
+def test_a_branchs_measures_are_those_of_its_orbits_refined():
+    """branch_responses measures each point's orbit refined to the map's accuracy (on Newton's last
+    run, not a run of its own): the measures of the orbit Newton finds there to 1e-10."""
+    from oscillator import continue_orbit
+    from oscillator.orbits.response import branch_responses
+
+    branch = continue_orbit("instance-1", param="Omega", start=1.79, stop=1.80, step=0.005, max_points=8)
+    table = branch_responses(branch)
+    assert len(table) == 8
+    for row, point in zip(table.itertuples(index=False), branch.points.itertuples(index=False), strict=True):
+        state = [point.x1, point.v1, point.x2, point.v2]
+        refined = find_orbit(resolve_case("instance-1", Omega=point.Omega), guess=state, tol=1e-10).response()
+        for name in ("energy_forcing", "x_max_m1", "v_peak_m2", "rest_m2"):
+            assert getattr(row, name) == pytest.approx(refined.columns()[name], rel=1e-10, abs=1e-10), name

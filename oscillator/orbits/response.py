@@ -44,6 +44,7 @@ import numpy as np
 from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
+from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case, resolve_case
 from oscillator.model.events import EventKind
@@ -66,6 +67,7 @@ __all__ = [
     "Response",
     "branch_responses",
     "impact_speeds",
+    "measured",
     "response",
     "unit_of",
 ]
@@ -123,9 +125,14 @@ def response(case: Case, periods: int = 1) -> Response:
     if not isinstance(case, Case):  # a declared system's measures: orbit_measures(find_orbit(chain))
         raise InputError(not_a_case(case), field="case")
     check_count(periods, "periods", 1, 100_000)
-    p = case.parameters
+    span = periods * case.parameters.period
+    return measured(simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True)), periods)
+
+
+def measured(result: Result, periods: int) -> Response:
+    """The response measures of a run of ``periods`` forcing periods that kept its segments."""
+    p = result.case.parameters
     span = periods * p.period
-    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
     pieces = [_Piece.of(segment, p) for segment in result.segments if segment.t1 > segment.t0]
     mass = {i: _mass_measures(pieces, i, span) for i in (1, 2)}
     events = result.events
@@ -145,12 +152,13 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
     """The response measures at every point of a continued branch: one row per point with the
     parameter, ``stable``, ``piece`` and every measure of :meth:`Response.columns` (the
     frequency response of the branch, when the parameter is ``Omega``).  Each point's orbit is
-    refined by Newton to :data:`REFINE` first (it stays as it is where Newton fails: a grazing or
-    sliding point)."""
+    refined by Newton to :data:`REFINE` first, or to where the period map's noise stops it
+    (:func:`~oscillator.orbits.shooting.newton`'s ``floor``), and measured on Newton's last run;
+    it stays as it is where Newton fails (a grazing or sliding point)."""
     import pandas as pd
 
     from oscillator.errors import OscillatorError
-    from oscillator.orbits.shooting import find_orbit
+    from oscillator.orbits.shooting import newton, tightened
 
     if branch.case is None:
         raise InputError(
@@ -161,16 +169,15 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
         values = point._asdict()
         state = {name: float(values[name]) for name in branch.case.system.state}
         case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
+        guess, period = np.array(list(state.values())), branch.period
         try:
-            refined = find_orbit(case, period=branch.period, guess=list(state.values()), tol=REFINE)
-            case = refined.one_period()
+            tight = tightened(case, {})
+            _, image, _ = newton(tight, branch.section, guess, period, tol=REFINE, max_iterations=20, floor=True)
+            measures = measured(image.result, period)
         except OscillatorError:
-            pass
-        measured = response(case, branch.period)
-        rows.append(
-            {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
-            | measured.columns()
-        )
+            measures = response(case, period)
+        row = {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
+        rows.append(row | measures.columns())
     return pd.DataFrame(rows)
 
 

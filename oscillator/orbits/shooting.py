@@ -65,6 +65,10 @@ MAX_ITERATIONS = 200
 MAX_TRANSIENT = 1_000_000
 #: CVODE's tolerances for orbits unless the caller sets them.
 ORBIT_RTOL = 1e-12
+#: The period map's own accuracy at :data:`ORBIT_RTOL`, relative to the state's scale: a residual
+#: below it is the map's noise (measured: 5e-12 to 6e-11 from one Newton step to the next at an
+#: orbit of Instance 1), which Newton asked for less cannot follow (:func:`newton`'s ``floor``).
+FLOOR = 1e-10
 #: The state's names (the article's system: :data:`oscillator.model.system.ARTICLE`).
 STATE = ARTICLE.state
 
@@ -367,14 +371,21 @@ def newton(
     tol: float,
     max_iterations: int,
     first_signature: list[Signature] | None = None,
+    floor: bool = False,
 ) -> tuple[np.ndarray, PeriodMap, list[float]]:
     """Newton's method on ``P(y) - y``; the fixed point, the map there and the residuals.
+
+    It stops where the residual is within ``tol`` of the state's scale; with ``floor``, also where
+    the residual, below the map's own accuracy (:data:`FLOOR`), no longer halves in a step: the
+    best iterate is returned, its residual the last of the history (a ``tol`` below the map's
+    accuracy is otherwise chased through its noise, and met by chance or not at all).
 
     ``first_signature``, when given, receives the :func:`cyclic_signature` of the map at the
     guess (to tell whether Newton went from one kind of motion to another).
     """
     history: list[float] = []
     y = np.array(y, dtype=float)
+    best: tuple[np.ndarray, PeriodMap, int] | None = None
     for _ in range(max_iterations + 1):
         image = period_map(case, t0, y, periods)
         if first_signature is not None and not first_signature:
@@ -383,6 +394,10 @@ def newton(
         history.append(float(np.max(np.abs(residual))))
         if history[-1] <= tol * _scale(case):
             return y, image, history
+        if best is None or history[-1] < history[best[2]]:
+            best = (y, image, len(history) - 1)
+        if floor and history[-1] <= FLOOR * _scale(case) and len(history) > 1 and history[-1] > history[-2] / 2:
+            return best[0], best[1], history[: best[2] + 1]  # at the map's noise: its best iterate
         if len(history) > max_iterations:
             break
         matrix, residual = fixed_point_system(image)
