@@ -181,6 +181,30 @@ def _start(command: list[str]) -> subprocess.Popen:
 LONG_RUN = ["run", "instance-1", "--t-end", "40000", "--no-plots", "--quiet"]
 
 
+#: A Ctrl-C that lands in a finalizer (numba frees its LLVM objects at any time): Python prints it
+#: as an ignored exception with a traceback and goes on; the command's hook delivers it again.
+FINALIZER = """
+import sys
+from oscillator.cli.app import _interrupt_in_a_finalizer
+sys.unraisablehook = _interrupt_in_a_finalizer
+class Freed:
+    def __del__(self):
+        raise KeyboardInterrupt
+try:
+    Freed()
+    import time
+    time.sleep(5)
+    print("not interrupted")
+except KeyboardInterrupt:
+    print("interrupted")
+"""
+
+
+def test_a_ctrl_c_in_a_finalizer_reaches_the_command_without_a_traceback():
+    done = subprocess.run([sys.executable, "-c", FINALIZER], capture_output=True, text=True, timeout=TIMEOUT)
+    assert done.stdout.strip() == "interrupted" and done.stderr == "", (done.stdout, done.stderr)
+
+
 @pytest.mark.slow
 def test_sigint_keeps_the_run_so_far_marked_interrupted(tmp_path):
     folder = tmp_path / "interrupted"
