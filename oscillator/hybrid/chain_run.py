@@ -150,13 +150,18 @@ class _Run:
 
     def result(self, status: Status, message: str, t: float, y: np.ndarray) -> ChainResult:
         chain = self.chain
-        columns = ["t", *state_columns(chain), *(f"mode:{chain.elements[k].name}" for k in self.switching)]
-        data = np.concatenate(self.rows) if self.rows else np.empty((0, len(columns)))
-        trajectory = pd.DataFrame(data, columns=columns)
-        for k in self.switching:
-            trajectory[f"mode:{chain.elements[k].name}"] = trajectory[f"mode:{chain.elements[k].name}"].astype("int64")
-        events = pd.DataFrame([e.row() for e in self.events], columns=list(ChainEvent.columns()))
-        events = events.astype({"t": "float64", "mode_before": "int64", "mode_after": "int64"})
+        names = ["t", *state_columns(chain)]
+        modes = [f"mode:{chain.elements[k].name}" for k in self.switching]
+        data = np.concatenate(self.rows) if self.rows else np.empty((0, len(names) + len(modes)))
+        columns: dict[str, np.ndarray] = {name: data[:, j] for j, name in enumerate(names)}
+        columns |= {name: data[:, len(names) + j].astype(np.int64) for j, name in enumerate(modes)}
+        trajectory = pd.DataFrame(columns, copy=False)
+        if self.events:  # column by column: each column's type told by its values
+            values = zip(*(e.row() for e in self.events), strict=True)
+            events = pd.DataFrame(dict(zip(ChainEvent.columns(), values, strict=True)))
+        else:
+            events = pd.DataFrame(columns=list(ChainEvent.columns()))
+            events = events.astype({"t": "float64", "mode_before": "int64", "mode_after": "int64"})
         size = self.arrays.size
         work = {e.name: float(y[size + k]) for k, e in enumerate(chain.elements)}
         return ChainResult(chain, events, trajectory, work, status, message, t, y.copy())

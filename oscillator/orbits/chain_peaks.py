@@ -96,7 +96,9 @@ def peak_places(run: ChainResult) -> dict[str, Peak]:
     contacts = [(k, e.name) for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
     names = [f"a_max:{m.name}" for m in chain.masses] + [f"force_max:{name}" for _, name in contacts]
     best = {name: Peak(0.0, float(t[0]), states[0], modes[0]) for name in names}
-    own = [pack(field.arrays, modes[k]) for k in range(len(t))]
+    passed = {mode.tobytes(): mode for mode in modes}  # each mode the run passed, packed once
+    packed = {key: pack(field.arrays, mode) for key, mode in passed.items()}  # (the calls rewrite its scratch)
+    own = [packed[mode.tobytes()] for mode in modes]
     values = [field.at(t[k], states[k], own[k]) for k in range(len(t))]
     for k in range(len(t) - 1):
         left, data = values[k], own[k]
