@@ -174,7 +174,7 @@ def design(
             out_dir if out_dir is not None else new_folder(resolved, "design"), problem, settings, count
         )
         store.check()
-        processes = check_workers(workers)
+        processes = check_workers(workers, starts=count * problem.band * problem.starts)
         lock, client = locked(store.folder, scheduler)
     with computing(store, "surveys", lock, client):
         from oscillator.designing.optimise import design as run_design

@@ -55,7 +55,12 @@ FullTransientOption = Annotated[
 ]
 #: ``--workers`` and ``--scheduler``: where the many runs run.
 WorkersOption = Annotated[
-    int | None, typer.Option("--workers", metavar="N", help="Local processes (default: every core).")
+    int | None,
+    typer.Option(
+        "--workers",
+        metavar="N",
+        help="Local processes (default: every core; basins and design of fewer than 1,000 landings: this process).",
+    ),
 ]
 SchedulerOption = Annotated[
     str | None,
