@@ -8,13 +8,14 @@ still starting prints one line, not a traceback.
 import signal
 import sys
 
-from oscillator.process import interrupted_exit
+from oscillator.process import interrupted_exit, interrupts_from_finalizers
 
 
 def main() -> None:
     """Run the ``oscillator`` command (see :mod:`oscillator.cli.app`)."""
     import os
 
+    interrupts_from_finalizers()
     os.environ.setdefault("OSCILLATOR_COMPILE_NOTICE", "0")  # the command says it its own way
     try:
         from oscillator.cli.app import main as command

@@ -182,11 +182,10 @@ LONG_RUN = ["run", "instance-1", "--t-end", "40000", "--no-plots", "--quiet"]
 
 
 #: A Ctrl-C that lands in a finalizer (numba frees its LLVM objects at any time): Python prints it
-#: as an ignored exception with a traceback and goes on; the command's hook delivers it again.
+#: as an ignored exception with a traceback and goes on; the entry point's hook delivers it again.
 FINALIZER = """
-import sys
-from oscillator.cli.app import _interrupt_in_a_finalizer
-sys.unraisablehook = _interrupt_in_a_finalizer
+from oscillator.process import interrupts_from_finalizers
+interrupts_from_finalizers()
 class Freed:
     def __del__(self):
         raise KeyboardInterrupt

@@ -20,10 +20,8 @@ from __future__ import annotations
 import importlib
 import os
 import pkgutil
-import signal
 import sys
-import threading
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 from rich.text import Text
@@ -86,25 +84,11 @@ def _tolerant_streams() -> None:
                 pass
 
 
-def _interrupt_in_a_finalizer(unraisable: Any, default: Any = sys.unraisablehook) -> None:
-    """A Ctrl-C that lands while a finalizer runs (numba's LLVM objects are freed at any time) is
-    not raised but printed as an ignored exception, with its traceback: delivered again to the main
-    thread instead, once out of here (from another thread: here it would be raised in this hook),
-    where the command's own handling of Ctrl-C takes it."""
-    if isinstance(unraisable.exc_value, KeyboardInterrupt) and hasattr(signal, "pthread_kill"):
-        main_thread = threading.main_thread().ident
-        assert main_thread is not None
-        threading.Timer(0.01, signal.pthread_kill, (main_thread, signal.SIGINT)).start()
-        return
-    default(unraisable)
-
-
 def main(args: list[str] | None = None) -> None:
     """Entry point of the ``oscillator`` command: every outcome is an exit code and at most one
     line of error, never a traceback (see the module docstring for the codes)."""
     args = sys.argv[1:] if args is None else list(args)
     _tolerant_streams()
-    sys.unraisablehook = _interrupt_in_a_finalizer
     try:
         command = typer.main.get_command(app)
         code = command.main(args=args, prog_name="oscillator", standalone_mode=False)

@@ -14,16 +14,8 @@ import numpy as np
 from oscillator.errors import OscillatorError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Bifurcation, Skipped, skipped
-from oscillator.orbits.shooting import (
-    PeriodMap,
-    fixed_point_system,
-    moving_multipliers,
-    multipliers_of,
-    newton,
-    period_map,
-    pinned_rows,
-    verdict_of,
-)
+from oscillator.orbits.multipliers import moving_multipliers, multipliers_of, verdict_of
+from oscillator.orbits.shooting import PeriodMap, fixed_point_system, newton, period_map, pinned_rows
 from oscillator.orbits.signature import Signature, cyclic_signature
 
 __all__ = ["Continuer", "Located", "OrbitPoint", "critical_multiplier", "kind_of_change", "natural", "slope"]

@@ -174,7 +174,7 @@ def monodromy_derivative(
 
 
 def multiplier_derivatives(monodromy: np.ndarray, derivative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The multipliers (largest modulus first, as :func:`~oscillator.orbits.shooting.multipliers_of`)
+    """The multipliers (largest modulus first, as :func:`~oscillator.orbits.multipliers.multipliers_of`)
     and their derivatives (multipliers x k, complex): ``w^H dM v / (w^H v)``; ``nan`` for a multiplier
     within :data:`SIMPLE` of another (a repeated one has no derivative)."""
     values, right = np.linalg.eig(monodromy)

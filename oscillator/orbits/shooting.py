@@ -37,6 +37,7 @@ from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
 from oscillator.model.phase_space import Mode
 from oscillator.model.system import ARTICLE
+from oscillator.orbits.multipliers import multipliers_of, verdict_of
 from oscillator.orbits.signature import Signature, cyclic_signature, event_signature
 from oscillator.presenting import presenter
 from oscillator.text import shown
@@ -317,22 +318,6 @@ class Orbit:
         return "; ".join(words)
 
 
-def moving_multipliers(monodromy: np.ndarray, resting: tuple[int, ...]) -> np.ndarray:
-    """The multipliers of the coordinates of the masses that move.
-
-    A mass at rest all period contributes the exact multipliers 1 (in ``x_i``, neutral) and 0
-    (in ``v_i``): its row ``x_i`` of ``M`` is ``e_(x_i)``, its row and column ``v_i`` are zero, so
-    ``M`` is block triangular and its other multipliers are those of the block left.
-    """
-    free = [k for k in range(4) if (k // 2 + 1) not in resting]
-    return np.linalg.eigvals(monodromy[np.ix_(free, free)]) if free else np.empty(0, dtype=complex)
-
-
-def verdict_of(monodromy: np.ndarray, resting: tuple[int, ...]) -> bool:
-    """Whether no disturbance grows: every multiplier of the moving masses inside the unit circle."""
-    return bool(np.all(np.abs(moving_multipliers(monodromy, resting)) < 1.0))
-
-
 def discontinuities(case: Case, image: PeriodMap) -> tuple[str, ...]:
     """The velocities ``"v1"``, ``"v2"`` in which the map is discontinuous at its start: those of
     the masses resting there with ``|A_i| > mu_k g + p_i``.  Static friction holds such a mass;
@@ -344,12 +329,6 @@ def discontinuities(case: Case, image: PeriodMap) -> tuple[str, ...]:
     return tuple(
         f"v{mass}" for mass in (1, 2) if mode.sign(mass) == 0 and abs(forces[mass - 1]) > kinetic_threshold(p, mass)
     )
-
-
-def multipliers_of(monodromy: np.ndarray) -> np.ndarray:
-    """The eigenvalues of the monodromy matrix, largest modulus first."""
-    values = np.linalg.eigvals(monodromy)
-    return values[np.argsort(-np.abs(values), kind="stable")]
 
 
 def _state_text(y: np.ndarray) -> str:
