@@ -137,21 +137,29 @@ def _extrema(kind: int, t: float, y: Vector, data: Vector, g: Vector) -> None:  
 
 
 @njit(cache=True)
+def _stage(
+    kind: int, data: Vector, a: Vector, tau: float, t: float, y: Vector, h: float, k: np.ndarray, s: int
+) -> None:  # pragma: no cover - compiled
+    """Stage ``s``: ``k[s]`` = the field at ``(t + tau h, y + h sum_j a[j] k[j])``, ``j < s``."""
+    size = y.shape[0]
+    work = np.empty(size)
+    for i in range(size):
+        total = 0.0
+        for j in range(s):
+            total += a[j] * k[j, i]
+        work[i] = y[i] + h * total
+    _field(kind, t + tau * h, work, data, k[s])
+
+
+@njit(cache=True)
 def _attempt(
     kind: int, data: Vector, t: float, y: Vector, h: float, k: np.ndarray, out: Vector
 ) -> None:  # pragma: no cover - compiled
     """One Runge-Kutta step from ``(t, y)`` by ``h`` (``k[0]`` the field there): the stages in
     ``k``, the new state in ``out`` (SciPy's ``rk_step`` without its last stage)."""
-    size = y.shape[0]
-    work = np.empty(size)
     for s in range(1, _STAGES):
-        for i in range(size):
-            total = 0.0
-            for j in range(s):
-                total += _A[s, j] * k[j, i]
-            work[i] = y[i] + h * total
-        _field(kind, t + _C[s] * h, work, data, k[s])
-    for i in range(size):
+        _stage(kind, data, _A[s], _C[s], t, y, h, k, s)
+    for i in range(y.shape[0]):
         total = 0.0
         for j in range(_STAGES):
             total += _B[j] * k[j, i]
@@ -241,15 +249,8 @@ def _dense(
 ) -> None:  # pragma: no cover
     """``out`` (7 x size): the step's dense output's coefficients (SciPy's ``_dense_output_impl``)."""
     size = y.shape[0]
-    work = np.empty(size)
     for e in range(_A_EXTRA.shape[0]):
-        s = _STAGES + 1 + e
-        for i in range(size):
-            total = 0.0
-            for j in range(s):
-                total += _A_EXTRA[e, j] * k[j, i]
-            work[i] = y[i] + h * total
-        _field(kind, t + _C_EXTRA[e] * h, work, data, k[s])
+        _stage(kind, data, _A_EXTRA[e], _C_EXTRA[e], t, y, h, k, _STAGES + 1 + e)
     for i in range(size):
         delta = y_new[i] - y[i]
         out[0, i] = delta
