@@ -192,7 +192,7 @@ class Freed:
 try:
     Freed()
     import time
-    time.sleep(5)
+    time.sleep(60)  # ended by the interrupt at once; 60 s only if it never comes
     print("not interrupted")
 except KeyboardInterrupt:
     print("interrupted")

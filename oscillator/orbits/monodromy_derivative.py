@@ -37,7 +37,8 @@ from oscillator.model.kernels import field_jacobian
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import rest_projection
-from oscillator.orbits.sensitivity import Crossing, columns_of, crossings, mode_flags, selector_of
+from oscillator.orbits.pieces import mode_flags
+from oscillator.orbits.sensitivity import Crossing, columns_of, crossings, selector_of
 from oscillator.orbits.tangent import field_gradient, jacobian_gradient, monodromy_rates
 
 __all__ = ["SIMPLE", "monodromy_derivative", "multiplier_derivatives"]

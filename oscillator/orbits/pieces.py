@@ -47,6 +47,7 @@ from oscillator.engines.dop853 import (
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian
 from oscillator.model.fields import C3, K3
 from oscillator.model.kernels import rates
+from oscillator.model.phase_space import Mode
 from oscillator.model.types import Vector
 from oscillator.orbits.tangent import tangent_rates
 
@@ -58,6 +59,7 @@ __all__ = [
     "chain_data",
     "chain_tangent_rates",
     "integrate_piece",
+    "mode_flags",
 ]
 
 #: The fields: the article's tangent system (the response integrals alone with no parameter), a
@@ -67,6 +69,11 @@ _STAGES = _B.shape[0]
 _EPS = float(np.finfo(float).eps)
 #: The extremum functions of the article's pieces: ``a1``, ``a2``, the contact force's rate.
 EXTREMA = 3
+
+
+def mode_flags(mode: Mode) -> tuple[int, int, bool, bool]:
+    """The compiled kernels' description of a mode: each mass's velocity sign and the contacts."""
+    return mode.sign(1), mode.sign(2), mode.left, mode.right
 
 
 def article_data(flags: tuple[int, int, bool, bool], columns: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -50,7 +50,7 @@ from oscillator.io.cases import Case, not_a_case, resolve_case
 from oscillator.model.events import EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.parameters import Parameters, check_count
-from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece
+from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece, mode_flags
 from oscillator.orbits.tangent import INTEGRALS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -200,7 +200,7 @@ class _Piece:
     @classmethod
     def of(cls, segment: Segment, p: Parameters) -> _Piece:
         c, mode = coefficients(p), segment.mode
-        data = article_data((mode.sign(1), mode.sign(2), mode.left, mode.right), np.zeros(0, np.int64), c)
+        data = article_data(mode_flags(mode), np.zeros(0, np.int64), c)
         start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
         solved = integrate_piece(ARTICLE_PIECE, data, (segment.t0, segment.t1), start, rtol=TOLERANCE, atol=TOLERANCE)
         ends = [segment.y0, solved.end[:4]]

@@ -44,7 +44,7 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
 from oscillator.model.system import ARTICLE
-from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece
+from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece, mode_flags
 from oscillator.orbits.tangent import INTEGRALS, force_gradient, threshold_gradient
 from oscillator.text import shown
 
@@ -61,7 +61,6 @@ __all__ = [
     "check_params",
     "columns_of",
     "crossings",
-    "mode_flags",
     "selector_of",
     "sensitivities",
     "tangent_pass",
@@ -147,11 +146,6 @@ def selector_of(params: tuple[str, ...]) -> np.ndarray:
     for j, name in enumerate(params):
         selector[_POSITION[name], j] = 1.0
     return selector
-
-
-def mode_flags(mode: Mode) -> tuple[int, int, bool, bool]:
-    """The compiled kernels' description of a mode: each mass's velocity sign and the contacts."""
-    return mode.sign(1), mode.sign(2), mode.left, mode.right
 
 
 def _pack(y: np.ndarray, sigma: np.ndarray, k: int) -> np.ndarray:
