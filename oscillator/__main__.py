@@ -8,14 +8,14 @@ still starting prints one line, not a traceback.
 import signal
 import sys
 
-from oscillator.process import interrupted_exit, interrupts_from_finalizers
+from oscillator.process import interrupted_exit, interrupts_where_safe
 
 
 def main() -> None:
     """Run the ``oscillator`` command (see :mod:`oscillator.cli.app`)."""
     import os
 
-    interrupts_from_finalizers()
+    interrupts_where_safe()
     os.environ.setdefault("OSCILLATOR_COMPILE_NOTICE", "0")  # the command says it its own way
     try:
         from oscillator.cli.app import main as command

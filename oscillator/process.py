@@ -1,13 +1,56 @@
-"""How the command's process takes an interrupt: one that lands in a finalizer, and how it ends after
-one it handled (the command and its entry point)."""
+"""How the command's process takes an interrupt: where a Ctrl-C may be raised (never inside numba's
+or llvmlite's code, nor in a finalizer), and how the process ends after one it handled."""
 
 import atexit
 import os
 import signal
 import sys
 import threading
+from types import FrameType
 
-__all__ = ["interrupted_exit", "interrupts_from_finalizers"]
+__all__ = ["in_fragile_code", "interrupted_exit", "interrupts_where_safe"]
+
+#: The packages whose code a ``KeyboardInterrupt`` must not cut short: llvmlite's objects own
+#: LLVM memory that an exception between a C call and its bookkeeping frees twice (a crash, not
+#: an error, when a later collection frees it again); numba's compiler and cache drive them.
+FRAGILE_PACKAGES = ("numba", "llvmlite")
+
+#: How long a Ctrl-C that came in fragile code waits before it is tried again (s).
+RETRY = 0.01
+
+
+def in_fragile_code(frame: FrameType | None) -> bool:
+    """Whether the code running in ``frame`` (or any frame that called it) is a finalizer
+    (``__del__``, a ``weakref.finalize`` callback) or numba's or llvmlite's: where Python would
+    drop a ``KeyboardInterrupt`` (it prints a finalizer's exception as ignored and goes on) or
+    where one leaves LLVM's objects half freed."""
+    while frame is not None:
+        module = frame.f_globals.get("__name__") or ""
+        if frame.f_code.co_name == "__del__" or module.partition(".")[0] in FRAGILE_PACKAGES:
+            return True
+        if module == "weakref" and frame.f_code.co_name == "__call__":
+            return True
+        frame = frame.f_back
+    return False
+
+
+def interrupts_where_safe() -> None:
+    """Install the command's Ctrl-C: ``KeyboardInterrupt`` at once, as Python's own handler does,
+    unless it came in fragile code (:func:`in_fragile_code`); then it is sent again a moment later
+    (from a timer thread: a handler cannot wait), until it lands where it can be raised.  Installed
+    by the entry point only: the command's process, not a program that calls its functions."""
+    if not hasattr(signal, "pthread_kill"):
+        return
+    main_thread = threading.main_thread().ident
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        if not in_fragile_code(frame):
+            raise KeyboardInterrupt
+        retry = threading.Timer(RETRY, signal.pthread_kill, (main_thread, signal.SIGINT))
+        retry.daemon = True  # not kept waiting for by an interpreter that exits
+        retry.start()
+
+    signal.signal(signal.SIGINT, handler)
 
 
 def interrupted_exit() -> None:
@@ -25,25 +68,3 @@ def interrupted_exit() -> None:
         except (OSError, ValueError):
             pass
     os._exit(130)
-
-
-def interrupts_from_finalizers() -> None:
-    """Deliver a Ctrl-C that lands while a finalizer runs to the command.
-
-    Python does not raise an exception from a finalizer: it prints it as ignored, with its
-    traceback, and goes on, and numba frees its LLVM objects at any time.  The process's hook for
-    such exceptions sends SIGINT to the main thread again instead, from a timer thread (from the
-    hook itself the interrupt would be raised in the hook), where the command's own handling of
-    Ctrl-C takes it.  Installed by the entry point only: the command's process, not a program
-    that calls the command's functions."""
-    default = sys.unraisablehook
-
-    def hook(unraisable: "sys.UnraisableHookArgs") -> None:
-        main_thread = threading.main_thread().ident
-        if isinstance(unraisable.exc_value, KeyboardInterrupt) and main_thread is not None:
-            threading.Timer(0.01, signal.pthread_kill, (main_thread, signal.SIGINT)).start()
-            return
-        default(unraisable)
-
-    if hasattr(signal, "pthread_kill"):
-        sys.unraisablehook = hook

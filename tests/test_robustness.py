@@ -26,6 +26,8 @@ from oscillator import OscillatorError, Parameters, Reason, SolverOptions, Statu
 from oscillator.analysis.sweeps import read_sweep
 from oscillator.cli.app import app
 from oscillator.io.cases import case_to_toml
+from oscillator.io.signals import interrupts_heard
+from oscillator.process import in_fragile_code
 from oscillator.report.runs import read_events_csv, read_run_folder
 
 runner = CliRunner()
@@ -181,17 +183,19 @@ def _start(command: list[str]) -> subprocess.Popen:
 LONG_RUN = ["run", "instance-1", "--t-end", "40000", "--no-plots", "--quiet"]
 
 
-#: A Ctrl-C that lands in a finalizer (numba frees its LLVM objects at any time): Python prints it
-#: as an ignored exception with a traceback and goes on; the entry point's hook delivers it again.
+#: A Ctrl-C that lands in a finalizer (numba frees its LLVM objects at any time): Python would print
+#: it as an ignored exception with a traceback and go on; the command's handler sends it again
+#: until it lands in the command's own code.
 FINALIZER = """
-from oscillator.process import interrupts_from_finalizers
-interrupts_from_finalizers()
+import os, signal, time
+from oscillator.process import interrupts_where_safe
+interrupts_where_safe()
 class Freed:
     def __del__(self):
-        raise KeyboardInterrupt
+        signal.raise_signal(signal.SIGINT)
+        print("freed")
 try:
     Freed()
-    import time
     time.sleep(60)  # ended by the interrupt at once; 60 s only if it never comes
     print("not interrupted")
 except KeyboardInterrupt:
@@ -201,7 +205,40 @@ except KeyboardInterrupt:
 
 def test_a_ctrl_c_in_a_finalizer_reaches_the_command_without_a_traceback():
     done = subprocess.run([sys.executable, "-c", FINALIZER], capture_output=True, text=True, timeout=TIMEOUT)
-    assert done.stdout.strip() == "interrupted" and done.stderr == "", (done.stdout, done.stderr)
+    assert done.stdout.split() == ["freed", "interrupted"] and done.stderr == "", (done.stdout, done.stderr)
+
+
+def _frame_of(module: str, function: str = "here"):
+    """A frame of a function ``function`` defined in a module named ``module``."""
+    namespace = {"__name__": module, "sys": sys}
+    exec(f"def {function}():\n    return sys._getframe()", namespace)
+    return namespace[function]()
+
+
+def test_fragile_code_is_numbas_llvmlites_and_finalizers():
+    assert in_fragile_code(_frame_of("llvmlite.binding.ffi")) and in_fragile_code(_frame_of("numba.core.caching"))
+    assert in_fragile_code(_frame_of("oscillator.anything", "__del__"))
+    assert not in_fragile_code(_frame_of("oscillator.hybrid.supervisor")) and not in_fragile_code(_frame_of("numbers"))
+    assert not in_fragile_code(sys._getframe()) and not in_fragile_code(None)
+
+
+def test_an_interrupt_heard_in_a_finalizer_is_remembered_not_raised_there():
+    raised_in_finalizer = []
+
+    class Freed:
+        def __del__(self):
+            try:
+                signal.raise_signal(signal.SIGINT)
+                sum(range(10))  # the handler runs here, inside the finalizer
+            except KeyboardInterrupt:
+                raised_in_finalizer.append(True)
+
+    with interrupts_heard() as heard:
+        Freed()
+        assert heard() and not raised_in_finalizer
+    with pytest.raises(KeyboardInterrupt), interrupts_heard() as heard:
+        signal.raise_signal(signal.SIGINT)  # in this test's own code: raised at once
+    assert heard()
 
 
 @pytest.mark.slow

@@ -2,10 +2,10 @@
 
 * :func:`interrupts_deferred` holds Ctrl-C while files are being written, so that a finished
   computation reaches the disk whole; the interrupt is raised when the block ends.
-* :func:`interrupts_heard` raises Ctrl-C at once, as Python does, and also remembers it: a
-  ``KeyboardInterrupt`` raised where Python drops it (in an object's ``__del__``, which a garbage
-  collection runs anywhere: llvmlite's, while numba loads its kernels) is raised again where the
-  caller next asks.
+* :func:`interrupts_heard` raises Ctrl-C at once, as Python does, unless it came in fragile code
+  (a finalizer, which a garbage collection runs anywhere, or numba's or llvmlite's code:
+  :func:`oscillator.process.in_fragile_code`), and remembers it: the caller raises it where it
+  next asks.
 * :func:`interrupts_ignored` ignores SIGINT while worker processes are spawned: they are born
   ignoring it, so a Ctrl-C that reaches a worker before it is ready (its imports take seconds)
   cannot print a traceback.
@@ -25,6 +25,9 @@ import signal
 import threading
 import time
 from collections.abc import Callable, Iterator
+from types import FrameType
+
+from oscillator.process import in_fragile_code
 
 __all__ = ["interrupts_deferred", "interrupts_heard", "interrupts_ignored", "prepare_worker", "quiet_resource_tracker"]
 
@@ -55,17 +58,20 @@ def interrupts_deferred() -> Iterator[None]:
 @contextlib.contextmanager
 def interrupts_heard() -> Iterator[Callable[[], bool]]:
     """Raise ``KeyboardInterrupt`` at SIGINT, as Python's own handler does, and yield a function
-    that says whether one came during the block (a caller that asks it where it can stop raises
-    the interrupt again: one dropped in a ``__del__`` is not lost).  Where SIGINT is not Python's
-    own (a worker ignoring it, a block deferring it, a program's handler), it is left as it is."""
+    that says whether one came during the block.  One that comes in fragile code (a finalizer,
+    where Python would drop it, or numba's or llvmlite's code, which it would leave with LLVM's
+    objects half freed) is only remembered: the caller, which asks where it can stop, raises it.
+    Where SIGINT is not Python's own (a worker ignoring it, a block deferring it, the command's
+    handler: :func:`oscillator.process.interrupts_where_safe`), it is left as it is."""
     if not _main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield lambda: False
         return
     heard: list[int] = []
 
-    def handler(signum: int, frame: object) -> None:
+    def handler(signum: int, frame: FrameType | None) -> None:
         heard.append(signum)
-        raise KeyboardInterrupt
+        if not in_fragile_code(frame):
+            raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
     try:
