@@ -424,3 +424,34 @@ def test_a_saved_chain_run_reads_back_as_it_was(tmp_path):
     assert again.events.equals(result.events) and again.trajectory.equals(result.trajectory)
     assert again.work == pytest.approx(result.work, rel=1e-15)
     assert again.energy.residual == pytest.approx(result.energy.residual, abs=1e-12)
+
+
+def test_a_runs_tables_are_built_when_read_and_its_arrays_are_theirs(tmp_path):
+    """A run builds its tables only when they are read (a period map's are not); the times, states,
+    modes and mode-changing events the tangents and orbits read without them are the tables'
+    columns, for a run and for its folder read back; a copy reads the same tables."""
+    import dataclasses
+
+    import oscillator
+
+    result = simulate_chain(_blade(0.3), 20.0)
+    records = result._records
+    assert records._trajectory_frame is None and records._events_frame is None
+    before = result.switches()
+    copy = dataclasses.replace(result, message="a copy")
+    trajectory, events = result.trajectory, result.events
+    assert copy.trajectory is trajectory and copy.events is events
+    again = oscillator.read_run(result.save(tmp_path / "blade", figures=False, report=False))
+    for run in (result, again):
+        np.testing.assert_array_equal(run.times, trajectory.t.to_numpy())
+        np.testing.assert_array_equal(run.states, trajectory[list(result.chain.system.state)].to_numpy())
+        changed = events[events.mode_before != events.mode_after]
+        t, elements, kinds, after = run.switches()
+        np.testing.assert_array_equal(t, changed.t.to_numpy())
+        assert elements == changed.element.tolist() and kinds == changed.kind.tolist()
+        assert after == changed.mode_after.tolist()
+        for k, element in enumerate(result.chain.elements):
+            if f"mode:{element.name}" in trajectory:
+                np.testing.assert_array_equal(run.mode_of(element.name), trajectory[f"mode:{element.name}"].to_numpy())
+                np.testing.assert_array_equal(run.modes()[:, k], trajectory[f"mode:{element.name}"].to_numpy())
+    assert len(before[0]) >= 4 and np.array_equal(before[0], result.switches()[0])

@@ -54,20 +54,105 @@ def state_columns(chain: FrictionChain) -> tuple[str, ...]:
     return chain.system.state
 
 
+class _ChainRecords:
+    """A chain run's rows and events until its tables are asked for: each table is built then,
+    once (a period map whose tables nobody reads builds none), and kept here, so every copy of the
+    result (``dataclasses.replace``) reads the same tables.  The times, the states and the modes
+    are read from the rows without a table (:meth:`ChainResult.times` and its neighbours)."""
+
+    def __init__(self, chain: FrictionChain, data: np.ndarray, events: list[ChainEvent]) -> None:
+        self.chain, self.data, self.events = chain, data, events
+        self.switching = _switching(chain)
+        self._events_frame: pd.DataFrame | None = None
+        self._trajectory_frame: pd.DataFrame | None = None
+
+    def events_frame(self) -> pd.DataFrame:
+        if self._events_frame is None:
+            if self.events:  # column by column: each column's type told by its values
+                values = zip(*(e.row() for e in self.events), strict=True)
+                self._events_frame = pd.DataFrame(dict(zip(ChainEvent.columns(), values, strict=True)))
+            else:
+                empty = pd.DataFrame(columns=list(ChainEvent.columns()))
+                self._events_frame = empty.astype({"t": "float64", "mode_before": "int64", "mode_after": "int64"})
+        return self._events_frame
+
+    def switches(self) -> tuple[np.ndarray, list[str], list[str], list[int]]:
+        if self._events_frame is None or self.events:  # the run's own events: no table needed
+            found = [e for e in self.events if e.mode_before != e.mode_after]
+            return (
+                np.array([e.t for e in found], dtype=float),
+                [e.element for e in found],
+                [str(e.kind) for e in found],
+                [int(e.mode_after) for e in found],
+            )
+        events = self._events_frame[self._events_frame.mode_before != self._events_frame.mode_after]
+        return (
+            events.t.to_numpy(float),
+            [str(name) for name in events.element],
+            [str(kind) for kind in events.kind],
+            [int(m) for m in events.mode_after],
+        )
+
+    def trajectory_frame(self) -> pd.DataFrame:
+        if self._trajectory_frame is None:
+            chain, data = self.chain, self.data
+            names = ["t", *state_columns(chain)]
+            columns: dict[str, np.ndarray] = {name: data[:, j] for j, name in enumerate(names)}
+            for j, k in enumerate(self.switching):
+                columns[f"mode:{chain.elements[k].name}"] = data[:, len(names) + j].astype(np.int64)
+            self._trajectory_frame = pd.DataFrame(columns, copy=False)
+        return self._trajectory_frame
+
+
+def chain_records_of(chain: FrictionChain, events: pd.DataFrame, trajectory: pd.DataFrame) -> _ChainRecords:
+    """Records holding tables already built (a run folder read back)."""
+    names = [*("t", *state_columns(chain)), *(f"mode:{chain.elements[k].name}" for k in _switching(chain))]
+    records = _ChainRecords(chain, trajectory.reindex(columns=names).to_numpy(float), [])
+    records._events_frame, records._trajectory_frame = events, trajectory
+    return records
+
+
+def _switching(chain: FrictionChain) -> list[int]:
+    """The rows of the elements whose mode the trajectory records."""
+    return [k for k, e in enumerate(chain.elements) if e.type in _SWITCHING]
+
+
 @dataclass(frozen=True)
 class ChainResult:
     """A friction chain's run: its ``events`` (one row per event, :meth:`ChainEvent.columns`), its
     ``trajectory`` (``t``, the state columns, each switching element's mode ``mode:<element>``),
-    each element's ``work`` on the masses over the run (J), and how it ended."""
+    each element's ``work`` on the masses over the run (J), and how it ended.  The two tables are
+    built when first asked for."""
 
     chain: FrictionChain
-    events: pd.DataFrame
-    trajectory: pd.DataFrame
     work: dict[str, float]
     status: Status = Status.COMPLETE
     message: str = ""
     t_end: float = math.nan
     y_end: np.ndarray = field(default_factory=lambda: np.empty(0))
+    _records: _ChainRecords = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    @property
+    def events(self) -> pd.DataFrame:
+        return self._records.events_frame()
+
+    @property
+    def trajectory(self) -> pd.DataFrame:
+        return self._records.trajectory_frame()
+
+    @property
+    def times(self) -> np.ndarray:
+        """The trajectory's times (its ``t`` column), read without building the table."""
+        return self._records.data[:, 0]
+
+    @property
+    def states(self) -> np.ndarray:
+        """The trajectory's states, ``(rows, state)`` (its state columns, in the system's order)."""
+        return self._records.data[:, 1 : 1 + self.chain.system.size]
+
+    def switches(self) -> tuple[np.ndarray, list[str], list[str], list[int]]:
+        """The events that changed a mode: their times, elements, kinds and modes after."""
+        return self._records.switches()
 
     def plot(self) -> Figure:
         """Each mass's motion and each slider's force against time (a matplotlib figure)."""
@@ -81,18 +166,22 @@ class ChainResult:
         """Each trajectory row's mode of every element, ``(rows, elements)`` (0 for an element
         that does not switch): what the field takes at that row with
         :func:`~oscillator.model.chain_fields.pack`."""
-        modes = np.zeros((len(self.trajectory), len(self.chain.elements)))
-        for k, element in enumerate(self.chain.elements):
-            column = f"mode:{element.name}"
-            if column in self.trajectory:
-                modes[:, k] = self.trajectory[column].to_numpy(float)
+        records, size = self._records, self.chain.system.size
+        modes = np.zeros((len(records.data), len(self.chain.elements)))
+        for j, k in enumerate(records.switching):
+            modes[:, k] = records.data[:, 1 + size + j]
         return modes
+
+    def mode_of(self, element: str) -> np.ndarray:
+        """The mode of the switching element ``element`` at each trajectory row."""
+        records = self._records
+        k = [e.name for e in self.chain.elements].index(element)
+        return records.data[:, 1 + self.chain.system.size + records.switching.index(k)].astype(np.int64)
 
     @property
     def energy(self) -> ChainEnergy:
         """The work-energy balance over the run (:func:`~oscillator.model.chain_energy.audit`)."""
-        start = self.trajectory.iloc[0, 1:].to_numpy(dtype=float)
-        return audit(self.chain, start, self.y_end, self.work)
+        return audit(self.chain, self.states[0], self.y_end, self.work)
 
 
 class _Run:
@@ -103,7 +192,7 @@ class _Run:
         self.rows: list[np.ndarray] = []
         self.events: list[ChainEvent] = []
         self.recent: deque[float] = deque(maxlen=options.storm_events)
-        self.switching = [k for k, e in enumerate(chain.elements) if e.type in _SWITCHING]
+        self.switching = _switching(chain)
         self.count = 0  # rows kept
 
     def keep(self, t: float, y: np.ndarray, mode: np.ndarray) -> None:
@@ -150,21 +239,11 @@ class _Run:
 
     def result(self, status: Status, message: str, t: float, y: np.ndarray) -> ChainResult:
         chain = self.chain
-        names = ["t", *state_columns(chain)]
-        modes = [f"mode:{chain.elements[k].name}" for k in self.switching]
-        data = np.concatenate(self.rows) if self.rows else np.empty((0, len(names) + len(modes)))
-        columns: dict[str, np.ndarray] = {name: data[:, j] for j, name in enumerate(names)}
-        columns |= {name: data[:, len(names) + j].astype(np.int64) for j, name in enumerate(modes)}
-        trajectory = pd.DataFrame(columns, copy=False)
-        if self.events:  # column by column: each column's type told by its values
-            values = zip(*(e.row() for e in self.events), strict=True)
-            events = pd.DataFrame(dict(zip(ChainEvent.columns(), values, strict=True)))
-        else:
-            events = pd.DataFrame(columns=list(ChainEvent.columns()))
-            events = events.astype({"t": "float64", "mode_before": "int64", "mode_after": "int64"})
+        width = 1 + self.arrays.size + len(self.switching)
+        data = np.concatenate(self.rows) if self.rows else np.empty((0, width))
         size = self.arrays.size
         work = {e.name: float(y[size + k]) for k, e in enumerate(chain.elements)}
-        return ChainResult(chain, events, trajectory, work, status, message, t, y.copy())
+        return ChainResult(chain, work, status, message, t, y.copy(), _ChainRecords(chain, data, self.events))
 
 
 def run_end(chain: FrictionChain, t_end: float | None) -> float:
@@ -281,10 +360,10 @@ def mode_spans(run: ChainResult, element: str, start: float, span: float) -> lis
     """``(from, to, mode)``: the spans of ``[start, start + span]`` between the switching element's
     events, each with its mode (a friction element's or slider's slip sign, ``0`` stuck; a stop's
     or contact's ``1`` closed)."""
-    trajectory, events = run.trajectory, run.events
-    mine = events[(events.element == element) & (events.mode_before != events.mode_after)]
-    times = [start, *mine.t.to_numpy(float), start + span]
-    modes = [int(trajectory[f"mode:{element}"].iloc[0]), *mine.mode_after.astype(int).tolist()]
+    t, elements, _, after = run.switches()
+    mine = [k for k, name in enumerate(elements) if name == element]
+    times = [start, *(float(t[k]) for k in mine), start + span]
+    modes = [int(run.mode_of(element)[0]), *(after[k] for k in mine)]
     return [(a, b, m) for a, b, m in zip(times, times[1:], modes, strict=False)]
 
 

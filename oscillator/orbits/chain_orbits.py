@@ -143,13 +143,13 @@ def held_coordinates(chain: FrictionChain, result: ChainResult) -> tuple[set[int
     mass stuck there; the place of one stuck all period (any nearby place is an orbit too); the
     ``z`` of a slider that holds all period (any nearby stretch too) or never can (``F = 0``: its
     ``z`` follows the motion and acts on nothing)."""
-    system, trajectory = chain.system, result.trajectory
+    system = chain.system
     held: set[int] = set()
     neutral = []
     for element in chain.elements:
         if element.type not in ("friction", "jenkins"):
             continue
-        mode = trajectory[f"mode:{element.name}"].to_numpy()
+        mode = result.mode_of(element.name)
         if element.type == "jenkins":
             if (mode == 0).all() or element.values["F"] == 0:
                 held.add(system.state.index(f"z:{element.name}"))

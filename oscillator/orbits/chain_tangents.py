@@ -241,14 +241,9 @@ class _Switches:
 
     @classmethod
     def of(cls, run: ChainResult) -> _Switches:
-        events = run.events[run.events.mode_before != run.events.mode_after]
+        t, elements, kinds, after = run.switches()
         rows = {e.name: k for k, e in enumerate(run.chain.elements)}
-        return cls(
-            events.t.to_numpy(float),
-            [rows[name] for name in events.element],
-            [str(kind) for kind in events.kind],
-            [int(m) for m in events.mode_after],
-        )
+        return cls(t, [rows[name] for name in elements], kinds, after)
 
     def first_at(self, t: float) -> int:
         """The first event at ``t``: the one whose root CVODE found (the others follow from it)."""
@@ -295,9 +290,7 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     params = check_names(chain, params)
     data = NumberData(chain, params)
     n, k = data.arrays.size, len(params)
-    trajectory = run.trajectory
-    t = trajectory.t.to_numpy(float)
-    states = trajectory[list(chain.system.state)].to_numpy(float)
+    t, states = run.times, run.states
     modes, switches = run.modes(), _Switches.of(run)
     block = np.hstack([np.eye(n), np.zeros((n, k))])
     changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]

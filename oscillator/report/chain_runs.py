@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from oscillator.errors import InputError
-from oscillator.hybrid.chain_run import ChainResult
+from oscillator.hybrid.chain_run import ChainResult, chain_records_of
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.report.markup import Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
@@ -176,4 +176,5 @@ def read_chain_run(folder: Path) -> ChainResult:
     y_end = np.concatenate([end, np.array([work[name] for name in names])])
     status = Status(info.get("status", "complete")) if info.get("status") in set(Status) else Status.COMPLETE
     t_end = float(info.get("t_end", trajectory.t.iloc[-1]))
-    return ChainResult(chain, events, trajectory, work, status, str(info.get("message", "")), t_end, y_end)
+    records = chain_records_of(chain, events, trajectory)
+    return ChainResult(chain, work, status, str(info.get("message", "")), t_end, y_end, records)

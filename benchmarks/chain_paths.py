@@ -1,0 +1,109 @@
+"""A friction chain's hot path against an earlier checkout: the same calls on this code and on the
+code of ``--against DIR`` (a checkout of an earlier commit, ``git worktree add DIR REV``), each in
+a fresh process (numba's cache filled by a first call there), alternating, the minimum of
+``--repeats`` each; the answers must be the same.
+
+1. docs/systems.md's design of the friction damper (``oscillator design
+   docs/systems/blade-damper.toml --vary platform.F=0.05,3 --over Omega 0.6 1.6 --objective
+   x_max:blade --band 5``, the library call: ``chain_design(..., sweep=5)``);
+2. its frequency sweep over the band at F = 0.5 N, 11 values (each orbit by Newton with the exact
+   monodromy, its measures);
+3. 200 period maps of its orbit at Omega = 1.1 with their tangent pass (what a Newton step takes).
+
+Paths: period maps and their tangents only, no table read unless a measure needs it (trajectory
+off for a user: nothing is written).
+
+Usage: python benchmarks/chain_paths.py --against DIR [--repeats N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_CALLS = """
+import json, sys, time
+import numpy as np
+from oscillator.designing.chain_design import chain_design
+from oscillator.io.chains import load_system
+from oscillator.orbits.chain_orbits import chain_period_map, find_chain_orbit
+from oscillator.orbits.chain_response import frequency_sweep
+from oscillator.orbits.chain_tangents import tangent_pass
+
+machine = load_system(sys.argv[1])
+loaded = machine.with_values({"platform.F": 0.5, "Omega": 1.1})
+orbit = find_chain_orbit(loaded, transient=60)
+
+
+def design():
+    found = chain_design(machine, {"platform.F": (0.05, 3.0)}, {"Omega": (0.6, 1.6)}, "x_max:blade", sweep=5)
+    return [found.value, found.worst.value]
+
+
+def sweep():
+    table = frequency_sweep(machine.with_values({"platform.F": 0.5}), np.linspace(0.6, 1.6, 11), transient=60)
+    return table["x_max:blade"].tolist()
+
+
+def maps():
+    for _ in range(200):
+        image = chain_period_map(loaded, loaded.t0, orbit.state)
+        last = tangent_pass(image).monodromy
+    return last.ravel().tolist()
+
+
+import oscillator
+assert oscillator.__file__.startswith(sys.argv[2]), oscillator.__file__
+timed = {}
+for name, call in (("design", design), ("sweep", sweep), ("maps", maps)):
+    call()  # numba's cache loaded, the code warm
+    started = time.perf_counter()
+    answer = call()
+    timed[name] = (time.perf_counter() - started, answer)
+print(json.dumps(timed))
+"""
+
+LABELS = {
+    "design": "docs/systems.md's damper design (chain_design, sweep=5)",
+    "sweep": "its frequency sweep at F = 0.5 N, 11 values",
+    "maps": "200 period maps with their tangent pass",
+}
+
+
+def timed(code: Path) -> dict[str, tuple[float, list[float]]]:
+    """The calls' times and answers in a fresh process on the package at ``code``."""
+    env = {**os.environ, "PYTHONPATH": str(code)}
+    system = str(ROOT / "docs" / "systems" / "blade-damper.toml")
+    done = subprocess.run(  # run in ``code``: ``-c`` puts the working folder first on the path
+        [sys.executable, "-c", _CALLS, system, str(code)], cwd=code, env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--against", type=Path, required=True, help="a checkout of the earlier code")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    print(f"benchmarks/chain_paths.py, {dt.datetime.now():%Y-%m-%d %H:%M}, load {os.getloadavg()[0]:.2f}")
+    runs: dict[str, list[dict[str, tuple[float, list[float]]]]] = {"before": [], "now": []}
+    for _ in range(args.repeats):  # alternating: a busy spell slows both
+        runs["before"].append(timed(args.against.resolve()))
+        runs["now"].append(timed(ROOT))
+    for name, label in LABELS.items():
+        before = min(run[name][0] for run in runs["before"])
+        now = min(run[name][0] for run in runs["now"])
+        same = runs["before"][0][name][1] == runs["now"][0][name][1]
+        print(f"{label}: {before:.2f} s -> {now:.2f} s ({before / now:.2f}x), same answers: {same}")
+    print(f"load at the end {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
