@@ -13,7 +13,7 @@ import pytest
 
 from oscillator import FrictionChain
 from oscillator.orbits.chain_orbits import find_chain_orbit
-from oscillator.orbits.chain_peaks import peak_places, peaks, quintic
+from oscillator.orbits.chain_peaks import peak_places, peaks, quintic, rates_at
 from oscillator.orbits.chain_response import orbit_measures
 from test_chain_sensitivities import impact_chain
 
@@ -122,6 +122,57 @@ def test_a_peak_on_a_switch_moves_with_the_switch():
         narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
         exact = found[f"d/d{name}"].to_numpy()
         assert np.abs((4 * narrow - wide) / 3 - exact).max() <= 1e-7 * np.abs(exact).max(), name
+
+
+def test_a_long_runs_peaks_are_its_rows_largest_or_a_turn_between_them():
+    """Over a run of many steps, stick-slip and impacts (the impact chain, 30 periods from rest):
+    the field at every row as :func:`rates_at` evaluates it at once is the field each row's mode
+    gives one call at a time; each peak is at least every row's value, and either is one (a row
+    or a switch's other side, in the step's mode) or lies between two rows where the quantity's
+    rate vanishes."""
+    from oscillator.hybrid.chain_run import simulate_chain
+    from oscillator.model.chain_fields import arrays_of, chain_derivative, element_force, pack
+
+    chain = impact_chain()
+    run = simulate_chain(chain, chain.t0 + 30 * chain.period)
+    t, states, modes, arrays = run.times, run.states, run.modes(), arrays_of(chain)
+    assert len(t) > 1000 and len(run.switches()[0]) > 20
+    rows = np.arange(0, len(t), 7)
+    one_by_one = np.empty((len(rows), chain.system.size))
+    for j, k in enumerate(rows.tolist()):
+        chain_derivative(t[k], states[k], one_by_one[j], pack(arrays, modes[k]))
+    assert np.array_equal(rates_at(run, rows), one_by_one)
+    accelerations = rates_at(run, np.arange(len(t)))[:, 1 : 2 * len(chain.masses) : 2]
+    places = peak_places(run)
+    for i, mass in enumerate(chain.masses):
+        peak = places[f"a_max:{mass.name}"]
+        assert abs(peak.value) >= np.abs(accelerations[:, i]).max()
+        if peak.t not in set(t.tolist()):
+            k = int(np.searchsorted(t, peak.t))
+            assert t[k - 1] < peak.t < t[k] and np.array_equal(peak.mode, modes[k - 1])
+            rate = np.empty(chain.system.size)
+            chain_derivative(peak.t, peak.y, rate, pack(arrays, peak.mode))
+            assert rate[2 * i + 1] == pytest.approx(peak.value, rel=1e-12)
+    for k, element in enumerate(chain.elements):
+        if element.type in ("stop", "contact"):
+            peak, closed = places[f"force_max:{element.name}"], np.flatnonzero(modes[:, k] != 0.0)
+            forces = [element_force(t[j], states[j], pack(arrays, modes[j]), k) for j in closed.tolist()]
+            assert abs(peak.value) >= max(np.abs(forces)) > 0.0
+
+
+def test_a_packed_mode_is_a_copy_of_the_chains_vector():
+    """pack() gives a vector of its own each call (the compiled calls write their scratch in
+    it), from the chain's vector that no call can change."""
+    from oscillator.model.chain_fields import arrays_of, pack
+
+    arrays = arrays_of(impact_chain())
+    first, second = pack(arrays, [1] * len(arrays.kind)), pack(arrays, [0] * len(arrays.kind))
+    first[-1] = 123.0
+    assert second[-1] == 0.0 and arrays.packed[-1] == 0.0 and not arrays.packed.flags.writeable
+    assert np.array_equal(first[:-1][5 : 5 + len(arrays.kind)], np.ones(len(arrays.kind)))
+    assert np.array_equal(
+        np.delete(first, np.s_[5 : 5 + len(arrays.kind)])[:-1], np.delete(second, np.s_[5 : 5 + len(arrays.kind)])[:-1]
+    )
 
 
 def test_the_quintic_is_exact_on_polynomials_of_its_degree():

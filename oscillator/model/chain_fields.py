@@ -23,6 +23,7 @@ here equals :func:`oscillator.model.kernels.rates`' in every mode (tests/test_ch
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -90,10 +91,21 @@ class ChainArrays:
     friction: np.ndarray
     Omega: float
 
-    @property
+    @functools.cached_property
     def size(self) -> int:
         """The state's length: two values a mass, one a slider."""
         return 2 * len(self.mass) + int((self.slider >= 0).sum())
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """:func:`pack`'s vector with every element's mode 0 (read only: :func:`pack` copies it)."""
+        n, e = len(self.mass), len(self.kind)
+        head = [0.0, float(n), float(e), float(self.size), self.Omega]
+        parts = [head, np.zeros(e), self.mass, self.friction, self.kind, self.on, self.other, self.slider]
+        scratch = np.zeros(n)
+        vector = np.concatenate([np.asarray(part, dtype=float).ravel() for part in (*parts, self.value, scratch)])
+        vector.flags.writeable = False
+        return vector
 
 
 def arrays_of(chain: FrictionChain) -> ChainArrays:
@@ -145,12 +157,11 @@ def pack(arrays: ChainArrays, mode: np.ndarray | list[int]) -> np.ndarray:
     """The chain in ``mode`` as one vector of floats, what the compiled field reads (and CVODE's
     user data): :data:`HEADER`, then the mode, the masses, each mass's friction element, each
     element's code, ends, slider and values, and room for the forces on the masses (the compiled
-    functions' scratch: they allocate nothing).  Its length is :func:`data_length`."""
-    n, e = len(arrays.mass), len(arrays.kind)
-    head = [0.0, float(n), float(e), float(arrays.size), arrays.Omega]
-    parts = [head, mode, arrays.mass, arrays.friction, arrays.kind, arrays.on, arrays.other, arrays.slider]
-    scratch = np.zeros(n)
-    return np.concatenate([np.asarray(part, dtype=float).ravel() for part in (*parts, arrays.value, scratch)])
+    functions' scratch: they allocate nothing).  Its length is :func:`data_length`; a new vector
+    each call, from the one :attr:`ChainArrays.packed` holds."""
+    vector = arrays.packed.copy()
+    vector[len(HEADER) : len(HEADER) + len(arrays.kind)] = mode
+    return vector
 
 
 #: Where each part of the data vector starts (:func:`_offsets`).

@@ -267,7 +267,7 @@ class FrictionChain:
         twice = next((name for name in names if names.count(name) > 1), None)
         if twice is not None:
             raise InputError(f"two masses are named {printable(twice)!r}; give each its own name", field="name")
-        named = [dataclasses.replace(e, name=e.name or f"{e.type}-{k + 1}") for k, e in enumerate(self.elements)]
+        named = [e if e.name else dataclasses.replace(e, name=f"{e.type}-{k + 1}") for k, e in enumerate(self.elements)]
         object.__setattr__(self, "elements", tuple(named))
         self._check_elements(set(names))
 

@@ -14,6 +14,10 @@ limit of a switch both: an impact with damping, a mass that sticks, change the a
 once) and over those turns.  The turn is located as well as the value (``f' = 0`` there to the
 interpolant's accuracy), so that a peak's derivative in a number is the quantity's at that fixed
 time (:mod:`oscillator.orbits.chain_sensitivity`).
+
+The field, its second rate and the contacts' forces at every row are computed in one compiled
+pass over the rows (each mode the run passed packed once); only the turns, a few a period, are
+sought one by one.
 """
 
 from __future__ import annotations
@@ -25,10 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from oscillator.compiled import njit
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["Peak", "peak_places", "peaks", "quintic"]
+__all__ = ["Peak", "peak_places", "peaks", "quintic", "rates_at"]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
@@ -88,41 +93,163 @@ def peaks(run: ChainResult) -> dict[str, float]:
 
 def peak_places(run: ChainResult) -> dict[str, Peak]:
     """:func:`peaks` with where each is (a stop or contact that never closes: value 0 at the
-    run's start)."""
-    chain, trajectory = run.chain, run.trajectory
-    t = trajectory.t.to_numpy(float)
-    states = trajectory[list(chain.system.state)].to_numpy(float)
-    modes, field = run.modes(), _Field(run)
-    contacts = [(k, e.name) for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
-    names = [f"a_max:{m.name}" for m in chain.masses] + [f"force_max:{name}" for _, name in contacts]
-    best = {name: Peak(0.0, float(t[0]), states[0], modes[0]) for name in names}
-    passed = {mode.tobytes(): mode for mode in modes}  # each mode the run passed, packed once
-    packed = {key: pack(field.arrays, mode) for key, mode in passed.items()}  # (the calls rewrite its scratch)
-    own = [packed[mode.tobytes()] for mode in modes]
-    values = [field.at(t[k], states[k], own[k]) for k in range(len(t))]
-    for k in range(len(t) - 1):
-        left, data = values[k], own[k]
-        right = values[k + 1] if np.array_equal(modes[k], modes[k + 1]) else field.at(t[k + 1], states[k + 1], data)
-        step = _Step((t[k], t[k + 1]), (states[k], *left, states[k + 1], *right), modes[k], data, field)
-        for i, mass in enumerate(chain.masses):
-            ends = (left[0][2 * i + 1], left[1][2 * i + 1], right[0][2 * i + 1], right[1][2 * i + 1])
-            _keep(best, f"a_max:{mass.name}", step.candidates(ends, functools.partial(_acceleration, i)))
-        for row, name in contacts:
-            if modes[k, row] != 0.0:
-                ends = (
-                    element_force(t[k], states[k], data, row),
-                    element_rate(t[k], states[k], left[0], data, row),
-                    element_force(t[k + 1], states[k + 1], data, row),
-                    element_rate(t[k + 1], states[k + 1], right[0], data, row),
-                )
-                _keep(best, f"force_max:{name}", step.candidates(ends, functools.partial(_contact_force, row)))
+    run's start).  Each quantity's candidates, in the run's order (each step's left end, its
+    right end, its turn), are valued at once; the first of the largest is the peak."""
+    chain, t, states, modes = run.chain, run.times, run.states, run.modes()
+    field, rows = _Field(run), [k for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
+    left, right, data = _ends(field, t, states, modes, rows)
+    best: dict[str, Peak] = {}
+    for i, mass in enumerate(chain.masses):
+        ends = (
+            left.rates[:, 2 * i + 1],
+            left.seconds[:, 2 * i + 1],
+            right.rates[:, 2 * i + 1],
+            right.seconds[:, 2 * i + 1],
+        )
+        quantity = functools.partial(_acceleration, i)
+        best[f"a_max:{mass.name}"] = _largest(
+            (t, states, modes, data), field, (left, right), ends, quantity, np.ones(len(t) - 1, bool)
+        )
+    for c, row in enumerate(rows):
+        ends = (left.forces[:, c], left.force_rates[:, c], right.forces[:, c], right.force_rates[:, c])
+        closed = modes[:-1, row] != 0.0
+        quantity = functools.partial(_contact_force, row)
+        best[f"force_max:{chain.elements[row].name}"] = _largest(
+            (t, states, modes, data), field, (left, right), ends, quantity, closed
+        )
     return best
 
 
-def _keep(best: dict[str, Peak], name: str, candidates: list[Peak]) -> None:
-    for candidate in candidates:
-        if abs(candidate.value) > abs(best[name].value):
-            best[name] = candidate
+@dataclass(frozen=True)
+class _Rows:
+    """The field at rows, each in a given mode: the rates and second rates ``(rows, state)``, the
+    contacts' forces and their rates ``(rows, contacts)``."""
+
+    rates: np.ndarray
+    seconds: np.ndarray
+    forces: np.ndarray
+    force_rates: np.ndarray
+
+
+def _ends(
+    field: _Field, t: np.ndarray, states: np.ndarray, modes: np.ndarray, rows: list[int]
+) -> tuple[_Rows, _Rows, list[np.ndarray]]:
+    """The field at every step's left end in the step's mode (each row in its own) and at its
+    right end in the same mode (the next row's own but where a switch changed it); each step's
+    mode's data."""
+    datas, which = _packed(field, modes)
+    contacts = np.asarray(rows, dtype=np.int64)
+    own = _rows_at(field, t, states, datas, which, contacts)
+    switched = np.flatnonzero(which[:-1] != which[1:])
+    after = _rows_at(field, t[switched + 1], states[switched + 1], datas, which[switched], contacts)
+
+    def joined(name: str) -> np.ndarray:
+        values: np.ndarray = getattr(own, name)[1:].copy()
+        values[switched] = getattr(after, name)
+        return values
+
+    right = _Rows(joined("rates"), joined("seconds"), joined("forces"), joined("force_rates"))
+    return own, right, [datas[j] for j in which[:-1].tolist()]
+
+
+def _packed(field: _Field, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The data of each mode the run passed, packed once (one row each), and the one each
+    trajectory row is in."""
+    starts = np.concatenate([[0], np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1])
+    index: dict[bytes, int] = {}
+    passed: list[np.ndarray] = []
+    for k in starts.tolist():
+        if index.setdefault(modes[k].tobytes(), len(passed)) == len(passed):
+            passed.append(modes[k])
+    spans = np.array([index[modes[k].tobytes()] for k in starts.tolist()], dtype=np.int64)
+    datas = np.stack([pack(field.arrays, mode) for mode in passed])
+    return datas, np.repeat(spans, np.diff(np.append(starts, len(modes))))
+
+
+def _rows_at(
+    field: _Field, t: np.ndarray, states: np.ndarray, datas: np.ndarray, which: np.ndarray, contacts: np.ndarray
+) -> _Rows:
+    """:class:`_Rows` at ``(t, states)``, row ``k`` in the mode of ``datas[which[k]]``."""
+    n, size = len(t), field.size
+    rates, seconds = np.empty((n, size)), np.empty((n, size))
+    forces, force_rates = np.empty((n, len(contacts))), np.empty((n, len(contacts)))
+    _field_at_rows(
+        t, np.ascontiguousarray(states), datas, which, contacts, field.arrays.size, rates, seconds, forces, force_rates
+    )
+    return _Rows(rates, seconds, forces, force_rates)
+
+
+@njit(cache=True)
+def _field_at_rows(
+    t: np.ndarray,
+    states: np.ndarray,
+    datas: np.ndarray,
+    which: np.ndarray,
+    contacts: np.ndarray,
+    length: int,
+    rates: np.ndarray,
+    seconds: np.ndarray,
+    forces: np.ndarray,
+    force_rates: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Fill :class:`_Rows`' arrays (``length``: the field's vector's)."""
+    size = states.shape[1]
+    rate, jacobian, partial = np.empty(length), np.empty((size, size)), np.empty(size)
+    for k in range(len(t)):
+        d, y = datas[which[k]], states[k]
+        chain_derivative(t[k], y, rate, d)
+        chain_jacobian(t[k], y, d, jacobian, partial)
+        rates[k] = rate[:size]
+        seconds[k] = jacobian @ rates[k] + partial
+        for c in range(len(contacts)):
+            forces[k, c] = element_force(t[k], y, d, contacts[c])
+            force_rates[k, c] = element_rate(t[k], y, rates[k], d, contacts[c])
+
+
+def _largest(
+    run: tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]],
+    field: _Field,
+    sides: tuple[_Rows, _Rows],
+    ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    quantity: Callable[..., tuple[float, float]],
+    counted: np.ndarray,
+) -> Peak:
+    """The first of the largest ``|value|`` over the counted steps' candidates (their ends'
+    values and rates ``ends``: left value, left rate, right value, right rate), or 0 at the run's
+    start if none is larger; ``run``: its times, states, modes and each step's mode's data."""
+    t, states, modes, data = run
+    f0, r0, f1, r1 = (np.where(counted, part[:-1] if k < 2 else part, 0.0) for k, part in enumerate(ends))
+    h = np.diff(t)
+    turning = np.flatnonzero(counted & (h > 0.0) & (r0 * r1 < 0.0))
+    turns: dict[int, Peak] = {}
+    for k in turning.tolist():
+        step_ends = (
+            states[k],
+            sides[0].rates[k],
+            sides[0].seconds[k],
+            states[k + 1],
+            sides[1].rates[k],
+            sides[1].seconds[k],
+        )
+        turns[k] = _Step((t[k], t[k + 1]), step_ends, modes[k], data[k], field).turn(quantity)
+    inner = np.zeros(len(h))
+    inner[turning] = [turns[k].value for k in turning.tolist()]
+    candidates = np.abs(np.column_stack([f0, f1, inner]))
+    if len(h) == 0 or candidates.max() == 0.0:
+        return Peak(0.0, float(t[0]), states[0].copy(), modes[0])
+    k, side = divmod(int(np.argmax(candidates)), 3)
+    if side == 2:
+        return turns[k]
+    return Peak(float((f0, f1)[side][k]), float(t[k + side]), states[k + side].copy(), modes[k])
+
+
+def rates_at(run: ChainResult, rows: np.ndarray) -> np.ndarray:
+    """The field's value ``y'`` at the run's trajectory ``rows``, each in its own mode:
+    ``(len(rows), state)``."""
+    field, modes = _Field(run), run.modes()
+    datas, which = _packed(field, modes)
+    contacts = np.zeros(0, dtype=np.int64)
+    return _rows_at(field, run.times[rows], run.states[rows], datas, which[rows], contacts).rates
 
 
 def _acceleration(
@@ -155,21 +282,13 @@ class _Step:
         self.times, self.h, self.ends = times, times[1] - times[0], ends
         self.mode, self.data, self.field = mode, data, field
 
-    def candidates(
-        self, ends: tuple[float, float, float, float], quantity: Callable[..., tuple[float, float]]
-    ) -> list[Peak]:
-        """The quantity at both ends (values and rates ``ends``), and where its rate changes sign
-        inside the step: the root of ``quantity(t, y, y', y'', data)``'s rate along the quintic's
-        state, by Brent's method to the last bit (a step of length 0, at an event, has none; two
-        turns in one solver step, where the rate keeps its sign, would be a wiggle the solver's
-        tolerance does not resolve)."""
-        f0, r0, f1, r1 = ends
-        found = [Peak(f0, self.times[0], self.ends[0], self.mode), Peak(f1, self.times[1], self.ends[3], self.mode)]
-        if self.h > 0.0 and r0 * r1 < 0.0:
-            s = brentq(lambda s: self._at(s, quantity)[1], 0.0, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
-            tt, y = self.times[0] + s * self.h, quintic(s, self.h, self.ends)
-            found.append(Peak(self._at(s, quantity)[0], tt, y, self.mode))
-        return found
+    def turn(self, quantity: Callable[..., tuple[float, float]]) -> Peak:
+        """Where the quantity's rate changes sign inside the step: the root of
+        ``quantity(t, y, y', y'', data)``'s rate along the quintic's state, by Brent's method to
+        the last bit (two turns in one solver step, where the rate keeps its sign, would be a
+        wiggle the solver's tolerance does not resolve)."""
+        s = brentq(lambda s: self._at(s, quantity)[1], 0.0, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        return Peak(self._at(s, quantity)[0], self.times[0] + s * self.h, quintic(s, self.h, self.ends), self.mode)
 
     def _at(self, s: float, quantity: Callable[..., tuple[float, float]]) -> tuple[float, float]:
         """The quantity and its rate at ``s`` (0 to 1) of the step, at the quintic's state."""

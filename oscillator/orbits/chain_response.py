@@ -25,10 +25,9 @@ import pandas as pd
 
 from oscillator.errors import InputError, OscillatorError
 from oscillator.hybrid.chain_run import ChainResult, closed_spans, mode_spans, stuck_spans
-from oscillator.model.chain_fields import arrays_of, chain_derivative, pack
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
-from oscillator.orbits.chain_peaks import peaks
+from oscillator.orbits.chain_peaks import peaks, rates_at
 
 __all__ = [
     "MEASURE_UNITS",
@@ -88,14 +87,8 @@ def turns(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> tuple[n
 def _accelerations(run: ChainResult, rows: np.ndarray) -> np.ndarray:
     """Each mass's acceleration at the trajectory's ``rows`` (one row of masses each; nan
     elsewhere), from the chain's field in the row's mode."""
-    chain, trajectory = run.chain, run.trajectory
-    arrays, system = arrays_of(chain), chain.system
-    states, modes = trajectory[list(system.state)].to_numpy(float), run.modes()
-    found = np.full((len(trajectory), len(system.masses)), math.nan)
-    rate = np.empty(arrays.size)
-    for row in rows.tolist():
-        chain_derivative(float(trajectory.t.iloc[row]), states[row], rate, pack(arrays, modes[row]))
-        found[row] = rate[1 : 2 * len(system.masses) : 2]
+    found = np.full((len(run.times), len(run.chain.system.masses)), math.nan)
+    found[rows] = rates_at(run, rows)[:, 1 : 2 * len(run.chain.system.masses) : 2]
     return found
 
 
@@ -137,14 +130,13 @@ def measure_unit(name: str) -> str:
 def extremes(run: ChainResult) -> dict[str, tuple[float, float, float, float]]:
     """Each mass's ``(t_max, x_max, t_min, x_min)`` over ``run``: its largest and smallest
     displacement and when (the run's ends, and every turn: :func:`turns`)."""
-    chain, trajectory = run.chain, run.trajectory
-    t = trajectory.t.to_numpy(float)
-    velocities = trajectory[[chain.system.velocity(m) for m in chain.system.masses]].to_numpy(float)
+    system, t, states = run.chain.system, run.times, run.states
+    velocities = states[:, [system.state.index(system.velocity(m)) for m in system.masses]]
     turning = np.flatnonzero((velocities[:-1] * velocities[1:] < 0.0).any(axis=1))
     accelerations = _accelerations(run, np.union1d(turning, turning + 1))
     found: dict[str, tuple[float, float, float, float]] = {}
-    for i, mass in enumerate(chain.system.masses):
-        x = trajectory[chain.system.position(mass)].to_numpy(float)
+    for i, mass in enumerate(system.masses):
+        x = states[:, system.state.index(system.position(mass))]
         times, places = turns(t, x, velocities[:, i], accelerations[:, i])
         times, places = np.concatenate([t[[0, -1]], times]), np.concatenate([x[[0, -1]], places])
         high, low = int(np.argmax(places)), int(np.argmin(places))
@@ -183,7 +175,7 @@ def _energy_measures(run: ChainResult, start: float, span: float) -> dict[str, f
     run's energy audit); each friction element's and slider's slip distance (m): the sum over its
     slips (each of one sign) of how far its mass moved against the belt (``x - w t``), or its
     ``z`` moved, from the states at the slip's ends."""
-    chain, trajectory = run.chain, run.trajectory
+    chain, t, states = run.chain, run.times, run.states
     table = run.energy.table.set_index("element")
     found: dict[str, float] = {}
     for element in chain.elements:
@@ -191,11 +183,11 @@ def _energy_measures(run: ChainResult, start: float, span: float) -> dict[str, f
         found[f"work:{name}"] = float(table.work[name])
         found[f"dissipated:{name}"] = float(table.dissipated[name])
         if element.type in _SLIDING:
-            spans, t = mode_spans(run, name, start, span), trajectory.t.to_numpy(float)
+            spans, state = mode_spans(run, name, start, span), chain.system.state
             if element.type == "friction":  # the place against the belt's: x - w t
-                place = trajectory[chain.system.position(element.on)].to_numpy(float) - element.values["w"] * t
+                place = states[:, state.index(chain.system.position(element.on))] - element.values["w"] * t
             else:
-                place = trajectory[f"z:{name}"].to_numpy(float)
+                place = states[:, state.index(f"z:{name}")]
             moves = [abs(np.interp(b, t, place) - np.interp(a, t, place)) for a, b, m in spans if m]
             found[f"slip:{name}"] = float(sum(moves))
     return found
