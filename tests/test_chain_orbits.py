@@ -100,6 +100,25 @@ def test_a_friction_dampers_stick_slip_orbit_returns_and_a_disturbance_decays_as
     assert grown == pytest.approx(abs(values[k]) ** periods, rel=0.02)
 
 
+def test_the_transient_is_the_run_simulate_makes_and_newton_refines_it_to_the_same_orbit():
+    """Without a guess, the orbit starts where ``simulate_chain`` at its own tolerances leaves the
+    motion after the transient (as the article's system's does: Newton's path from there is the
+    same to the bit), a tight run's end more than 1e-9 away; from either, Newton at the map's
+    tolerances gives the same orbit (1e-10: at Omega = 1.1 the slider sticks and slips, the orbit
+    is one, not a family)."""
+    from oscillator.hybrid.chain_run import simulate_chain
+    from oscillator.orbits.chain_orbits import ORBIT_OPTIONS
+
+    chain = load_system(SYSTEMS / "blade-damper.toml").with_values({"Omega": 1.1})
+    size, end = chain.system.size, chain.t0 + 40 * chain.period
+    plain = simulate_chain(chain, end).y_end[:size]
+    tight = simulate_chain(chain, end, options=ORBIT_OPTIONS).y_end[:size]
+    assert np.max(np.abs(plain - tight)) > 1e-9
+    orbit = find_chain_orbit(chain, transient=40)
+    assert np.max(np.abs(find_chain_orbit(chain, plain, transient=0).state - orbit.state)) == 0.0
+    assert np.max(np.abs(find_chain_orbit(chain, tight, transient=0).state - orbit.state)) <= 1e-10
+
+
 def test_a_mass_stuck_all_period_keeps_its_place_and_velocity():
     """A second mass held by friction far above the force it feels: it rests the whole period,
     neutral in its place; Newton moves the first mass only."""

@@ -176,12 +176,16 @@ def _derivative(image: ChainResult, free: list[int], rtol: float = RTOL) -> np.n
 
 def _guess(chain: FrictionChain, section: float, transient: int, options: SolverOptions) -> np.ndarray:
     """The state at the first section time ``transient`` periods or more after the chain's start
-    (its start itself for none at the start)."""
+    (its start itself for none at the start): where a run at ``simulate``'s tolerances (or
+    ``options``' where looser) leaves the motion, as the article's system's transient does; Newton
+    refines it at ``options``'."""
     returns = max(0, math.ceil((chain.t0 + transient * chain.period - section) / chain.period - 1e-12))
     end = section + returns * chain.period
     if end <= chain.t0:
         return state_of(chain)
-    return _ends(simulate_chain(chain, end, options=options))
+    default = SolverOptions()
+    looser = dataclasses.replace(options, rtol=max(options.rtol, default.rtol), atol=max(options.atol, default.atol))
+    return _ends(simulate_chain(chain, end, options=looser))
 
 
 def find_chain_orbit(
