@@ -1,7 +1,7 @@
 """A friction chain's hot path against an earlier checkout: the same calls on this code and on the
-code of ``--against DIR`` (a checkout of an earlier commit, ``git worktree add DIR REV``), each in
-a fresh process (numba's cache filled by a first call there), alternating, the minimum of
-``--repeats`` each; the answers must be the same.
+code of ``--against DIR`` (:mod:`checkouts`: a checkout of an earlier commit, each in a fresh
+process, numba's cache filled by a first call there, alternating, the minimum of ``--repeats``
+each); the answers must be the same.
 
 1. docs/systems.md's design of the friction damper (``oscillator design
    docs/systems/blade-damper.toml --vary platform.F=0.05,3 --over Omega 0.6 1.6 --objective
@@ -20,16 +20,13 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from checkouts import ROOT, alternating, fastest, script
 
-_CALLS = """
-import json, sys, time
+_BODY = """
+import sys
 import numpy as np
 from oscillator.designing.chain_design import chain_design
 from oscillator.io.chains import load_system
@@ -37,7 +34,7 @@ from oscillator.orbits.chain_orbits import chain_period_map, find_chain_orbit
 from oscillator.orbits.chain_response import frequency_sweep
 from oscillator.orbits.chain_tangents import tangent_pass
 
-machine = load_system(sys.argv[1])
+machine = load_system(sys.argv[2])
 loaded = machine.with_values({"platform.F": 0.5, "Omega": 1.1})
 orbit = find_chain_orbit(loaded, transient=60)
 
@@ -60,15 +57,9 @@ def maps():
 
 
 import oscillator
-assert oscillator.__file__.startswith(sys.argv[2]), oscillator.__file__
-timed = {}
-for name, call in (("design", design), ("sweep", sweep), ("maps", maps)):
-    call()  # numba's cache loaded, the code warm
-    started = time.perf_counter()
-    answer = call()
-    timed[name] = (time.perf_counter() - started, answer)
-print(json.dumps(timed))
+assert oscillator.__file__.startswith(sys.argv[1]), oscillator.__file__
 """
+_CALLS = script(_BODY, ("design", "sweep", "maps"))
 
 LABELS = {
     "design": "docs/systems.md's damper design (chain_design, sweep=5)",
@@ -77,29 +68,16 @@ LABELS = {
 }
 
 
-def timed(code: Path) -> dict[str, tuple[float, list[float]]]:
-    """The calls' times and answers in a fresh process on the package at ``code``."""
-    env = {**os.environ, "PYTHONPATH": str(code)}
-    system = str(ROOT / "docs" / "systems" / "blade-damper.toml")
-    done = subprocess.run(  # run in ``code``: ``-c`` puts the working folder first on the path
-        [sys.executable, "-c", _CALLS, system, str(code)], cwd=code, env=env, capture_output=True, text=True, check=True
-    )
-    return json.loads(done.stdout.splitlines()[-1])
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--against", type=Path, required=True, help="a checkout of the earlier code")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     print(f"benchmarks/chain_paths.py, {dt.datetime.now():%Y-%m-%d %H:%M}, load {os.getloadavg()[0]:.2f}")
-    runs: dict[str, list[dict[str, tuple[float, list[float]]]]] = {"before": [], "now": []}
-    for _ in range(args.repeats):  # alternating: a busy spell slows both
-        runs["before"].append(timed(args.against.resolve()))
-        runs["now"].append(timed(ROOT))
+    system = str(ROOT / "docs" / "systems" / "blade-damper.toml")
+    runs = alternating(args.against, _CALLS, system, repeats=args.repeats)
     for name, label in LABELS.items():
-        before = min(run[name][0] for run in runs["before"])
-        now = min(run[name][0] for run in runs["now"])
+        before, now = fastest(runs["before"], name), fastest(runs["now"], name)
         same = runs["before"][0][name][1] == runs["now"][0][name][1]
         print(f"{label}: {before:.2f} s -> {now:.2f} s ({before / now:.2f}x), same answers: {same}")
     print(f"load at the end {os.getloadavg()[0]:.2f}")

@@ -165,7 +165,7 @@ def test_both_masses_at_rest_all_period_and_a_guess_beside_them():
 
 
 def test_a_singular_newton_system_is_the_library_s_error():
-    from oscillator.orbits.shooting import solve_step
+    from oscillator.orbits.stroboscopic import solve_step
 
     with pytest.raises(SimulationFailed, match=r"singular.*give another guess"):
         solve_step(np.zeros((4, 4)), np.ones(4), "Newton's method at the guess")

@@ -17,7 +17,7 @@ The engines:
   its rootfinding, called through its C API with compiled callbacks: the default;
 * ``"sksundae"`` - :class:`~oscillator.engines.sksundae.SksundaeEngine`, the same through
   scikit-sundae's Python API: the fallback where SUNDIALS' libraries cannot be loaded;
-* ``"dop853"`` - :class:`~oscillator.engines.dop853.Dop853Engine`, the explicit Runge-Kutta pair
+* ``"dop853"`` - :class:`~oscillator.engines.dop853_engine.Dop853Engine`, the explicit Runge-Kutta pair
   DOP853 with CVODE's root search on its dense output, compiled whole: the engine of the
   many-start analyses (:mod:`oscillator.hybrid.batch`), checked against CVODE's events;
 * ``"scipy"`` - :class:`~oscillator.engines.scipy.ScipyEngine`, SciPy's ``solve_ivp`` (DOP853)
@@ -158,7 +158,7 @@ ENGINES = {
         ),
         EngineInfo(
             "dop853",
-            "oscillator.engines.dop853:Dop853Engine",
+            "oscillator.engines.dop853_engine:Dop853Engine",
             "DOP853 (SciPy's coefficients) with CVODE's root search on its dense output, compiled",
             "DOP853",
         ),
@@ -218,8 +218,9 @@ def build_engine(
     choice: EngineChoice, params: Parameters, options: SolverOptions, *, variational: bool = False
 ) -> Engine:
     """An engine ready for :meth:`Engine.reset`: the default one (``None``), the one called
-    ``choice``, or ``choice(params, options)``.  With ``variational``, the compiled CVODE engine
-    integrating the derivative of the flow with the state (only it can)."""
+    ``choice``, or ``choice(params, options)``.  With ``variational``, an engine integrating the
+    derivative of the flow with the state: the compiled CVODE one (the default) or the compiled
+    DOP853 one (only they can)."""
     if variational:
         return _variational_engine(choice, params, options)
     if choice is None:
@@ -233,9 +234,14 @@ def build_engine(
 
 
 def _variational_engine(choice: EngineChoice, params: Parameters, options: SolverOptions) -> Engine:
+    if choice == "dop853":
+        from oscillator.engines.dop853_engine import Dop853Engine
+
+        return Dop853Engine(params, options, variational=True)
     if choice not in (None, "cvode"):
         raise InputError(
-            f"the derivative of the flow (periodic orbits) needs the compiled CVODE engine, not {shown(choice)}",
+            "the derivative of the flow (periodic orbits) needs the compiled CVODE engine or the "
+            f"compiled DOP853 one, not {shown(choice)}",
             field="engine",
         )
     from oscillator.engines.cvode_c import CCvodeEngine

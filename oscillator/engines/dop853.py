@@ -1,4 +1,4 @@
-"""DOP853 with its dense output and CVODE's root finding on it, all compiled: the ``"dop853"`` engine.
+"""DOP853 with its dense output and CVODE's root finding on it, all compiled: the ``"dop853"`` engine's kernels.
 
 The method is SciPy's ``DOP853`` (Hairer, Norsett & Wanner's explicit Runge-Kutta pair of order
 8(5,3) with a 7th-order dense output), its coefficients taken from
@@ -27,15 +27,13 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from oscillator.compiled import hot
-from oscillator.engines import EngineFailure, Step, StepKind
-from oscillator.model.fields import coefficients
-from oscillator.model.kernels import rates
+from oscillator.model.kernels import jacobian, rates
 from oscillator.model.parameters import Parameters, SolverOptions
 from oscillator.model.phase_space import Mode
 from oscillator.model.roots import NUM_ROOTS, root_directions, root_values_at
 from oscillator.model.types import Vector
 
-__all__ = ["FAILURES", "Dop853Engine", "advance", "grid_returns", "new_work", "restart"]
+__all__ = ["FAILURES", "advance", "grid_returns", "mode_vector", "new_work", "restart"]
 
 _STAGES = int(_coefficients.N_STAGES)  # 12
 _A = np.ascontiguousarray(_coefficients.A[:_STAGES, :_STAGES])
@@ -77,7 +75,8 @@ R = NUM_ROOTS
     MAX_STEPS,
     STARTED,
     T_REF,
-) = range(15)
+    TANGENT,
+) = range(16)
 Y_OLD = 16
 Y_NEW = Y_OLD + N
 F_NEW = Y_NEW + N
@@ -90,7 +89,20 @@ G_HI = G_LO + R
 G_MID = G_HI + R
 K_AT = G_MID + R
 F_AT = K_AT + _EXTENDED * N
-SIZE = F_AT + _POWER * N
+# The derivative of the flow, ``Phi`` (16, row by row), where ``w[TANGENT]`` is set: its values at
+# the step's two ends, its field ``J Phi`` at the new end, a stage's, the step's attempt, the output,
+# its stages, its dense output's coefficients and the Jacobian ``J`` itself.
+M = 16
+PHI_OLD = F_AT + _POWER * N
+PHI_NEW = PHI_OLD + M
+PF_NEW = PHI_NEW + M
+PHI_TMP = PF_NEW + M
+PHI_STEP = PHI_TMP + M
+PHI_OUT = PHI_STEP + M
+PK_AT = PHI_OUT + M
+PF_AT = PK_AT + _EXTENDED * M
+JAC = PF_AT + _POWER * M
+SIZE = JAC + M
 
 #: What :func:`advance` returns: a root, the target (or the stop time), one step, or a failure.
 ROOT, TARGET, STEPPED_ONE, TOO_MUCH_WORK, TOO_SMALL = 0, 1, 2, -1, -3
@@ -101,7 +113,7 @@ FAILURES = {
 }
 
 # The modes vector: the signs and contact flags, then the root directions.
-_DIRECTIONS = 4
+DIRECTIONS = 4
 
 
 @hot(inline=True)
@@ -117,6 +129,21 @@ def _field(
     w[EVALS] += 1.0
 
 
+@hot(inline=True)
+def _tangent(w: Vector, modes: np.ndarray, c: Vector, at: int, phi: int, out: int) -> None:  # pragma: no cover
+    """``w[out:out + 16]`` = ``J Phi``: the variational field (:func:`~oscillator.model.kernels.jacobian`)
+    at the state ``w[at:]`` applied to ``Phi = w[phi:phi + 16]``.  The same stages as the state's
+    carry it, so ``Phi`` is the derivative of the step the method took (internal differentiation)."""
+    x1, v1, x2, v2 = w[at], w[at + 1], w[at + 2], w[at + 3]
+    jacobian(x1, v1, x2, v2, c, modes[0], modes[1], modes[2] != 0, modes[3] != 0, w[JAC : JAC + M])
+    for row in range(4):
+        for col in range(4):
+            total = 0.0
+            for k in range(4):
+                total += w[JAC + 4 * row + k] * w[phi + 4 * k + col]
+            w[out + 4 * row + col] = total
+
+
 @hot
 def _roots(w: Vector, modes: np.ndarray, c: Vector, tau: float, y: int, g: int) -> None:  # pragma: no cover
     """``w[g:g + 11]`` = the root functions (:func:`~oscillator.model.roots.root_values_at`) at
@@ -126,9 +153,11 @@ def _roots(w: Vector, modes: np.ndarray, c: Vector, tau: float, y: int, g: int) 
     root_values_at(w[T_REF] + tau, x1, v1, x2, v2, c, modes[0], modes[1], left, right, w[CAP], w[NEAR], w, g)
 
 
-def new_work(params: Parameters, options: SolverOptions) -> np.ndarray:
-    """A work vector for :func:`advance` with the options' tolerances and step cap."""
+def new_work(params: Parameters, options: SolverOptions, *, tangent: bool = False) -> np.ndarray:
+    """A work vector for :func:`advance` with the options' tolerances and step cap; with
+    ``tangent``, the derivative of the flow ``Phi`` is carried with the state."""
     w = np.zeros(SIZE)
+    w[TANGENT] = float(tangent)
     w[RTOL], w[ATOL] = options.rtol, options.atol
     w[H_MAX] = w[CAP] = options.max_step_fraction * params.period
     w[NEAR] = options.grazing_displacement_tolerance
@@ -167,9 +196,14 @@ def _first_step(w: Vector, modes: np.ndarray, c: Vector) -> float:  # pragma: no
 def restart(w: Vector, modes: np.ndarray, c: Vector, t: float, y: Vector) -> None:  # pragma: no cover - compiled
     """Integrate ``modes``' field from ``(t, y)`` on: the step size reached so far is kept.  The
     time is measured from here on, as CVODE's is from its restarts: a root is located to
-    ``100 eps`` of the time since the restart, not of the time since the run's start."""
+    ``100 eps`` of the time since the restart, not of the time since the run's start.  Where the
+    work carries ``Phi``, ``y`` is 24 long: the state, the works and ``Phi``."""
     for i in range(N):
         w[Y_NEW + i] = y[i]
+    if w[TANGENT] != 0.0:
+        for i in range(M):
+            w[PHI_NEW + i] = y[N + i]
+        _tangent(w, modes, c, Y_NEW, PHI_NEW, PF_NEW)
     w[T_REF] = t
     w[T_NEW] = w[T_CUR] = 0.0
     w[STEPPED] = 0.0
@@ -184,16 +218,23 @@ def restart(w: Vector, modes: np.ndarray, c: Vector, t: float, y: Vector) -> Non
 
 @hot(inline=True)
 def _stage(
-    w: Vector, modes: np.ndarray, c: Vector, a: np.ndarray, row: int, s: int, start: int, tau: float, h: float
+    w: Vector, modes: np.ndarray, c: Vector, a: np.ndarray, row: int, s: int, start: int, phi: int, tau: float, h: float
 ) -> None:  # pragma: no cover - compiled
     """Stage ``s``: ``K[s]`` = the field at ``(tau, y + h sum_j a[row, j] K[j])``, ``j < s``, with
-    ``y`` at ``w[start:]``."""
+    ``y`` at ``w[start:]`` (and ``Phi``'s stage likewise from ``w[phi:]``, where it is carried)."""
     for i in range(N):
         total = 0.0
         for j in range(s):
             total += a[row, j] * w[K_AT + N * j + i]
         w[Y_TMP + i] = w[start + i] + h * total
     _field(w, modes, c, tau, Y_TMP, K_AT + N * s)
+    if w[TANGENT] != 0.0:
+        for i in range(M):
+            total = 0.0
+            for j in range(s):
+                total += a[row, j] * w[PK_AT + M * j + i]
+            w[PHI_TMP + i] = w[phi + i] + h * total
+        _tangent(w, modes, c, Y_TMP, PHI_TMP, PK_AT + M * s)
 
 
 @hot
@@ -202,14 +243,24 @@ def _stages(w: Vector, modes: np.ndarray, c: Vector, t: float, h: float) -> None
     the new state in ``Y_OUT`` (SciPy's ``rk_step``)."""
     for i in range(N):
         w[K_AT + i] = w[F_NEW + i]
+    tangent = w[TANGENT] != 0.0
+    if tangent:
+        _copy(w, PF_NEW, PK_AT, M)
     for s in range(1, _STAGES):
-        _stage(w, modes, c, _A, s, s, Y_NEW, t + _C[s] * h, h)
+        _stage(w, modes, c, _A, s, s, Y_NEW, PHI_NEW, t + _C[s] * h, h)
     for i in range(N):
         total = 0.0
         for j in range(_STAGES):
             total += _B[j] * w[K_AT + N * j + i]
         w[Y_OUT + i] = w[Y_NEW + i] + h * total
     _field(w, modes, c, t + h, Y_OUT, K_AT + N * _STAGES)
+    if tangent:
+        for i in range(M):
+            total = 0.0
+            for j in range(_STAGES):
+                total += _B[j] * w[PK_AT + M * j + i]
+            w[PHI_STEP + i] = w[PHI_NEW + i] + h * total
+        _tangent(w, modes, c, Y_OUT, PHI_STEP, PK_AT + M * _STAGES)
 
 
 @hot
@@ -257,6 +308,10 @@ def _step(w: Vector, modes: np.ndarray, c: Vector, t_stop: float) -> bool:  # pr
         w[Y_OLD + i] = w[Y_NEW + i]
         w[Y_NEW + i] = w[Y_OUT + i]
         w[F_NEW + i] = w[K_AT + N * _STAGES + i]
+    if w[TANGENT] != 0.0:
+        _copy(w, PHI_NEW, PHI_OLD, M)
+        _copy(w, PHI_STEP, PHI_NEW, M)
+        _copy(w, PK_AT + M * _STAGES, PF_NEW, M)
     w[STEPPED] = 1.0
     w[DENSE] = 0.0
     _roots(w, modes, c, t_new, Y_NEW, G_NEW)
@@ -270,35 +325,64 @@ def _dense(w: Vector, modes: np.ndarray, c: Vector) -> None:  # pragma: no cover
         return
     t_old, h = w[T_OLD], w[T_NEW] - w[T_OLD]
     for e in range(_A_EXTRA.shape[0]):
-        _stage(w, modes, c, _A_EXTRA, e, _STAGES + 1 + e, Y_OLD, t_old + _C_EXTRA[e] * h, h)
-    for i in range(N):
-        delta = w[Y_NEW + i] - w[Y_OLD + i]
-        w[F_AT + i] = delta
-        w[F_AT + N + i] = h * w[K_AT + i] - delta
-        w[F_AT + 2 * N + i] = 2.0 * delta - h * (w[F_NEW + i] + w[K_AT + i])
+        _stage(w, modes, c, _A_EXTRA, e, _STAGES + 1 + e, Y_OLD, PHI_OLD, t_old + _C_EXTRA[e] * h, h)
+    _coefficients_of(w, h, Y_OLD, Y_NEW, F_NEW, K_AT, F_AT, N)
+    if w[TANGENT] != 0.0:
+        _coefficients_of(w, h, PHI_OLD, PHI_NEW, PF_NEW, PK_AT, PF_AT, M)
+    w[DENSE] = 1.0
+
+
+@hot(inline=True)
+def _coefficients_of(
+    w: Vector, h: float, old: int, new: int, f_new: int, k: int, f: int, n: int
+) -> None:  # pragma: no cover - compiled
+    """The dense output's coefficients ``w[f:]`` of ``n`` values from ``w[old:]`` to ``w[new:]``
+    with their stages at ``w[k:]`` (SciPy's ``_dense_output_impl``)."""
+    for i in range(n):
+        delta = w[new + i] - w[old + i]
+        w[f + i] = delta
+        w[f + n + i] = h * w[k + i] - delta
+        w[f + 2 * n + i] = 2.0 * delta - h * (w[f_new + i] + w[k + i])
         for r in range(_POWER - 3):
             total = 0.0
             for j in range(_EXTENDED):
-                total += _D[r, j] * w[K_AT + N * j + i]
-            w[F_AT + N * (3 + r) + i] = h * total
-    w[DENSE] = 1.0
+                total += _D[r, j] * w[k + n * j + i]
+            w[f + n * (3 + r) + i] = h * total
 
 
 @hot
 def interpolate(w: Vector, t: float, out: int) -> None:  # pragma: no cover - compiled
     """``w[out:out + 8]`` = the state at ``t`` inside the last step, from its dense output
     (computed before)."""
+    _interpolated(w, t, Y_OLD, Y_NEW, F_AT, out, N)
+
+
+@hot(inline=True)
+def _interpolated(
+    w: Vector, t: float, old: int, new: int, f: int, out: int, n: int
+) -> None:  # pragma: no cover - compiled
+    """``w[out:out + n]`` at ``t`` from the dense output's coefficients ``w[f:]`` of the values at
+    ``w[old:]`` and ``w[new:]``."""
     if t == w[T_NEW]:
-        for i in range(N):
-            w[out + i] = w[Y_NEW + i]
+        for i in range(n):
+            w[out + i] = w[new + i]
         return
     x = (t - w[T_OLD]) / (w[T_NEW] - w[T_OLD])
-    for i in range(N):
+    for i in range(n):
         total = 0.0
         for r in range(_POWER - 1, -1, -1):
-            total += w[F_AT + N * r + i]
+            total += w[f + n * r + i]
             total *= x if (_POWER - 1 - r) % 2 == 0 else 1.0 - x
-        w[out + i] = total + w[Y_OLD + i]
+        w[out + i] = total + w[old + i]
+
+
+@hot
+def _output(w: Vector, t: float) -> None:  # pragma: no cover - compiled
+    """The state at ``t`` inside the last step into ``Y_OUT``, and ``Phi`` into ``PHI_OUT`` where
+    it is carried (the dense output computed before, unless ``t`` is the step's end)."""
+    interpolate(w, t, Y_OUT)
+    if w[TANGENT] != 0.0:
+        _interpolated(w, t, PHI_OLD, PHI_NEW, PF_AT, PHI_OUT, M)
 
 
 @hot
@@ -316,7 +400,7 @@ def _crossing(w: Vector, modes: np.ndarray, lo: int, hi: int) -> tuple[int, bool
     best, largest, zero = -1, 0.0, False
     for i in range(R):
         low, high = w[lo + i], w[hi + i]
-        if modes[_DIRECTIONS + i] * low > 0.0:
+        if modes[DIRECTIONS + i] * low > 0.0:
             continue
         if high == 0.0:
             zero = True
@@ -366,7 +450,7 @@ def _locate(
     fired = 0
     for i in range(R):
         low, high = w[G_LO + i], w[G_HI + i]
-        if modes[_DIRECTIONS + i] * low > 0.0:
+        if modes[DIRECTIONS + i] * low > 0.0:
             continue
         if high == 0.0 or low * high < 0.0:
             fired |= 1 << i
@@ -392,7 +476,7 @@ def _lower_end(w: Vector, modes: np.ndarray, c: Vector) -> None:  # pragma: no c
     for i in range(R):
         if w[G_LO + i] == 0.0:
             # left out where it stays zero: the direction's own sign cannot cross
-            w[G_LO + i] = w[G_MID + i] if w[G_MID + i] != 0.0 else float(modes[_DIRECTIONS + i])
+            w[G_LO + i] = w[G_MID + i] if w[G_MID + i] != 0.0 else float(modes[DIRECTIONS + i])
 
 
 @hot
@@ -409,7 +493,7 @@ def advance(
     while True:
         if w[STEPPED] == 0.0 or w[T_CUR] >= w[T_NEW]:
             if w[T_CUR] >= t_stop:
-                _copy(w, Y_NEW, Y_OUT, N)
+                _output(w, w[T_NEW])
                 return TARGET, 0
             steps += 1
             if steps > w[MAX_STEPS]:
@@ -427,7 +511,7 @@ def advance(
         if first >= 0 or zero:
             _dense(w, modes, c)
             t_root, fired = _locate(w, modes, c, w[T_CUR], t_hi, first)
-            interpolate(w, t_root, Y_OUT)
+            _output(w, t_root)
             w[T_CUR] = t_root
             _copy(w, G_HI, G_CUR, R)
             return ROOT, fired
@@ -436,10 +520,10 @@ def advance(
         if t_hi == target or t_hi >= t_stop:
             if t_hi < w[T_NEW]:
                 _dense(w, modes, c)
-            interpolate(w, t_hi, Y_OUT)
+            _output(w, t_hi)
             return TARGET, 0
         if one_step:
-            _copy(w, Y_NEW, Y_OUT, N)
+            _output(w, w[T_NEW])
             return STEPPED_ONE, 0
 
 
@@ -450,7 +534,8 @@ def grid_returns(
     """:func:`advance` to each time of ``grid`` in turn, until a root, ``t_stop`` or a failure,
     at most ``len(rows)`` times: each grid time reached written as a row ``(t, x1, v1, x2, v2)``
     and its whole state into ``last``.  Returns the last return's kind and roots, the number of
-    rows written and the time reached (the grid's own time for a row)."""
+    rows written and the time reached (the grid's own time for a row).  ``last`` is 24 long
+    where the work carries ``Phi``."""
     most = min(rows.shape[0], grid.shape[0])
     n, kind, fired, t = 0, TARGET, 0, w[T_REF] + w[T_CUR]
     while n < most:
@@ -467,76 +552,8 @@ def grid_returns(
             rows[n, 1 + k] = w[Y_OUT + k]
         for k in range(N):
             last[k] = w[Y_OUT + k]
+        if w[TANGENT] != 0.0:
+            for k in range(M):
+                last[N + k] = w[PHI_OUT + k]
         n += 1
     return kind, fired, n, t
-
-
-_KINDS = {ROOT: StepKind.ROOT, TARGET: StepKind.TARGET, STEPPED_ONE: StepKind.STEP}
-
-
-class Dop853Engine:
-    """The compiled DOP853 of this module behind the :class:`~oscillator.engines.Engine` interface."""
-
-    name = "dop853"
-    size = N
-
-    def __init__(self, params: Parameters, options: SolverOptions) -> None:
-        self._c = coefficients(params)
-        self._w = new_work(params, options)
-        self._modes: dict[Mode, np.ndarray] = {}
-        self._mode = np.zeros(_DIRECTIONS + R, np.int64)
-        self._restarts = 0
-        self._last = np.zeros(N)
-        self._pending: EngineFailure | None = None  # met by the grid loop after some rows: raised next
-
-    def reset(self, mode: Mode, t: float, y: np.ndarray) -> None:
-        vector = self._modes.get(mode)
-        if vector is None:
-            vector = self._modes[mode] = mode_vector(mode)
-        self._mode = vector
-        restart(self._w, vector, self._c, float(t), np.ascontiguousarray(y[:N], dtype=np.float64))
-        self._restarts += 1
-
-    def advance(self, target: float, *, t_stop: float, one_step: bool) -> Step:
-        w = self._w
-        self._raise_pending()
-        kind, fired = advance(w, self._mode, self._c, float(target), float(t_stop), one_step)
-        if kind < 0:
-            raise EngineFailure(FAILURES[kind], kind)
-        roots = tuple(i for i in range(R) if fired >> i & 1)
-        # a target is returned at its own time, as CVODE's engines do (t_ref + tau may differ by an ulp)
-        t = min(float(target), float(t_stop)) if kind == TARGET else float(w[T_REF] + w[T_CUR])
-        return Step(t, w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots)
-
-    def advance_grid(self, grid: np.ndarray, *, t_stop: float, rows: np.ndarray) -> tuple[Step, int]:
-        """:meth:`advance` to each time of ``grid`` in turn, in compiled code (:func:`grid_returns`),
-        until a root or ``t_stop``, at most ``len(rows)`` times: each time reached written as a
-        row ``(t, x1, v1, x2, v2)``.  The last return as a :class:`Step`, and how many rows were
-        written (a failure after some rows is raised at the next call, as CVODE's engine does)."""
-        self._raise_pending()
-        w = self._w
-        kind, fired, n, t = grid_returns(w, self._mode, self._c, grid, float(t_stop), rows, self._last)
-        if kind < 0:
-            failure = EngineFailure(FAILURES[kind], kind)
-            if n == 0:
-                raise failure
-            self._pending = failure
-            return Step(float(rows[n - 1, 0]), self._last.copy(), StepKind.TARGET, ()), n
-        roots = tuple(i for i in range(R) if fired >> i & 1)
-        return Step(float(t), w[Y_OUT : Y_OUT + N].copy(), _KINDS[kind], roots), n
-
-    def _raise_pending(self) -> None:
-        failure, self._pending = self._pending, None
-        if failure is not None:
-            raise failure
-
-    @property
-    def rhs_evaluations(self) -> int:
-        return int(self._w[EVALS])
-
-    @property
-    def restarts(self) -> int:
-        return self._restarts
-
-    def close(self) -> None:
-        """Nothing to free: the engine's state is one array."""

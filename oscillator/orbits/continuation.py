@@ -28,13 +28,22 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from oscillator.engines import check_engine
 from oscillator.errors import InputError, Interrupted, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.parameters import Parameters, check_count, real_argument
 from oscillator.orbits.branch import Branch, Skipped, point_columns
 from oscillator.orbits.corrector import Continuer, Located, OrbitPoint
 from oscillator.orbits.locating import between, end_point, own_kind
-from oscillator.orbits.shooting import MAX_TRANSIENT, STATE, check_guess, check_orbit_settings, orbit_case, start_of
+from oscillator.orbits.shooting import (
+    MAX_TRANSIENT,
+    STATE,
+    check_guess,
+    check_orbit_settings,
+    orbit_case,
+    start_of,
+)
+from oscillator.orbits.stroboscopic import ORBIT_ENGINE, ORBIT_ENGINES
 from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -119,6 +128,7 @@ def continue_orbit(
     tol: float = 1e-9,
     locate_tol: float = 1e-9,
     progress: Callable[[float], None] | None = None,
+    engine: str = ORBIT_ENGINE,
     **overrides: float,
 ) -> Branch:
     """Continue the period-``period`` orbit in ``param`` from ``start`` to ``stop``: a :class:`Branch`
@@ -146,6 +156,9 @@ def continue_orbit(
         Bifurcations are located to this in the parameter (``> 0``).
     progress : callable, optional
         Called with the fraction of ``[start, stop]`` covered after each point.
+    engine : str
+        The period maps' engine, as for :func:`~oscillator.find_orbit`: ``"dop853"`` (compiled,
+        the default) or ``"cvode"`` (the reference).
     **overrides
         Any other parameter, initial value or solver option.
 
@@ -195,8 +208,9 @@ def continue_orbit(
     )
     start, stop = settings.start, settings.stop
     base = orbit_case(case, {**overrides, param: start})
-    section_, y_start = start_of(base, section, guess, transient)
-    cont = Continuer(base, param, section_, settings.period, abs(stop - start), settings.tol)
+    engine = check_engine(engine, among=ORBIT_ENGINES)
+    section_, y_start = start_of(base, section, guess, transient, engine=engine)
+    cont = Continuer(base, param, section_, settings.period, abs(stop - start), settings.tol, engine)
     direction = 1.0 if stop > start else -1.0
 
     trace = _Trace(cont.first(y_start, start, direction), cont.scale, param)

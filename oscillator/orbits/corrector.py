@@ -15,8 +15,10 @@ from oscillator.errors import OscillatorError, Reason
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Bifurcation, Skipped, skipped
 from oscillator.orbits.multipliers import moving_multipliers, multipliers_of, verdict_of
-from oscillator.orbits.shooting import PeriodMap, fixed_point_system, newton, period_map, pinned_rows
+from oscillator.orbits.sensitivity import map_gradient
+from oscillator.orbits.shooting import newton
 from oscillator.orbits.signature import Signature, cyclic_signature
+from oscillator.orbits.stroboscopic import ORBIT_ENGINE, PeriodMap, fixed_point_system, period_map, pinned_rows
 
 __all__ = ["Continuer", "Located", "OrbitPoint", "critical_multiplier", "kind_of_change", "natural", "slope"]
 
@@ -83,9 +85,13 @@ class Located:
 class Continuer:
     """The branch's state as it is traced: the case, the scaling and the corrector."""
 
-    def __init__(self, case: Case, param: str, t0: float, period: int, sigma: float, tol: float) -> None:
+    def __init__(
+        self, case: Case, param: str, t0: float, period: int, sigma: float, tol: float, engine: str = ORBIT_ENGINE
+    ) -> None:
         self.case, self.param, self.t0, self.period = case, param, t0, period
         self.sigma, self.tol = sigma, tol
+        #: The period maps' engine (:data:`~oscillator.orbits.shooting.ORBIT_ENGINES`).
+        self.engine = engine
         self.scale = max(1.0, abs(case.parameters.d), abs(case.parameters.d1))
 
     def at(self, lam: float) -> Case:
@@ -93,27 +99,31 @@ class Continuer:
 
     def first(self, guess: np.ndarray, lam: float, direction: float) -> OrbitPoint:
         """The orbit at ``lam`` from ``guess``, with its tangent pointing ``direction`` in ``lam``."""
-        y, image, _ = newton(self.at(lam), self.t0, guess, self.period, tol=self.tol, max_iterations=20)
+        y, image, _ = newton(
+            self.at(lam), self.t0, guess, self.period, tol=self.tol, max_iterations=20, engine=self.engine
+        )
         jacobian = self.jacobian(y, lam, image)
         return OrbitPoint(y, lam, image, self.tangent(jacobian, None, direction), 0, jacobian[:, 4])
 
     def residual(self, y: np.ndarray, lam: float) -> tuple[np.ndarray, PeriodMap]:
         """``P(y) - y`` (zero in the displacement of a mass at rest all period) and the map."""
-        image = period_map(self.at(lam), self.t0, y, self.period)
+        image = period_map(self.at(lam), self.t0, y, self.period, engine=self.engine)
         return fixed_point_system(image)[1], image
 
     def jacobian(self, y: np.ndarray, lam: float, image: PeriodMap, column: np.ndarray | None = None) -> np.ndarray:
         """``[M - I, sigma dP/dlam]`` (4 x 5); a mass at rest all period keeps its displacement:
         its row is ``[e_(x_i), 0]`` (:func:`~oscillator.orbits.shooting.fixed_point_system`).
 
-        ``dP/dlam`` is a central difference (two runs without the derivative), unless ``column``
+        ``dP/dlam`` is exact, carried through every switch along the map's own pieces
+        (:func:`~oscillator.orbits.sensitivity.map_gradient`: a difference quotient would straddle
+        a switch's change as soon as the branch comes within its step of one), unless ``column``
         is given (the corrector's steps between two points reuse the last point's: a chord
         method in ``lam``, exact in ``y``)."""
         if column is None:
-            h = 1e-6 * max(1.0, abs(lam))
-            plus = period_map(self.at(lam + h), self.t0, y, self.period, derivative=False).end
-            minus = period_map(self.at(lam - h), self.t0, y, self.period, derivative=False).end
-            column = self.sigma * (plus - minus) / (2 * h)
+            p = image.result.case.parameters
+            dt_end = np.array([-(image.t1 - image.t0) / p.Omega if self.param == "Omega" else 0.0])
+            gradient = map_gradient(image.segments, p, (self.param,), image.t1, dt_end)
+            column = self.sigma * gradient[:, 0]
         column = column.copy()
         column[pinned_rows(image.settled)] = 0.0
         return np.column_stack([fixed_point_system(image)[0], column])
@@ -187,7 +197,9 @@ def critical_multiplier(point: OrbitPoint) -> complex:
 def natural(cont: Continuer, lam: float, guess: np.ndarray) -> OrbitPoint | Skipped:
     """The orbit at ``lam`` by Newton from ``guess`` (no arclength condition); why not, if it fails."""
     try:
-        y, image, _ = newton(cont.at(lam), cont.t0, guess, cont.period, tol=cont.tol, max_iterations=8)
+        y, image, _ = newton(
+            cont.at(lam), cont.t0, guess, cont.period, tol=cont.tol, max_iterations=8, engine=cont.engine
+        )
     except OscillatorError as error:
         return skipped(lam, error)
     return OrbitPoint(y, lam, image, np.zeros(5), 0)

@@ -49,9 +49,10 @@ from oscillator.model.fields import C3, K3
 from oscillator.model.kernels import rates
 from oscillator.model.phase_space import Mode
 from oscillator.model.types import Vector
-from oscillator.orbits.tangent import tangent_rates
+from oscillator.orbits.tangent import map_rates, tangent_rates
 
 __all__ = [
+    "ARTICLE_MAP",
     "ARTICLE_PIECE",
     "CHAIN_PIECE",
     "IntegratedPiece",
@@ -63,8 +64,9 @@ __all__ = [
 ]
 
 #: The fields: the article's tangent system (the response integrals alone with no parameter), a
-#: chain's tangent equations.
-ARTICLE_PIECE, CHAIN_PIECE = 0, 1
+#: chain's tangent equations, the article's state and its derivatives in the parameters alone
+#: (no integrals, no extrema: :func:`oscillator.orbits.sensitivity.map_gradient`).
+ARTICLE_PIECE, CHAIN_PIECE, ARTICLE_MAP = 0, 1, 2
 _STAGES = _B.shape[0]
 _EPS = float(np.finfo(float).eps)
 #: The extremum functions of the article's pieces: ``a1``, ``a2``, the contact force's rate.
@@ -114,11 +116,15 @@ def chain_tangent_rates(
 @njit(cache=True)
 def _field(kind: int, t: float, y: Vector, data: Vector, out: Vector) -> None:  # pragma: no cover - compiled
     """``out``: the field ``kind`` at ``(t, y)`` with its numbers ``data``."""
-    if kind == ARTICLE_PIECE:
+    if kind == ARTICLE_PIECE or kind == ARTICLE_MAP:
         k = int(data[4])
         columns = data[5 : 5 + k].astype(np.int64)
         s1, s2 = int(data[0]), int(data[1])
-        tangent_rates(t, y, data[5 + k :], columns, s1, s2, data[2] != 0.0, data[3] != 0.0, out)
+        left, right = data[2] != 0.0, data[3] != 0.0
+        if kind == ARTICLE_PIECE:
+            tangent_rates(t, y, data[5 + k :], columns, s1, s2, left, right, out)
+        else:
+            map_rates(t, y, data[5 + k :], columns, s1, s2, left, right, out)
     else:
         k, m = int(data[0]), int(data[1])
         steps = data[2 : 2 + k]

@@ -44,7 +44,7 @@ from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.saltation import Boundary, boundary_of, elementary_switches, rest_projection
 from oscillator.model.system import ARTICLE
-from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece, mode_flags
+from oscillator.orbits.pieces import ARTICLE_MAP, ARTICLE_PIECE, article_data, integrate_piece, mode_flags
 from oscillator.orbits.tangent import INTEGRALS, force_gradient, threshold_gradient
 from oscillator.text import shown
 
@@ -61,6 +61,7 @@ __all__ = [
     "check_params",
     "columns_of",
     "crossings",
+    "map_gradient",
     "selector_of",
     "sensitivities",
     "tangent_pass",
@@ -317,6 +318,31 @@ def tangent_pass(
             raise ValueError(f"no piece holds the time {t!r}")
         marked.append(v)
     return Pass(pieces, switches, end, marked)
+
+
+def map_gradient(
+    segments: Sequence[Segment], p: Parameters, params: tuple[str, ...], t_end: float, dt_end: np.ndarray
+) -> np.ndarray:
+    """``dP/dc`` (4 x k) at fixed start: the end of :func:`tangent_pass` from ``sigma = 0``, with
+    nothing else of the pass integrated or kept (the continuation's corrector takes its column in
+    the parameter from it).
+
+    Raises the refusal (:class:`~oscillator.errors.SimulationFailed`) at a grazing."""
+    selector, c, columns, k = selector_of(params), coefficients(p), columns_of(params), len(params)
+    sigma = np.zeros((4, k))
+    for index, segment in enumerate(segments):
+        data = article_data(mode_flags(segment.mode), columns, c)
+        start = np.concatenate([segment.y0, sigma.ravel()])
+        span = (segment.t0, segment.t1)
+        end = integrate_piece(ARTICLE_MAP, data, span, start, rtol=_TOLERANCE, atol=_TOLERANCE).end
+        y1, sigma1 = end[:4], end[4:].reshape(4, k)
+        if index + 1 < len(segments):
+            following = segments[index + 1]
+            crossed = crossings(following.t0, y1, following.y0, sigma1, p, segment.mode, following.mode, selector)
+            sigma = rest_projection(following.mode) @ crossed[-1].sigma_after
+    f_end = np.array(state_derivative(t_end, y1, p, segments[-1].mode))
+    gradient: np.ndarray = sigma1 + np.outer(f_end, dt_end)
+    return gradient
 
 
 def _with_end(piece: Piece, tau1: np.ndarray) -> Piece:

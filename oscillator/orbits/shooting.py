@@ -1,10 +1,10 @@
 """Periodic orbits by shooting: the stroboscopic map, its derivative through every switch, Newton.
 
 The stroboscopic map ``P: y(t0) -> y(t0 + N T)`` (``T = 2 pi / Omega``) is one run of
-:func:`oscillator.simulate` that keeps its segments (``SaveAt(segments=True)``); its derivative,
-the monodromy matrix, is carried by the same run (``SaveAt(derivative=True)``): the engine
-integrates each mode's variational equations with the state, and the supervisor applies the
-saltation matrix of each switch it resolves (:func:`oscillator.model.saltation.carried_through`),
+:func:`oscillator.simulate` that keeps its segments (:mod:`oscillator.orbits.stroboscopic`); its
+derivative, the monodromy matrix, is carried by the same run: the engine integrates each mode's
+variational equations with the state, and the supervisor applies the saltation matrix of each
+switch it resolves (:func:`oscillator.model.saltation.carried_through`),
 
     M = Phi_n S_n ... Phi_1 S_1 Phi_0.
 
@@ -15,30 +15,35 @@ A period-``N`` orbit is a fixed point of ``P``, found by Newton's method ``y <- 
 from __future__ import annotations
 
 import dataclasses
-import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 import pandas as pd
 
+from oscillator.engines import check_engine
 from oscillator.errors import InputError, Reason, SimulationFailed
-from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
-from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, resolve_case
 from oscillator.io.files import as_folder
 from oscillator.model.chains import FrictionChain
-from oscillator.model.events import COLUMN, KINDS, EventKind
+from oscillator.model.events import EventKind
 from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
-from oscillator.model.phase_space import Mode
 from oscillator.model.system import ARTICLE
 from oscillator.orbits.multipliers import multipliers_of, verdict_of
 from oscillator.orbits.signature import Signature, cyclic_signature, event_signature
+from oscillator.orbits.stroboscopic import (
+    ORBIT_ENGINE,
+    ORBIT_ENGINES,
+    PeriodMap,
+    fixed_point_system,
+    period_map,
+    solve_step,
+)
 from oscillator.presenting import presenter
 from oscillator.text import shown
 
@@ -64,7 +69,7 @@ MAX_PERIOD = 1000
 #: The most Newton steps allowed, and the longest transient (forcing periods).
 MAX_ITERATIONS = 200
 MAX_TRANSIENT = 1_000_000
-#: CVODE's tolerances for orbits unless the caller sets them.
+#: The tolerances of the period maps unless the caller sets them.
 ORBIT_RTOL = 1e-12
 #: The period map's own accuracy at :data:`ORBIT_RTOL`, relative to the state's scale: a residual
 #: below it is the map's noise (measured: 5e-12 to 6e-11 from one Newton step to the next at an
@@ -72,132 +77,6 @@ ORBIT_RTOL = 1e-12
 FLOOR = 1e-10
 #: The state's names (the article's system: :data:`oscillator.model.system.ARTICLE`).
 STATE = ARTICLE.state
-
-
-@dataclass(frozen=True)
-class PeriodMap:
-    """``P(y)`` and what it passed: one evaluation of the stroboscopic map.
-
-    Attributes
-    ----------
-    t0, t1 : float
-        Start and end of the map (``t1 = t0 + N T``).
-    start, end : ndarray
-        ``y(t0)`` and ``y(t1)`` = ``P(y(t0))``.
-    segments : tuple of Segment
-        The run's smooth pieces, in order (:class:`oscillator.hybrid.record.Segment`).
-    result : Result
-        The run itself (its event table is built when :attr:`events` is first read).
-    monodromy : ndarray or None
-        ``dP/dy`` (4 x 4), when asked for: the derivative of the flow the run carried through
-        every switch (``SaveAt(derivative=True)``).
-    """
-
-    t0: float
-    t1: float
-    start: np.ndarray
-    end: np.ndarray
-    segments: tuple[Segment, ...]
-    result: Result = field(repr=False)
-    monodromy: np.ndarray | None = None
-
-    @property
-    def switches(self) -> list[tuple[float, np.ndarray, Mode]]:
-        """The start and every switch: the time, the state after it, the mode after it."""
-        return [(segment.t0, segment.y0, segment.mode) for segment in self.segments]
-
-    @property
-    def events(self) -> pd.DataFrame:
-        """The event table over ``[t0, t1]`` (as ``Result.events``)."""
-        return self.result.events
-
-    @property
-    def kinds(self) -> list[tuple[float, int, EventKind]]:
-        """``(t, mass, kind)`` of every event, in order, read from the segments' event rows
-        (no table is built)."""
-        rows = [segment.rows for segment in self.segments if len(segment.rows)]
-        if not rows:
-            return []
-        table = np.concatenate(rows)
-        columns = table[:, [COLUMN["t"], COLUMN["mass"], COLUMN["kind"]]]
-        return [(float(t), int(mass), KINDS[int(kind)]) for t, mass, kind in columns]
-
-    @property
-    def resting(self) -> tuple[int, ...]:
-        """The masses at rest over the whole map (in every mode it passed)."""
-        return tuple(mass for mass in (1, 2) if all(segment.mode.sign(mass) == 0 for segment in self.segments))
-
-    @property
-    def settled(self) -> tuple[int, ...]:
-        """The masses at rest at the end of the map that never left rest during it: at rest all
-        along, or moving at first and then stuck for good."""
-        modes = [segment.mode for segment in self.segments]
-        return tuple(
-            mass
-            for mass in (1, 2)
-            if modes[-1].sign(mass) == 0
-            and not any(a.sign(mass) == 0 and b.sign(mass) != 0 for a, b in itertools.pairwise(modes))
-        )
-
-
-def pinned_rows(masses: tuple[int, ...]) -> list[int]:
-    """The state rows of these masses' displacements (:func:`fixed_point_system`)."""
-    return [2 * mass - 2 for mass in masses]
-
-
-def fixed_point_system(image: PeriodMap) -> tuple[np.ndarray, np.ndarray]:
-    """``(J, F)`` for a Newton step ``J dy = -F`` towards a fixed point from ``y = image.start``:
-    ``J = M - I`` and ``F = P(y) - y``, but for the masses that settle (:attr:`PeriodMap.settled`).
-
-    A mass at rest over the whole period stays where it is put: ``P`` leaves its ``x_i``
-    unchanged (row ``x_i`` of ``M`` is ``e_(x_i)``), so ``M - I`` has a zero row and every nearby
-    ``x_i`` is an orbit too, a continuum; a mass that moves at first and then sticks for good
-    makes that row nearly zero.  Its row becomes ``(e_(x_i), y_i - P_i(y))``: the step puts
-    the mass where it stuck (nowhere else for one at rest all period) and the system is regular.
-    """
-    assert image.monodromy is not None
-    matrix, residual = image.monodromy - np.eye(4), image.end - image.start
-    for row in pinned_rows(image.settled):
-        matrix[row] = 0.0
-        matrix[row, row] = 1.0
-        residual[row] = -residual[row]
-    return matrix, residual
-
-
-def solve_step(matrix: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
-    """``matrix^-1 rhs``; a singular system is the library's error, with the reason."""
-    try:
-        step = np.linalg.solve(matrix, rhs)
-    except np.linalg.LinAlgError:
-        step = np.full(len(rhs), np.nan)
-    if not np.isfinite(step).all():
-        raise SimulationFailed(
-            f"{what}: the Newton system is singular (a Floquet multiplier of the map at this guess is 1: "
-            "an orbit at a fold, or a family of orbits); give another guess or a longer transient",
-            reason=Reason.SINGULAR,
-            field="guess",
-        )
-    return step
-
-
-def period_map(case: Case, t0: float, y: np.ndarray, periods: int = 1, *, derivative: bool = True) -> PeriodMap:
-    """``P(y)`` over ``periods`` forcing periods from ``t0``, and its derivative if asked.
-
-    One :func:`~oscillator.simulate` run that keeps no trajectory, only its segments, and with
-    ``derivative`` carries the derivative of the flow through every switch (the monodromy).
-
-    Raises
-    ------
-    SimulationFailed
-        The simulation failed, or the orbit grazes a boundary (the map has no derivative there).
-    """
-    t1 = t0 + periods * case.parameters.period
-    start = np.array(y[:4], dtype=float)
-    initial = dataclasses.replace(case.initial, t0=t0, **dict(zip(STATE, start, strict=True)))
-    run_case = dataclasses.replace(case, initial=initial, t_end=t1, expected=(), keep_events_from=None)
-    result = simulate(run_case, save=SaveAt(steps=False, segments=True, derivative=derivative))
-    end = np.asarray(result.final_state[1:], dtype=float)
-    return PeriodMap(t0, t1, start, end, result.segments, result, result.derivative)
 
 
 @dataclass(frozen=True)
@@ -351,6 +230,7 @@ def newton(
     max_iterations: int,
     first_signature: list[Signature] | None = None,
     floor: bool = False,
+    engine: str = ORBIT_ENGINE,
 ) -> tuple[np.ndarray, PeriodMap, list[float]]:
     """Newton's method on ``P(y) - y``; the fixed point, the map there and the residuals.
 
@@ -360,13 +240,14 @@ def newton(
     accuracy is otherwise chased through its noise, and met by chance or not at all).
 
     ``first_signature``, when given, receives the :func:`cyclic_signature` of the map at the
-    guess (to tell whether Newton went from one kind of motion to another).
+    guess (to tell whether Newton went from one kind of motion to another).  The maps run on
+    ``engine``.
     """
     history: list[float] = []
     y = np.array(y, dtype=float)
     best: tuple[np.ndarray, PeriodMap, int] | None = None
     for _ in range(max_iterations + 1):
-        image = period_map(case, t0, y, periods)
+        image = period_map(case, t0, y, periods, engine=engine)
         if first_signature is not None and not first_signature:
             first_signature.append(cyclic_signature(image))
         residual = image.end - y
@@ -406,20 +287,26 @@ def tightened(case: Case, overrides: dict[str, Any]) -> Case:
     return resolve_case(case, **tight) if tight else case
 
 
-def settled(case: Case, state: np.ndarray | Sequence[float], periods: int) -> np.ndarray:
+def settled(case: Case, state: np.ndarray | Sequence[float], periods: int, *, engine: str = ORBIT_ENGINE) -> np.ndarray:
     """The state ``(x1, v1, x2, v2)`` that ``periods`` forcing periods from ``state`` at the case's
-    ``t0`` reach (the same section: the forcing has period ``T``); ``state`` itself for 0."""
+    ``t0`` reach (the same section: the forcing has period ``T``); ``state`` itself for 0.  The
+    run is on ``engine``."""
     y = np.array(state, dtype=float)
     if periods == 0:
         return y
     start = dataclasses.replace(case.initial, **dict(zip(case.system.state, (float(v) for v in y), strict=True)))
     end = case.initial.t0 + periods * case.parameters.period
-    warm = simulate(dataclasses.replace(case, initial=start), t_end=end, save=SaveAt(steps=False, events_from=end))
+    warm = simulate(
+        dataclasses.replace(case, initial=start), t_end=end, save=SaveAt(steps=False, events_from=end), engine=engine
+    )
     return np.asarray(warm.final_state[1:], dtype=float)
 
 
-def start_of(case: Case, section: object, guess: object, transient: object) -> tuple[float, np.ndarray]:
-    """The section's time and Newton's first state: ``guess``, or the state a transient reaches.
+def start_of(
+    case: Case, section: object, guess: object, transient: object, *, engine: str = ORBIT_ENGINE
+) -> tuple[float, np.ndarray]:
+    """The section's time and Newton's first state: ``guess``, or the state a transient reaches
+    (on ``engine``).
 
     The section defaults to the case's start ``t0``; the transient runs a whole number of
     periods from it, which lands on the same section (the forcing has period ``T``).
@@ -436,7 +323,7 @@ def start_of(case: Case, section: object, guess: object, transient: object) -> t
             "`guess` (x1, v1, x2, v2 there), or move the case's start with t0",
             field="guess",
         )
-    return section, settled(case, case.initial.y, transient)
+    return section, settled(case, case.initial.y, transient, engine=engine)
 
 
 def check_orbit_settings(period: object, tol: object, max_iterations: object) -> tuple[int, float, int]:
@@ -458,6 +345,7 @@ def find_orbit(
     transient: int | None = None,
     tol: float = 1e-9,
     max_iterations: int = 20,
+    engine: str = ORBIT_ENGINE,
     **overrides: float,
 ) -> ChainOrbit: ...
 
@@ -472,6 +360,7 @@ def find_orbit(
     transient: int | None = None,
     tol: float = 1e-9,
     max_iterations: int = 20,
+    engine: str = ORBIT_ENGINE,
     **overrides: float,
 ) -> Orbit: ...
 
@@ -485,6 +374,7 @@ def find_orbit(
     transient: int | None = None,
     tol: float = 1e-9,
     max_iterations: int = 20,
+    engine: str = ORBIT_ENGINE,
     **overrides: float,
 ) -> Orbit | ChainOrbit:
     """A period-``period`` orbit of the stroboscopic map ``y(section) -> y(section + period T)``.
@@ -508,6 +398,10 @@ def find_orbit(
         Converged when ``max |P(y) - y| <= tol`` (times the larger of 1 and the stops' distances).
     max_iterations : int
         Newton steps before giving up (1 to 200).
+    engine : str
+        The period maps' engine: ``"dop853"`` (compiled, the default) or ``"cvode"`` (the
+        reference); both carry the monodromy through every switch and find the same orbit to
+        1e-9.  A friction chain's maps run on its own CVODE engine.
     **overrides
         Any parameter, initial value (``t0`` moves the case's start, and so the default section)
         or solver option, as for :func:`oscillator.simulate`.  CVODE's ``rtol`` and ``atol``
@@ -528,6 +422,7 @@ def find_orbit(
     (True, True)
     """
     period, tol, max_iterations = check_orbit_settings(period, tol, max_iterations)
+    engine = check_engine(engine, among=ORBIT_ENGINES)
     if isinstance(case, FrictionChain):
         from oscillator.orbits.chain_orbits import find_chain_orbit
 
@@ -538,8 +433,8 @@ def find_orbit(
         transient = 100 if transient is None else transient
         return find_chain_orbit(chain, given, period=period, section=section, transient=transient, tol=tol)
     case = orbit_case(case, overrides)
-    section, start = start_of(case, section, guess, transient)
-    return _orbit(case, section, start, period, tol=tol, max_iterations=max_iterations)
+    section, start = start_of(case, section, guess, transient, engine=engine)
+    return _orbit(case, section, start, period, tol=tol, max_iterations=max_iterations, engine=engine)
 
 
 def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, history: list[float]) -> Orbit:
@@ -563,10 +458,12 @@ def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, hi
     )
 
 
-def _orbit(case: Case, section: float, start: np.ndarray, period: int, *, tol: float, max_iterations: int) -> Orbit:
+def _orbit(
+    case: Case, section: float, start: np.ndarray, period: int, *, tol: float, max_iterations: int, engine: str
+) -> Orbit:
     first: list[Signature] = []
     state, image, history = newton(
-        case, section, start, period, tol=tol, max_iterations=max_iterations, first_signature=first
+        case, section, start, period, tol=tol, max_iterations=max_iterations, first_signature=first, engine=engine
     )
     orbit = orbit_of(case, section, state, image, history)
     found = cyclic_signature(image)

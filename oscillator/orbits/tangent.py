@@ -57,6 +57,7 @@ __all__ = [
     "INTEGRALS",
     "force_gradient",
     "jacobian_gradient",
+    "map_rates",
     "monodromy_rates",
     "tangent_rates",
     "threshold_gradient",
@@ -179,23 +180,15 @@ def tangent_rates(
     contact = c[C3] * (y[1] - y[3]) ** 2 if left else 0.0
     out[4], out[5], out[6], out[7] = y[0] * y[0], y[2] * y[2], a1 * a1, a2 * a2
     out[8], out[9], out[10], out[11], out[12] = r[4], r[5], r[6] - contact, contact, r[7]
-    jac = np.empty(16)
-    jacobian(y[0], y[1], y[2], y[3], c, s1, s2, left, right, jac)
-    fc = np.empty((4, _SIZE))
-    field_gradient(t, y, c, s1, s2, left, right, fc)
+    sigma = state[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
+    tangent = out[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
+    _sigma_rates(t, y, c, columns, s1, s2, left, right, sigma, tangent)
     grad = np.empty((INTEGRALS, 4))
     partial = np.empty((INTEGRALS, _SIZE))
     _integrand_gradients(t, y, a1, a2, c, s1, s2, left, grad, partial)
-    sigma = state[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
-    tangent = out[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
     integral = out[4 + INTEGRALS + 4 * k :]
     for j in range(k):
         p = columns[j]
-        for row in range(4):
-            total = fc[row, p]
-            for m in range(4):
-                total += jac[4 * row + m] * sigma[m * k + j]
-            tangent[row * k + j] = total
         for q in range(INTEGRALS):
             total = partial[q, p]
             for m in range(4):
@@ -204,6 +197,47 @@ def tangent_rates(
         # d(a_i^2) = 2 a_i da_i, da_i the velocity row of the tangent just computed
         integral[2 * k + j] = 2.0 * a1 * tangent[1 * k + j]
         integral[3 * k + j] = 2.0 * a2 * tangent[3 * k + j]
+
+
+@njit(cache=True)
+def _sigma_rates(
+    t: float,
+    y: Vector,
+    c: Vector,
+    columns: np.ndarray,
+    s1: int,
+    s2: int,
+    left: bool,
+    right: bool,
+    sigma: Vector,
+    out: Vector,
+) -> None:  # pragma: no cover - compiled
+    """``out`` = ``J sigma + df/dc`` for the parameters ``columns`` (``sigma`` and ``out`` 4 x k,
+    row by row)."""
+    k = len(columns)
+    jac = np.empty(16)
+    jacobian(y[0], y[1], y[2], y[3], c, s1, s2, left, right, jac)
+    fc = np.empty((4, _SIZE))
+    field_gradient(t, y, c, s1, s2, left, right, fc)
+    for j in range(k):
+        p = columns[j]
+        for row in range(4):
+            total = fc[row, p]
+            for m in range(4):
+                total += jac[4 * row + m] * sigma[m * k + j]
+            out[row * k + j] = total
+
+
+@njit(cache=True)
+def map_rates(
+    t: float, state: Vector, c: Vector, columns: np.ndarray, s1: int, s2: int, left: bool, right: bool, out: Vector
+) -> None:  # pragma: no cover - compiled
+    """The tangent system without the response integrals: ``y`` (4) and ``sigma`` (4 x k, row by
+    row) in ``state`` and ``out`` (what the derivative of the period map in a parameter needs)."""
+    k = len(columns)
+    r = rates(t, state[0], state[1], state[2], state[3], c, s1, s2, left, right)
+    out[0], out[1], out[2], out[3] = r[0], r[1], r[2], r[3]
+    _sigma_rates(t, state[:4], c, columns, s1, s2, left, right, state[4 : 4 + 4 * k], out[4 : 4 + 4 * k])
 
 
 @njit(cache=True)

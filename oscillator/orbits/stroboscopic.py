@@ -1,0 +1,175 @@
+"""The stroboscopic map ``P: y(t0) -> y(t0 + N T)`` and its derivative, one run each
+(:func:`period_map`), and the Newton system of a fixed point (:func:`fixed_point_system`):
+what :mod:`oscillator.orbits.shooting` and the continuation's corrector iterate on.
+
+The map is one run of :func:`oscillator.simulate` that keeps its segments
+(``SaveAt(segments=True)``); its derivative, the monodromy matrix, is carried by the same run
+(``SaveAt(derivative=True)``): the engine integrates each mode's variational equations with the
+state, and the supervisor applies the saltation matrix of each switch it resolves
+(:func:`oscillator.model.saltation.carried_through`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from oscillator.errors import Reason, SimulationFailed
+from oscillator.hybrid.record import Segment
+from oscillator.hybrid.recording import SaveAt
+from oscillator.hybrid.result import Result
+from oscillator.hybrid.simulate import simulate
+from oscillator.io.cases import Case
+from oscillator.model.events import COLUMN, KINDS, EventKind
+from oscillator.model.phase_space import Mode
+from oscillator.model.system import ARTICLE
+
+__all__ = [
+    "ORBIT_ENGINE",
+    "ORBIT_ENGINES",
+    "PeriodMap",
+    "fixed_point_system",
+    "period_map",
+    "pinned_rows",
+    "solve_step",
+]
+
+#: The period maps' engine: the compiled DOP853 (:mod:`oscillator.engines.dop853`), whose
+#: derivative of the flow is that of its own steps; ``"cvode"`` is the reference it is held to
+#: (the same orbits to 1e-9, their monodromy matrices to 1e-9: tests/test_orbit_engines.py).
+ORBIT_ENGINE = "dop853"
+#: The engines a period map can run on (those that carry the derivative of the flow).
+ORBIT_ENGINES = ("dop853", "cvode")
+
+
+@dataclass(frozen=True)
+class PeriodMap:
+    """``P(y)`` and what it passed: one evaluation of the stroboscopic map.
+
+    Attributes
+    ----------
+    t0, t1 : float
+        Start and end of the map (``t1 = t0 + N T``).
+    start, end : ndarray
+        ``y(t0)`` and ``y(t1)`` = ``P(y(t0))``.
+    segments : tuple of Segment
+        The run's smooth pieces, in order (:class:`oscillator.hybrid.record.Segment`).
+    result : Result
+        The run itself (its event table is built when :attr:`events` is first read).
+    monodromy : ndarray or None
+        ``dP/dy`` (4 x 4), when asked for: the derivative of the flow the run carried through
+        every switch (``SaveAt(derivative=True)``).
+    """
+
+    t0: float
+    t1: float
+    start: np.ndarray
+    end: np.ndarray
+    segments: tuple[Segment, ...]
+    result: Result = field(repr=False)
+    monodromy: np.ndarray | None = None
+
+    @property
+    def switches(self) -> list[tuple[float, np.ndarray, Mode]]:
+        """The start and every switch: the time, the state after it, the mode after it."""
+        return [(segment.t0, segment.y0, segment.mode) for segment in self.segments]
+
+    @property
+    def events(self) -> pd.DataFrame:
+        """The event table over ``[t0, t1]`` (as ``Result.events``)."""
+        return self.result.events
+
+    @property
+    def kinds(self) -> list[tuple[float, int, EventKind]]:
+        """``(t, mass, kind)`` of every event, in order, read from the segments' event rows
+        (no table is built)."""
+        rows = [segment.rows for segment in self.segments if len(segment.rows)]
+        if not rows:
+            return []
+        table = np.concatenate(rows)
+        columns = table[:, [COLUMN["t"], COLUMN["mass"], COLUMN["kind"]]]
+        return [(float(t), int(mass), KINDS[int(kind)]) for t, mass, kind in columns]
+
+    @property
+    def resting(self) -> tuple[int, ...]:
+        """The masses at rest over the whole map (in every mode it passed)."""
+        return tuple(mass for mass in (1, 2) if all(segment.mode.sign(mass) == 0 for segment in self.segments))
+
+    @property
+    def settled(self) -> tuple[int, ...]:
+        """The masses at rest at the end of the map that never left rest during it: at rest all
+        along, or moving at first and then stuck for good."""
+        modes = [segment.mode for segment in self.segments]
+        return tuple(
+            mass
+            for mass in (1, 2)
+            if modes[-1].sign(mass) == 0
+            and not any(a.sign(mass) == 0 and b.sign(mass) != 0 for a, b in itertools.pairwise(modes))
+        )
+
+
+def pinned_rows(masses: tuple[int, ...]) -> list[int]:
+    """The state rows of these masses' displacements (:func:`fixed_point_system`)."""
+    return [2 * mass - 2 for mass in masses]
+
+
+def fixed_point_system(image: PeriodMap) -> tuple[np.ndarray, np.ndarray]:
+    """``(J, F)`` for a Newton step ``J dy = -F`` towards a fixed point from ``y = image.start``:
+    ``J = M - I`` and ``F = P(y) - y``, but for the masses that settle (:attr:`PeriodMap.settled`).
+
+    A mass at rest over the whole period stays where it is put: ``P`` leaves its ``x_i``
+    unchanged (row ``x_i`` of ``M`` is ``e_(x_i)``), so ``M - I`` has a zero row and every nearby
+    ``x_i`` is an orbit too, a continuum; a mass that moves at first and then sticks for good
+    makes that row nearly zero.  Its row becomes ``(e_(x_i), y_i - P_i(y))``: the step puts
+    the mass where it stuck (nowhere else for one at rest all period) and the system is regular.
+    """
+    assert image.monodromy is not None
+    matrix, residual = image.monodromy - np.eye(4), image.end - image.start
+    for row in pinned_rows(image.settled):
+        matrix[row] = 0.0
+        matrix[row, row] = 1.0
+        residual[row] = -residual[row]
+    return matrix, residual
+
+
+def solve_step(matrix: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
+    """``matrix^-1 rhs``; a singular system is the library's error, with the reason."""
+    try:
+        step = np.linalg.solve(matrix, rhs)
+    except np.linalg.LinAlgError:
+        step = np.full(len(rhs), np.nan)
+    if not np.isfinite(step).all():
+        raise SimulationFailed(
+            f"{what}: the Newton system is singular (a Floquet multiplier of the map at this guess is 1: "
+            "an orbit at a fold, or a family of orbits); give another guess or a longer transient",
+            reason=Reason.SINGULAR,
+            field="guess",
+        )
+    return step
+
+
+def period_map(
+    case: Case, t0: float, y: np.ndarray, periods: int = 1, *, derivative: bool = True, engine: str = ORBIT_ENGINE
+) -> PeriodMap:
+    """``P(y)`` over ``periods`` forcing periods from ``t0``, and its derivative if asked.
+
+    One :func:`~oscillator.simulate` run on ``engine`` (:data:`ORBIT_ENGINES`) that keeps no
+    trajectory, only its segments, and with ``derivative`` carries the derivative of the flow
+    through every switch (the monodromy).
+
+    Raises
+    ------
+    SimulationFailed
+        The simulation failed, or the orbit grazes a boundary (the map has no derivative there).
+    """
+    t1 = t0 + periods * case.parameters.period
+    start = np.array(y[:4], dtype=float)
+    initial = dataclasses.replace(case.initial, t0=t0, **dict(zip(ARTICLE.state, start, strict=True)))
+    run_case = dataclasses.replace(case, initial=initial, t_end=t1, expected=(), keep_events_from=None)
+    result = simulate(run_case, save=SaveAt(steps=False, segments=True, derivative=derivative), engine=engine)
+    end = np.asarray(result.final_state[1:], dtype=float)
+    return PeriodMap(t0, t1, start, end, result.segments, result, result.derivative)
