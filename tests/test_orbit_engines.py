@@ -131,3 +131,32 @@ def test_an_engine_that_cannot_carry_the_derivative_is_refused_by_name():
     assert refused.value.field == "engine"
     with pytest.raises(InputError, match="engine"):
         continue_orbit("instance-1", param="Omega", start=1.6, stop=1.7, engine="sksundae")
+
+
+def test_the_compiled_saltation_is_the_formula_at_every_switch_between_modes():
+    """``carried_through`` (compiled, the supervisor's every switch) against ``R(after) S Phi`` from
+    the Python saltation matrices, on every pair of modes a sequence of crossings joins."""
+    import itertools
+
+    from oscillator.model.phase_space import Mode
+    from oscillator.model.saltation import carried_through, elementary_switches, rest_projection, saltation_matrix
+
+    p = resolve_case("instance-1").parameters
+    rng = np.random.default_rng(5)
+    modes = set()
+    for s1, s2, left, right in itertools.product((-1, 0, 1), (-1, 0, 1), (False, True), (False, True)):
+        try:
+            modes.add(Mode.from_signs(s1, s2, left=left, right=right))
+        except ValueError:
+            continue
+    compared = 0
+    for before, after in itertools.product(sorted(modes, key=str), repeat=2):
+        try:
+            elementary_switches(before, after)
+        except ValueError:
+            continue
+        t, y, phi = rng.uniform(0, 10), 3 * rng.normal(size=4), rng.normal(size=(4, 4))
+        expected = rest_projection(after) @ saltation_matrix(t, y, y, p, before, after) @ phi
+        assert _relative(carried_through(phi, t, y, y, p, before, after), expected) <= 1e-14
+        compared += 1
+    assert compared > 1000

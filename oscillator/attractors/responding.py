@@ -33,7 +33,7 @@ from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.branch import Branch
 from oscillator.orbits.continuation import continue_orbit
 from oscillator.orbits.response import COLUMNS, REFINE, branch_responses, response
-from oscillator.orbits.shooting import STATE, find_orbit, period_map
+from oscillator.orbits.shooting import STATE, fixed_point, period_map
 
 __all__ = [
     "RESTART",
@@ -249,7 +249,7 @@ def orbit_state(
     None where it does not converge."""
     for tol in tolerances:
         try:
-            return find_orbit(case, period=period, guess=guess, tol=tol).state
+            return fixed_point(case, guess, period, tol=tol)
         except OscillatorError:
             continue
     return None

@@ -40,12 +40,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from oscillator.model.fields import state_derivative
-from oscillator.model.kernels import field_jacobian
+from oscillator.compiled import njit
+from oscillator.model.fields import M1, M2, OMEGA, PHI1, PHI2, Q1, Q2, coefficients, forces, kinetic, state_derivative
+from oscillator.model.kernels import field_jacobian, jacobian
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 
-__all__ = ["Boundary", "boundary_of", "carried_through", "elementary_switches", "rest_projection", "saltation_matrix"]
+__all__ = [
+    "Boundary",
+    "boundary_of",
+    "carried_through",
+    "carry_compiled",
+    "elementary_switches",
+    "rest_projection",
+    "saltation_matrix",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,9 +180,128 @@ def carried_through(
 ) -> np.ndarray:
     """The derivative of the flow ``Phi`` (4 x 4) just after the switch ``before -> after`` at
     ``t``, from the one just before: ``R(after) S Phi`` with ``S`` the :func:`saltation_matrix`
-    and ``R`` the :func:`rest_projection` of the mode the run goes on in (docs/orbits.md, Sec. 2).
+    and ``R`` the :func:`rest_projection` of the mode the run goes on in (docs/orbits.md, Sec. 2),
+    computed by :func:`carry_compiled` (the supervisor's every switch).
 
     Raises ``ZeroDivisionError`` at a grazing contact (no saltation matrix there).
     """
-    carried: np.ndarray = rest_projection(after) @ saltation_matrix(t, y_before, y_after, p, before, after) @ phi
-    return carried
+    out = np.empty(16)
+    status = carry_compiled(
+        np.ascontiguousarray(phi, dtype=np.float64).ravel(),
+        float(t),
+        np.ascontiguousarray(y_before[:4], dtype=np.float64),
+        np.ascontiguousarray(y_after[:4], dtype=np.float64),
+        coefficients(p),
+        _flags(before),
+        _flags(after),
+        out,
+    )
+    if status == _GRAZING:
+        saltation_matrix(t, y_before, y_after, p, before, after)  # raises, naming the boundary
+    if status != _CARRIED:
+        raise ValueError(f"the switch {before} -> {after} is not a sequence of boundary crossings")
+    return out.reshape(4, 4)
+
+
+def _flags(mode: Mode) -> np.ndarray:
+    return np.array([mode.sign(1), mode.sign(2), int(mode.left), int(mode.right)], dtype=np.int64)
+
+
+#: :func:`carry_compiled`'s outcomes: carried; a grazing crossing; modes no crossings join.
+_CARRIED, _GRAZING, _NOT_A_SEQUENCE = 0, 1, 2
+
+
+@njit(cache=True)
+def _crossed(
+    matrix: np.ndarray,
+    t: float,
+    yb: np.ndarray,
+    ya: np.ndarray,
+    c: np.ndarray,
+    mode: np.ndarray,
+    new: np.ndarray,
+    which: int,
+) -> bool:  # pragma: no cover - compiled
+    """``matrix <- (I + (f+ - f-) n^T / (n . f- + h_t)) matrix`` for the crossing ``mode -> new`` of
+    the boundary ``which`` (0 left stop, 1 right stop, 2 + i the velocity of mass i, 4 + i its
+    flow barrier; :func:`boundary_of`); False at a grazing (``n . f- + h_t = 0``)."""
+    normal, rate = np.zeros(4), 0.0
+    if which == 0:
+        normal[0], normal[2] = 1.0, -1.0
+    elif which == 1:
+        normal[0] = 1.0
+    elif which < 4:
+        normal[2 * (which - 2) + 1] = 1.0
+    else:
+        mass = which - 3
+        rows = np.empty(16)
+        jacobian(yb[0], yb[1], yb[2], yb[3], c, new[0], new[1], new[2] != 0, new[3] != 0, rows)
+        normal[:] = rows[8 * mass - 4 : 8 * mass]
+        amplitude, phase, m = (c[Q1], c[PHI1], c[M1]) if mass == 1 else (c[Q2], c[PHI2], c[M2])
+        rate = amplitude * c[OMEGA] * math.cos(c[OMEGA] * t + phase) / m
+    before_forces = forces(t, yb[0], yb[1], yb[2], yb[3], mode[2] != 0, mode[3] != 0, c)
+    after_forces = forces(t, ya[0], ya[1], ya[2], ya[3], new[2] != 0, new[3] != 0, c)
+    f_minus = np.array(
+        [yb[1], kinetic(c, 1, mode[0], before_forces[0]), yb[3], kinetic(c, 2, mode[1], before_forces[1])]
+    )
+    f_plus = np.array([ya[1], kinetic(c, 1, new[0], after_forces[0]), ya[3], kinetic(c, 2, new[1], after_forces[1])])
+    speed = normal @ f_minus + rate
+    if speed == 0.0:
+        return False
+    jump = np.outer(f_plus - f_minus, normal) / speed
+    matrix[:, :] = matrix + jump @ matrix
+    return True
+
+
+@njit(cache=True)
+def carry_compiled(
+    phi: np.ndarray,
+    t: float,
+    yb: np.ndarray,
+    ya: np.ndarray,
+    c: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
+    out: np.ndarray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`carried_through` compiled: ``out`` (16, row by row) = ``R(after) S Phi`` for ``phi``
+    (16), the crossings taken in :func:`elementary_switches`' order; the outcome (0 carried, 1 a
+    grazing, 2 no sequence of crossings joins the modes).  A mode is ``(s1, s2, left, right)``."""
+    matrix = np.eye(4)
+    current = before.copy()
+    released = np.array([before[0] == 0 and after[0] != 0, before[1] == 0 and after[1] != 0])
+    changed = [side for side in (2, 3) if before[side] != after[side]]
+    for k in range(len(changed)):
+        new = current.copy()
+        new[changed[k]] = after[changed[k]]
+        if k == len(changed) - 1:
+            for i in range(2):
+                if released[i]:
+                    new[i] = after[i]
+        if not _crossed(matrix, t, yb, ya, c, current, new, changed[k] - 2):
+            return _GRAZING
+        current = new
+    for i in range(2):
+        if before[i] != 0 and after[i] != before[i]:
+            new = current.copy()
+            new[i] = after[i]
+            if not _crossed(matrix, t, yb, ya, c, current, new, 2 + i):
+                return _GRAZING
+            current = new
+    if not changed:
+        for i in range(2):
+            if released[i]:
+                new = current.copy()
+                new[i] = after[i]
+                if not _crossed(matrix, t, yb, ya, c, current, new, 4 + i):
+                    return _GRAZING
+                current = new
+    for k in range(4):
+        if current[k] != after[k]:
+            return _NOT_A_SEQUENCE
+    carried = matrix @ phi.reshape(4, 4)
+    for i in range(2):
+        if after[i] == 0:
+            carried[2 * i + 1, :] = 0.0
+    out[:] = carried.ravel()
+    return _CARRIED

@@ -437,6 +437,21 @@ def find_orbit(
     return _orbit(case, section, start, period, tol=tol, max_iterations=max_iterations, engine=engine)
 
 
+def fixed_point(case: Case, guess: np.ndarray | Sequence[float], period: int, *, tol: float) -> np.ndarray:
+    """The state at the case's start of the period-``period`` orbit that Newton reaches from
+    ``guess``: :func:`find_orbit`'s Newton (the tolerances tightened likewise, 20 steps at most)
+    without the :class:`Orbit` around it (no event table, no multipliers), for callers that want
+    the state alone.
+
+    Raises
+    ------
+    OscillatorError
+        As :func:`find_orbit`: bad input, a failed simulation, or no convergence.
+    """
+    tight = orbit_case(case, {})
+    return newton(tight, tight.initial.t0, check_guess(guess), period, tol=tol, max_iterations=20)[0]
+
+
 def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, history: list[float]) -> Orbit:
     """The :class:`Orbit` through ``state``, from the map ``image`` there and Newton's residuals."""
     assert image.monodromy is not None
