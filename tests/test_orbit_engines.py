@@ -10,6 +10,8 @@ straddle a bifurcation as soon as the branch comes within its step of one.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -160,3 +162,61 @@ def test_the_compiled_saltation_is_the_formula_at_every_switch_between_modes():
         assert _relative(carried_through(phi, t, y, y, p, before, after), expected) <= 1e-14
         compared += 1
     assert compared > 1000
+
+
+def _over(case, periods: int):
+    """``case`` run over ``periods`` forcing periods from its start."""
+    return dataclasses.replace(case, t_end=case.initial.t0 + periods * case.parameters.period)
+
+
+def _maps() -> list:
+    cases = [orbit_case(name, overrides) for name, overrides in CASES]
+    return cases + [orbit_case(random_case(seed), {}) for seed in range(0, 12, 2)]
+
+
+@pytest.mark.parametrize("derivative", [True, False])
+def test_the_compiled_period_map_is_the_supervisor_s_run_to_the_bit(derivative):
+    """A period map runs in one compiled call (``compiled_run``): its segments, event rows, end
+    and derivative are those of ``simulate(..., engine="dop853")`` exactly, over one and three
+    periods, on the instances and on random systems that pass stops, rests and releases."""
+    from oscillator.hybrid.recording import SaveAt
+    from oscillator.hybrid.simulate import simulate
+    from oscillator.orbits.stroboscopic import compiled_run
+
+    switches = 0
+    for case in _maps():
+        for periods in (1, 3):
+            run = _over(case, periods)
+            compiled = compiled_run(run, np.array(case.initial.y[:4]), derivative, periods)
+            supervised = simulate(run, save=SaveAt(steps=False, segments=True, derivative=derivative), engine="dop853")
+            assert compiled is not None
+            assert compiled.final_state == supervised.final_state
+            assert (compiled.derivative is None) == (not derivative)
+            if derivative:
+                assert np.array_equal(compiled.derivative, supervised.derivative)
+            assert [(s.mode, s.t0, s.t1) for s in compiled.segments] == [
+                (s.mode, s.t0, s.t1) for s in supervised.segments
+            ]
+            for ours, theirs in zip(compiled.segments, supervised.segments, strict=True):
+                assert np.array_equal(ours.y0, theirs.y0) and np.array_equal(ours.y1, theirs.y1)
+                assert np.array_equal(ours.rows, theirs.rows, equal_nan=True)
+            assert compiled.events.equals(supervised.events)
+            assert compiled.energy == supervised.energy
+            switches += len(compiled.segments) - 1
+    assert switches > 100
+
+
+def test_a_map_the_compiled_run_cannot_finish_is_the_supervisor_s_failure_with_its_words():
+    """A guard that stops the run (here at most 3 events) makes the compiled call give up; the map
+    is then run by the supervisor, whose refusal names what happened."""
+    from oscillator import SimulationFailed
+    from oscillator.orbits.stroboscopic import compiled_run
+
+    case = orbit_case("instance-1", {"Omega": 1.6, "max_events": 3})
+    run = _over(case, 5)
+    assert compiled_run(run, np.array(case.initial.y[:4]), True, 5) is None
+    with pytest.raises(SimulationFailed, match="events") as failed:
+        period_map(case, case.initial.t0, np.array(case.initial.y[:4]), 5)
+    with pytest.raises(SimulationFailed) as reference:
+        period_map(case, case.initial.t0, np.array(case.initial.y[:4]), 5, engine="cvode")
+    assert failed.value.reason == reference.value.reason

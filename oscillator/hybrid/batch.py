@@ -24,10 +24,24 @@ import math
 import numpy as np
 
 from oscillator.compiled import njit
-from oscillator.engines.dop853 import ROOT, STARTED, T_CUR, T_REF, Y_OUT, N, R, advance, grid_returns, restart
+from oscillator.engines.dop853 import (
+    PHI_OUT,
+    ROOT,
+    STARTED,
+    T_CUR,
+    T_REF,
+    Y_OUT,
+    M,
+    N,
+    R,
+    advance,
+    grid_returns,
+    restart,
+)
 from oscillator.hybrid.guards import CONSISTENCY, MAX_STALLS, SAME_INSTANT
 from oscillator.model.parameters import SolverOptions
 from oscillator.model.roots import directions_into, violation_code
+from oscillator.model.saltation import carry_compiled
 from oscillator.model.switching import MAX_ROWS, initial_compiled, resolve_compiled
 from oscillator.model.types import Vector
 
@@ -36,9 +50,12 @@ __all__ = [
     "OK",
     "OPTIONS",
     "SETTLE_CHUNK",
+    "SWITCH_COLUMNS",
     "WINDOW_FULL",
     "land_compiled",
+    "map_compiled",
     "options_vector",
+    "resolved",
     "run_compiled",
     "settled_compiled",
 ]
@@ -150,11 +167,12 @@ def _root(
 #: The running counts of one landing (a float vector): the events kept by the storm guard's
 #: ring, all events, the window's event rows, root returns without a switch at one instant, the
 #: last root's time, and the time the window begins.
-_FILLED, _TOTAL, _KEPT, _STALLS, _LAST_ROOT, _WINDOW_FROM = range(6)
+TALLY = 6
+_FILLED, _TOTAL, _KEPT, _STALLS, _LAST_ROOT, _WINDOW_FROM = range(TALLY)
 
 
 @njit(cache=True, error_model="numpy")
-def _through_root(
+def resolved(
     w: Vector,
     modes: np.ndarray,
     c: Vector,
@@ -163,10 +181,10 @@ def _through_root(
     fired: int,
     buffers: tuple[np.ndarray, Vector, np.ndarray],
     tally: Vector,
-) -> int:  # pragma: no cover - compiled
-    """A root return: resolved, counted by the guards, its events kept where the window has begun,
-    and the engine restarted where the mode switched (the supervisor's ``_through_mode``).  The
-    status (:data:`OK` to go on)."""
+) -> tuple[int, bool]:  # pragma: no cover - compiled
+    """A root return resolved (the state projected in ``w[Y_OUT:]``, ``modes`` the mode after),
+    counted by the guards, its events kept where the window has begun: the status (:data:`OK` to go
+    on) and whether the mode switched (the engine is then to be restarted)."""
     rows, recent, window_rows = buffers
     t = w[T_REF] + w[T_CUR]
     mode = (modes[0], modes[1], modes[2], modes[3])
@@ -175,22 +193,21 @@ def _through_root(
     filled, stormy = _storm(recent, int(tally[_FILLED]), t, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
     tally[_FILLED] = filled
     if not ok or stormy or tally[_TOTAL] > options[_MAX_EVENTS]:
-        return FAILED
+        return FAILED, False
     if t >= tally[_WINDOW_FROM] and n:
         kept = int(tally[_KEPT])
         if kept + n > window_rows.shape[0]:
-            return WINDOW_FULL
+            return WINDOW_FULL, False
         window_rows[kept : kept + n, :] = rows[:n, :]
         tally[_KEPT] = kept + n
     if after != mode:
         _set_mode(modes, after[0], after[1], after[2], after[3])
-        restart(w, modes, c, t, w[Y_OUT : Y_OUT + N])
         tally[_STALLS], tally[_LAST_ROOT] = 0.0, -math.inf
-        return OK
+        return OK, True
     same = t - tally[_LAST_ROOT] <= SAME_INSTANT * (1.0 + abs(t))
     tally[_STALLS] = tally[_STALLS] + 1.0 if same and n == 0 else 0.0
     tally[_LAST_ROOT] = t
-    return FAILED if tally[_STALLS] > MAX_STALLS else OK
+    return (FAILED if tally[_STALLS] > MAX_STALLS else OK), False
 
 
 @njit(cache=True, error_model="numpy")
@@ -203,19 +220,24 @@ def _start(
     start: Vector,
     options: Vector,
     buffers: tuple[np.ndarray, Vector, np.ndarray],
-) -> float:  # pragma: no cover - compiled
-    """The mode at the start and the engine started in it; the storm guard's count (-1: failed)."""
+    y: Vector,
+) -> tuple[float, int]:  # pragma: no cover - compiled
+    """The mode at the start and the engine started in it from ``y`` (the start in its first four
+    entries; ``Phi``, the rest projection, where it has room for it): the storm guard's count (-1:
+    failed) and the start's event rows (written into the buffers' first)."""
     rows, recent, _ = buffers
-    y = np.zeros(N)
     y[:4] = start  # the start as given, as the supervisor starts from it
     w[STARTED] = 0.0  # the first step chosen afresh: a landing does not depend on the one before
     mode, n, ok = initial_compiled(t0, start.copy(), c, period, rows)
     filled, stormy = _storm(recent, 0, t0, n, int(options[_STORM_EVENTS]), options[_STORM_WINDOW])
     if not ok or stormy:
-        return -1.0
+        return -1.0, 0
     _set_mode(modes, mode[0], mode[1], mode[2], mode[3])
+    if y.shape[0] > N:
+        for i in range(4):
+            y[N + 5 * i] = 0.0 if i % 2 == 1 and modes[i // 2] == 0 else 1.0
     restart(w, modes, c, t0, y)
-    return float(filled)
+    return float(filled), n
 
 
 @njit(cache=True, error_model="numpy")
@@ -241,7 +263,7 @@ def land_compiled(
     ring = np.empty((max(8, 3 * max_period), 4))
     ordered = np.empty_like(ring)
     tally = np.zeros(6)
-    tally[_FILLED] = _start(w, modes, c, t0, period, start, options, buffers)
+    tally[_FILLED] = _start(w, modes, c, t0, period, start, options, buffers, np.zeros(N))[0]
     if tally[_FILLED] < 0.0:
         return FAILED, 0, 0
     ring[0, :] = start
@@ -253,9 +275,11 @@ def land_compiled(
         if kind < 0:
             return FAILED, 0, 0
         if kind == ROOT:
-            status = _through_root(w, modes, c, period, options, fired, buffers, tally)
+            status, switched = resolved(w, modes, c, period, options, fired, buffers, tally)
             if status != OK:
                 return status, 0, 0
+            if switched:
+                restart(w, modes, c, w[T_REF] + w[T_CUR], w[Y_OUT : Y_OUT + N])
             continue
         k += 1
         y = w[Y_OUT : Y_OUT + N]
@@ -340,11 +364,107 @@ def run_compiled(
                 break
             continue
         before = (modes[0], modes[1], modes[2], modes[3])
-        status = _through_root(w, modes, c, period, options, fired, (rows, recent, events), tally)
+        status, switched = resolved(w, modes, c, period, options, fired, (rows, recent, events), tally)
         if status != OK:
             return status, done, int(tally[_KEPT]), count
+        if switched:
+            restart(w, modes, c, w[T_REF] + w[T_CUR], w[Y_OUT : Y_OUT + N])
         if (modes[0], modes[1], modes[2], modes[3]) != before:
             count = _changed(changes, count, t, modes)
             if count < 0:
                 return WINDOW_FULL, done, int(tally[_KEPT]), 0
     return OK, done, int(tally[_KEPT]), count
+
+
+#: The columns of :func:`map_compiled`'s switches: the time, the mode after (``s1, s2, left,
+#: right``), the state the flow reached and the state the switch left, the event rows kept before
+#: the piece it begins (the start is the first row, and its piece begins with no rows kept).
+SWITCH_COLUMNS = 14
+
+
+@njit(cache=True, error_model="numpy")
+def _map_start(
+    w: Vector,
+    modes: np.ndarray,
+    c: Vector,
+    t0: float,
+    period: float,
+    start: Vector,
+    options: Vector,
+    buffers: tuple[np.ndarray, Vector, np.ndarray],
+    switches: np.ndarray,
+    y: Vector,
+    tally: Vector,
+) -> bool:  # pragma: no cover - compiled
+    """:func:`map_compiled`'s start: the mode there, its events, the first row of ``switches``,
+    ``Phi`` (the rest projection, where ``y`` has room for it) and the engine started; False if
+    the start fails."""
+    events = buffers[2]
+    filled, n = _start(w, modes, c, t0, period, start, options, buffers, y)
+    if filled < 0.0 or n > events.shape[0]:
+        return False
+    events[:n, :] = buffers[0][:n, :]
+    row = switches[0]  # the start, as the first switch's row: the first piece's mode
+    row[0], row[1:5], row[5:9], row[9:13], row[13] = t0, modes[:4], start, start, 0.0
+    tally[_FILLED], tally[_TOTAL], tally[_KEPT] = filled, n, n
+    tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, -math.inf  # every event kept
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def map_compiled(
+    c: Vector,
+    t0: float,
+    t1: float,
+    period: float,
+    start: Vector,
+    w: Vector,
+    options: Vector,
+    buffers: tuple[np.ndarray, np.ndarray, Vector],
+) -> tuple[int, int, int, int]:  # pragma: no cover - compiled
+    """One period map from ``(t0, start)`` to ``t1`` as the supervisor makes it with the
+    ``"dop853"`` engine, and where ``w`` carries it (:func:`~oscillator.engines.dop853.new_work`'s
+    ``tangent``) the derivative of the flow through every switch
+    (:func:`~oscillator.model.saltation.carry_compiled`).  Into ``buffers = (events, switches,
+    end)``: every event row, a row of :data:`SWITCH_COLUMNS` for the start and each switch, the
+    state (and ``Phi``) at ``t1``.  The status (:data:`OK`; :data:`FAILED` for an engine's failure,
+    a guard or a grazing; :data:`WINDOW_FULL` where a buffer is too small), the event rows, the
+    switches and the engine's returns."""
+    events, switches, end = buffers
+    tangent = end.shape[0] > N
+    rows = np.empty((2 * MAX_ROWS, events.shape[1]))
+    recent = np.empty(int(options[_STORM_EVENTS]) + 1)
+    modes = np.zeros(4 + R, np.int64)
+    y = np.zeros(end.shape[0])
+    tally = np.zeros(TALLY)
+    if not _map_start(w, modes, c, t0, period, start, options, (rows, recent, events), switches, y, tally):
+        return FAILED, 0, 0, 0
+    count, returns, before, phi = 1, 0, np.zeros(4, np.int64), np.empty(M)
+    while True:
+        kind, fired = advance(w, modes, c, t1, t1, False)
+        returns += 1
+        if kind < 0 or not _finite(w[Y_OUT : Y_OUT + N]):
+            return FAILED, int(tally[_KEPT]), count, returns
+        if kind != ROOT:
+            end[:N] = w[Y_OUT : Y_OUT + N]
+            if tangent:
+                end[N:] = w[PHI_OUT : PHI_OUT + M]
+            return OK, int(tally[_KEPT]), count, returns
+        t, reached = w[T_REF] + w[T_CUR], w[Y_OUT : Y_OUT + 4].copy()
+        before[:] = modes[:4]
+        status, switched = resolved(w, modes, c, period, options, fired, (rows, recent, events), tally)
+        if status != OK:
+            return status, int(tally[_KEPT]), count, returns
+        if not switched:
+            continue
+        if count >= switches.shape[0]:
+            return WINDOW_FULL, int(tally[_KEPT]), count, returns
+        row = switches[count]
+        row[0], row[1:5], row[5:9], row[9:13], row[13] = t, modes[:4], reached, w[Y_OUT : Y_OUT + 4], tally[_KEPT]
+        count += 1
+        y[:N] = w[Y_OUT : Y_OUT + N]
+        if tangent and carry_compiled(w[PHI_OUT : PHI_OUT + M], t, reached, y[:4], c, before, modes[:4], phi) != 0:
+            return FAILED, int(tally[_KEPT]), count, returns  # a grazing: no derivative here
+        if tangent:
+            y[N:] = phi
+        restart(w, modes, c, t, y)

@@ -2,8 +2,9 @@
 (a design counts the simulations each of its stages took, docs/design.md).
 
 A run is one call of the supervisor through :func:`~oscillator.hybrid.simulate.simulate` (a map,
-a Newton step's map, a transient) or one start run whole in compiled code
-(:func:`oscillator.hybrid.batch.land_compiled`).  Worker processes count their own; a task that
+a Newton step's map, a transient) or one run whole in compiled code: a start landed by
+:func:`oscillator.hybrid.batch.land_compiled`, a period map by
+:func:`oscillator.hybrid.batch.map_compiled`.  Worker processes count their own; a task that
 reports a cost returns the difference it made.
 """
 

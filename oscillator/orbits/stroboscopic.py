@@ -12,26 +12,33 @@ state, and the supervisor applies the saltation matrix of each switch it resolve
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from oscillator.engines.dop853 import EVALS, new_work
 from oscillator.errors import Reason, SimulationFailed
-from oscillator.hybrid.record import Segment
+from oscillator.hybrid.batch import OK, SWITCH_COLUMNS, WINDOW_FULL, map_compiled, options_vector
+from oscillator.hybrid.counting import counted
+from oscillator.hybrid.record import RunRecord, Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case
-from oscillator.model.events import COLUMN, KINDS, EventKind
+from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
+from oscillator.model.fields import coefficients
 from oscillator.model.phase_space import Mode
 from oscillator.model.system import ARTICLE
+from oscillator.model.types import VARIATIONAL
 
 __all__ = [
     "ORBIT_ENGINE",
     "ORBIT_ENGINES",
     "PeriodMap",
+    "compiled_run",
     "fixed_point_system",
     "period_map",
     "pinned_rows",
@@ -170,6 +177,60 @@ def period_map(
     start = np.array(y[:4], dtype=float)
     initial = dataclasses.replace(case.initial, t0=t0, **dict(zip(ARTICLE.state, start, strict=True)))
     run_case = dataclasses.replace(case, initial=initial, t_end=t1, expected=(), keep_events_from=None)
-    result = simulate(run_case, save=SaveAt(steps=False, segments=True, derivative=derivative), engine=engine)
+    result = compiled_run(run_case, start, derivative, periods) if engine == "dop853" else None
+    if result is None:  # another engine, or the compiled run failed: the supervisor's, with its words
+        result = simulate(run_case, save=SaveAt(steps=False, segments=True, derivative=derivative), engine=engine)
     end = np.asarray(result.final_state[1:], dtype=float)
     return PeriodMap(t0, t1, start, end, result.segments, result, result.derivative)
+
+
+#: Rows of the compiled run's buffers per forcing period (grown where a map needs more).
+_ROWS_PER_PERIOD = 64
+
+
+def compiled_run(case: Case, start: np.ndarray, derivative: bool, periods: int) -> Result | None:
+    """The run of ``case`` (a period map: segments, events, the derivative of the flow if asked)
+    in one compiled call (:func:`~oscillator.hybrid.batch.map_compiled`), recorded as the
+    supervisor records it with the ``"dop853"`` engine; None where it failed (an engine's failure,
+    a guard, a grazing), for the supervisor to run it again and say why."""
+    p, options = case.parameters, case.options
+    c, vector = coefficients(p), options_vector(options)
+    rows = _ROWS_PER_PERIOD * periods
+    while True:
+        w = new_work(p, options, tangent=derivative)
+        events, switches = np.empty((rows, WIDTH)), np.empty((rows, SWITCH_COLUMNS))
+        end = np.empty(VARIATIONAL + 16 if derivative else VARIATIONAL)
+        status, kept, count, returns = map_compiled(
+            c, case.initial.t0, case.t_end, p.period, start, w, vector, (events, switches, end)
+        )
+        if status != WINDOW_FULL or rows >= options.max_events:
+            break
+        rows *= 8
+    if status != OK:
+        return None
+    counted()
+    record = RunRecord()
+    record.events.stage(events[:kept])
+    record.events.keep(kept)
+    modes = [_mode(row) for row in switches[:count]]
+    opens = [*(int(k) for k in switches[1:count, 13]), kept]
+    ends = [*((switches[k + 1, 0], switches[k + 1, 5:9]) for k in range(count - 1)), (case.t_end, end[:4])]
+    for k in range(count):
+        row, (t_end, y_end) = switches[k], ends[k]
+        pieces = events[int(row[13]) : opens[k]]
+        record.segments.append(Segment(modes[k], float(row[0]), row[9:13].copy(), float(t_end), y_end.copy(), pieces))
+    record.mode_initial = modes[0]
+    record.reached(case.t_end, end, modes[-1])
+    record.returns, record.root_returns, record.restarts = returns, returns - 1, count
+    record.event_count, record.rhs_evaluations = kept, int(w[EVALS])
+    return Result.from_record(case, record, engine="dop853")
+
+
+@functools.cache
+def _mode_of(s1: int, s2: int, left: bool, right: bool) -> Mode:
+    return Mode.from_signs(s1, s2, left=left, right=right)
+
+
+def _mode(row: np.ndarray) -> Mode:
+    """The mode in a row of :func:`~oscillator.hybrid.batch.map_compiled`'s switches."""
+    return _mode_of(int(row[1]), int(row[2]), bool(row[3]), bool(row[4]))
