@@ -2,11 +2,13 @@
 (:func:`period_map`), and the Newton system of a fixed point (:func:`fixed_point_system`):
 what :mod:`oscillator.orbits.shooting` and the continuation's corrector iterate on.
 
-The map is one run of :func:`oscillator.simulate` that keeps its segments
-(``SaveAt(segments=True)``); its derivative, the monodromy matrix, is carried by the same run
-(``SaveAt(derivative=True)``): the engine integrates each mode's variational equations with the
-state, and the supervisor applies the saltation matrix of each switch it resolves
-(:func:`oscillator.model.saltation.carried_through`).
+The map is one run that keeps its segments (``SaveAt(segments=True)``); its derivative, the
+monodromy matrix, is carried by the same run (``SaveAt(derivative=True)``): the engine integrates
+each mode's variational equations with the state, and the supervisor applies the saltation matrix
+of each switch it resolves (:func:`oscillator.model.saltation.carried_through`).  On the
+``"dop853"`` engine (:data:`ORBIT_ENGINE`) the run is one compiled call (:func:`compiled_run`,
+recorded as the supervisor records it); on ``"cvode"``, the reference, it is
+:func:`oscillator.simulate`'s.
 """
 
 from __future__ import annotations
