@@ -220,3 +220,23 @@ def test_a_map_the_compiled_run_cannot_finish_is_the_supervisor_s_failure_with_i
     with pytest.raises(SimulationFailed) as reference:
         period_map(case, case.initial.t0, np.array(case.initial.y[:4]), 5, engine="cvode")
     assert failed.value.reason == reference.value.reason
+
+
+@pytest.mark.parametrize("omega", [1.3, 1.6, 1.85])
+def test_both_engines_give_an_orbit_the_same_response_measures(omega):
+    """What the frequency response reads off each branch point (``measured`` on the map's run):
+    every measure of the same orbit on either engine to 1e-9 (1e-11 measured)."""
+    from oscillator.orbits.response import measured
+
+    case = orbit_case("instance-1", {"Omega": omega})
+    measures = {}
+    for engine in ("dop853", "cvode"):
+        orbit = find_orbit(case, engine=engine, tol=1e-11)
+        measures[engine] = measured(period_map(case, orbit.section, orbit.state, engine=engine).result, 1).columns()
+    assert measures["dop853"].keys() == measures["cvode"].keys()
+    compared = 0
+    for name, value in measures["cvode"].items():
+        if np.isfinite(value):
+            assert abs(measures["dop853"][name] - value) <= 1e-9 * max(1.0, abs(value)), name
+            compared += 1
+    assert compared >= 20
