@@ -27,7 +27,7 @@ from numba.core import caching
 
 from oscillator.folders import private_scratch, writable
 
-__all__ = ["CACHE", "COMPILING", "cfunc", "hot", "kernels_cached", "njit"]
+__all__ = ["CACHE", "COMPILING", "cfunc", "holds", "hot", "kernels_cached", "njit"]
 
 
 def _cache_location() -> str | None:
@@ -72,6 +72,14 @@ def kernels_cached() -> bool:
             continue
         return any(Path(found.get_cache_path()).glob("theorems.*.nbi"))
     return False
+
+
+def holds(kernel: Any) -> bool:
+    """Whether numba's cache holds ``kernel`` (a compiled function) already: its index file is
+    there (one left by an older install counts too, as for :func:`kernels_cached`)."""
+    cache = getattr(kernel, "_cache", None)
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    return index is not None and Path(index).exists()
 
 
 def _read_damaged_as_missing() -> None:

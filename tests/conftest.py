@@ -32,8 +32,8 @@ def pytest_configure(config):
     """On a fresh install (numba's cache empty), the kernels compiled once, before the test workers
     start (this runs in pytest-xdist's controller first): both workers compiled all of them at once
     (CI's default run: 217 s, against 162 s with the cache filled).  The compiled landing's kernels
-    too, as the analyses compile them before their own workers (``before_workers``), and the
-    friction chains' in a second process meanwhile."""
+    too, and the compiled period map's, as the analyses compile them before their own workers
+    (``before_workers``), and the friction chains' in a second process meanwhile."""
     from oscillator.compiled import CACHE, kernels_cached
 
     if hasattr(config, "workerinput") or not CACHE or kernels_cached():
@@ -43,6 +43,7 @@ def pytest_configure(config):
 
     from oscillator.attractors.mapping import _compile_landing
     from oscillator.cli.console import compile_kernels
+    from oscillator.orbits.stroboscopic import compile_period_map
 
     # The chains' kernels (and the pieces' integrator, about 15 s) in a second process meanwhile:
     # the two sets share none of their compiled functions (measured cold: 19 s and 25 s in turn).
@@ -51,6 +52,7 @@ def pytest_configure(config):
     helper = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     compile_kernels(beside=True, show=False)
     _compile_landing()
+    compile_period_map()
     if helper.wait() != 0:  # it failed: compiled here, where a failure shows
         _compile_chains()
 

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from oscillator.analysis.execution import before_workers
+from oscillator.compiled import CACHE, holds
 from oscillator.engines.dop853 import EVALS, new_work
 from oscillator.errors import Reason, SimulationFailed
 from oscillator.hybrid.batch import OK, SWITCH_COLUMNS, WINDOW_FULL, map_compiled, options_vector
@@ -29,7 +31,7 @@ from oscillator.hybrid.record import RunRecord, Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
-from oscillator.io.cases import Case
+from oscillator.io.cases import Case, resolve_case
 from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import coefficients
 from oscillator.model.phase_space import Mode
@@ -40,6 +42,7 @@ __all__ = [
     "ORBIT_ENGINE",
     "ORBIT_ENGINES",
     "PeriodMap",
+    "compile_period_map",
     "compiled_run",
     "fixed_point_system",
     "period_map",
@@ -226,6 +229,18 @@ def compiled_run(case: Case, start: np.ndarray, derivative: bool, periods: int) 
     record.returns, record.root_returns, record.restarts = returns, returns - 1, count
     record.event_count, record.rhs_evaluations = kept, int(w[EVALS])
     return Result.from_record(case, record, engine="dop853")
+
+
+@before_workers
+def compile_period_map() -> None:
+    """The compiled period map's kernels (:func:`~oscillator.hybrid.batch.map_compiled` carrying
+    the derivative of the flow, the saltation) compiled into numba's cache in this process before
+    local workers start, where the cache does not hold them yet: the workers of a fresh install
+    would each compile them at once (one period map of Instance 2)."""
+    if not CACHE or holds(map_compiled):
+        return
+    case = resolve_case("instance-2")
+    compiled_run(case, np.array(case.initial.y[:4]), True, 1)
 
 
 @functools.cache
