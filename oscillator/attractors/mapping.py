@@ -39,6 +39,7 @@ from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import coefficients
 from oscillator.model.parameters import check_count
 from oscillator.orbits.signature import signature_of
+from oscillator.orbits.stroboscopic import compile_period_map
 from oscillator.text import shown
 
 __all__ = [
@@ -319,6 +320,10 @@ def _compile_landing() -> None:
     if CACHE:
         case = resolve_case("instance-1")
         land(case, AttractorSettings(transient=1, record=2, settle=False), 0, tuple(case.initial.y))
+
+
+#: The period maps' kernels too: the analyses' workers refine orbits and continue branches.
+before_workers(compile_period_map)
 
 
 def check_settings(settings: object) -> AttractorSettings:

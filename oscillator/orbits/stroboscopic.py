@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from oscillator.analysis.execution import before_workers
 from oscillator.compiled import CACHE, holds
 from oscillator.engines.dop853 import EVALS, new_work
 from oscillator.errors import Reason, SimulationFailed
@@ -231,12 +230,12 @@ def compiled_run(case: Case, start: np.ndarray, derivative: bool, periods: int) 
     return Result.from_record(case, record, engine="dop853")
 
 
-@before_workers
 def compile_period_map() -> None:
     """The compiled period map's kernels (:func:`~oscillator.hybrid.batch.map_compiled` carrying
-    the derivative of the flow, the saltation) compiled into numba's cache in this process before
-    local workers start, where the cache does not hold them yet: the workers of a fresh install
-    would each compile them at once (one period map of Instance 2)."""
+    the derivative of the flow, the saltation) compiled into numba's cache in this process, where
+    the cache does not hold them yet (one period map of Instance 2): run before local workers
+    start (:func:`oscillator.analysis.execution.before_workers`, registered by the attractors'
+    mapper), since the workers of a fresh install would each compile them at once."""
     if not CACHE or holds(map_compiled):
         return
     case = resolve_case("instance-2")
