@@ -90,7 +90,7 @@ class Continuer:
     ) -> None:
         self.case, self.param, self.t0, self.period = case, param, t0, period
         self.sigma, self.tol = sigma, tol
-        #: The period maps' engine (:data:`~oscillator.orbits.shooting.ORBIT_ENGINES`).
+        #: The period maps' engine (:data:`~oscillator.orbits.stroboscopic.ORBIT_ENGINES`).
         self.engine = engine
         self.scale = max(1.0, abs(case.parameters.d), abs(case.parameters.d1))
 
