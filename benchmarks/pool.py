@@ -4,7 +4,11 @@
   landings without a trajectory) at N x N starts on one worker and on two: where one worker is as
   fast (``SERIAL_BELOW`` in oscillator/analysis/execution.py);
 * the default atlas (80 x 60, ``--starts 3``, 2 workers) with one task a submit (``MAX_CHUNK = 1``,
-  as before issue 56) and with the chunks of ``chunk_size``: the same table both ways.
+  as before issue 56) and with the chunks of ``chunk_size``: the same table both ways;
+* smaller atlases (12 x 8 and 30 x 20, one start a point) and the documented frequency response
+  (``frc instance-1 --param Omega 1.3 1.85``: 2 x 41 sweep values and 5 seeds) on one worker and
+  on two: the commands that, without ``--workers``, run fewer than 1,000 landings in their own
+  process.
 
 Each is the command itself (``--no-plots``), in a fresh process, warm (the kernels compiled first).
 
@@ -51,6 +55,16 @@ def atlas(chunk: int, folder: Path) -> float:
                   "--starts", "3", "--workers", "2", "--no-plots", "--quiet", "--out", str(folder)], chunk)  # fmt: skip
 
 
+def atlas_of(columns: int, rows: int, workers: int, folder: Path) -> float:
+    return timed(["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", str(columns), "--y", "Q2", "68.5", "72",
+                  str(rows), "--workers", str(workers), "--no-plots", "--quiet", "--out", str(folder)])  # fmt: skip
+
+
+def frc(workers: int, folder: Path) -> float:
+    return timed(["frc", "instance-1", "--param", "Omega", "1.3", "1.85", "--workers", str(workers), "--no-plots",
+                  "--quiet", "--out", str(folder)])  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--cells", type=int, nargs="+", default=[10, 30, 45])
@@ -64,6 +78,12 @@ def main() -> None:
         for cells in options.cells:
             one, two = basins(cells, 1, root / f"b{cells}-1"), basins(cells, 2, root / f"b{cells}-2")
             print(f"  {cells * cells:>6} {one:8.2f} s {two:8.2f} s")
+        print("below 1,000 landings: one worker, two workers")
+        for columns, rows in ((12, 8), (30, 20)):
+            one, two = atlas_of(columns, rows, 1, root / f"s{rows}-1"), atlas_of(columns, rows, 2, root / f"s{rows}-2")
+            print(f"  atlas {columns} x {rows:<3} {one:8.2f} s {two:8.2f} s")
+        one, two = frc(1, root / "f1"), frc(2, root / "f2")
+        print(f"  frc (82 sweep values, 5 seeds) {one:8.2f} s {two:8.2f} s")
         if options.no_atlas:
             return
         before, after = atlas(1, root / "a1"), atlas(8, root / "a8")

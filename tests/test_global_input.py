@@ -207,3 +207,39 @@ def test_unspecified_workers_are_every_core_except_for_few_starts(monkeypatch):
     assert check_workers(None, starts=SERIAL_BELOW - 1) == 1 and check_workers(3, starts=10) == 3
     with pytest.raises(oscillator.InputError, match="workers must be a whole number from 1 to 16"):
         check_workers(17, starts=10)
+
+
+class _Counted(BaseException):
+    """Raised by the spy below once a command has said how many landings it runs."""
+
+
+@pytest.mark.parametrize(
+    ("module", "arguments", "landings"),
+    [
+        ("plane", ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "12", "--y", "Q2", "68.5", "72", "8"], 96),
+        ("plane", ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "5", "--y", "d1", "3.3", "4", "4", "--starts", "3"], 60),
+        ("frequency", ["frc", "instance-1", "--param", "Omega", "1.3", "1.85"], 2 * 41 + 5),
+        ("frequency", ["frc", "instance-1", "--param", "Omega", "1.5", "1.7", "--sweep", "21", "--seeds", "3", "--starts", "4"], 42 + 12),
+    ],
+)  # fmt: skip
+def test_a_command_without_workers_asks_for_the_pool_by_its_landings(monkeypatch, tmp_path, module, arguments, landings):
+    """The atlas (points x starts) and the frequency response (two sweeps and the seeds' starts)
+    pass their landings to ``check_workers``, so that without ``--workers`` a small one runs in the
+    command's own process (``benchmarks/pool.py``: the 12 x 8 atlas 3.53 s on one worker, 4.98 s on
+    two)."""
+    from typer.testing import CliRunner
+
+    from oscillator.analysis.execution import check_workers
+    from oscillator.cli.app import app
+
+    asked = []
+
+    def spy(workers, starts=None):
+        asked.append((workers, starts, check_workers(workers, starts=starts)))
+        raise _Counted
+
+    monkeypatch.setattr("os.cpu_count", lambda: 4)
+    monkeypatch.setattr(f"oscillator.cli.{module}.check_workers", spy)
+    with pytest.raises(_Counted):  # a BaseException: the runner lets it through
+        CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "out")])
+    assert asked == [(None, landings, 1)]

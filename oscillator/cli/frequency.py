@@ -118,7 +118,7 @@ def frc(
         seeded = 5 if seeds is None else seeds
         options: dict[str, Any] = {"period": period, "seeds": seeded, "sweep": sweep, "max_points": max_points}
         store = _opened(resolved, (name, low, high), measure, starts, settings, options, out_dir)
-        count = check_workers(workers)
+        count = check_workers(workers, starts=2 * sweep + seeded * starts)  # the landings of sweeps and seeds
         lock, client = locked(store.folder, scheduler)
     with computing(store, "parts", lock, client):
         from oscillator.attractors.frequency import frequency_response

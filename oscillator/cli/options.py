@@ -59,7 +59,7 @@ WorkersOption = Annotated[
     typer.Option(
         "--workers",
         metavar="N",
-        help="Local processes (default: every core; basins and design of fewer than 1,000 landings: this process).",
+        help="Local processes (default: every core; a computation of fewer than 1,000 landings: this process).",
     ),
 ]
 SchedulerOption = Annotated[

@@ -118,13 +118,13 @@ def atlas(
         refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         from oscillator.attractors.atlas import atlas_settings, atlas_store, check_measures, measures_of
 
-        count = check_workers(workers)
         given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
         chosen = {name: value for name, value in given.items() if value is not None}
         check_engine(engine, LANDING_ENGINES)
         if declared and engine != "dop853":
             raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
         settings = atlas_settings(resolved, **chosen, settle=not full_transient, engine=engine)
+        count = check_workers(workers, starts=x_axis.count * y_axis.count * settings.starts)
         folder = out_dir if out_dir is not None else new_folder(stem if stem is not None else title, "atlas")
         names = [] if measures is None else [n.strip() for n in measures.split(",") if n.strip()]
         responses = check_measures(names, "--measures", known=measures_of(resolved))

@@ -52,12 +52,12 @@ def basins_system(
         if found is None:
             return False
         chain, stem = found
-        count = check_workers(workers)
+        x, y = axes
+        count = check_workers(workers, starts=x.count * y.count)
         load("oscillator.attractors.chain_attractors", notice=not quiet)
         from oscillator.attractors.basins import basin_store
         from oscillator.attractors.chain_attractors import chain_grid, find_chain_basins
 
-        x, y = axes
         if settings.engine != "dop853":
             raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
         chain_grid(chain, x, y)
