@@ -213,16 +213,22 @@ class _Counted(BaseException):
     """Raised by the spy below once a command has said how many landings it runs."""
 
 
+_ATLAS = ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85"]
+_FRC = ["frc", "instance-1", "--param", "Omega"]
+
+
 @pytest.mark.parametrize(
     ("module", "arguments", "landings"),
     [
-        ("plane", ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "12", "--y", "Q2", "68.5", "72", "8"], 96),
-        ("plane", ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "5", "--y", "d1", "3.3", "4", "4", "--starts", "3"], 60),
-        ("frequency", ["frc", "instance-1", "--param", "Omega", "1.3", "1.85"], 2 * 41 + 5),
-        ("frequency", ["frc", "instance-1", "--param", "Omega", "1.5", "1.7", "--sweep", "21", "--seeds", "3", "--starts", "4"], 42 + 12),
+        ("plane", [*_ATLAS, "12", "--y", "Q2", "68.5", "72", "8"], 96),
+        ("plane", [*_ATLAS, "5", "--y", "d1", "3.3", "4", "4", "--starts", "3"], 60),
+        ("frequency", [*_FRC, "1.3", "1.85"], 2 * 41 + 5),
+        ("frequency", [*_FRC, "1.5", "1.7", "--sweep", "21", "--seeds", "3", "--starts", "4"], 42 + 12),
     ],
-)  # fmt: skip
-def test_a_command_without_workers_asks_for_the_pool_by_its_landings(monkeypatch, tmp_path, module, arguments, landings):
+)
+def test_a_command_without_workers_asks_for_the_pool_by_its_landings(
+    monkeypatch, tmp_path, module, arguments, landings
+):
     """The atlas (points x starts) and the frequency response (two sweeps and the seeds' starts)
     pass their landings to ``check_workers``, so that without ``--workers`` a small one runs in the
     command's own process (``benchmarks/pool.py``: the 12 x 8 atlas 3.53 s on one worker, 4.98 s on
