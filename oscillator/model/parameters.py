@@ -42,6 +42,8 @@ MAX_SWEEP_RECORD = 100_000
 
 def is_number(value: Any) -> bool:
     """A real number (Python's or NumPy's), not a boolean."""
+    if type(value) is float:  # the common case, without the abstract classes' checks (every case resolved)
+        return True
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
