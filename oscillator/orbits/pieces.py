@@ -118,7 +118,7 @@ def _field(kind: int, t: float, y: Vector, data: Vector, out: Vector) -> None:  
     """``out``: the field ``kind`` at ``(t, y)`` with its numbers ``data``."""
     if kind == ARTICLE_PIECE or kind == ARTICLE_MAP:
         k = int(data[4])
-        columns = data[5 : 5 + k].astype(np.int64)
+        columns = data[5 : 5 + k]  # the parameters' positions, as floats (read with int()): no copy a call
         s1, s2 = int(data[0]), int(data[1])
         left, right = data[2] != 0.0, data[3] != 0.0
         if kind == ARTICLE_PIECE:
@@ -151,11 +151,11 @@ def _extrema(kind: int, t: float, y: Vector, data: Vector, g: Vector) -> None:  
 
 @njit(cache=True)
 def _stage(
-    kind: int, data: Vector, a: Vector, tau: float, t: float, y: Vector, h: float, k: np.ndarray, s: int
+    kind: int, data: Vector, a: Vector, tau: float, t: float, y: Vector, h: float, k: np.ndarray, s: int, work: Vector
 ) -> None:  # pragma: no cover - compiled
-    """Stage ``s``: ``k[s]`` = the field at ``(t + tau h, y + h sum_j a[j] k[j])``, ``j < s``."""
+    """Stage ``s``: ``k[s]`` = the field at ``(t + tau h, y + h sum_j a[j] k[j])``, ``j < s`` (the
+    stage's state in ``work``)."""
     size = y.shape[0]
-    work = np.empty(size)
     for i in range(size):
         total = 0.0
         for j in range(s):
@@ -166,12 +166,13 @@ def _stage(
 
 @njit(cache=True)
 def _attempt(
-    kind: int, data: Vector, t: float, y: Vector, h: float, k: np.ndarray, out: Vector
+    kind: int, data: Vector, t: float, y: Vector, h: float, k: np.ndarray, out: Vector, work: Vector
 ) -> None:  # pragma: no cover - compiled
     """One Runge-Kutta step from ``(t, y)`` by ``h`` (``k[0]`` the field there): the stages in
-    ``k``, the new state in ``out`` (SciPy's ``rk_step`` without its last stage)."""
+    ``k``, the new state in ``out`` (SciPy's ``rk_step`` without its last stage; ``work`` a
+    scratch vector of the state's size)."""
     for s in range(1, _STAGES):
-        _stage(kind, data, _A[s], _C[s], t, y, h, k, s)
+        _stage(kind, data, _A[s], _C[s], t, y, h, k, s, work)
     for i in range(y.shape[0]):
         total = 0.0
         for j in range(_STAGES):
@@ -230,7 +231,7 @@ def _root(
     (values ``g_lo``, ``g_hi`` at its ends, neither zero): the Illinois method on ``tau``, each
     state one step from ``t``."""
     size = y.shape[0]
-    k, state, g = np.empty((_STAGES + 1, size)), np.empty(size), np.empty(EXTREMA)
+    k, state, g, work = np.empty((_STAGES + 1, size)), np.empty(size), np.empty(EXTREMA), np.empty(size)
     k[0, :] = f
     lo, hi, side = 0.0, h, 0
     for _ in range(200):
@@ -239,7 +240,7 @@ def _root(
         tau = hi - g_hi * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
         if not lo < tau < hi:
             tau = 0.5 * (lo + hi)
-        _attempt(kind, data, t, y, tau, k, state)
+        _attempt(kind, data, t, y, tau, k, state, work)
         _extrema(kind, t + tau, state, data, g)
         value = g[which]
         if value == 0.0:
@@ -252,18 +253,18 @@ def _root(
             hi, g_hi = tau, value
             g_lo *= 0.5 if side == 1 else 1.0
             side = 1
-    _attempt(kind, data, t, y, 0.5 * (lo + hi), k, state)
+    _attempt(kind, data, t, y, 0.5 * (lo + hi), k, state, work)
     return t + 0.5 * (lo + hi), state
 
 
 @njit(cache=True)
 def _dense(
-    kind: int, data: Vector, t: float, h: float, y: Vector, y_new: Vector, k: np.ndarray, out: np.ndarray
+    kind: int, data: Vector, t: float, h: float, y: Vector, y_new: Vector, k: np.ndarray, out: np.ndarray, work: Vector
 ) -> None:  # pragma: no cover
     """``out`` (7 x size): the step's dense output's coefficients (SciPy's ``_dense_output_impl``)."""
     size = y.shape[0]
     for e in range(_A_EXTRA.shape[0]):
-        _stage(kind, data, _A_EXTRA[e], _C_EXTRA[e], t, y, h, k, _STAGES + 1 + e)
+        _stage(kind, data, _A_EXTRA[e], _C_EXTRA[e], t, y, h, k, _STAGES + 1 + e, work)
     for i in range(size):
         delta = y_new[i] - y[i]
         out[0, i] = delta
@@ -293,7 +294,7 @@ def _integrate(
     """:func:`integrate_piece`'s steps: the end, the extrema's rows ``(which, t, state...)``, the
     steps' start times, their start states and their dense coefficients (``dense``)."""
     size = y0.shape[0]
-    y, f, y_new = y0.copy(), np.empty(size), np.empty(size)
+    y, f, y_new, work = y0.copy(), np.empty(size), np.empty(size), np.empty(size)
     k = np.empty((_STAGES + 1 + (_A_EXTRA.shape[0] if dense else 0), size))
     g, g_new = np.empty(EXTREMA), np.empty(EXTREMA)
     found, count = np.empty((4, 2 + size)), 0
@@ -310,7 +311,7 @@ def _integrate(
             t_new = min(t + h_abs, t1)
             h = t_new - t
             k[0, :] = f
-            _attempt(kind, data, t, y, h, k, y_new)
+            _attempt(kind, data, t, y, h, k, y_new, work)
             _field(kind, t_new, y_new, data, k[_STAGES])
             error = _error_norm(k, h, y, y_new, rtol, atol)
             if error < 1.0:
@@ -324,7 +325,7 @@ def _integrate(
             coefficients = _grown(coefficients, steps)
             starts[steps] = t
             states[steps, :] = y
-            _dense(kind, data, t, h, y, y_new, k, coefficients[steps])
+            _dense(kind, data, t, h, y, y_new, k, coefficients[steps], work)
             steps += 1
         _extrema(kind, t_new, y_new, data, g_new)
         for which in range(EXTREMA):

@@ -180,6 +180,8 @@ def tangent_rates(
     contact = c[C3] * (y[1] - y[3]) ** 2 if left else 0.0
     out[4], out[5], out[6], out[7] = y[0] * y[0], y[2] * y[2], a1 * a1, a2 * a2
     out[8], out[9], out[10], out[11], out[12] = r[4], r[5], r[6] - contact, contact, r[7]
+    if k == 0:  # the response integrals alone (oscillator.orbits.response): no gradient to build
+        return
     sigma = state[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
     tangent = out[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
     _sigma_rates(t, y, c, columns, s1, s2, left, right, sigma, tangent)
@@ -188,7 +190,7 @@ def tangent_rates(
     _integrand_gradients(t, y, a1, a2, c, s1, s2, left, grad, partial)
     integral = out[4 + INTEGRALS + 4 * k :]
     for j in range(k):
-        p = columns[j]
+        p = int(columns[j])
         for q in range(INTEGRALS):
             total = partial[q, p]
             for m in range(4):
@@ -220,7 +222,7 @@ def _sigma_rates(
     fc = np.empty((4, _SIZE))
     field_gradient(t, y, c, s1, s2, left, right, fc)
     for j in range(k):
-        p = columns[j]
+        p = int(columns[j])
         for row in range(4):
             total = fc[row, p]
             for m in range(4):
