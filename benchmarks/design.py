@@ -3,12 +3,22 @@ the exact sensitivities against SciPy's Nelder-Mead from the same start on the s
 function (simulations counted, each optimiser to its own convergence), and an independent
 brute-force grid over the same parameters judged from fresh starts.
 
-Usage: python benchmarks/design.py [--grid N] [--workers W]
+With ``--overhead``, instead: the documented command (``oscillator design instance-1 ...`` of
+docs/design.md, figures and report) against its library call, each end to end in a fresh process
+(imports and the compiled kernels loaded from numba's cache in both), alternating, the least of
+``--repeats``.
+
+Usage: python benchmarks/design.py [--grid N] [--workers W] [--overhead [--repeats N]]
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime as dt
+import os
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -70,11 +80,47 @@ def grid(problem: Problem, count: int) -> tuple[np.ndarray, float, int]:
     return best[0], best[1], total
 
 
+COMMAND = ["design", "instance-1", "--vary", "d1=2.5,4.5", "--vary", "K6=1,40", "--over", "Omega", "1.4", "1.6",
+           "--objective", OBJECTIVE, *[a for c in CONSTRAINTS for a in ("--constraint", c)], "--band", "3",
+           "--starts", "2", "--candidates", "8", "--transient", "100", "--record", "8", "--quiet"]  # fmt: skip
+LIBRARY = f"""
+from oscillator.attractors.mapping import AttractorSettings
+from oscillator.designing.optimise import design
+design("instance-1", {VARY!r}, {OVER!r}, {OBJECTIVE!r}, {CONSTRAINTS!r}, band=3, starts=2, candidates=8,
+       settings=AttractorSettings(transient=100, record=8), workers=1)
+"""
+
+
+def _fresh(arguments: list[str]) -> float:
+    started = time.perf_counter()
+    subprocess.run([sys.executable, *arguments], check=True, capture_output=True)
+    return time.perf_counter() - started
+
+
+def overhead(repeats: int) -> None:
+    """The command against its library call, each in a fresh process (module docstring)."""
+    print(f"benchmarks/design.py --overhead, {dt.datetime.now():%Y-%m-%d %H:%M}, load {os.getloadavg()[0]:.2f}")
+    times: dict[str, list[float]] = {"library": [], "command": []}
+    with tempfile.TemporaryDirectory() as scratch:
+        for k in range(repeats):
+            times["library"].append(_fresh(["-c", LIBRARY]))
+            times["command"].append(_fresh(["-m", "oscillator", *COMMAND, "--out", f"{scratch}/design-{k}"]))
+    library, command = min(times["library"]), min(times["command"])
+    print(f"  library call (fresh process, one worker): {library:.2f} s")
+    print(f"  oscillator design ... (figures and report): {command:.2f} s, {command / library:.2f}x the library call")
+    print(f"load at the end {os.getloadavg()[0]:.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--grid", type=int, default=21)
     parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--overhead", action="store_true", help="the command against its library call")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
+    if args.overhead:
+        overhead(args.repeats)
+        return
     started = time.perf_counter()
     found = design("instance-1", VARY, OVER, OBJECTIVE, CONSTRAINTS, band=3, starts=2, candidates=8,
                    settings=SETTINGS, workers=args.workers)  # fmt: skip

@@ -9,8 +9,10 @@ and on the code of ``--against DIR`` (:mod:`checkouts`: fresh processes, alterna
    sliding onset, a grazing, two sliding-vanish points 1e-5 apart);
 4. ``frequency_response("instance-1", "Omega", (1.3, 1.85), workers=2)``: the library call of
    ``oscillator frc instance-1 --param Omega 1.3 1.85``;
-5. that command end to end in a fresh process (``python -m oscillator``, figures and report
-   written to a scratch folder).
+5. the hardening Duffing oscillator of docs/frequency.md (``frequency_response`` over Omega 0.8 to
+   1.6, 3 seeds, 81 sweep values, transient 400; one worker);
+6. ``oscillator frc instance-1 --param Omega 1.3 1.85`` end to end in a fresh process (``python -m
+   oscillator``, figures and report written to a scratch folder).
 
 Paths: period maps with their monodromy, no trajectory kept; the frequency response's measures
 read from their own pieces.  The answers are compared, not required equal: the orbits' engine
@@ -67,14 +69,26 @@ def frc():
     return [len(found.points), *sorted(found.bifurcations["Omega"].tolist())]
 
 
+def duffing():
+    case = oscillator.resolve_case("instance-1", **DUFFING)
+    found = oscillator.frequency_response(case, "Omega", (0.8, 1.6), seeds=3, sweep=81,
+                                          settings=oscillator.AttractorSettings(transient=400, record=8))
+    return [len(found.points), *sorted(found.bifurcations["Omega"].tolist())]
+
+
 """
-_CALLS = script(_BODY, ("maps", "find", "branch", "frc"))
+#: docs/frequency.md's hardening Duffing oscillator (mass 1 cubic, no friction, no stops).
+DUFFING = dict(m1=1.0, K1=1.0, K2=0.05, C1=0.05, C2=0.0, K3=0.0, C3=0.0, m2=1.5, K4=1.0, K5=0.0, C4=0.2, C5=0.0,
+               mu_k=0.0, mu_s=0.0, P1=0.0, P2=0.0, d=1000.0, d1=1000.0, Q1=0.2, Q2=0.1, Omega=0.8, x1=0.0, v1=0.0,
+               x2=0.0, v2=0.1)  # fmt: skip
+_CALLS = script(f"DUFFING = {DUFFING!r}\n" + _BODY, ("maps", "find", "branch", "frc", "duffing"))
 
 LABELS = {
     "maps": "200 period maps with their monodromy (Instance 1, Omega 1.6)",
     "find": "find_orbit(instance-1, Omega=1.6)",
     "branch": "continue_orbit over Omega 1.3652471..1.85 (one branch)",
     "frc": "frequency_response(instance-1, Omega 1.3..1.85), 2 workers",
+    "duffing": "frequency_response of docs/frequency.md's Duffing oscillator, one worker",
 }
 COMMAND = ["frc", "instance-1", "--param", "Omega", "1.3", "1.85", "--quiet"]
 
