@@ -255,3 +255,17 @@ def test_a_branchs_measures_are_those_of_its_orbits_refined():
         refined = find_orbit(resolve_case("instance-1", Omega=point.Omega), guess=state, tol=1e-10).response()
         for name in ("energy_forcing", "x_max_m1", "v_peak_m2", "rest_m2"):
             assert getattr(row, name) == pytest.approx(refined.columns()[name], rel=1e-10, abs=1e-10), name
+
+
+def test_impact_speeds_read_from_a_runs_event_rows_are_those_of_its_event_table():
+    """The measures read contact onsets from a run's event rows without building its table: the
+    same speeds, in the same order, as from ``Result.events``, on both stops (stops moved in: m1
+    strikes the right one and the masses strike each other, dozens of times in 20 periods)."""
+    from oscillator.orbits.response import impact_speeds
+
+    case = resolve_case("instance-1", d=1, d1=3.5, Omega=1.5)
+    result = simulate(case, t_end=case.initial.t0 + 20 * case.parameters.period)
+    for stop, least in (("right", 10), ("left", 20)):
+        from_table, from_rows = impact_speeds(result.events, stop), impact_speeds(result.event_rows, stop)
+        assert len(from_table) >= least and np.array_equal(from_table, from_rows)
+        assert np.all(from_rows > 0)

@@ -83,8 +83,9 @@ class SolverStats:
 
 
 class _Records:
-    """A run's records until its tables are asked for: each table is built then, once, and its
-    records let go (a run that nobody reads a table of never imports pandas).  The tables are
+    """A run's records until its tables are asked for: each table is built then, once, and the
+    trajectory's rows let go (a run that nobody reads a table of never imports pandas); the event
+    rows are kept, few beside the trajectory's, for what reads them as numbers.  The tables are
     kept here, so every copy of the result (``dataclasses.replace``) reads the same tables."""
 
     def __init__(self, events: np.ndarray, rows: TrajectoryRows) -> None:
@@ -93,12 +94,15 @@ class _Records:
         self._events_frame: pd.DataFrame | None = None
         self._trajectory_frame: pd.DataFrame | None = None
 
+    def event_rows(self) -> np.ndarray | None:
+        return self._events
+
     def events_frame(self) -> pd.DataFrame:
         if self._events_frame is None:
             from oscillator.io.tables import events_frame
 
-            assert self._events is not None
-            self._events_frame, self._events = events_frame(self._events), None
+            assert self._events is not None  # records read back hold their table already
+            self._events_frame = events_frame(self._events)
         return self._events_frame
 
     def trajectory_frame(self) -> pd.DataFrame:
@@ -178,6 +182,13 @@ class Result:
     @property
     def events(self) -> pd.DataFrame:
         return self._records.events_frame()
+
+    @property
+    def event_rows(self) -> np.ndarray | None:
+        """The events as rows of numbers (columns :data:`~oscillator.model.events.COLUMN`, the
+        kinds, boundaries and theorems as codes): ``events`` without building its table; None for
+        a result read back from a folder (its table is all it has)."""
+        return self._records.event_rows()
 
     @property
     def trajectory(self) -> pd.DataFrame:

@@ -47,7 +47,7 @@ from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case, resolve_case
-from oscillator.model.events import EventKind
+from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece, mode_flags
@@ -135,7 +135,8 @@ def measured(result: Result, periods: int) -> Response:
     span = periods * p.period
     pieces = [_Piece.of(segment, p) for segment in result.segments if segment.t1 > segment.t0]
     mass = {i: _mass_measures(pieces, i, span) for i in (1, 2)}
-    events = result.events
+    rows = result.event_rows
+    events = result.events if rows is None else rows  # the rows where the run kept them: no table built
     contact = {stop: _contact_measures(pieces, events, stop, span, periods) for stop in ("right", "left")}
     totals = np.sum([piece.integrals for piece in pieces], axis=0)
     energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
@@ -241,23 +242,29 @@ def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, fl
     }
 
 
-def impact_speeds(events: pd.DataFrame, stop: str) -> np.ndarray:
+def impact_speeds(events: pd.DataFrame | np.ndarray, stop: str) -> np.ndarray:
     """The approach speed at each contact onset on ``stop`` (``"right"`` or ``"left"``) of an event
-    table, in order (m/s): ``|v1|`` on the right stop, ``|v1 - v2|`` between the masses (a contact
-    between the masses is written for both, and counted once)."""
-    kinds = [EventKind(kind) for kind in events.kind]
+    table, or of a run's event rows (:attr:`~oscillator.Result.event_rows`: no table built), in
+    order (m/s): ``|v1|`` on the right stop, ``|v1 - v2|`` between the masses (a contact between
+    the masses is written for both, and counted once)."""
+    if isinstance(events, np.ndarray):
+        rows = events.reshape(-1, WIDTH)
+        kinds = [KINDS[int(code)] for code in rows[:, COLUMN["kind"]]]
+        masses, v1, v2 = rows[:, COLUMN["mass"]], rows[:, COLUMN["v1"]], rows[:, COLUMN["v2"]]
+    else:
+        kinds = [EventKind(kind) for kind in events.kind]
+        masses, v1, v2 = events["mass"].to_numpy(), events.v1.to_numpy(float), events.v2.to_numpy(float)
     onsets = [
         k
-        for k, (kind, mass) in enumerate(zip(kinds, events["mass"], strict=True))
+        for k, (kind, mass) in enumerate(zip(kinds, masses, strict=True))
         if kind.contact_starts and kind.contact == stop and kind.stands_for_event(int(mass))
     ]
-    rows = events.iloc[onsets]
-    speeds: np.ndarray = np.abs((rows.v1 - rows.v2) if stop == "left" else rows.v1).to_numpy(float)
+    speeds: np.ndarray = np.abs(v1[onsets] - v2[onsets] if stop == "left" else v1[onsets]).astype(float)
     return speeds
 
 
 def _contact_measures(
-    pieces: list[_Piece], events: pd.DataFrame, stop: str, span: float, periods: int
+    pieces: list[_Piece], events: pd.DataFrame | np.ndarray, stop: str, span: float, periods: int
 ) -> dict[str, float]:
     """The measures of the contact on ``stop`` (module docstring)."""
     speeds = impact_speeds(events, stop)
