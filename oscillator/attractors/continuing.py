@@ -223,17 +223,18 @@ class _Loop:
             here = _found_type(cases[k])(
                 cases[k], self.mapper.seed_settings, attractors, table, tuple(unsettled(found))
             )
-            self.match(k, here, starts[k][1])
+            self.match(k, here, starts[k][1], labels)
         return batch
 
-    def match(self, k: int, here: Attractors, origins: list[tuple[int, int]]) -> None:
+    def match(self, k: int, here: Attractors, origins: list[tuple[int, int]], labels: dict[int, int]) -> None:
+        """Number ``here``'s attractors by the ones they continue; ``labels``: each start's
+        attractor (by the start's index; none for a failed start), as ``here.labels`` holds them."""
         fresh = len(self.mapper.fresh)
-        seat = here.labels.set_index("index").attractor
         landed: dict[int, int] = {}
         previous: list[tuple[Attractor, int]] = []
         for j, (point, local) in enumerate(origins):
             kept = self.ids[point][local]
-            landed.setdefault(kept, int(seat.get(fresh + j, -1)))
+            landed.setdefault(kept, labels.get(fresh + j, -1))
             previous.append((self.found[point].attractors[local], kept))
         parent = self.points[k].parent
         if parent is not None:
