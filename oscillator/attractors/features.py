@@ -41,7 +41,7 @@ def impact_velocity(case: Case, attractor: Attractor) -> float:
     begin = dict(zip(case.system.state, (float(v) for v in attractor.points[-1]), strict=True))
     run = resolve_case(case, **begin)
     result = simulate(run, t_end=run.initial.t0 + periods * run.parameters.period, save=SaveAt(steps=False))
-    rows = result.event_rows  # a run of this process: its rows, no table built
+    rows = result.event_rows  # its rows, where no table was built from them yet
     speeds = np.concatenate(
         [impact_speeds(result.events if rows is None else rows, stop) for stop in ("right", "left")]
     )

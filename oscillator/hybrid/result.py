@@ -83,10 +83,10 @@ class SolverStats:
 
 
 class _Records:
-    """A run's records until its tables are asked for: each table is built then, once, and the
-    trajectory's rows let go (a run that nobody reads a table of never imports pandas); the event
-    rows are kept, few beside the trajectory's, for what reads them as numbers.  The tables are
-    kept here, so every copy of the result (``dataclasses.replace``) reads the same tables."""
+    """A run's records until its tables are asked for: each table is built then, once, and its
+    records let go (a run that nobody reads a table of never imports pandas); until then the event
+    rows can be read as numbers.  The tables are kept here, so every copy of the result
+    (``dataclasses.replace``) reads the same tables."""
 
     def __init__(self, events: np.ndarray, rows: TrajectoryRows) -> None:
         self._events: np.ndarray | None = events
@@ -101,8 +101,8 @@ class _Records:
         if self._events_frame is None:
             from oscillator.io.tables import events_frame
 
-            assert self._events is not None  # records read back hold their table already
-            self._events_frame = events_frame(self._events)
+            assert self._events is not None
+            self._events_frame, self._events = events_frame(self._events), None
         return self._events_frame
 
     def trajectory_frame(self) -> pd.DataFrame:
@@ -186,8 +186,8 @@ class Result:
     @property
     def event_rows(self) -> np.ndarray | None:
         """The events as rows of numbers (columns :data:`~oscillator.model.events.COLUMN`, the
-        kinds, boundaries and theorems as codes): ``events`` without building its table; None for
-        a result read back from a folder (its table is all it has)."""
+        kinds, boundaries and theorems as codes): ``events`` without building its table; None once
+        the table is built (its rows are let go then) or for a result read back from a folder."""
         return self._records.event_rows()
 
     @property

@@ -136,7 +136,7 @@ def measured(result: Result, periods: int) -> Response:
     pieces = [_Piece.of(segment, p) for segment in result.segments if segment.t1 > segment.t0]
     mass = {i: _mass_measures(pieces, i, span) for i in (1, 2)}
     rows = result.event_rows
-    events = result.events if rows is None else rows  # the rows where the run kept them: no table built
+    events = result.events if rows is None else rows  # the rows while the table is not built: none built
     contact = {stop: _contact_measures(pieces, events, stop, span, periods) for stop in ("right", "left")}
     totals = np.sum([piece.integrals for piece in pieces], axis=0)
     energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
