@@ -12,7 +12,10 @@
 
 Each is the command itself (``--no-plots``), in a fresh process, warm (the kernels compiled first).
 
-Usage: python benchmarks/pool.py [--cells 10 30 45] [--no-atlas]
+With ``--against DIR`` (a checkout of earlier code), instead: the default atlas with ``--starts 3``
+on that code and on this, alternating, the least of 2 each, and whether the tables are the same.
+
+Usage: python benchmarks/pool.py [--cells 10 30 45] [--no-atlas] [--against DIR]
 """
 
 from __future__ import annotations
@@ -38,9 +41,11 @@ main()
 """
 
 
-def timed(arguments: list[str], chunk: int = 8) -> float:
+def timed(arguments: list[str], chunk: int = 8, code: Path | None = None) -> float:
+    """The command in a fresh process, on this code or on the package at ``code``."""
+    env = {**os.environ, "PYTHONPATH": str(code)} if code is not None else None
     started = time.perf_counter()
-    subprocess.run([sys.executable, "-c", CHILD, str(chunk), *arguments], check=True, capture_output=True)
+    subprocess.run([sys.executable, "-c", CHILD, str(chunk), *arguments], check=True, capture_output=True, env=env)
     return time.perf_counter() - started
 
 
@@ -50,9 +55,24 @@ def basins(cells: int, workers: int, folder: Path) -> float:
                   "--workers", str(workers), "--no-plots", "--quiet", "--out", str(folder)])  # fmt: skip
 
 
-def atlas(chunk: int, folder: Path) -> float:
-    return timed(["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "80", "--y", "Q2", "68.5", "72", "60",
-                  "--starts", "3", "--workers", "2", "--no-plots", "--quiet", "--out", str(folder)], chunk)  # fmt: skip
+def atlas(chunk: int, folder: Path, code: Path | None = None) -> float:
+    arguments = ["atlas", "instance-1", "--x", "Omega", "1.3", "1.85", "80", "--y", "Q2", "68.5", "72", "60",
+                 "--starts", "3", "--workers", "2", "--no-plots", "--quiet", "--out", str(folder)]  # fmt: skip
+    return timed(arguments, chunk, code)
+
+
+def against(code: Path, root: Path, repeats: int = 2) -> None:
+    """The default atlas with ``--starts 3`` on the code at ``code`` and on this code, alternating,
+    the least of ``repeats`` each, and whether the two tables are the same."""
+    times: dict[str, list[float]] = {"before": [], "now": []}
+    for k in range(repeats):
+        times["before"].append(atlas(8, root / f"before-{k}", code))
+        times["now"].append(atlas(8, root / f"now-{k}"))
+    tables = [pd.read_parquet(root / f"{label}-0" / "atlas.parquet") for label in ("before", "now")]
+    same = tables[0].equals(tables[1])
+    before, now = min(times["before"]), min(times["now"])
+    print(f"default atlas, --starts 3, 2 workers, against {code}: {before:.2f} s -> {now:.2f} s "
+          f"({before / now:.2f}x), the same table: {same}")  # fmt: skip
 
 
 def atlas_of(columns: int, rows: int, workers: int, folder: Path) -> float:
@@ -69,10 +89,15 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--cells", type=int, nargs="+", default=[10, 30, 45])
     parser.add_argument("--no-atlas", action="store_true")
+    parser.add_argument("--against", type=Path, help="a checkout of earlier code: the default atlas on both, alone")
     options = parser.parse_args()
-    print(f"{datetime.date.today()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
+    print(f"{datetime.datetime.now():%Y-%m-%d %H:%M}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
+        if options.against is not None:
+            against(options.against.resolve(), root)
+            print(f"load at the end {os.getloadavg()[0]:.2f}")
+            return
         basins(5, 1, root / "warm")  # the kernels compiled (or loaded) before anything is timed
         print("basins (landings, no trajectory): starts, one worker, two workers")
         for cells in options.cells:
