@@ -1154,12 +1154,20 @@ def test_section_points_are_settled_only_when_close_to_where_they_converge():
     slow = np.array([[1.0 + 1e-3 * 0.999**k, 2.0, 3.0, 4.0] for k in range(6)])  # steps 1e-6 (1+|P|) apart,
     assert not settled(slow, 1e-6, 16)  # but 1e-3 from where they converge
     assert not settled(np.random.default_rng(1).normal(size=(40, 4)), 1e-6, 16)  # no repeat at all
+    from oscillator.attractors.mapping import first_settled
+
+    approach = np.array([[1.0 + 0.1**k, 2.0, 3.0, 4.0] for k in range(12)])  # steps 0.9 * 0.1^k
+    first = first_settled(approach, 1, AttractorSettings(tolerance=1e-6, max_period=4))
+    # still to go d / (1 - rho) = 0.1^(k-1) against 1e-6 (1 + max |P| = 4): first within at k = 7
+    assert first == (7, 1)
+    assert settled(approach[:8], 1e-6, 4) == 1 and settled(approach[:7], 1e-6, 4) == 0
 
 
 def test_a_transient_that_ends_where_the_motion_settled_labels_every_start_alike():
     """The starts of a slice at Q2 = 71.165 reach the same attractors, with the same shares, with
     the transient ended where each settled as with the whole transient; each stops well before
-    it.  Ueda's chaotic motion never settles: it runs the whole transient."""
+    it, at the same section with either engine, and records two cycles of its period.  Ueda's
+    chaotic motion never settles: it runs the whole transient and records all ``record``."""
     case = resolve_case("instance-1", Q2=71.165)
     starts = grid_starts(case, Axis("x2", 3.0, 6.0, 4), Axis("v2", -4.0, 4.0, 3))
     settings = AttractorSettings(transient=100, record=16, lyapunov_periods=0)
@@ -1171,10 +1179,13 @@ def test_a_transient_that_ends_where_the_motion_settled_labels_every_start_alike
         assert np.allclose(a.points, b.points, atol=1e-6)
     from oscillator.attractors.mapping import land
 
-    ran = [land(case, settings, k, start).transient for k, start in enumerate(starts[:4])]
-    assert all(16 <= n <= 40 for n in ran), ran
+    landed = [land(case, settings, k, start) for k, start in enumerate(starts[:4])]
+    reference = [land(case, dataclasses.replace(settings, engine="cvode"), k, s) for k, s in enumerate(starts[:4])]
+    assert [a.transient for a in landed] == [b.transient for b in reference]
+    assert all(3 <= a.transient < 40 and len(a.points) == 2 * a.period + 1 for a in landed), landed
     chaos = resolve_case("instance-1", **UEDA)
-    assert land(chaos, AttractorSettings(transient=40, record=8), 0, chaos.initial.y).transient == 40
+    wandering = land(chaos, AttractorSettings(transient=40, record=8), 0, chaos.initial.y)
+    assert wandering.transient == 40 and wandering.period == 0 and len(wandering.points) == 9
 
 
 def test_full_transient_runs_every_start_the_whole_transient(tmp_path, monkeypatch):

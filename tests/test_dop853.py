@@ -166,9 +166,10 @@ def test_the_compiled_settling_test_is_the_python_one():
         cycle = rng.normal(size=(period, 4))
         decay = rng.choice([0.0, 1e-9, 1e-7, 0.3])
         points = np.array([cycle[k % period] * (1 + decay * 0.5**k) for k in range(count)])
-        expected = settled(points, 1e-6, 16)
+        expected = settled(points, 1e-6, 16)  # the period settled with, 0 if none
         assert settled_compiled(points, count, 1e-6, 16) == expected
-        agreed[expected] += 1
+        assert expected % period == 0  # a whole number of the cycle's periods (0: not settled)
+        agreed[expected > 0] += 1
     assert agreed[True] > 50 and agreed[False] > 50
 
 
@@ -201,7 +202,7 @@ def test_a_start_stopped_by_a_guard_is_told_in_the_reference_engines_words(optio
     the landing says the same as the reference's."""
     case = chatter_case(**options)
     p = case.parameters
-    status, _, _ = land_compiled(
+    status, _, _, _ = land_compiled(
         coefficients(p), case.initial.t0, p.period, np.array(case.initial.y), dop853.new_work(p, case.options),
         options_vector(case.options), (False, 600, 4, 1e-6, 3), np.empty((5, 6)), np.empty((320, WIDTH)),
     )  # fmt: skip

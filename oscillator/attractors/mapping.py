@@ -28,7 +28,7 @@ from oscillator.analysis.periods import detect_period
 from oscillator.engines import check_engine
 from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
-from oscillator.hybrid.batch import OK, SETTLE_CHUNK, land_compiled, options_vector
+from oscillator.hybrid.batch import OK, SETTLE_CHUNK, land_compiled, options_vector, recorded
 from oscillator.hybrid.counting import counted
 from oscillator.hybrid.guards import ARITHMETIC_ERRORS
 from oscillator.hybrid.recording import SaveAt
@@ -155,36 +155,48 @@ def _run_from(
     return point, simulate(point, t_end=float(marks[-1]), save=save, engine=engine)
 
 
-def settled(points: np.ndarray, tolerance: float, max_period: int) -> bool:
-    """Whether section points have settled: for some ``n <= max_period`` the last ``n`` repeat
-    the ``n`` before within ``d <= tolerance (1 + |P|)``, and, the repeats converging
-    geometrically (``d`` over the ``d0`` of the ``n`` before that, ``rho = d / d0 < 1``), the
-    distance still to go, ``d / (1 - rho)``, is within it too (a motion converging slowly is not
-    settled while its steps are small).  (:func:`oscillator.hybrid.batch.settled_compiled` is
+def settled(points: np.ndarray, tolerance: float, max_period: int) -> int:
+    """The period section points have settled with, 0 if they have not: the least
+    ``n <= max_period`` whose last ``n`` points repeat the ``n`` before within
+    ``d <= tolerance (1 + |P|)`` while, the repeats converging geometrically (``d`` over the
+    ``d0`` of the ``n`` before that, ``rho = d / d0 < 1``), the distance still to go,
+    ``d / (1 - rho)``, is within it too (a motion converging slowly is not settled while its
+    steps are small).  (:func:`oscillator.hybrid.batch.settled_compiled` is
     the same test, compiled.)"""
     scale = tolerance * (1.0 + float(np.max(np.abs(points[-8:])))) if len(points) else tolerance
     for n in range(1, min(max_period, len(points) // 3) + 1):
         d = float(np.max(np.linalg.norm(points[-n:] - points[-2 * n : -n], axis=1)))
         d0 = float(np.max(np.linalg.norm(points[-2 * n : -n] - points[-3 * n : -2 * n], axis=1)))
         if d <= scale and (d == 0.0 or (d < d0 and d / (1.0 - d / d0) <= scale)):
-            return True
-    return False
+            return n
+    return 0
 
 
-def _settle(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[np.ndarray, int]:
-    """The state at the section once the motion has :func:`settled`, and the forcing periods it
-    took: runs of :data:`SETTLE_CHUNK` periods, then doubling, to ``transient`` at most."""
-    state, ran = np.array(start, dtype=float), 0
-    points, chunk = [state], SETTLE_CHUNK
-    while ran < settings.transient:
-        n = min(chunk, settings.transient - ran)
-        _, result = _run_from(case, state, 1, n, events=False, engine=settings.engine)
+def first_settled(points: np.ndarray, since: int, settings: AttractorSettings) -> tuple[int, int] | None:
+    """The first section ``k >= since`` where ``points[: k + 1]`` have :func:`settled`, and the
+    period they settled with; None if there is none."""
+    for k in range(since, len(points)):
+        if n := settled(points[: k + 1], settings.tolerance, settings.max_period):
+            return k, n
+    return None
+
+
+def _settle(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[np.ndarray, int, int]:
+    """The state at the first section where the motion has :func:`settled` (or after
+    ``transient`` periods), the forcing periods it took and the period it settled with (0: it
+    did not): the sections come from runs of :data:`SETTLE_CHUNK` periods, then doubling, and
+    each is checked, as the compiled landing does."""
+    points, chunk = [np.array(start, dtype=float)], SETTLE_CHUNK
+    while len(points) <= settings.transient:
+        n = min(chunk, settings.transient + 1 - len(points))
+        _, result = _run_from(case, points[-1], 1, n, events=False, engine=settings.engine)
+        ran = len(points) - 1
         points += list(result.trajectory[list(STATE)].to_numpy())
-        state, ran = points[-1], ran + n
-        chunk = chunk if ran < 2 * SETTLE_CHUNK else 2 * chunk
-        if settled(np.array(points), settings.tolerance, settings.max_period):
-            break
-    return state, ran
+        found = first_settled(np.array(points), ran + 1, settings)
+        if found is not None:
+            return points[found[0]], found[0], found[1]
+        chunk = chunk if len(points) - 1 < 2 * SETTLE_CHUNK else 2 * chunk
+    return points[-1], len(points) - 1, 0
 
 
 @dataclass(frozen=True)
@@ -198,13 +210,16 @@ class _Window:
     kinds: list[EventKind]
     ran: int  #: forcing periods run before the window
     first: int  #: the window's first section, counted from the run's start
+    record: int  #: forcing periods recorded (:func:`~oscillator.hybrid.batch.recorded`)
 
 
 def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[float]) -> Landing:
     """Run one start and read where it went (section points, period, switches per period).
 
-    The transient ends where the motion has settled (``settings.settle``, :func:`settled`) or
-    after ``settings.transient`` periods; then ``settings.record`` periods are recorded.  With
+    The transient ends at the first section where the motion has settled (``settings.settle``,
+    :func:`settled`) or after ``settings.transient`` periods; then ``settings.record`` periods
+    are recorded, or two cycles of the period it settled with if fewer
+    (:func:`~oscillator.hybrid.batch.recorded`: the rest would repeat them).  With
     ``settings.engine = "dop853"`` (the default) the whole run is compiled
     (:func:`oscillator.hybrid.batch.land_compiled`); a start that fails there, or any start with
     another engine, runs through :func:`~oscillator.hybrid.simulate.simulate`.  A start the model
@@ -228,11 +243,12 @@ def _simulated_window(case: Case, settings: AttractorSettings, begin: tuple[floa
     CVODE where the compiled run failed)."""
     engine = "cvode" if settings.engine == "dop853" else settings.engine
     if settings.settle:
-        state, ran = _settle(case, begin, dataclasses.replace(settings, engine=engine))
-        _, result = _run_from(case, state, 0, settings.record, events=True, engine=engine)
+        state, ran, n = _settle(case, begin, dataclasses.replace(settings, engine=engine))
+        record = recorded(settings.record, n)
+        _, result = _run_from(case, state, 0, record, events=True, engine=engine)
     else:  # one run: the whole transient, then the recorded window
-        ran = settings.transient
-        _, result = _run_from(case, begin, ran, ran + settings.record, events=True, engine=engine)
+        ran, record = settings.transient, settings.record
+        _, result = _run_from(case, begin, ran, ran + record, events=True, engine=engine)
     rows = result.trajectory
     events = result.events
     return _Window(
@@ -242,6 +258,7 @@ def _simulated_window(case: Case, settings: AttractorSettings, begin: tuple[floa
         [EventKind(kind) for kind in events.kind],
         ran,
         0 if settings.settle else ran,  # a settled start's window is a run of its own
+        record,
     )
 
 
@@ -252,7 +269,7 @@ def _compiled_window(case: Case, settings: AttractorSettings, begin: tuple[float
     points = np.empty((settings.record + 1, 6))
     rows = np.empty((WINDOW_ROWS * (settings.record + 1), WIDTH))
     try:
-        status, ran, kept = land_compiled(
+        status, ran, record, kept = land_compiled(
             coefficients(p),
             case.initial.t0,
             p.period,
@@ -267,11 +284,10 @@ def _compiled_window(case: Case, settings: AttractorSettings, begin: tuple[float
         return None
     if status != OK:
         return None
-    rows = rows[:kept]
+    rows, points = rows[:kept], points[: record + 1]
     events = {name: rows[:, COLUMN[name]] for name in ("t", "mass", "from_domain", "to_domain")}
-    return _Window(
-        points[:, :4], points[:, 4:] == 0, events, [KINDS[int(k)] for k in rows[:, COLUMN["kind"]]], ran, ran
-    )
+    kinds = [KINDS[int(k)] for k in rows[:, COLUMN["kind"]]]
+    return _Window(points[:, :4], points[:, 4:] == 0, events, kinds, ran, ran, record)
 
 
 def _read(
@@ -280,8 +296,8 @@ def _read(
     """The landing of a recorded window: period, cycle of switches, rests and contacts per period."""
     points, events, period = window.points, window.events, case.parameters.period
     n = detect_period(points, settings.tolerance, settings.max_period)
-    span = n if n else settings.record
-    end = case.initial.t0 + period * (window.first + settings.record)
+    span = n if n else window.record
+    end = case.initial.t0 + period * (window.first + window.record)
     last = end - span * period
     masses = events["mass"].astype(int).tolist()
     mine = [

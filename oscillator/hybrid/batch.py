@@ -9,9 +9,10 @@ returns, at every root the check that the state stands in its mode, the switchin
 at one instant or within ``storm_window``, a stall, more than ``max_events`` events), with the
 step size carried across switches.  What comes out are arrays: the section points
 ``P_k = y(t0 + k T)`` of the window with the velocity signs there, the event rows of the window,
-and a status.  The transient ends where the section points have settled, checked after 8, 16,
-32, ... periods as :func:`oscillator.attractors.mapping.settled` does (:func:`settled_compiled`
-is the same test).
+and a status.  The transient ends at the first section where the points so far have settled, as
+:func:`oscillator.attractors.mapping.settled` says (:func:`settled_compiled` is the same test);
+a motion that settled with period ``n`` is recorded for ``2 n`` periods (:func:`recorded`), one
+that did not for ``record``.
 
 A start that fails here is told by a code only (:data:`FAILED`); the caller runs it again with
 the reference engine for the words (:func:`oscillator.attractors.mapping.land`).
@@ -55,6 +56,7 @@ __all__ = [
     "land_compiled",
     "map_compiled",
     "options_vector",
+    "recorded",
     "resolved",
     "run_compiled",
     "settled_compiled",
@@ -77,8 +79,9 @@ def options_vector(options: SolverOptions) -> np.ndarray:
     return np.array([values[name] for name in OPTIONS], dtype=float)
 
 
-#: Forcing periods in the first two runs of a settling transient; the runs after double (the
-#: compiled landing's and :func:`oscillator.attractors.mapping.land`'s through ``simulate``).
+#: Forcing periods in the first two runs of a settling transient through ``simulate`` (or a
+#: chain's run); the runs after double.  Every section of each run is checked; the compiled
+#: landing checks each as it passes it.
 SETTLE_CHUNK = 8
 
 
@@ -90,8 +93,9 @@ def _set_mode(modes: np.ndarray, s1: int, s2: int, left: int, right: int) -> Non
 
 
 @njit(cache=True, error_model="numpy")
-def settled_compiled(points: np.ndarray, count: int, tolerance: float, max_period: int) -> bool:  # pragma: no cover
-    """:func:`oscillator.attractors.mapping.settled` on the first ``count`` rows of ``points``."""
+def settled_compiled(points: np.ndarray, count: int, tolerance: float, max_period: int) -> int:  # pragma: no cover
+    """:func:`oscillator.attractors.mapping.settled` on the first ``count`` rows of ``points``: the
+    period they settled with, 0 if none."""
     largest = 0.0
     for k in range(max(0, count - 8), count):
         for i in range(4):
@@ -107,8 +111,16 @@ def settled_compiled(points: np.ndarray, count: int, tolerance: float, max_perio
                 before += (points[b, i] - points[e, i]) ** 2
             d, d0 = max(d, math.sqrt(near)), max(d0, math.sqrt(before))
         if d <= scale and (d == 0.0 or (d < d0 and d / (1.0 - d / d0) <= scale)):
-            return True
-    return False
+            return n
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def recorded(record: int, period: int) -> int:  # pragma: no cover - compiled
+    """The forcing periods recorded after a transient that settled with ``period`` (0: it did not
+    settle): two of its cycles, enough to read the period and one cycle's switches with a
+    repeat to spare, else ``record`` (at most ``record`` either way)."""
+    return min(record, 2 * period) if period > 0 else record
 
 
 @njit(cache=True, error_model="numpy")
@@ -251,12 +263,12 @@ def land_compiled(
     settings: tuple[bool, int, int, float, int],
     points: np.ndarray,
     window_rows: np.ndarray,
-) -> tuple[int, int, int]:  # pragma: no cover - compiled
+) -> tuple[int, int, int, int]:  # pragma: no cover - compiled
     """Land one start (see the module's docstring); ``settings`` is ``(settle, transient, record,
     tolerance, max_period)``.  Writes the window's section points with the velocity signs there
-    (``points``: ``record + 1`` rows ``x1, v1, x2, v2, s1, s2``) and its event rows
-    (``window_rows``); returns the status, the forcing periods run before the window, and how
-    many event rows."""
+    (``points``: up to ``record + 1`` rows ``x1, v1, x2, v2, s1, s2``) and its event rows
+    (``window_rows``); returns the status, the forcing periods run before the window, the
+    periods recorded (:func:`recorded`) and how many event rows."""
     settle, transient, record, tolerance, max_period = settings
     modes = np.zeros(4 + R, np.int64)
     buffers = (np.empty((2 * MAX_ROWS, window_rows.shape[1])), np.empty(int(options[_STORM_EVENTS]) + 1), window_rows)
@@ -265,40 +277,36 @@ def land_compiled(
     tally = np.zeros(6)
     tally[_FILLED] = _start(w, modes, c, t0, period, start, options, buffers, np.zeros(N))[0]
     if tally[_FILLED] < 0.0:
-        return FAILED, 0, 0
+        return FAILED, 0, 0, 0
     ring[0, :] = start
-    count, k, ran = 1, 0, -1 if settle else transient
+    count, k, ran, last = 1, 0, -1 if settle else transient, transient + record
     tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, math.inf if settle else t0 + period * transient
-    checkpoint, chunk = min(SETTLE_CHUNK, transient), SETTLE_CHUNK
     while True:
         kind, fired = advance(w, modes, c, t0 + period * (k + 1), t0 + period * (transient + record), False)
         if kind < 0:
-            return FAILED, 0, 0
+            return FAILED, 0, 0, 0
         if kind == ROOT:
             status, switched = resolved(w, modes, c, period, options, fired, buffers, tally)
             if status != OK:
-                return status, 0, 0
+                return status, 0, 0, 0
             if switched:
                 restart(w, modes, c, w[T_REF] + w[T_CUR], w[Y_OUT : Y_OUT + N])
             continue
         k += 1
         y = w[Y_OUT : Y_OUT + N]
         if not _finite(y):
-            return FAILED, 0, 0
-        if ran < 0:  # settling: the points so far, checked at the chunks' ends
+            return FAILED, 0, 0, 0
+        if ran < 0:  # settling: the points so far, checked at every section
             ring[count % ring.shape[0], :] = y[:4]
             count += 1
-            if k == checkpoint:
-                if k >= transient or settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period):
-                    ran, tally[_WINDOW_FROM] = k, t0 + period * k
-                else:
-                    chunk = chunk if k < 2 * SETTLE_CHUNK else 2 * chunk
-                    checkpoint = min(k + chunk, transient)
+            n = settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period)
+            if k >= transient or n > 0:
+                ran, last, tally[_WINDOW_FROM] = k, k + recorded(record, n), t0 + period * k
         if ran >= 0 and k >= ran:
             points[k - ran, :4] = y[:4]
             points[k - ran, 4], points[k - ran, 5] = modes[0], modes[1]
-            if k == ran + record:
-                return OK, ran, int(tally[_KEPT])
+            if k == last:
+                return OK, ran, last - ran, int(tally[_KEPT])
 
 
 @njit(cache=True, error_model="numpy")
