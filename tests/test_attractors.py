@@ -1125,6 +1125,25 @@ def test_the_core_composes_an_analysis_along_any_path_of_parameters():
         path_points([{"Omegaa": 1.0}])
 
 
+def test_work_sent_ahead_runs_on_the_pool_before_its_results_are_taken(tmp_path):
+    """``Executor.ahead`` (the next batch's fresh starts of the global continuation): every task
+    is sent at the call, so all of them run while this process does other work (``map`` keeps at
+    most 4 chunks a worker in flight, here 16 of the 40 tasks); the results come back whole."""
+    import time
+    from pathlib import Path
+
+    from oscillator.analysis.execution import Executor
+
+    marks = [tmp_path / f"{k}" for k in range(40)]
+    with Executor(workers=2) as executor:
+        results = executor.ahead(Path.touch, [(mark,) for mark in marks])
+        deadline = time.monotonic() + 120
+        while not all(mark.exists() for mark in marks) and time.monotonic() < deadline:
+            time.sleep(0.05)  # waiting on the workers' output: none of the results taken yet
+        assert all(mark.exists() for mark in marks)
+        assert list(results) == [None] * len(marks)
+
+
 def test_the_atlas_keeps_each_attractors_identity_across_the_plane():
     """In the hysteresis window at Omega = 1.6 the orbit without rest (lower Omega) and the one in
     which m2 rests twice (higher Omega) keep one id each across the plane, and both ids meet at

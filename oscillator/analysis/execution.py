@@ -147,6 +147,16 @@ class Executor:
             function, tasks, shared=shared, keywords=keywords, workers=self.workers, client=self.client, pool=self._pool
         )
 
+    def ahead(
+        self, function: Callable[..., T], tasks: Iterable[tuple[Any, ...]], shared: tuple[Any, ...] = ()
+    ) -> Iterator[T]:
+        """:meth:`map`, with every task sent to a local pool at the call (not as the results are
+        taken): work for the workers while this process does something else first.  In this
+        process, or on Dask, the same as :meth:`map`."""
+        if self._pool is None or self.client is not None:
+            return self.map(function, tasks, shared)
+        return self._pool.run(function, list(tasks), shared, {}, at_once=True)
+
 
 def run_tasks(
     function: Callable[..., T],
@@ -245,25 +255,31 @@ class Pool:
         tasks: list[tuple[Any, ...]],
         shared: tuple[Any, ...],
         keywords: dict[str, Any],
+        at_once: bool = False,
     ) -> Iterator[T]:
         """The tasks' results as they finish; at most ``4 workers`` chunks in flight, so that
-        memory stays flat.  The tasks go in chunks of :func:`chunk_size` (the shared arguments
-        are sent once a chunk, not once a task)."""
+        memory stays flat, or all of them (``at_once``: work sent ahead, for the workers to run
+        while the caller does other work).  The tasks go in chunks of :func:`chunk_size` (the
+        shared arguments are sent once a chunk, not once a task).  The first chunks are sent at
+        the call, the rest as the results are taken."""
         size = chunk_size(len(tasks), self.workers)
-        pending = iter([tasks[k : k + size] for k in range(0, len(tasks), size)])
-        running: set[cf.Future[list[T]]] = set()
+        chunks = [(function, shared, keywords, tasks[k : k + size]) for k in range(0, len(tasks), size)]
+        limit = len(chunks) if at_once else 4 * self.workers
+        pending, running = iter(chunks), set[cf.Future[list[T]]]()
+        self._fill(pending, running, limit)
+        return self._results(pending, running, limit)
 
-        def fill() -> None:
-            for chunk in pending:
-                # A submit may spawn a worker, which must be born ignoring SIGINT; once all are
-                # running, a Ctrl-C during a submit is the parent's, as anywhere else.
-                spawning = len(getattr(self._executor, "_processes", None) or {}) < self.workers
-                with interrupts_ignored() if spawning else contextlib.nullcontext():
-                    running.add(self._executor.submit(_run_chunk, function, shared, keywords, chunk))
-                if len(running) >= 4 * self.workers:
-                    return
+    def _fill(self, pending: Iterator[tuple[Any, ...]], running: set[cf.Future[list[T]]], limit: int) -> None:
+        for chunk in pending:
+            # A submit may spawn a worker, which must be born ignoring SIGINT; once all are
+            # running, a Ctrl-C during a submit is the parent's, as anywhere else.
+            spawning = len(getattr(self._executor, "_processes", None) or {}) < self.workers
+            with interrupts_ignored() if spawning else contextlib.nullcontext():
+                running.add(self._executor.submit(_run_chunk, *chunk))
+            if len(running) >= limit:
+                return
 
-        fill()
+    def _results(self, pending: Iterator[tuple[Any, ...]], running: set[cf.Future[list[T]]], limit: int) -> Iterator[T]:
         while running:
             finished, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for future in finished:
@@ -274,7 +290,7 @@ class Pool:
                     error = self._broken()
                     raise error from (None if isinstance(error, InputError) else exc)
                 yield from results
-            fill()
+            self._fill(pending, running, limit)
 
     def _broken(self) -> Exception:
         """Why the pool broke: a script without a ``__main__`` guard (said so, with the fix), or

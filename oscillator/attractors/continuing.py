@@ -20,7 +20,9 @@ are the same loop over :class:`Point` s, composed of swappable pieces:
   (:class:`~oscillator.attractors.store.LandingStore`).
 
 Points run in *batches*: each batch depends only on earlier ones (one value of a list; one row of
-a plane), and its points' starts and then its attractors' descriptions run in parallel.  Every
+a plane), and its points' starts and then its attractors' descriptions run in parallel.  The
+fresh starts depend on no batch: the next batch's are sent while this process groups and matches
+the one before, so that the workers are not idle then.  Every
 piece is a pure function of its inputs, so the result is the same for any executor, and a run
 that resumes from its store gives what an uninterrupted run gives.
 """
@@ -28,7 +30,7 @@ that resumes from its store gives what an uninterrupted run gives.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -150,13 +152,17 @@ def land_at(system: Subject, settings: AttractorSettings, index: int, start: Seq
 
 
 def _land(
-    system: Subject, settings: AttractorSettings, point: int, index: int, start: tuple[float, ...]
+    settings: AttractorSettings, system: Subject, point: int, index: int, start: tuple[float, ...]
 ) -> tuple[int, Landing]:
     return point, land_at(system, settings, index, start)
 
 
 def _describe(describe: Describer, case: Subject, point: int, attractor: Attractor) -> tuple[int, Attractor]:
     return point, describe(case, attractor)
+
+
+def _batch_name(points: Sequence[Point], batch: list[int]) -> str:
+    return f"batch-{points[batch[0]].batch:05d}"
 
 
 def _found_type(system: Subject) -> type[Any]:
@@ -185,6 +191,8 @@ class _Loop:
         self.ids: list[dict[int, int]] = []
         self.landed: list[dict[int, int]] = []
         self.next_id = 0
+        #: The next batch, its systems and its fresh starts' landings, sent ahead.
+        self.early: tuple[list[int], dict[int, Subject], Iterator[tuple[int, Landing]]] | None = None
 
     def starts(self, k: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
         """The starts of point ``k`` (fresh, then seeds) and each seed's origin."""
@@ -193,28 +201,25 @@ class _Loop:
         states = np.vstack([self.mapper.fresh, *[state[None, :] for state, _ in seeds]])
         return states, [origin for _, origin in seeds]
 
-    def batch(self, batch: list[int], executor: Executor, store: LandingStore | None) -> list[int]:
+    def batch(self, batch: list[int], executor: Executor, store: LandingStore | None, following: list[int]) -> None:
         """Run one batch: its landings (read back from ``store`` when there), grouped, described
-        and matched.  Returns the batch's points, for progress."""
-        cases = {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
+        and matched; the ``following`` batch's fresh starts are sent meanwhile (:meth:`ahead_of`)."""
+        early = self.early if self.early is not None and self.early[0] == batch else None
+        self.early = None
+        cases = early[1] if early is not None else {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
         starts = {k: self.starts(k) for k in batch}
-        name = f"batch-{self.points[batch[0]].batch:05d}"
+        name = _batch_name(self.points, batch)
         landings = store.read_batch(name, {k: s for k, (s, _) in starts.items()}) if store is not None else None
         if landings is None:
-            tasks = [
-                (cases[k], self.mapper.settings(i), k, i, tuple(row))
-                for k in batch
-                for i, row in enumerate(starts[k][0])
-            ]
-            landings = {k: [] for k in batch}
-            for k, landing in executor.map(_land, tasks):
-                landings[k].append(landing)
+            landings = self.land(batch, cases, starts, executor, early[2] if early is not None else None)
             if store is not None:
                 store.write_batch(landings, name)
         grouped = {k: group(landings[k], self.mapper.seed_settings) for k in batch}
-        describing = [(self.describe, cases[k], k, a) for k in batch for a in grouped[k][0]]
+        describing = executor.ahead(_describe, [(self.describe, cases[k], k, a) for k in batch for a in grouped[k][0]])
+        if following:
+            self.ahead_of(following, executor, store)
         described: dict[int, list[Attractor]] = {k: [] for k in batch}
-        for k, attractor in executor.map(_describe, describing):
+        for k, attractor in describing:
             described[k].append(attractor)
         for k in batch:
             found, labels = grouped[k]
@@ -224,7 +229,36 @@ class _Loop:
                 cases[k], self.mapper.seed_settings, attractors, table, tuple(unsettled(found))
             )
             self.match(k, here, starts[k][1], labels)
-        return batch
+
+    def land(
+        self,
+        batch: list[int],
+        cases: dict[int, Subject],
+        starts: dict[int, tuple[np.ndarray, list[tuple[int, int]]]],
+        executor: Executor,
+        fresh: Iterator[tuple[int, Landing]] | None,
+    ) -> dict[int, list[Landing]]:
+        """The landings of a batch by point (fresh starts, then seeds): the seeds sent, then the
+        fresh starts taken from ``fresh`` (sent ahead) or sent now."""
+        count = len(self.mapper.fresh)
+        tasks = [(cases[k], k, i, tuple(row)) for k in batch for i, row in enumerate(starts[k][0]) if i >= count]
+        seeds = executor.map(_land, tasks, shared=(self.mapper.seed_settings,))
+        landings: dict[int, list[Landing]] = {k: [] for k in batch}
+        for k, landing in itertools.chain(fresh if fresh is not None else self.fresh(batch, cases, executor), seeds):
+            landings[k].append(landing)
+        return landings
+
+    def fresh(self, batch: list[int], cases: dict[int, Subject], executor: Executor) -> Iterator[tuple[int, Landing]]:
+        """The fresh starts' landings of a batch (they depend on no other batch), sent at once."""
+        tasks = [(cases[k], k, i, tuple(row)) for k in batch for i, row in enumerate(self.mapper.fresh)]
+        return executor.ahead(_land, tasks, shared=(self.mapper.fresh_settings,))
+
+    def ahead_of(self, batch: list[int], executor: Executor, store: LandingStore | None) -> None:
+        """Send the fresh starts of the next ``batch`` now, so that the workers run them while this
+        process groups and matches the batch before (none where the store holds that batch)."""
+        if store is None or not store.holds(_batch_name(self.points, batch)):
+            cases = {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
+            self.early = (batch, cases, self.fresh(batch, cases, executor))
 
     def match(self, k: int, here: Attractors, origins: list[tuple[int, int]], labels: dict[int, int]) -> None:
         """Number ``here``'s attractors by the ones they continue; ``labels``: each start's
@@ -265,9 +299,11 @@ def continue_attractors(
     run that resumes).  ``progress(done, total)`` in points, after every batch."""
     loop = _Loop(case, points, mapper, describe, seeding, matcher or NearestSame())
     executor = executor or Executor()
+    batches = [list(members) for _, members in itertools.groupby(range(len(points)), key=lambda k: points[k].batch)]
     done = 0
-    for _, members in itertools.groupby(range(len(points)), key=lambda k: points[k].batch):
-        done += len(loop.batch(list(members), executor, store))
+    for n, batch in enumerate(batches):
+        loop.batch(batch, executor, store, batches[n + 1] if n + 1 < len(batches) else [])
+        done += len(batch)
         if progress is not None:
             progress(done, len(points))
     ids = renumbered([found.attractors for found in loop.found], loop.ids)

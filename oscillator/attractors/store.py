@@ -169,6 +169,10 @@ class LandingStore(ResumableFolder):
         with atomic_path(self.parts / f"{name}.parquet") as temporary:
             pd.DataFrame(rows).to_parquet(temporary, index=False)
 
+    def holds(self, name: str) -> bool:
+        """Whether the batch part ``name`` is there (:meth:`read_batch` reads and checks it)."""
+        return os.path.lexists(self.parts / f"{name}.parquet")
+
     def read_batch(self, name: str, starts: dict[int, np.ndarray]) -> dict[int, list[Landing]] | None:
         """The landings of the batch part ``name`` by point, each point's checked against its
         ``starts`` (all there, each once); None if there is no such part."""
