@@ -28,7 +28,7 @@ from oscillator.analysis.periods import detect_period
 from oscillator.engines import check_engine
 from oscillator.engines.dop853 import new_work
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
-from oscillator.hybrid.batch import OK, SETTLE_CHUNK, land_compiled, options_vector, recorded
+from oscillator.hybrid.batch import OK, SETTLE_CHUNK, SHORTER_CYCLE, land_compiled, options_vector, recorded
 from oscillator.hybrid.counting import counted
 from oscillator.hybrid.guards import ARITHMETIC_ERRORS
 from oscillator.hybrid.recording import SaveAt
@@ -161,42 +161,41 @@ def settled(points: np.ndarray, tolerance: float, max_period: int) -> int:
     ``d <= tolerance (1 + |P|)`` while, the repeats converging geometrically (``d`` over the
     ``d0`` of the ``n`` before that, ``rho = d / d0 < 1``), the distance still to go,
     ``d / (1 - rho)``, is within it too (a motion converging slowly is not settled while its
-    steps are small).  (:func:`oscillator.hybrid.batch.settled_compiled` is
-    the same test, compiled.)"""
+    steps are small).  Not
+    settled either while the repeats of a divisor of ``n`` are within
+    :data:`~oscillator.hybrid.batch.SHORTER_CYCLE` times that: the motion is still converging to
+    the shorter cycle (beside a period doubling).  (:func:`oscillator.hybrid.batch.settled_compiled`
+    is the same test, compiled.)"""
     scale = tolerance * (1.0 + float(np.max(np.abs(points[-8:])))) if len(points) else tolerance
-    for n in range(1, min(max_period, len(points) // 3) + 1):
-        d = float(np.max(np.linalg.norm(points[-n:] - points[-2 * n : -n], axis=1)))
-        d0 = float(np.max(np.linalg.norm(points[-2 * n : -n] - points[-3 * n : -2 * n], axis=1)))
+
+    def repeat(end: int, n: int) -> float:
+        stop = end if end < len(points) else None
+        return float(np.max(np.linalg.norm(points[end - n : stop] - points[end - 2 * n : end - n], axis=1)))
+
+    count = len(points)
+    for n in range(1, min(max_period, count // 3) + 1):
+        d, d0 = repeat(count, n), repeat(count - n, n)
         if d <= scale and (d == 0.0 or (d < d0 and d / (1.0 - d / d0) <= scale)):
-            return n
+            shorter = any(n % m == 0 and repeat(count, m) <= SHORTER_CYCLE * scale for m in range(1, n))
+            return 0 if shorter else n
     return 0
 
 
-def first_settled(points: np.ndarray, since: int, settings: AttractorSettings) -> tuple[int, int] | None:
-    """The first section ``k >= since`` where ``points[: k + 1]`` have :func:`settled`, and the
-    period they settled with; None if there is none."""
-    for k in range(since, len(points)):
-        if n := settled(points[: k + 1], settings.tolerance, settings.max_period):
-            return k, n
-    return None
-
-
 def _settle(case: Case, start: Sequence[float], settings: AttractorSettings) -> tuple[np.ndarray, int, int]:
-    """The state at the first section where the motion has :func:`settled` (or after
-    ``transient`` periods), the forcing periods it took and the period it settled with (0: it
-    did not): the sections come from runs of :data:`SETTLE_CHUNK` periods, then doubling, and
-    each is checked, as the compiled landing does."""
-    points, chunk = [np.array(start, dtype=float)], SETTLE_CHUNK
-    while len(points) <= settings.transient:
-        n = min(chunk, settings.transient + 1 - len(points))
-        _, result = _run_from(case, points[-1], 1, n, events=False, engine=settings.engine)
-        ran = len(points) - 1
+    """The state at the section once the motion has :func:`settled` (or after ``transient``
+    periods), the forcing periods it took and the period it settled with (0: it did not): runs
+    of :data:`SETTLE_CHUNK` periods, then doubling, checked at their ends."""
+    state, ran = np.array(start, dtype=float), 0
+    points, chunk = [state], SETTLE_CHUNK
+    while ran < settings.transient:
+        n = min(chunk, settings.transient - ran)
+        _, result = _run_from(case, state, 1, n, events=False, engine=settings.engine)
         points += list(result.trajectory[list(STATE)].to_numpy())
-        found = first_settled(np.array(points), ran + 1, settings)
-        if found is not None:
-            return points[found[0]], found[0], found[1]
-        chunk = chunk if len(points) - 1 < 2 * SETTLE_CHUNK else 2 * chunk
-    return points[-1], len(points) - 1, 0
+        state, ran = points[-1], ran + n
+        chunk = chunk if ran < 2 * SETTLE_CHUNK else 2 * chunk
+        if period := settled(np.array(points), settings.tolerance, settings.max_period):
+            return state, ran, period
+    return state, ran, 0
 
 
 @dataclass(frozen=True)
@@ -216,10 +215,10 @@ class _Window:
 def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[float]) -> Landing:
     """Run one start and read where it went (section points, period, switches per period).
 
-    The transient ends at the first section where the motion has settled (``settings.settle``,
-    :func:`settled`) or after ``settings.transient`` periods; then ``settings.record`` periods
-    are recorded, or two cycles of the period it settled with if fewer
-    (:func:`~oscillator.hybrid.batch.recorded`: the rest would repeat them).  With
+    The transient ends where the motion has settled (``settings.settle``, :func:`settled`) or
+    after ``settings.transient`` periods; then ``settings.record`` periods are recorded, or two
+    cycles of the period it settled with if fewer (:func:`~oscillator.hybrid.batch.recorded`:
+    the rest would repeat them).  With
     ``settings.engine = "dop853"`` (the default) the whole run is compiled
     (:func:`oscillator.hybrid.batch.land_compiled`); a start that fails there, or any start with
     another engine, runs through :func:`~oscillator.hybrid.simulate.simulate`.  A start the model
@@ -244,7 +243,7 @@ def _simulated_window(case: Case, settings: AttractorSettings, begin: tuple[floa
     engine = "cvode" if settings.engine == "dop853" else settings.engine
     if settings.settle:
         state, ran, n = _settle(case, begin, dataclasses.replace(settings, engine=engine))
-        record = recorded(settings.record, n)
+        record = recorded(settings.record, n, ran)
         _, result = _run_from(case, state, 0, record, events=True, engine=engine)
     else:  # one run: the whole transient, then the recorded window
         ran, record = settings.transient, settings.record

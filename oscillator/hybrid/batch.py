@@ -9,10 +9,11 @@ returns, at every root the check that the state stands in its mode, the switchin
 at one instant or within ``storm_window``, a stall, more than ``max_events`` events), with the
 step size carried across switches.  What comes out are arrays: the section points
 ``P_k = y(t0 + k T)`` of the window with the velocity signs there, the event rows of the window,
-and a status.  The transient ends at the first section where the points so far have settled, as
-:func:`oscillator.attractors.mapping.settled` says (:func:`settled_compiled` is the same test);
-a motion that settled with period ``n`` is recorded for ``2 n`` periods (:func:`recorded`), one
-that did not for ``record``.
+and a status.  The transient ends where the section points have settled, checked after 8, 16,
+32, ... periods as :func:`oscillator.attractors.mapping.settled` does (:func:`settled_compiled`
+is the same test);
+a motion that settled with period ``n`` is recorded for two cycles, to the end of a whole
+number of its cycles (:func:`recorded`), one that did not for ``record``.
 
 A start that fails here is told by a code only (:data:`FAILED`); the caller runs it again with
 the reference engine for the words (:func:`oscillator.attractors.mapping.land`).
@@ -51,6 +52,7 @@ __all__ = [
     "OK",
     "OPTIONS",
     "SETTLE_CHUNK",
+    "SHORTER_CYCLE",
     "SWITCH_COLUMNS",
     "WINDOW_FULL",
     "land_compiled",
@@ -79,9 +81,8 @@ def options_vector(options: SolverOptions) -> np.ndarray:
     return np.array([values[name] for name in OPTIONS], dtype=float)
 
 
-#: Forcing periods in the first two runs of a settling transient through ``simulate`` (or a
-#: chain's run); the runs after double.  Every section of each run is checked; the compiled
-#: landing checks each as it passes it.
+#: Forcing periods in the first two runs of a settling transient; the runs after double (the
+#: compiled landing's and :func:`oscillator.attractors.mapping.land`'s through ``simulate``).
 SETTLE_CHUNK = 8
 
 
@@ -90,6 +91,24 @@ def _set_mode(modes: np.ndarray, s1: int, s2: int, left: int, right: int) -> Non
     """The engine's mode vector: signs, contact flags and root directions."""
     modes[0], modes[1], modes[2], modes[3] = s1, s2, left, right
     directions_into(modes, 4, s1, s2, left != 0, right != 0)
+
+
+#: A divisor ``m`` of the period ``n`` a motion seems settled with, whose repeats are within this
+#: many times the settling tolerance: the motion is still converging to the shorter cycle (beside a
+#: period doubling, alternately), and is not settled yet.
+SHORTER_CYCLE = 16.0
+
+
+@njit(cache=True, error_model="numpy")
+def _repeat(points: np.ndarray, end: int, n: int) -> float:  # pragma: no cover - compiled
+    """The largest distance between the ``n`` rows before row ``end`` and the ``n`` before them."""
+    d = 0.0
+    for j in range(n):
+        near = 0.0
+        for i in range(4):
+            near += (points[end - n + j, i] - points[end - 2 * n + j, i]) ** 2
+        d = max(d, math.sqrt(near))
+    return d
 
 
 @njit(cache=True, error_model="numpy")
@@ -102,25 +121,23 @@ def settled_compiled(points: np.ndarray, count: int, tolerance: float, max_perio
             largest = max(largest, abs(points[k, i]))
     scale = tolerance * (1.0 + largest) if count else tolerance
     for n in range(1, min(max_period, count // 3) + 1):
-        d, d0 = 0.0, 0.0
-        for j in range(n):
-            a, b, e = count - n + j, count - 2 * n + j, count - 3 * n + j
-            near, before = 0.0, 0.0
-            for i in range(4):
-                near += (points[a, i] - points[b, i]) ** 2
-                before += (points[b, i] - points[e, i]) ** 2
-            d, d0 = max(d, math.sqrt(near)), max(d0, math.sqrt(before))
+        d, d0 = _repeat(points, count, n), _repeat(points, count - n, n)
         if d <= scale and (d == 0.0 or (d < d0 and d / (1.0 - d / d0) <= scale)):
+            for m in range(1, n):
+                if n % m == 0 and _repeat(points, count, m) <= SHORTER_CYCLE * scale:
+                    return 0
             return n
     return 0
 
 
 @njit(cache=True, error_model="numpy")
-def recorded(record: int, period: int) -> int:  # pragma: no cover - compiled
-    """The forcing periods recorded after a transient that settled with ``period`` (0: it did not
-    settle): two of its cycles, enough to read the period and one cycle's switches with a
-    repeat to spare, else ``record`` (at most ``record`` either way)."""
-    return min(record, 2 * period) if period > 0 else record
+def recorded(record: int, period: int, ran: int) -> int:  # pragma: no cover - compiled
+    """The forcing periods recorded after a transient of ``ran`` periods that settled with
+    ``period`` (0: it did not settle): two of its cycles, enough to read the period and one
+    cycle's switches with a repeat to spare, and up to ``period - 1`` more so that the run ends
+    after a whole number of its cycles (a start on a periodic orbit ends where it began: a sweep
+    that goes on from it keeps the orbit's phase); else ``record`` (at most ``record`` either way)."""
+    return min(record, 2 * period + (-ran) % period) if period > 0 else record
 
 
 @njit(cache=True, error_model="numpy")
@@ -281,6 +298,7 @@ def land_compiled(
     ring[0, :] = start
     count, k, ran, last = 1, 0, -1 if settle else transient, transient + record
     tally[_LAST_ROOT], tally[_WINDOW_FROM] = -math.inf, math.inf if settle else t0 + period * transient
+    checkpoint, chunk = min(SETTLE_CHUNK, transient), SETTLE_CHUNK
     while True:
         kind, fired = advance(w, modes, c, t0 + period * (k + 1), t0 + period * (transient + record), False)
         if kind < 0:
@@ -296,12 +314,16 @@ def land_compiled(
         y = w[Y_OUT : Y_OUT + N]
         if not _finite(y):
             return FAILED, 0, 0, 0
-        if ran < 0:  # settling: the points so far, checked at every section
+        if ran < 0:  # settling: the points so far, checked at the chunks' ends
             ring[count % ring.shape[0], :] = y[:4]
             count += 1
-            n = settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period)
-            if k >= transient or n > 0:
-                ran, last, tally[_WINDOW_FROM] = k, k + recorded(record, n), t0 + period * k
+            if k == checkpoint:
+                n = settled_compiled(ordered, _ordered(ring, count, ordered), tolerance, max_period)
+                if k >= transient or n > 0:
+                    ran, last, tally[_WINDOW_FROM] = k, k + recorded(record, n, k), t0 + period * k
+                else:
+                    chunk = chunk if k < 2 * SETTLE_CHUNK else 2 * chunk
+                    checkpoint = min(k + chunk, transient)
         if ran >= 0 and k >= ran:
             points[k - ran, :4] = y[:4]
             points[k - ran, 4], points[k - ran, 5] = modes[0], modes[1]
