@@ -161,8 +161,7 @@ def settled(points: np.ndarray, tolerance: float, max_period: int) -> int:
     ``d <= tolerance (1 + |P|)`` while, the repeats converging geometrically (``d`` over the
     ``d0`` of the ``n`` before that, ``rho = d / d0 < 1``), the distance still to go,
     ``d / (1 - rho)``, is within it too (a motion converging slowly is not settled while its
-    steps are small).  Not
-    settled either while the repeats of a divisor of ``n`` are within
+    steps are small).  Not settled either while the repeats of a divisor of ``n`` are within
     :data:`~oscillator.hybrid.batch.SHORTER_CYCLE` times that: the motion is still converging to
     the shorter cycle (beside a period doubling).  (:func:`oscillator.hybrid.batch.settled_compiled`
     is the same test, compiled.)"""
@@ -218,11 +217,11 @@ def land(case: Case, settings: AttractorSettings, index: int, start: Sequence[fl
     The transient ends where the motion has settled (``settings.settle``, :func:`settled`) or
     after ``settings.transient`` periods; then ``settings.record`` periods are recorded, or two
     cycles of the period it settled with if fewer (:func:`~oscillator.hybrid.batch.recorded`:
-    the rest would repeat them).  With
-    ``settings.engine = "dop853"`` (the default) the whole run is compiled
-    (:func:`oscillator.hybrid.batch.land_compiled`); a start that fails there, or any start with
-    another engine, runs through :func:`~oscillator.hybrid.simulate.simulate`.  A start the model
-    refuses or a failed run gives a landing with ``status = "failed"`` and the reason."""
+    the rest would repeat them).  With ``settings.engine = "dop853"`` (the default) the whole
+    run is compiled (:func:`oscillator.hybrid.batch.land_compiled`); a start that fails there, or
+    any start with another engine, runs through :func:`~oscillator.hybrid.simulate.simulate`.  A
+    start the model refuses or a failed run gives a landing with ``status = "failed"`` and the
+    reason."""
     started = time.perf_counter()
     begin = (float(start[0]), float(start[1]), float(start[2]), float(start[3]))
     try:
