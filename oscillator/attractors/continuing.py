@@ -194,6 +194,10 @@ class _Loop:
         #: The next batch, its systems and its fresh starts' landings, sent ahead.
         self.early: tuple[list[int], dict[int, Subject], Iterator[tuple[int, Landing]]] | None = None
 
+    def systems(self, batch: list[int]) -> dict[int, Subject]:
+        """The system at each point of ``batch`` (:func:`at_point`)."""
+        return {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
+
     def starts(self, k: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
         """The starts of point ``k`` (fresh, then seeds) and each seed's origin."""
         sources = [(p, self.found[p].attractors) for p in self.points[k].seeds_from]
@@ -206,7 +210,7 @@ class _Loop:
         and matched; the ``following`` batch's fresh starts are sent meanwhile (:meth:`ahead_of`)."""
         early = self.early if self.early is not None and self.early[0] == batch else None
         self.early = None
-        cases = early[1] if early is not None else {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
+        cases = early[1] if early is not None else self.systems(batch)
         starts = {k: self.starts(k) for k in batch}
         name = _batch_name(self.points, batch)
         landings = store.read_batch(name, {k: s for k, (s, _) in starts.items()}) if store is not None else None
@@ -257,7 +261,7 @@ class _Loop:
         """Send the fresh starts of the next ``batch`` now, so that the workers run them while this
         process groups and matches the batch before (none where the store holds that batch)."""
         if store is None or not store.holds(_batch_name(self.points, batch)):
-            cases = {k: at_point(self.case, dict(self.points[k].values)) for k in batch}
+            cases = self.systems(batch)
             self.early = (batch, cases, self.fresh(batch, cases, executor))
 
     def match(self, k: int, here: Attractors, origins: list[tuple[int, int]], labels: dict[int, int]) -> None:

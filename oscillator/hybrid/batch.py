@@ -11,9 +11,8 @@ step size carried across switches.  What comes out are arrays: the section point
 ``P_k = y(t0 + k T)`` of the window with the velocity signs there, the event rows of the window,
 and a status.  The transient ends where the section points have settled, checked after 8, 16,
 32, ... periods as :func:`oscillator.attractors.mapping.settled` does (:func:`settled_compiled`
-is the same test);
-a motion that settled with period ``n`` is recorded for two cycles, to the end of a whole
-number of its cycles (:func:`recorded`), one that did not for ``record``.
+is the same test); a motion that settled with period ``n`` is recorded for two cycles, to the
+end of a whole number of its cycles (:func:`recorded`), one that did not for ``record``.
 
 A start that fails here is told by a code only (:data:`FAILED`); the caller runs it again with
 the reference engine for the words (:func:`oscillator.attractors.mapping.land`).
