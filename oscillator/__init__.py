@@ -15,7 +15,10 @@ import importlib
 
 from oscillator import presenting as _presenting
 from oscillator import views as _views
+from oscillator.threads import one_blas_thread as _one_blas_thread
 from oscillator.version import __version__ as __version__
+
+_one_blas_thread()  # before NumPy loads its BLAS (oscillator.threads says why)
 
 #: ``typing.TYPE_CHECKING`` without importing ``typing``: the command starts faster, and a
 #: Ctrl-C in its first milliseconds reaches code that can catch it sooner.

@@ -93,7 +93,7 @@ def test_no_module_is_longer_than_600_lines():
 #: subpackage, or a top-level module) or from a lower layer; the units of the first layer (the
 #: base: plain modules) and of the last (the public API) also from each other.
 LAYERS = (
-    ("errors", "text", "compiled", "folders", "presenting", "process", "version"),
+    ("errors", "text", "compiled", "folders", "presenting", "process", "threads", "version"),
     ("model",),
     ("engines", "io"),
     ("hybrid",),
