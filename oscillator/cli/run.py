@@ -317,10 +317,12 @@ def _finish(folder: Path, *, figures: bool, report: bool, window: tuple[float, f
 
 def _rebuilt_chain(folder: Path, window: tuple[float, float] | None) -> bool:
     """The figures and report of a friction chain's run folder made again; whether it was one."""
-    from oscillator.report.chain_runs import finish_chain_run, is_chain_folder, read_chain_run
+    from oscillator.report.runs import is_chain_folder
 
-    if not is_chain_folder(folder):
+    if not is_chain_folder(folder):  # an article case's folder: the chains' code is not loaded
         return False
+    from oscillator.report.chain_runs import finish_chain_run, read_chain_run
+
     if window is not None:
         raise InputError(
             "--window redraws an article case's run; a system's figures show the whole run", field="--window"

@@ -24,7 +24,14 @@ from oscillator.hybrid.chain_run import ChainResult, chain_records_of
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.report.markup import Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
-from oscillator.report.runs import claim_output, finish_or_warn, json_text, run_metadata, write_tables
+from oscillator.report.runs import (
+    claim_output,
+    finish_or_warn,
+    is_chain_folder,
+    json_text,
+    run_metadata,
+    write_tables,
+)
 from oscillator.text import printable
 
 __all__ = ["finish_chain_run", "is_chain_folder", "read_chain_run", "save_chain_result", "write_chain_run"]
@@ -134,11 +141,6 @@ def save_chain_result(result: ChainResult, folder: Path | str, *, figures: bool 
     if figures or report:
         finish_or_warn(lambda: finish_chain_run(path, result, figures=figures, report=report), path)
     return path
-
-
-def is_chain_folder(folder: Path) -> bool:
-    """Whether ``folder`` is a friction chain's run folder (its ``system.toml`` and ``run.json``)."""
-    return (folder / "system.toml").is_file() and (folder / "run.json").is_file()
 
 
 def _damaged(folder: Path, what: str) -> InputError:

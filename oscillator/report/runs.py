@@ -57,6 +57,7 @@ __all__ = [
     "finish_or_warn",
     "finish_run",
     "folder_kind",
+    "is_chain_folder",
     "read_events_csv",
     "read_run_folder",
     "result_of",
@@ -465,6 +466,11 @@ def _update(folder: Path, info: dict[str, Any], *, done: str | None = None, **ch
     if done is not None:
         info["pending"] = [item for item in info.get("pending", []) if item != done]
     replace_file(folder / "run.json", json_text(info))
+
+
+def is_chain_folder(folder: Path) -> bool:
+    """Whether ``folder`` is a friction chain's run folder (its ``system.toml`` and ``run.json``)."""
+    return (folder / "system.toml").is_file() and (folder / "run.json").is_file()
 
 
 def folder_kind(folder: Path) -> str:
