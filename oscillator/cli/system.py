@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 from rich import box
 from rich.table import Table
 from rich.text import Text
@@ -23,6 +22,8 @@ from oscillator.io.files import check_name, check_new, refuse_link
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
     from oscillator.attractors.chain_frequency import ChainFrequencyResponse
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
@@ -357,6 +358,8 @@ def _swept(
     name, low, high = span
     sweep, seeds, starts = counts
     if seeds is None:
+        import pandas as pd
+
         up, down = _both_ways(chain, np.linspace(low, high, sweep), name, periods, progress)
         return pd.concat([up, down], ignore_index=True), None
     from oscillator.attractors.atlas import fresh_starts
