@@ -395,10 +395,31 @@ def startup() -> dict:
                            capture_output=True)  # fmt: skip
             walls.append(time.perf_counter() - started)
     row = {"cold_s": cold, "warm_s": min(warm), "cli_cold_s": walls[0], "cli_warm_s": walls[1]}
+    row |= _refusals()
     say(
         f"simulate(): first run after an install {cold:.1f} s, later runs {row['warm_s']:.1f} s; "
         f"`oscillator run instance-3`: {walls[0]:.1f} s, then {walls[1]:.1f} s"
     )
+    return row
+
+
+def _refusals() -> dict:
+    """The command's start where nothing is computed, the least of 5 fresh processes each:
+    ``oscillator --help``, and ``oscillator run`` refusing a malformed case file."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        broken = Path(folder) / "broken.toml"
+        broken.write_text("[parameters]\nm1 = = 2\n", encoding="utf-8")
+        row = {}
+        for key, arguments, code in (("cli_help_s", ["--help"], 0), ("cli_refusal_s", ["run", str(broken)], 2)):
+            walls = []
+            for _ in range(5):
+                started = time.perf_counter()
+                done = subprocess.run([sys.executable, "-m", "oscillator", *arguments], capture_output=True, cwd=folder)
+                walls.append(time.perf_counter() - started)
+                assert done.returncode == code, (arguments, done.returncode, done.stderr)
+            row[key] = min(walls)
     return row
 
 
@@ -420,7 +441,9 @@ def print_per_root(row: dict) -> None:
 def print_startup(row: dict) -> None:
     print(f"start-up (import + a 2 s run, fresh process): {row['cold_s']:.1f} s with numba's cache empty, "
           f"{row['warm_s']:.1f} s with it filled; `oscillator run instance-3 --no-plots`: {row['cli_cold_s']:.1f} s "
-          f"with it empty (the first run after an install), {row['cli_warm_s']:.1f} s with it filled")  # fmt: skip
+          f"with it empty (the first run after an install), {row['cli_warm_s']:.1f} s with it filled; "
+          f"`oscillator --help` {row['cli_help_s']:.2f} s, `oscillator run` refusing a malformed case file "
+          f"{row['cli_refusal_s']:.2f} s")  # fmt: skip
 
 
 def orbits(quick: bool) -> dict:
