@@ -57,12 +57,12 @@ def read_run(
         Not such a folder, or a file in it missing or damaged (named in the message).
     """
     from oscillator.report.kinds import folder_kind as analysis_kind
-    from oscillator.report.runs import folder_kind, read_run_folder, result_of
+    from oscillator.report.runs import folder_kind, is_chain_folder, read_run_folder, result_of
 
     folder = as_folder(folder)
-    from oscillator.report.chain_runs import is_chain_folder, read_chain_run
-
     if is_chain_folder(folder):  # a friction chain's run (docs/systems.md)
+        from oscillator.report.chain_runs import read_chain_run
+
         return read_chain_run(folder)
     kind = analysis_kind(folder)
     if kind is not None:

@@ -24,17 +24,10 @@ from oscillator.hybrid.chain_run import ChainResult, chain_records_of
 from oscillator.io.chains import chain_to_toml
 from oscillator.io.files import FolderClaim
 from oscillator.report.markup import Bullets, Figure, Heading, Paragraph, Span, Table, to_html, to_markdown
-from oscillator.report.runs import (
-    claim_output,
-    finish_or_warn,
-    is_chain_folder,
-    json_text,
-    run_metadata,
-    write_tables,
-)
+from oscillator.report.runs import claim_output, finish_or_warn, json_text, run_metadata, write_tables
 from oscillator.text import printable
 
-__all__ = ["finish_chain_run", "is_chain_folder", "read_chain_run", "save_chain_result", "write_chain_run"]
+__all__ = ["finish_chain_run", "read_chain_run", "save_chain_result", "write_chain_run"]
 
 
 def _info(result: ChainResult, command: list[str] | None) -> dict[str, Any]:
