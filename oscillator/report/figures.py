@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from oscillator.analysis.intervals import rest_intervals
 from oscillator.errors import InputError
@@ -36,6 +35,7 @@ from oscillator.model.system import ARTICLE
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from oscillator.io.cases import Case
 
@@ -275,9 +275,17 @@ def _finish_time_panel(
     outside_legend(ax)
 
 
+def _figure(width: float, height: float) -> Figure:
+    """A new figure of ``width`` x ``height`` inches, laid out by matplotlib's constrained layout
+    (matplotlib is imported here, when a figure is drawn: a run without figures never loads it)."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
 def _displacements(panel: Panel) -> Figure:
     trajectory, events, p, t0, y0, title, window = panel
-    fig = Figure(figsize=(10, 4.5), layout="constrained")
+    fig = _figure(10, 4.5)
     ax = fig.subplots()
     t = trajectory.t
     ax.plot(t, trajectory.x1, color=MASS_COLOR[1], label="$x_1$ (m1)")
@@ -303,7 +311,7 @@ def _displacements(panel: Panel) -> Figure:
 
 def _velocities(panel: Panel) -> Figure:
     trajectory, events, _, t0, y0, title, window = panel
-    fig = Figure(figsize=(10, 4.5), layout="constrained")
+    fig = _figure(10, 4.5)
     ax = fig.subplots()
     t = trajectory.t
     for mass in (1, 2):
@@ -324,7 +332,7 @@ def _with_velocity_boundary(ax: Axes) -> None:
 
 def _phase(panel: Panel) -> Figure:
     trajectory, events, p, t0, y0, title, window = panel
-    fig = Figure(figsize=(11, 5), layout="constrained")
+    fig = _figure(11, 5)
     axes = fig.subplots(1, 2)
     for ax, mass in zip(axes, (1, 2), strict=True):
         x, v = trajectory[f"x{mass}"], trajectory[f"v{mass}"]
@@ -368,7 +376,7 @@ def _phase(panel: Panel) -> Figure:
 def _forces(panel: Panel) -> Figure:
     trajectory, events, p, _, _, title, window = panel
     histories = force_histories(trajectory, p)
-    fig = Figure(figsize=(10, 7), layout="constrained")
+    fig = _figure(10, 7)
     axes = fig.subplots(2, 1, sharex=True)
     for ax, mass in zip(axes, (1, 2), strict=True):
         _force_lines(ax, histories, mass)
