@@ -77,16 +77,6 @@ def case(request):
     return orbit, kinds, params
 
 
-def _number(chain: FrictionChain, name: str) -> float:
-    owner, _, key = name.rpartition(".")
-    if not owner:
-        return float(getattr(chain, name))
-    mass = next((m for m in chain.masses if m.name == owner and key in ("m", "x", "v")), None)
-    if mass is not None:
-        return float(getattr(mass, key))
-    return float(next(e.values[key] for e in chain.elements if e.name == owner))
-
-
 def map_differences(orbit, free: list[int]) -> np.ndarray:
     """The period map's derivative over the state's indices ``free`` by central differences (a
     step of 1e-6 of each coordinate's scale): what the chain orbits took before the tangent pass
@@ -135,7 +125,7 @@ def test_sensitivities_in_element_fields_equal_richardson_differences(case):
         return np.concatenate([moved.state, [measures[k] for k in found.measures.index]])
 
     for name in params:
-        value = _number(orbit.chain, name)
+        value = orbit.chain.value(name)
         h = 1e-4 * max(1.0, abs(value))
         wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
         narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h

@@ -18,6 +18,7 @@ import pandas as pd
 from oscillator.engines import EngineFailure, StepKind
 from oscillator.engines.chain_cvode import ChainEngine
 from oscillator.errors import InputError, Reason, SimulationFailed
+from oscillator.hybrid.counting import counted
 from oscillator.hybrid.result import Status
 from oscillator.model.chain_energy import ChainEnergy, audit
 from oscillator.model.chain_fields import ChainArrays, arrays_of, state_of
@@ -278,6 +279,7 @@ def simulate_chain(
     chain = chain.checked()
     options = options or SolverOptions()
     end = run_end(chain, t_end)
+    counted()
     arrays, names = arrays_of(chain), names_of(chain)
     y = np.concatenate(
         [state_of(chain) if start_state is None else _given(chain, start_state), np.zeros(len(arrays.kind))]

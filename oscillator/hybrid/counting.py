@@ -2,7 +2,8 @@
 (a design counts the simulations each of its stages took, docs/design.md).
 
 A run is one call of the supervisor through :func:`~oscillator.hybrid.simulate.simulate` (a map,
-a Newton step's map, a transient) or one run whole in compiled code: a start landed by
+a Newton step's map, a transient), one of a friction chain's through
+:func:`~oscillator.hybrid.chain_run.simulate_chain`, or one run whole in compiled code: a start landed by
 :func:`oscillator.hybrid.batch.land_compiled`, a period map by
 :func:`oscillator.hybrid.batch.map_compiled`.  Worker processes count their own; a task that
 reports a cost returns the difference it made.

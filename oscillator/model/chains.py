@@ -350,6 +350,21 @@ class FrictionChain:
             names += [f"{e.name}.{k}" for k, v in e.values.items() if k != "side"]
         return names
 
+    def value(self, name: str) -> float | None:
+        """The number ``name`` (:meth:`parameter_names`); None for a field left to its default (a
+        friction element's normal load ``N``, its masses' weight).  An unknown name is refused
+        with the closest one."""
+        if name not in self.parameter_names():
+            self.with_values({name: 0.0})  # refuses it, naming the closest
+        owner, _, key = name.rpartition(".")
+        if not owner:
+            return float(getattr(self, name))
+        mass = next((m for m in self.masses if m.name == owner and key in ("m", "x", "v")), None)
+        if mass is not None:
+            return float(getattr(mass, key))
+        found = next(e for e in self.elements if e.name == owner).values.get(key)
+        return None if found is None else float(found)
+
     def with_values(self, changes: Mapping[str, float]) -> FrictionChain:
         """This chain with numbers changed by name (:meth:`parameter_names`), each checked as where
         it was first given; an unknown name is refused with the closest one."""

@@ -191,16 +191,7 @@ def check_names(chain: FrictionChain, params: str | Sequence[str]) -> tuple[str,
 
 
 def _steps(chain: FrictionChain, params: tuple[str, ...]) -> np.ndarray:
-    values = []
-    for name in params:
-        owner, _, key = name.rpartition(".")
-        if not owner:
-            values.append(float(getattr(chain, name)))
-            continue
-        mass = next((m for m in chain.masses if m.name == owner and key in ("m", "x", "v")), None)
-        element = next((e for e in chain.elements if e.name == owner), None)
-        found = getattr(mass, key) if mass is not None else (element.values.get(key) if element else None)
-        values.append(float(found) if found is not None else 0.0)
+    values = [chain.value(name) or 0.0 for name in params]
     return STEP * np.maximum(1.0, np.abs(values))
 
 
