@@ -68,6 +68,8 @@ _EXPORTS = {
     "Sensitivities": "oscillator.orbits.sensitivity",
     "Design": "oscillator.designing.optimise",
     "design": "oscillator.designing.optimise",
+    "Calibration": "oscillator.calibrating.fit",
+    "calibrate": "oscillator.calibrating.fit",
     "sensitivities": "oscillator.orbits.sensitivity",
     "explore": "oscillator.exploring",
     "Explorer": "oscillator.exploring.app",
@@ -101,6 +103,7 @@ __all__ = [
     "Axis",
     "Basins",
     "Branch",
+    "Calibration",
     "Case",
     "ChainOrbit",
     "ChainResult",
@@ -133,6 +136,7 @@ __all__ = [
     "SolverStats",
     "Status",
     "SweepSettings",
+    "calibrate",
     "case_names",
     "continue_orbit",
     "design",
@@ -167,6 +171,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.grouping import Attractor
     from oscillator.attractors.lyapunov import LyapunovSpectrum, lyapunov
     from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.calibrating.fit import Calibration, calibrate
     from oscillator.designing.chain_design import worst_over
     from oscillator.designing.optimise import Design, design
     from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed

@@ -99,7 +99,7 @@ LAYERS = (
     ("hybrid",),
     ("analysis", "orbits"),
     ("attractors",),
-    ("designing",),
+    ("designing", "calibrating"),
     ("report",),
     ("exploring",),
     ("cli",),

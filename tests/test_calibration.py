@@ -1,0 +1,219 @@
+"""Calibration to measured steady responses (docs/calibration.md): parameters recovered from
+noisy data simulated with known ones, intervals that cover them as often as they claim and shrink
+as 1/sqrt(n), what the data cannot identify named, bad data refused by row and column."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import oscillator as osc
+from oscillator.calibrating.fit import calibrate
+from oscillator.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Instance 1 with its stops close in: m1 strikes both every period (docs/frequency.md).
+IMPACTING = {"d": 1.0, "d1": 3.5}
+TRUE = {"mu_k": 0.1, "K3": 2.0, "K6": 1.0}
+
+
+@cache
+def _responses(frequencies: tuple[float, ...], measures: tuple[str, ...], **values: float) -> pd.DataFrame:
+    """Noise-free measurements: each frequency's orbit (settled from the case's start) measured."""
+    case = osc.resolve_case("instance-1", **IMPACTING, **values)
+    rows = []
+    for omega in frequencies:
+        found = osc.find_orbit(case, Omega=omega).response().columns()
+        rows += [(omega, name, found[name]) for name in measures]
+    return pd.DataFrame(rows, columns=["Omega", "measure", "value"])
+
+
+def _noisy(clean: pd.DataFrame, sigma: float, rng: np.random.Generator, repeats: int = 1) -> pd.DataFrame:
+    table = pd.concat([clean] * repeats, ignore_index=True)
+    return table.assign(value=table.value + rng.normal(0, sigma, len(table)), sigma=sigma)
+
+
+def _inside(found, truth: dict[str, float]) -> pd.Series:
+    table = found.table.loc[list(truth)]
+    return (table.ci_low <= pd.Series(truth)) & (pd.Series(truth) <= table.ci_high)
+
+
+def test_three_parameters_of_the_impacting_system_are_recovered_from_noisy_responses():
+    clean = _responses((1.3, 1.4, 1.5, 1.6, 1.7, 1.8), ("x_pp_m1", "x_pp_m2", "impact_max_left", "impact_max_right"))
+    data = _noisy(clean, 0.01, np.random.default_rng(1))
+    start = osc.resolve_case("instance-1", **IMPACTING, mu_k=0.13, K3=2.5, K6=1.3)
+    found = calibrate(start, data, {"mu_k": (0.05, 0.2), "K3": (1, 4), "K6": (0.5, 3)})
+    assert found.success and found.warnings == ()
+    assert _inside(found, TRUE).all(), found.table
+    for name, truth in TRUE.items():  # within three standard errors, and those are small
+        assert abs(found.estimate[name] - truth) < 3 * found.table.stderr[name], name
+    assert found.table.stderr.mu_k < 0.002 and found.table.stderr.K3 < 0.05
+    assert found.table.start.tolist() == [0.13, 2.5, 1.3]
+    # the residuals are the measurements minus the fitted model, which is the model at the estimate
+    fitted = osc.find_orbit(found.fitted, Omega=1.5).response().columns()["impact_max_left"]
+    row = found.residuals[(found.residuals.Omega == 1.5) & (found.residuals.measure == "impact_max_left")].iloc[0]
+    assert row.fitted == pytest.approx(fitted, abs=1e-7)
+    assert row.residual == pytest.approx(row.value - row.fitted, abs=1e-15)
+    assert abs(found.residuals.residual).max() < 0.04  # four sigma
+
+
+def test_the_intervals_shrink_as_one_over_the_root_of_the_number_of_measurements():
+    clean = _responses((1.4, 1.5, 1.7), ("x_pp_m1", "impact_max_left", "impact_max_right"))
+    rng = np.random.default_rng(3)
+    vary = {"mu_k": (0.05, 0.2), "K6": (0.5, 3)}
+    case = osc.resolve_case("instance-1", **IMPACTING)
+    once = calibrate(case, _noisy(clean, 0.02, rng), vary)
+    four = calibrate(case, _noisy(clean, 0.02, rng, repeats=4), vary)
+    ratio = once.table.stderr / four.table.stderr
+    assert ratio.to_numpy() == pytest.approx([2.0, 2.0], rel=0.03)
+    assert once.uncertainty.scale == 1.0  # sigma given: the noise is known, not estimated
+
+
+@pytest.mark.slow
+def test_the_95_percent_intervals_cover_the_truth_in_at_least_90_of_100_noisy_draws():
+    """One frequency's four measures, two parameters, a known noise: about 0.2 s a fit."""
+    clean = _responses((1.5,), ("x_pp_m1", "x_pp_m2", "impact_max_left", "force_peak_left"))
+    rng = np.random.default_rng(2026)
+    case = osc.resolve_case("instance-1", **IMPACTING)
+    covered = pd.Series(0, index=["mu_k", "K3"])
+    for _ in range(100):
+        found = calibrate(case, _noisy(clean, 0.01, rng), {"mu_k": (0.05, 0.2), "K3": (1, 4)})
+        covered += _inside(found, {"mu_k": 0.1, "K3": 2.0}).astype(int)
+    assert (covered >= 90).all(), covered
+    assert (covered < 100).all(), covered  # intervals that are not simply huge
+
+
+def test_two_parameters_that_enter_only_as_their_product_are_named_and_a_stop_never_reached_too():
+    """Where neither mass ever rests, friction enters only as ``mu_k g``: the data fix the product.
+    Instance 1's own stops are never reached below Omega 1.7: nothing depends on K6."""
+    case = osc.resolve_case("instance-1")
+    rows = []
+    for omega in (1.4, 1.5, 1.7):
+        found = osc.find_orbit(case, Omega=omega).response().columns()
+        assert found["rest_m1"] == found["rest_m2"] == 0 and found["onsets_right"] == 0
+        rows += [(omega, name, found[name]) for name in ("x_pp_m1", "x_pp_m2")]
+    data = pd.DataFrame(rows, columns=["Omega", "measure", "value"])
+    start = osc.resolve_case(case, mu_k=0.12)
+    found = calibrate(start, data, {"mu_k": (0.05, 0.2), "g": (5, 15), "K6": (0.5, 3)}, max_evaluations=30)
+    assert np.isinf(found.table.stderr).all()
+    said = " ".join(found.warnings)
+    assert "mu_k and g are not identifiable from these data, only a combination of them" in said
+    assert "% of mu_k and -" in said and "% of g" in said  # the product: both up or down by the same share
+    assert "K6 is not identifiable from these data: no fitted value depends on it" in said
+    assert found.estimate.mu_k * found.estimate.g == pytest.approx(0.1 * 9.8, rel=1e-6)
+
+
+def test_a_robust_loss_lets_an_outlier_count_little():
+    clean = _responses((1.3, 1.4, 1.5, 1.6, 1.7, 1.8), ("x_pp_m1", "x_pp_m2", "impact_max_left", "impact_max_right"))
+    data = _noisy(clean, 0.01, np.random.default_rng(7))
+    data.loc[5, "value"] += 0.5  # fifty sigma: a misread
+    case = osc.resolve_case("instance-1", **IMPACTING)
+    vary = {"mu_k": (0.05, 0.2), "K3": (1, 4)}
+    plain = calibrate(case, data, vary)
+    robust = calibrate(case, data, vary, loss="soft_l1", f_scale=2.0)
+    assert not _inside(plain, {"mu_k": 0.1, "K3": 2.0}).all()
+    assert _inside(robust, {"mu_k": 0.1, "K3": 2.0}).all(), robust.table
+    assert robust.residuals.weight[5] < 0.1 and robust.residuals.weight.drop(5).min() > 0.6  # r = 2 sigma: 0.71
+
+
+def test_several_starts_keep_the_best_and_say_each():
+    clean = _responses((1.4, 1.5, 1.7), ("x_pp_m1", "impact_max_left", "impact_max_right"))
+    data = _noisy(clean, 0.02, np.random.default_rng(4))
+    found = calibrate(
+        osc.resolve_case("instance-1", **IMPACTING), data, {"mu_k": (0.05, 0.2), "K6": (0.5, 3)}, starts=3
+    )
+    assert len(found.starts) == 3 and found.starts.mu_k[0] == 0.1 and found.starts.K6[0] == 1.0
+    assert found.cost == pytest.approx(found.starts.cost.min(), rel=1e-9)
+    assert found.runs >= sum(found.starts.evaluations)  # every evaluation ran at least one simulation
+
+
+def test_a_declared_systems_friction_is_recovered_by_element_and_field():
+    chain = osc.load_system(ROOT / "docs" / "systems" / "blade-damper.toml")
+    truth = {"platform.F": 0.3, "blade damping.c": 0.02}
+    rows = []
+    for omega in (0.8, 0.9, 1.1, 1.2):
+        from oscillator.orbits.chain_response import orbit_measures
+
+        measures = orbit_measures(osc.find_orbit(chain, Omega=omega))
+        rows += [(omega, name, measures[name]) for name in ("x_pp:blade", "x_pp:damper")]
+    data = _noisy(pd.DataFrame(rows, columns=["Omega", "measure", "value"]), 0.005, np.random.default_rng(11))
+    start = chain.with_values({"platform.F": 0.4, "blade damping.c": 0.03})
+    found = calibrate(start, data, {"platform.F": (0.1, 1.0), "blade damping.c": (0.005, 0.1)})
+    assert found.success and _inside(found, truth).all(), found.table
+    assert abs(found.estimate["platform.F"] - 0.3) < 0.01
+    assert (
+        isinstance(found.fitted, osc.FrictionChain) and found.fitted.value("platform.F") == found.estimate["platform.F"]
+    )
+
+
+GOOD = pd.DataFrame({"Omega": [1.4, 1.5, 1.6], "measure": ["x_pp_m1"] * 3, "value": [7.7, 7.8, 7.8]})
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (lambda d: d.drop(columns="value"), "data", "data has no column 'value'"),
+        (lambda d: d.assign(sd=0.1), "data", "a column the fit does not read: 'sd'"),
+        (lambda d: d.assign(value=[7.7, np.nan, 7.8]), "value", "data row 2 (Omega = 1.5): value is nan"),
+        (lambda d: d.assign(value=["7.7", "seven", "7.8"]), "value", "data row 2 (Omega = 1.5): value is 'seven'"),
+        (lambda d: d.assign(sigma=[0.1, 0.1, 0.0]), "sigma", "data row 3 (Omega = 1.6): sigma is 0"),
+        (lambda d: d.assign(measure=["x_pp_m1", "x_pp_m3", "x_pp_m1"]), "measure", "no response measure named"),
+        (lambda d: d.assign(value=[7.7, -7.8, 7.8]), "value", "data row 2 (Omega = 1.5): x_pp_m1 = -7.8 cannot be"),
+        (lambda d: d.assign(measure="rest_m2", value=[0, 40, 0]), "value", "rest_m2 = 40 is a share of a period"),
+        (lambda d: d.assign(Omega=[1.4, -1.5, 1.6]), "Omega", "data row 2: the model refuses Omega = -1.5"),
+        (lambda d: d.iloc[:2], "data", "data has 2 row(s) for 2 parameter(s)"),
+        (lambda d: [1, 2, 3], "data", "data must be a pandas DataFrame"),
+    ],
+)
+def test_bad_data_is_refused_by_row_and_column_before_any_simulation(change, field, words):
+    from oscillator.hybrid.counting import runs
+
+    before = runs()
+    with pytest.raises(InputError, match=None) as refused:
+        calibrate("instance-1", change(GOOD.copy()), {"mu_k": (0.05, 0.2), "K3": (1, 4)})
+    assert refused.value.field == field and words in str(refused.value), str(refused.value)
+    assert runs() == before
+
+
+@pytest.mark.parametrize(
+    ("vary", "options", "words"),
+    [
+        ({"mu_kk": (0.05, 0.2)}, {}, "mu_kk"),
+        ({"mu_k": (0.2, 0.05)}, {}, "range must be two numbers low < high"),
+        ({"Omega": (1, 2)}, {}, "Omega is the measured parameter"),
+        ({"mu_k": (0.05, 0.2)}, {"loss": "l1"}, "loss must be one of linear, soft_l1"),
+        ({"mu_k": (0.05, 0.2)}, {"level": 95}, "level must be a probability"),
+        ({"mu_k": (0.05, 0.2)}, {"starts": 0}, "starts"),
+        ({"m1": (-1, 2)}, {}, "vary: the model refuses m1 = -1"),
+    ],
+)
+def test_bad_options_are_refused_naming_the_field(vary, options, words):
+    with pytest.raises(InputError) as refused:
+        calibrate("instance-1", GOOD, vary, **options)
+    assert words in str(refused.value), str(refused.value)
+
+
+def test_the_worked_calibration_prints_what_the_page_shows(capsys, monkeypatch):
+    """docs/calibration.md: its Python block prints the block under it."""
+    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    code = page.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = page.split("```text\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(ROOT)  # it reads docs/systems/rattler.toml
+    exec(compile(code, "docs/calibration.md", "exec"), {})
+    assert capsys.readouterr().out == shown
+
+
+def test_the_page_quotes_the_warning_as_the_fit_words_it():
+    """docs/calibration.md's example of an unidentifiable pair is the message, word for word."""
+    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    quoted = " ".join(page.split("```text\n")[2].split("```", 1)[0].split())
+    case = osc.resolve_case("instance-1")
+    rows = [(omega, name, osc.find_orbit(case, Omega=omega).response().columns()[name])
+            for omega in (1.4, 1.5, 1.7) for name in ("x_pp_m1", "x_pp_m2")]  # fmt: skip
+    data = pd.DataFrame(rows, columns=["Omega", "measure", "value"])
+    found = calibrate(osc.resolve_case(case, mu_k=0.12), data, {"mu_k": (0.05, 0.2), "g": (5, 15)}, max_evaluations=30)
+    assert found.warnings == (quoted,)
