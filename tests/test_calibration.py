@@ -210,10 +210,108 @@ def test_the_worked_calibration_prints_what_the_page_shows(capsys, monkeypatch):
 def test_the_page_quotes_the_warning_as_the_fit_words_it():
     """docs/calibration.md's example of an unidentifiable pair is the message, word for word."""
     page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
-    quoted = " ".join(page.split("```text\n")[2].split("```", 1)[0].split())
+    quoted = " ".join(
+        page.split("Where neither\nmass ever rests", 1)[1].split("```text\n")[1].split("```", 1)[0].split()
+    )
     case = osc.resolve_case("instance-1")
     rows = [(omega, name, osc.find_orbit(case, Omega=omega).response().columns()[name])
             for omega in (1.4, 1.5, 1.7) for name in ("x_pp_m1", "x_pp_m2")]  # fmt: skip
     data = pd.DataFrame(rows, columns=["Omega", "measure", "value"])
     found = calibrate(osc.resolve_case(case, mu_k=0.12), data, {"mu_k": (0.05, 0.2), "g": (5, 15)}, max_evaluations=30)
     assert found.warnings == (quoted,)
+
+
+# -- time series -------------------------------------------------------------------------------
+
+TIGHT = {"rtol": 1e-14, "atol": 1e-14}
+
+
+def _richardson(f, value: float, h: float) -> np.ndarray:
+    def central(step):
+        return (np.asarray(f(value + step)) - np.asarray(f(value - step))) / (2 * step)
+
+    return (4 * central(h / 2) - central(h)) / 3
+
+
+def test_the_trajectorys_sensitivities_through_stick_slip_and_impact_are_richardsons_differences():
+    """Forward sensitivities at fixed times of a run that strikes both stops, rests and slips
+    again (every kind below), against Richardson-extrapolated central differences of ``simulate``
+    at CVODE's 1e-14, to 1e-7 of each derivative (or of a thousandth of the state's size where the
+    derivative nearly vanishes) plus the differences' resolution (the runs' rounding, up to 5e-12
+    with the event times', over the step); times 0.02 s or more from any event, where the state
+    is smooth in the parameters."""
+    from oscillator.calibrating.series import trajectory_sensitivities
+
+    case = osc.resolve_case("instance-1", **IMPACTING, **TIGHT)
+    events = osc.simulate(case, t_end=13).events
+    assert {"left_contact_onset", "right_contact_onset", "sliding_onset", "sliding_vanish"} <= set(events.kind)
+    grid = np.linspace(case.initial.t0 + 0.5, case.initial.t0 + 12, 40)
+    times = np.array([t for t in grid if np.abs(events.t.to_numpy() - t).min() > 0.02])
+    names = ("mu_k", "mu_s", "K3", "K6", "Omega")
+    states, derivatives, _ = trajectory_sensitivities(case, names, times)
+    for j, name in enumerate(names):
+        value = getattr(case.parameters, name)
+        step = 1e-4 * max(abs(value), 1.0)  # 1e-3 of mu_k or Omega ends m2's brief rest at 11.5 s
+
+        def at(v, name=name):
+            run = osc.simulate(osc.resolve_case(case, **{name: v}), t_end=times[-1] + 0.01, save=osc.SaveAt(ts=times))
+            return run.trajectory[["x1", "v1", "x2", "v2"]].to_numpy()
+
+        exact, differenced = derivatives[:, :, j], _richardson(at, value, step)
+        bound = 1e-7 * np.maximum(np.abs(exact), 1e-3 * np.abs(states)) + 5e-12 / step
+        assert (np.abs(exact - differenced) <= bound).all(), (name, np.abs(exact - differenced).max())
+        assert np.abs(exact).max() > 1e-3, name  # a derivative that is there
+
+
+def _series(case, times, sigma, rng):
+    run = osc.simulate(osc.resolve_case(case, **TIGHT), t_end=times[-1] + 0.01, save=osc.SaveAt(ts=times))
+    rows = [(t, name, value) for t, *values in run.trajectory[["t", "x1", "x2"]].itertuples(index=False)
+            for name, value in zip(("x1", "x2"), values, strict=True)]  # fmt: skip
+    table = pd.DataFrame(rows, columns=["t", "variable", "value"])
+    return table.assign(value=table.value + rng.normal(0, sigma, len(table)))
+
+
+def test_friction_and_a_stops_stiffness_are_recovered_from_a_noisy_measured_time_series():
+    case = osc.resolve_case("instance-1", **IMPACTING)
+    data = _series(case, np.linspace(case.initial.t0 + 0.25, case.initial.t0 + 15, 60), 0.01, np.random.default_rng(3))
+    start = osc.resolve_case(case, mu_k=0.12, K3=2.4)
+    found = osc.calibrate(start, data, {"mu_k": (0.05, 0.15), "K3": (1, 4)})
+    assert found.success and _inside(found, {"mu_k": 0.1, "K3": 2.0}).all(), found.table
+    assert found.table.stderr.mu_k < 0.002 and found.uncertainty.scale == pytest.approx(0.01, rel=0.25)
+    assert found.runs == found.evaluations  # one run of the model per evaluation, derivatives included
+    assert list(found.residuals.columns[:2]) == ["t", "variable"]
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (lambda d: d.iloc[[0, 3, 1, 2]], "t", "data row 3 (t = 2.0): the times are not in order (row 2 is at t = 2.5"),
+        (lambda d: d.assign(t=[0.5, 1.5, 2.0, 2.5]), "t", "data row 1 (t = 0.5): the measurement is before the model"),
+        (lambda d: d.assign(variable=["x1", "x3", "x1", "x2"]), "measure", "no response measure named 'x3'"),
+        (lambda d: d.drop(columns="variable"), "data", "a time series needs the columns 't', 'variable'"),
+    ],
+)
+def test_a_bad_time_series_is_refused_by_row_and_column(change, field, words):
+    good = pd.DataFrame(
+        {"t": [1.5, 2.0, 2.0, 2.5], "variable": ["x1", "x1", "x2", "x1"], "value": [3.0, 2.0, 1.0, 0.5]}
+    )
+    with pytest.raises(InputError) as refused:
+        osc.calibrate("instance-1", change(good).reset_index(drop=True), {"mu_k": (0.05, 0.2)})
+    assert refused.value.field == field and words in str(refused.value), str(refused.value)
+
+
+def test_a_declared_systems_time_series_is_refused_with_what_can_be_fitted():
+    chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
+    data = pd.DataFrame({"t": [1.0, 2.0, 3.0], "variable": ["x1"] * 3, "value": [0.1, 0.2, 0.3]})
+    with pytest.raises(InputError, match="a declared system's time series cannot be fitted yet; fit its steady"):
+        osc.calibrate(chain, data, {"floor.mu_k": (0.05, 0.12)})
+
+
+def test_the_worked_time_series_prints_what_the_page_shows(capsys):
+    """docs/calibration.md's second Python block prints the block under it."""
+    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    part = page.split("## From a measured time series", 1)[1]
+    code = part.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
+    exec(compile(code, "docs/calibration.md", "exec"), {})
+    assert capsys.readouterr().out == shown

@@ -1,12 +1,14 @@
-"""Least-squares calibration of a model's parameters to measured steady responses
-(docs/calibration.md).
+"""Least-squares calibration of a model's parameters to measured steady responses or a measured
+time series (docs/calibration.md).
 
 The parameters ``vary`` (each within its range) minimise ``sum rho((model_i - value_i) /
 sigma_i)`` over the measured rows, with ``rho`` the square (``loss = "linear"``) or a robust loss
 that lets an outlier count less (SciPy's ``least_squares``: ``"soft_l1"``, ``"huber"``,
 ``"cauchy"``, ``"arctan"``; trust-region reflective within the ranges).  The residuals'
-Jacobian is exact (:mod:`~oscillator.calibrating.steady`): each step costs one orbit and one
-sensitivity pass per measured frequency, never a difference of simulations.
+Jacobian is exact: each step costs one orbit and one sensitivity pass per measured frequency
+(:mod:`~oscillator.calibrating.steady`), or one run and its tangent pass for a time series
+(:mod:`~oscillator.calibrating.series`, a table with a ``t`` column), never a difference of
+simulations.
 
 The problem is not convex where the motion's switching sequence changes across the ranges:
 ``starts > 1`` fits again from that many more points spread over the ranges (a Latin hypercube)
@@ -24,7 +26,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.calibrating.measured import Measured, check_measured
+from oscillator.calibrating.measured import Measured, check_measured, check_series
+from oscillator.calibrating.series import Series
 from oscillator.calibrating.steady import Responses
 from oscillator.calibrating.uncertainty import Uncertainty, uncertainty
 from oscillator.errors import InputError, Reason, SimulationFailed
@@ -233,10 +236,12 @@ class _Fit:
     evaluations: int
     message: str
     success: bool
-    responses: Responses
+    responses: Responses | Series
 
 
-def _fit(responses: Responses, low: np.ndarray, high: np.ndarray, u0: np.ndarray, options: dict[str, Any]) -> _Fit:
+def _fit(
+    responses: Responses | Series, low: np.ndarray, high: np.ndarray, u0: np.ndarray, options: dict[str, Any]
+) -> _Fit:
     """Least squares from ``u0`` (scaled to the ranges) with the exact Jacobian."""
     from scipy.optimize import least_squares
 
@@ -334,8 +339,9 @@ def calibrate(
         The model; its own values of ``vary`` are the first start (each range's middle where
         outside it).
     data : DataFrame
-        Columns ``over``, ``measure``, ``value`` and optionally ``sigma``
-        (:mod:`~oscillator.calibrating.measured`).
+        Steady responses: columns ``over``, ``measure``, ``value`` and optionally ``sigma``; a
+        time series of the article's system: ``t``, ``variable`` (``x1``, ``v1``, ``x2``,
+        ``v2``), ``value`` and optionally ``sigma`` (:mod:`~oscillator.calibrating.measured`).
     vary : mapping
         Each fitted parameter's range, ``{"mu_k": (0.05, 0.2), "K6": (0.5, 5)}``.
     over : str
@@ -361,14 +367,14 @@ def calibrate(
         No orbit at a measured point from any start.
     """
     model = _system(system)
-    names, low, high = _ranges(model, vary, over)
-    measured = check_measured(data, over, len(names), _known_measures(model))
-    _check_points(model, measured)
+    series = isinstance(data, pd.DataFrame) and "t" in data.columns
+    names, low, high = _ranges(model, vary, "t" if series else over)
     options = _options(loss, f_scale, level, starts, max_evaluations)
     check_count(transient, "transient", 0, 100_000)
+    measured, make = _model_of(model, data, names, series, over, int(transient))
     before, fits, rows = runs(), [], []
     for u0 in _starts(_first(model, names, low, high), int(starts), seed):
-        responses = Responses(model, measured, names, transient=int(transient))
+        responses = make()
         start = dict(zip(names, low + u0 * (high - low), strict=True))
         try:
             fit = _fit(responses, low, high, u0, options)
@@ -382,6 +388,25 @@ def calibrate(
         raise SimulationFailed(f"no start reached a fit: {rows[0]['status']}", reason=Reason.NO_ORBIT)
     best = min(fits, key=lambda f: f.cost)
     return _result(model, measured, (names, low, high), best, pd.DataFrame(rows), runs() - before, options, level)
+
+
+def _model_of(
+    model: Case | FrictionChain, data: object, names: tuple[str, ...], series: bool, over: str, transient: int
+) -> tuple[Measured, Callable[[], Responses | Series]]:
+    """The data checked, and what makes the model's side of a fit: a time series' trajectory
+    (:class:`~oscillator.calibrating.series.Series`) or steady responses (:class:`Responses`)."""
+    if not series:
+        measured = check_measured(data, over, len(names), _known_measures(model))
+        _check_points(model, measured)
+        return measured, lambda: Responses(model, measured, names, transient=transient)
+    if isinstance(model, FrictionChain):
+        raise InputError(
+            "a declared system's time series cannot be fitted yet; fit its steady responses (columns "
+            f"{over!r}, 'measure', 'value'), or the article's system's time series",
+            field="data",
+        )
+    checked = check_series(data, len(names), model.initial.t0, model.system.state)
+    return checked, lambda: Series(model, checked, names)
 
 
 def _known_measures(model: Case | FrictionChain) -> tuple[str, ...] | None:

@@ -141,3 +141,36 @@ def _measure(name: object, row: int, over: str, at: float, measures: tuple[str, 
             field="measure",
         )
     return name
+
+
+def check_series(data: object, parameters: int, t0: float, variables: tuple[str, ...]) -> Measured:
+    """A measured time series (a DataFrame: ``t``, ``variable`` one of the system's state
+    ``variables``, ``value``, optionally ``sigma``) checked like :func:`check_measured`, and its
+    times finite, not before the model's start ``t0`` and in increasing order down the rows."""
+    if not isinstance(data, pd.DataFrame):
+        raise InputError(f"data must be a pandas DataFrame of measurements, got {shown(data)}", field="data")
+    renamed = data.rename(columns={"variable": "measure"}) if "variable" in data.columns else data
+    if "measure" in data.columns and "variable" in data.columns:
+        raise InputError("data has both 'measure' and 'variable'; a time series names a 'variable'", field="data")
+    if "variable" not in data.columns:
+        raise InputError(
+            f"a time series needs the columns 't', 'variable' (one of {', '.join(variables)}), 'value' and "
+            "optionally 'sigma'",
+            field="data",
+        )
+    found = check_measured(renamed, "t", parameters, variables)
+    table = found.table.rename(columns={"measure": "variable"})
+    times = table.t.to_numpy()
+    for k in np.flatnonzero(times < t0):
+        raise InputError(
+            f"{_where(int(k) + 1, 't', times[k])}: the measurement is before the model's start t0 = {t0:g} s; "
+            "give times from the start on (or move the start with t0)",
+            field="t",
+        )
+    for k in np.flatnonzero(np.diff(times) < 0):
+        raise InputError(
+            f"{_where(int(k) + 2, 't', times[k + 1])}: the times are not in order (row {int(k) + 1} is at "
+            f"t = {times[k]:g} s); sort the rows by time",
+            field="t",
+        )
+    return Measured("t", table, found.known_sigma)
