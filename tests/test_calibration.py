@@ -303,8 +303,9 @@ def test_a_bad_time_series_is_refused_by_row_and_column(change, field, words):
 def test_a_declared_systems_time_series_is_refused_with_what_can_be_fitted():
     chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
     data = pd.DataFrame({"t": [1.0, 2.0, 3.0], "variable": ["x1"] * 3, "value": [0.1, 0.2, 0.3]})
-    with pytest.raises(InputError, match="a declared system's time series cannot be fitted yet; fit its steady"):
+    with pytest.raises(InputError) as refused:
         osc.calibrate(chain, data, {"floor.mu_k": (0.05, 0.12)})
+    assert "a declared system's time series and event times cannot be fitted yet; fit its steady" in str(refused.value)
 
 
 def test_the_worked_time_series_prints_what_the_page_shows(capsys):
@@ -315,3 +316,61 @@ def test_the_worked_time_series_prints_what_the_page_shows(capsys):
     shown = part.split("```text\n", 1)[1].split("```", 1)[0]
     exec(compile(code, "docs/calibration.md", "exec"), {})
     assert capsys.readouterr().out == shown
+
+
+# -- event times -------------------------------------------------------------------------------
+
+
+def test_the_event_times_derivatives_are_richardsons_differences_of_the_runs_event_times():
+    """``dt_s/dc`` at every switch of a run that strikes both stops, rests and slips again: 1e-7
+    of the derivative plus the differences' resolution (the runs' rounding, 5e-12, over the step)."""
+    from oscillator.calibrating.events import event_sensitivities
+
+    case = osc.resolve_case("instance-1", **IMPACTING, **TIGHT)
+    names = ("mu_k", "mu_s", "K3", "K6", "Omega")
+    events = event_sensitivities(case, names, 10.0)
+    assert {"left_contact_onset", "right_contact_onset", "sliding_onset", "sliding_vanish"} <= set(events.kind)
+    for name in names:
+        value = getattr(case.parameters, name)
+        step = 1e-4 * max(abs(value), 1.0)
+
+        def times(v, name=name):
+            moved = event_sensitivities(osc.resolve_case(case, **{name: v}), (), 10.0)
+            assert moved.kind.tolist() == events.kind.tolist()  # the same sequence either side
+            return moved.t.to_numpy()
+
+        exact = events[f"dt/d{name}"].to_numpy()
+        differenced = _richardson(times, value, step)
+        assert (np.abs(exact - differenced) <= 1e-7 * np.abs(exact) + 5e-12 / step).all(), name
+
+
+def test_friction_and_a_stops_stiffness_are_recovered_from_measured_impact_and_rest_times():
+    from oscillator.calibrating.events import event_sensitivities
+
+    truth = osc.resolve_case("instance-1", **IMPACTING)
+    events = event_sensitivities(truth, (), 16.0)
+    kinds = ["left_contact_onset", "right_contact_onset", "sliding_onset"]
+    picked = events[events.kind.isin(kinds) & (events.mass == 1)]
+    noise = np.random.default_rng(5).normal(0, 1e-3, len(picked))
+    data = pd.DataFrame({"kind": picked.kind, "mass": 1, "t": picked.t + noise, "sigma": 1e-3})
+    found = osc.calibrate(osc.resolve_case(truth, mu_k=0.12, K3=2.4), data, {"mu_k": (0.05, 0.15), "K3": (1, 4)})
+    assert found.success and _inside(found, {"mu_k": 0.1, "K3": 2.0}).all(), found.table
+    assert found.runs == found.evaluations and abs(found.residuals.residual).max() < 4e-3
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (lambda d: d.assign(kind=["left_contact_onset", "grazing", "sliding_onset"]), "measure", "'grazing'"),
+        (lambda d: d.assign(mass=[1, 3, 1]), "mass", "data row 2: mass is 3; give one of 1, 2"),
+        (lambda d: d.assign(t=[4.6, 4.5, 5.0]), "t", "data row 2: t = 4.5 s comes before row 1's 4.6 s"),
+        (lambda d: d.assign(t=[0.5, 4.5, 5.0]), "t", "data row 1: t = 0.5 s is before the model's start 1 s"),
+        (lambda d: d.assign(t=[4.6, np.nan, 5.0]), "value", "data row 2"),
+        (lambda d: d.assign(time=1.0), "data", "the fit does not read 'time'"),
+    ],
+)
+def test_bad_event_times_are_refused_by_row_and_column(change, field, words):
+    good = pd.DataFrame({"kind": ["left_contact_onset", "right_contact_onset", "sliding_onset"], "t": [4.6, 4.9, 5.5]})
+    with pytest.raises(InputError) as refused:
+        osc.calibrate("instance-1", change(good.assign(mass=1)), {"mu_k": (0.05, 0.2)})
+    assert refused.value.field == field and words in str(refused.value), str(refused.value)

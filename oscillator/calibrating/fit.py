@@ -7,8 +7,8 @@ that lets an outlier count less (SciPy's ``least_squares``: ``"soft_l1"``, ``"hu
 ``"cauchy"``, ``"arctan"``; trust-region reflective within the ranges).  The residuals'
 Jacobian is exact: each step costs one orbit and one sensitivity pass per measured frequency
 (:mod:`~oscillator.calibrating.steady`), or one run and its tangent pass for a time series
-(:mod:`~oscillator.calibrating.series`, a table with a ``t`` column), never a difference of
-simulations.
+(:mod:`~oscillator.calibrating.series`, a table with a ``t`` column) or for event times
+(:mod:`~oscillator.calibrating.events`, a ``kind`` column), never a difference of simulations.
 
 The problem is not convex where the motion's switching sequence changes across the ranges:
 ``starts > 1`` fits again from that many more points spread over the ranges (a Latin hypercube)
@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from oscillator.calibrating.measured import Measured, check_measured, check_series
+from oscillator.calibrating.events import Events
+from oscillator.calibrating.measured import Measured, check_events, check_measured, check_series
 from oscillator.calibrating.series import Series
 from oscillator.calibrating.steady import Responses
 from oscillator.calibrating.uncertainty import Uncertainty, uncertainty
@@ -34,6 +35,7 @@ from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.counting import runs
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.chains import FrictionChain
+from oscillator.model.events import EventKind
 from oscillator.model.parameters import Parameters, check_count, is_finite_number
 from oscillator.text import printable, shown
 
@@ -236,11 +238,11 @@ class _Fit:
     evaluations: int
     message: str
     success: bool
-    responses: Responses | Series
+    responses: Responses | Series | Events
 
 
 def _fit(
-    responses: Responses | Series, low: np.ndarray, high: np.ndarray, u0: np.ndarray, options: dict[str, Any]
+    responses: Responses | Series | Events, low: np.ndarray, high: np.ndarray, u0: np.ndarray, options: dict[str, Any]
 ) -> _Fit:
     """Least squares from ``u0`` (scaled to the ranges) with the exact Jacobian."""
     from scipy.optimize import least_squares
@@ -341,7 +343,8 @@ def calibrate(
     data : DataFrame
         Steady responses: columns ``over``, ``measure``, ``value`` and optionally ``sigma``; a
         time series of the article's system: ``t``, ``variable`` (``x1``, ``v1``, ``x2``,
-        ``v2``), ``value`` and optionally ``sigma`` (:mod:`~oscillator.calibrating.measured`).
+        ``v2``), ``value`` and optionally ``sigma``; event times: ``kind``, ``t`` and optionally
+        ``mass`` and ``sigma`` (:mod:`~oscillator.calibrating.measured`).
     vary : mapping
         Each fitted parameter's range, ``{"mu_k": (0.05, 0.2), "K6": (0.5, 5)}``.
     over : str
@@ -367,7 +370,7 @@ def calibrate(
         No orbit at a measured point from any start.
     """
     model = _system(system)
-    series = isinstance(data, pd.DataFrame) and "t" in data.columns
+    series = isinstance(data, pd.DataFrame) and ("t" in data.columns or "kind" in data.columns)
     names, low, high = _ranges(model, vary, "t" if series else over)
     options = _options(loss, f_scale, level, starts, max_evaluations)
     check_count(transient, "transient", 0, 100_000)
@@ -392,7 +395,7 @@ def calibrate(
 
 def _model_of(
     model: Case | FrictionChain, data: object, names: tuple[str, ...], series: bool, over: str, transient: int
-) -> tuple[Measured, Callable[[], Responses | Series]]:
+) -> tuple[Measured, Callable[[], Responses | Series | Events]]:
     """The data checked, and what makes the model's side of a fit: a time series' trajectory
     (:class:`~oscillator.calibrating.series.Series`) or steady responses (:class:`Responses`)."""
     if not series:
@@ -401,10 +404,14 @@ def _model_of(
         return measured, lambda: Responses(model, measured, names, transient=transient)
     if isinstance(model, FrictionChain):
         raise InputError(
-            "a declared system's time series cannot be fitted yet; fit its steady responses (columns "
-            f"{over!r}, 'measure', 'value'), or the article's system's time series",
+            "a declared system's time series and event times cannot be fitted yet; fit its steady responses "
+            f"(columns {over!r}, 'measure', 'value'), or the article's system's time series",
             field="data",
         )
+    if "kind" in data.columns:  # type: ignore[attr-defined]
+        kinds = tuple(kind.value for kind in EventKind if kind.switches)
+        timed = check_events(data, len(names), model.initial.t0, kinds, model.system.masses)
+        return timed, lambda: Events(model, timed, names)
     checked = check_series(data, len(names), model.initial.t0, model.system.state)
     return checked, lambda: Series(model, checked, names)
 

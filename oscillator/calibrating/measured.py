@@ -174,3 +174,43 @@ def check_series(data: object, parameters: int, t0: float, variables: tuple[str,
             field="t",
         )
     return Measured("t", table, found.known_sigma)
+
+
+def check_events(
+    data: object, parameters: int, t0: float, kinds: tuple[str, ...], masses: tuple[object, ...]
+) -> Measured:
+    """Measured event times (a DataFrame: ``kind``, one of ``kinds``, ``t``, and optionally
+    ``mass``, one of ``masses``, and ``sigma`` in seconds), checked by row and column; ``value``
+    is the time."""
+    if not isinstance(data, pd.DataFrame):
+        raise InputError(f"data must be a pandas DataFrame of measurements, got {shown(data)}", field="data")
+    extra = [str(c) for c in data.columns if c not in ("kind", "mass", "t", "sigma")]
+    if "t" not in data.columns or extra:
+        raise InputError(
+            "measured events need the columns 'kind' and 't', and optionally 'mass' and 'sigma'"
+            + (f"; the fit does not read {', '.join(map(repr, map(printable, extra)))}" if extra else ""),
+            field="data",
+        )
+    given = data.assign(measure=data["kind"], value=data["t"]).drop(columns=["kind", "t"])
+    checked = check_measured(given.drop(columns="mass", errors="ignore").assign(at=0.0), "at", parameters, kinds)
+    table = checked.table.drop(columns="at").rename(columns={"measure": "kind"})
+    table.insert(1, "t", table.value)
+    mass = pd.to_numeric(data["mass"], errors="coerce") if "mass" in data.columns else pd.Series(0, index=data.index)
+    for row, value in enumerate(mass.to_numpy()):
+        if value != 0 and value not in masses:
+            raise InputError(
+                f"data row {row + 1}: mass is {shown(_plain(data['mass'].iloc[row]))}; give one of "
+                f"{', '.join(map(str, masses))} (or leave it out: either mass)",
+                field="mass",
+            )
+    table.insert(1, "mass", mass.fillna(0).astype(int).to_numpy())
+    times = table.t.to_numpy()
+    for k in np.flatnonzero(times < t0):
+        raise InputError(f"data row {int(k) + 1}: t = {times[k]:g} s is before the model's start {t0:g} s", field="t")
+    for k in np.flatnonzero(np.diff(times) < 0):
+        raise InputError(
+            f"data row {int(k) + 2}: t = {times[k + 1]:g} s comes before row {int(k) + 1}'s {times[k]:g} s; "
+            "sort the rows by time",
+            field="t",
+        )
+    return Measured("t", table, checked.known_sigma)
