@@ -374,3 +374,60 @@ def test_bad_event_times_are_refused_by_row_and_column(change, field, words):
     with pytest.raises(InputError) as refused:
         osc.calibrate("instance-1", change(good.assign(mass=1)), {"mu_k": (0.05, 0.2)})
     assert refused.value.field == field and words in str(refused.value), str(refused.value)
+
+
+# -- the command -------------------------------------------------------------------------------
+
+
+def _invoke(*args):
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def test_the_command_fits_a_measurement_file_and_writes_what_the_library_finds(tmp_path):
+    case = osc.resolve_case("instance-1", **IMPACTING)
+    data = _series(case, np.linspace(case.initial.t0 + 0.25, case.initial.t0 + 15, 60), 0.01, np.random.default_rng(3))
+    data.to_csv(tmp_path / "measured.csv", index=False)
+    start = {"d": 1, "d1": 3.5, "mu_k": 0.12, "K3": 2.4}
+    sets = [a for name, v in start.items() for a in ("--set", f"{name}={v}")]
+    done = _invoke("calibrate", "instance-1", tmp_path / "measured.csv", "--vary", "mu_k=0.05,0.15", "--vary",
+                   "K3=1,4", *sets, "--out", tmp_path / "fit", "--no-plots")  # fmt: skip
+    assert done.exit_code == 0, done.output
+    assert "mu_k = 0.0992" in done.stdout and "written to" in done.stdout
+    library = osc.calibrate(osc.resolve_case("instance-1", **start), pd.read_csv(tmp_path / "measured.csv"),
+                            {"mu_k": (0.05, 0.15), "K3": (1, 4)})  # fmt: skip
+    written = pd.read_csv(tmp_path / "fit" / "estimate.csv", index_col="parameter")
+    assert np.allclose(written.estimate, library.estimate, rtol=1e-12) and np.allclose(
+        written.stderr, library.table.stderr
+    )
+    fitted = osc.load_case(tmp_path / "fit" / "fitted.toml")
+    assert fitted.parameters.mu_k == pytest.approx(library.estimate.mu_k, rel=1e-12)
+    residuals = pd.read_parquet(tmp_path / "fit" / "residuals.parquet")
+    assert len(residuals) == 120 and "K3 fitted to 120 measurements of a time series" in (
+        tmp_path / "fit" / "report.md"
+    ).read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        (
+            "Omega,measure,value\n1.4,x_pp_m1,7.7\n1.5,x_pp_m1,oops\n1.6,x_pp_m1,7.8\n",
+            "data row 2 (Omega = 1.5): value",
+        ),
+        ("\x00\x01binary", "measurement file"),
+        ("Omega,measure,value\n", "holds no measurement"),
+        ('Omega,measure,value\n1.4,"x_pp_m1\n', "is not a CSV table"),
+    ],
+)
+def test_the_command_refuses_a_bad_measurement_file_in_one_line_and_writes_nothing(tmp_path, text, words):
+    (tmp_path / "bad.csv").write_text(text, encoding="utf-8")
+    done = _invoke("calibrate", "instance-1", tmp_path / "bad.csv", "--vary", "mu_k=0.05,0.15", "--out", tmp_path / "x")
+    assert done.exit_code == 2 and words in done.stderr, done.output
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.output
+    assert not (tmp_path / "x").exists()
+    missing = _invoke("calibrate", "instance-1", tmp_path / "none.csv", "--vary", "mu_k=0.05,0.15")
+    assert missing.exit_code == 2 and "cannot read measurement file" in missing.stderr

@@ -38,7 +38,7 @@ COMMAND = str(Path(sys.executable).with_name("oscillator"))
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 COMMANDS = (
     "list", "show", "run", "check", "report", "sweep", "locate", "orbit", "continue",
-    "basins", "attractors", "lyapunov", "frc", "atlas", "curve", "design", "explore",
+    "basins", "attractors", "lyapunov", "frc", "atlas", "curve", "design", "calibrate", "explore",
 )  # fmt: skip
 
 
@@ -158,6 +158,7 @@ def _fixtures(folder: Path) -> None:
     (folder / "broken.toml").write_text("[parameters]\nm1 = 1.0\nm2 = = 2\n", encoding="utf-8")
     (folder / "chatter.toml").write_text(case_to_toml(chatter_case()), encoding="utf-8")
     shutil.copytree(ROOT / "docs" / "systems", folder / "docs" / "systems")  # the system files docs/systems.md shows
+    shutil.copytree(ROOT / "docs" / "measured", folder / "docs" / "measured")  # docs/calibration.md's measurements
 
 
 def _serve_once(shown: Shown, arguments: list[str], folder: Path) -> None:
@@ -216,7 +217,7 @@ def test_every_command_of_a_page_runs_as_shown(tmp_path, monkeypatch, page):
 #: folder that ``run``'s example writes); the groups run side by side.
 HELP_GROUPS = {"runs": ("list", "show", "check", "run", "report"), "sweeps": ("sweep", "locate"),
                "orbits": ("orbit", "continue"), "attractors": ("basins", "attractors", "lyapunov"),
-               "atlas": ("atlas", "curve", "explore"), "frc": ("frc",), "design": ("design",)}  # fmt: skip
+               "atlas": ("atlas", "curve", "explore"), "frc": ("frc",), "design": ("design", "calibrate")}  # fmt: skip
 
 
 def test_every_command_has_a_help_example_in_a_group():

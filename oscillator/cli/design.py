@@ -92,7 +92,7 @@ def _of_system(
     return design_system(case, assignments, ranges, values, objectives, out_dir, case_only, plots, quiet)
 
 
-def _ranges(texts: list[str]) -> dict[str, tuple[float, float]]:
+def parse_ranges(texts: list[str]) -> dict[str, tuple[float, float]]:
     """``--vary NAME=LOW,HIGH`` (each) as ``{name: (low, high)}``; the names and ranges are checked
     with the problem."""
     ranges = {}
@@ -152,7 +152,7 @@ def design(
         --objective x_max:blade
     """
     with refusing():
-        ranges = _ranges(vary)
+        ranges = parse_ranges(vary)
     given = (constraint, starts, candidates, front, transient, record, full_transient, engine, workers, scheduler)
     if _of_system(case, set_, ranges, (over, band), objective, out_dir, given, not no_plots, quiet):
         return
