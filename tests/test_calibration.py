@@ -300,12 +300,59 @@ def test_a_bad_time_series_is_refused_by_row_and_column(change, field, words):
     assert refused.value.field == field and words in str(refused.value), str(refused.value)
 
 
-def test_a_declared_systems_time_series_is_refused_with_what_can_be_fitted():
+#: Each number's difference step on the rattler: where the truncation error and the runs'
+#: rounding balance (mu_k and Omega move its slip and impact times most).
+RATTLER_STEPS = {"floor.mu_k": 1e-4, "floor.mu_s": 1e-3, "stop.K": 1e-3, "Omega": 1e-4}
+
+
+def test_a_declared_systems_trajectory_sensitivities_through_stick_slip_and_impact_are_richardsons():
+    """The rattler (docs/systems/rattler.toml) sticks, slips and strikes its stop: its state's
+    derivatives at fixed times against Richardson differences of its runs, to 1e-7 of each plus
+    the differences' resolution (its runs' rounding, 1e-10 at its orbits' tolerances, over the
+    step); times 0.02 s or more from any event."""
+    from oscillator.calibrating.series import chain_trajectory_sensitivities
+    from oscillator.hybrid.chain_run import simulate_chain
+
     chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
-    data = pd.DataFrame({"t": [1.0, 2.0, 3.0], "variable": ["x1"] * 3, "value": [0.1, 0.2, 0.3]})
+    events = simulate_chain(chain, t_end=20).events
+    assert {"sticks", "slips", "stop_closes", "stop_opens"} <= set(events.kind)
+    grid = np.linspace(0.5, 19.5, 40)
+    times = np.array([t for t in grid if np.abs(events.t.to_numpy() - t).min() > 0.02])
+    names = tuple(RATTLER_STEPS)
+    states, derivatives, _ = chain_trajectory_sensitivities(chain, names, times)
+    for j, name in enumerate(names):
+        value = chain.value(name)
+        step = RATTLER_STEPS[name] * max(abs(value), 1.0)
+
+        def at(v, name=name):
+            return chain_trajectory_sensitivities(chain.with_values({name: v}), (), times)[0]
+
+        exact, differenced = derivatives[:, :, j], _richardson(at, value, step)
+        bound = 1e-7 * np.maximum(np.abs(exact), 1e-3 * np.abs(states)) + 1e-10 / step
+        assert (np.abs(exact - differenced) <= bound).all(), (name, np.abs(exact - differenced).max())
+
+
+def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time_series():
+    from oscillator.hybrid.chain_run import simulate_chain
+
+    truth = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
+    times = np.linspace(0.5, 20, 40)
+    run = simulate_chain(truth, t_end=20.01, at=times)
+    rows = np.searchsorted(run.times, times - 1e-9 * np.maximum(1, times))
+    noise = np.random.default_rng(9).normal(0, 0.01, len(times))
+    data = pd.DataFrame({"t": times, "variable": "x:part", "value": run.states[rows, 0] + noise, "sigma": 0.01})
+    start = truth.with_values({"floor.mu_k": 0.08, "floor.mu_s": 0.2, "stop.K": 30.0})
+    found = osc.calibrate(start, data, {"floor.mu_k": (0.02, 0.14), "floor.mu_s": (0.14, 0.4), "stop.K": (10, 200)})
+    assert found.success and _inside(found, {"floor.mu_k": 0.1, "floor.mu_s": 0.15, "stop.K": 50.0}).all(), found.table
+    assert found.runs == found.evaluations
+
+
+def test_a_declared_systems_event_times_are_refused_with_what_can_be_fitted():
+    chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
+    data = pd.DataFrame({"kind": ["sticks", "slips", "sticks"], "t": [1.0, 2.0, 3.0]})
     with pytest.raises(InputError) as refused:
         osc.calibrate(chain, data, {"floor.mu_k": (0.05, 0.12)})
-    assert "a declared system's time series and event times cannot be fitted yet; fit its steady" in str(refused.value)
+    assert "a declared system's event times cannot be fitted yet; fit its steady" in str(refused.value)
 
 
 def test_the_worked_time_series_prints_what_the_page_shows(capsys):

@@ -342,9 +342,9 @@ def calibrate(
         outside it).
     data : DataFrame
         Steady responses: columns ``over``, ``measure``, ``value`` and optionally ``sigma``; a
-        time series of the article's system: ``t``, ``variable`` (``x1``, ``v1``, ``x2``,
-        ``v2``), ``value`` and optionally ``sigma``; event times: ``kind``, ``t`` and optionally
-        ``mass`` and ``sigma`` (:mod:`~oscillator.calibrating.measured`).
+        time series: ``t``, ``variable`` (a state's name: ``x1``, ``v2``, ``x:part``), ``value``
+        and optionally ``sigma``; the article's system's event times: ``kind``, ``t`` and
+        optionally ``mass`` and ``sigma`` (:mod:`~oscillator.calibrating.measured`).
     vary : mapping
         Each fitted parameter's range, ``{"mu_k": (0.05, 0.2), "K6": (0.5, 5)}``.
     over : str
@@ -403,11 +403,15 @@ def _model_of(
         _check_points(model, measured)
         return measured, lambda: Responses(model, measured, names, transient=transient)
     if isinstance(model, FrictionChain):
-        raise InputError(
-            "a declared system's time series and event times cannot be fitted yet; fit its steady responses "
-            f"(columns {over!r}, 'measure', 'value'), or the article's system's time series",
-            field="data",
-        )
+        if "kind" in data.columns:  # type: ignore[attr-defined]
+            raise InputError(
+                "a declared system's event times cannot be fitted yet; fit its steady responses (columns "
+                f"{over!r}, 'measure', 'value') or its time series (t, variable, value)",
+                field="data",
+            )
+        chain = model
+        measured = check_series(data, len(names), chain.t0, tuple(map(str, chain.system.state)))
+        return measured, lambda: Series(chain, measured, names)
     if "kind" in data.columns:  # type: ignore[attr-defined]
         kinds = tuple(kind.value for kind in EventKind if kind.switches)
         timed = check_events(data, len(names), model.initial.t0, kinds, model.system.masses)

@@ -5,8 +5,10 @@ One run of the model from its start to the last measured time (CVODE, its tolera
 saltation rule with the switch times' own derivatives at each switch
 (:func:`oscillator.orbits.sensitivity.tangent_pass`, the pass the orbits' sensitivities use, here
 from ``sigma = 0`` at the fixed start): ``y(t_k)`` and ``dy(t_k)/dc`` at every measured time
-``t_k``, through stick, slip and impact.  Where the run's sequence of events changes between two
-fit steps, a crossing is recorded: the derivatives hold on each side, not across.
+``t_k``, through stick, slip and impact.  A declared system's run takes its own tangent pass
+(:func:`oscillator.orbits.chain_tangents.tangent_pass`, from ``Psi = 0``).  Where the run's
+sequence of events changes between two fit steps, a crossing is recorded: the derivatives hold
+on each side, not across.
 """
 
 from __future__ import annotations
@@ -21,10 +23,11 @@ from oscillator.calibrating.steady import Crossing
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case
+from oscillator.model.chains import FrictionChain
 from oscillator.orbits.sensitivity import tangent_pass
 from oscillator.orbits.shooting import orbit_case
 
-__all__ = ["Series", "trajectory_sensitivities"]
+__all__ = ["Series", "chain_trajectory_sensitivities", "trajectory_sensitivities"]
 
 #: The run ends this share of a forcing period after the last measured time (a time must lie
 #: inside a piece of the run).
@@ -48,10 +51,37 @@ def trajectory_sensitivities(
     return states, derivatives, within[["t", "kind", "mass"]].astype({"kind": str}).reset_index(drop=True)
 
 
-class Series:
-    """``series(theta) -> (fitted, jacobian)`` over the rows of a measured time series."""
+def chain_trajectory_sensitivities(
+    chain: FrictionChain, names: Sequence[str], times: Sequence[float] | np.ndarray
+) -> tuple[np.ndarray, np.ndarray, pd.DataFrame]:
+    """As :func:`trajectory_sensitivities` for a declared system: its run to the last of
+    ``times`` (the solver stopping at each, tolerances as its orbits'), then its tangent pass
+    (:func:`oscillator.orbits.chain_tangents.tangent_pass`, ``Psi = 0`` at the start); the
+    events' ``mass`` is the element's name."""
+    from oscillator.hybrid.chain_run import simulate_chain
+    from oscillator.orbits.chain_orbits import ORBIT_OPTIONS
+    from oscillator.orbits.chain_tangents import tangent_pass as chain_pass
 
-    def __init__(self, case: Case, measured: Measured, names: Sequence[str]) -> None:
+    marks = np.asarray(times, dtype=float)
+    end = float(marks.max()) + _BEYOND * chain.period
+    run = simulate_chain(chain, t_end=end, options=ORBIT_OPTIONS, at=marks)
+    along = chain_pass(run, names)
+    n = len(chain.system.state)
+    # the solver stops at each mark to within its rounding, on either side
+    rows = np.searchsorted(run.times, marks - 1e-9 * np.maximum(1.0, np.abs(marks)))
+    states = run.states[rows]
+    derivatives = np.array([along.at(float(t))[:, n:] for t in marks])
+    events = run.events
+    within = events[events.t <= marks.max()]
+    table = pd.DataFrame({"t": within.t, "kind": within.kind.astype(str), "mass": within.element.astype(str)})
+    return states, derivatives, table.reset_index(drop=True)
+
+
+class Series:
+    """``series(theta) -> (fitted, jacobian)`` over the rows of a measured time series, of the
+    article's system or of a declared one."""
+
+    def __init__(self, case: Case | FrictionChain, measured: Measured, names: Sequence[str]) -> None:
         self.case, self.measured, self.names = case, measured, tuple(names)
         self.evaluations = 0
         self.crossings: list[Crossing] = []
@@ -63,8 +93,12 @@ class Series:
 
     def __call__(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         self.evaluations += 1
-        case = orbit_case(self.case, dict(zip(self.names, map(float, theta), strict=True)))
-        states, derivatives, events = trajectory_sensitivities(case, self.names, self._times)
+        given = dict(zip(self.names, map(float, theta), strict=True))
+        if isinstance(self.case, FrictionChain):
+            found = chain_trajectory_sensitivities(self.case.with_values(given), self.names, self._times)
+        else:
+            found = trajectory_sensitivities(orbit_case(self.case, given), self.names, self._times)
+        states, derivatives, events = found
         before = self._events
         if before is not None and not before[["kind", "mass"]].equals(events[["kind", "mass"]]):
             self.crossings.append(Crossing(self.evaluations, _first_change(before, events), len(before), len(events)))
