@@ -455,3 +455,19 @@ def test_a_runs_tables_are_built_when_read_and_its_arrays_are_theirs(tmp_path):
                 np.testing.assert_array_equal(run.mode_of(element.name), trajectory[f"mode:{element.name}"].to_numpy())
                 np.testing.assert_array_equal(run.modes()[:, k], trajectory[f"mode:{element.name}"].to_numpy())
     assert len(before[0]) >= 4 and np.array_equal(before[0], result.switches()[0])
+
+
+def test_a_runs_rows_at_its_marks_are_found_where_the_solver_landed_a_hair_either_side():
+    """The solver stops at a mark to within its rounding: a plain search took the next step after
+    a mark landed a hair early (a calibration's state at t = 1.962 s, a sweep's section point)."""
+    import numpy as np
+    import pytest
+
+    from oscillator.errors import SimulationFailed
+    from oscillator.hybrid.chain_run import rows_at
+
+    times = np.array([0.0, 1.0 - 1e-13, 1.5, 2.0 + 1e-13, 2.0 + 1e-13, 3.0])
+    assert rows_at(times, np.array([1.0, 2.0, 3.0]), 6.28).tolist() == [1, 3, 5]
+    assert np.searchsorted(times, 1.0) == 2  # what a plain search gives
+    with pytest.raises(SimulationFailed, match="did not stop at every marked time"):
+        rows_at(times, np.array([1.2]), 6.28)

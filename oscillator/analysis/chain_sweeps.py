@@ -29,7 +29,7 @@ import pandas as pd
 from oscillator.analysis.periods import detect_period
 from oscillator.analysis.sweep_points import PointTables, frame_of
 from oscillator.errors import InputError, OscillatorError
-from oscillator.hybrid.chain_run import ChainResult, simulate_chain, stuck_spans
+from oscillator.hybrid.chain_run import ChainResult, rows_at, simulate_chain, stuck_spans
 from oscillator.model.chain_rules import ChainEventKind
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SweepSettings
@@ -156,8 +156,7 @@ def _poincare(run: ChainResult, marks: np.ndarray, param: str, value: float, ind
     events there."""
     names = list(run.chain.system.state)
     rows = run.trajectory.drop_duplicates("t", keep="last").set_index("t")
-    near = np.searchsorted(rows.index.to_numpy(float), marks)
-    at = rows.iloc[np.minimum(near, len(rows) - 1)]
+    at = rows.iloc[rows_at(rows.index.to_numpy(float), marks, run.chain.period)]
     table = pd.DataFrame({"n": np.arange(len(marks)), "t": marks})
     for name in names:
         table[name] = at[name].to_numpy(float)

@@ -41,7 +41,7 @@ from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing
 from oscillator.attractors.store import LandingStore
 from oscillator.errors import InputError, OscillatorError, Reason, SimulationFailed
 from oscillator.hybrid.batch import SETTLE_CHUNK
-from oscillator.hybrid.chain_run import ChainResult, simulate_chain, stuck_spans
+from oscillator.hybrid.chain_run import ChainResult, rows_at, simulate_chain, stuck_spans
 from oscillator.model.chain_fields import state_of
 from oscillator.model.chain_rules import ChainEventKind
 from oscillator.model.chains import FrictionChain
@@ -82,9 +82,7 @@ def _sections(chain: FrictionChain, state: np.ndarray, periods: int) -> tuple[np
     run = simulate_chain(chain, float(marks[-1]), options=LANDING_OPTIONS, at=marks[1:-1], start_state=state)
     trajectory = run.trajectory.drop_duplicates("t", keep="last")
     times = trajectory.t.to_numpy(float)
-    rows = np.clip(np.searchsorted(times, marks - 1e-9 * chain.period), 0, len(times) - 1)
-    if np.max(np.abs(times[rows] - marks)) > 1e-9 * chain.period:  # pragma: no cover - the solver stops there
-        raise SimulationFailed("the run did not stop at every section time", reason=Reason.SOLVER_FAILURE)
+    rows = rows_at(times, marks, chain.period)
     points = trajectory[list(chain.system.state)].to_numpy(float)[rows]
     points[-1] = run.y_end[: chain.system.size]
     return points, run

@@ -58,7 +58,7 @@ def chain_trajectory_sensitivities(
     ``times`` (the solver stopping at each, tolerances as its orbits'), then its tangent pass
     (:func:`oscillator.orbits.chain_tangents.tangent_pass`, ``Psi = 0`` at the start); the
     events' ``mass`` is the element's name."""
-    from oscillator.hybrid.chain_run import simulate_chain
+    from oscillator.hybrid.chain_run import rows_at, simulate_chain
     from oscillator.orbits.chain_orbits import ORBIT_OPTIONS
     from oscillator.orbits.chain_tangents import tangent_pass as chain_pass
 
@@ -67,9 +67,7 @@ def chain_trajectory_sensitivities(
     run = simulate_chain(chain, t_end=end, options=ORBIT_OPTIONS, at=marks)
     along = chain_pass(run, names)
     n = len(chain.system.state)
-    # the solver stops at each mark to within its rounding, on either side
-    rows = np.searchsorted(run.times, marks - 1e-9 * np.maximum(1.0, np.abs(marks)))
-    states = run.states[rows]
+    states = run.states[rows_at(run.times, marks, chain.period)]
     derivatives = np.array([along.at(float(t))[:, n:] for t in marks])
     events = run.events
     within = events[events.t <= marks.max()]

@@ -30,7 +30,7 @@ from oscillator.presenting import presenter
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["ChainResult", "closed_spans", "mode_spans", "simulate_chain", "stuck_spans"]
+__all__ = ["ChainResult", "closed_spans", "mode_spans", "rows_at", "simulate_chain", "stuck_spans"]
 
 #: The forcing periods a run lasts when no end is given.
 DEFAULT_PERIODS = 10
@@ -356,6 +356,22 @@ def _supervise(
 
 
 # -- the spans of a run in which an element is in a mode (its events between) ----------------------
+
+
+def rows_at(times: np.ndarray, marks: np.ndarray, period: float) -> np.ndarray:
+    """The row of ``times`` (increasing; the first of several equal ones) at each of ``marks``,
+    times a run was told to stop at (``simulate_chain(..., at=marks)``).  The solver lands on a
+    mark to within its rounding, on either side: a row within ``1e-9`` of a ``period`` counts.
+
+    Raises
+    ------
+    SimulationFailed
+        A mark the run did not stop at.
+    """
+    rows = np.clip(np.searchsorted(times, marks - 1e-9 * period), 0, len(times) - 1)
+    if len(rows) and np.max(np.abs(times[rows] - marks)) > 1e-9 * period:
+        raise SimulationFailed("the run did not stop at every marked time", reason=Reason.SOLVER_FAILURE)
+    return rows
 
 
 def mode_spans(run: ChainResult, element: str, start: float, span: float) -> list[tuple[float, float, int]]:
