@@ -478,3 +478,18 @@ def test_the_command_refuses_a_bad_measurement_file_in_one_line_and_writes_nothi
     assert not (tmp_path / "x").exists()
     missing = _invoke("calibrate", "instance-1", tmp_path / "none.csv", "--vary", "mu_k=0.05,0.15")
     assert missing.exit_code == 2 and "cannot read measurement file" in missing.stderr
+
+
+def test_text_from_a_measurement_file_is_printed_escaped(tmp_path):
+    """A column or measure name holding a terminal escape or markup is data: printed escaped."""
+    (tmp_path / "bad.csv").write_text(
+        "Omega,measure,value,\x1b[31m[bold]red\n1.4,x_pp_m1,7.7,1\n1.5,x_pp_m1,7.8,1\n", encoding="utf-8"
+    )
+    done = _invoke("calibrate", "instance-1", tmp_path / "bad.csv", "--vary", "mu_k=0.05,0.15")
+    assert done.exit_code == 2 and "a column the fit does not read" in done.stderr, done.output
+    assert "\x1b" not in done.output and "[bold]red" in done.stderr
+    (tmp_path / "bad.csv").write_text("Omega,measure,value\n1.4,\x1b]0;x\x07m,7.7\n1.5,x_pp_m1,7.8\n", encoding="utf-8")
+    done = _invoke("calibrate", "instance-1", tmp_path / "bad.csv", "--vary", "mu_k=0.05,0.15")
+    assert (
+        done.exit_code == 2 and "data row 1" in done.stderr and "\x1b" not in done.output and "\x07" not in done.output
+    )

@@ -95,8 +95,9 @@ def check_measured(data: object, over: str, parameters: int, measures: tuple[str
     missing = [c for c in (over, "measure", "value") if c not in data.columns]
     if missing:
         raise InputError(
-            f"data has no column {', '.join(map(repr, missing))}; give the columns {over!r}, 'measure', 'value' "
-            "and optionally 'sigma' (its columns are " + ", ".join(map(repr, map(str, data.columns))) + ")",
+            f"data has no column {', '.join(repr(printable(c)) for c in missing)}; give the columns "
+            f"{printable(over)!r}, 'measure', 'value' "
+            "and optionally 'sigma' (its columns are " + ", ".join(repr(printable(str(c))) for c in data.columns) + ")",
             field="data",
         )
     extra = [str(c) for c in data.columns if c not in (over, *_COLUMNS)]

@@ -25,6 +25,7 @@ import pandas as pd
 from oscillator.calibrating.measured import Measured
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.orbits.shooting import find_orbit
+from oscillator.text import printable
 
 __all__ = ["Crossing", "Responses"]
 
@@ -77,7 +78,7 @@ class Responses:
                 name = table.measure.iloc[k]
                 if name not in measures.index:
                     raise InputError(
-                        f"data row {k + 1}: no response measure named {name!r}; choose one of "
+                        f"data row {k + 1}: no response measure named {printable(name)!r}; choose one of "
                         f"{', '.join(measures.index[:8])}, ...",
                         field="measure",
                     )
