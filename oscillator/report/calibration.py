@@ -63,7 +63,8 @@ def calibration_figure(found: Calibration) -> Figure:
         rows = table[table[group] == name].sort_values(x)
         color, label = f"C{k % 10}", plain_label(str(name))
         ax.errorbar(rows[x], rows.value, yerr=rows.sigma, fmt="o", ms=4, color=color, label="measured")
-        ax.plot(rows[x], rows.fitted, "-" if x == "t" else "x-", lw=1, color="0.2", label="fitted")
+        shown = "fitted, at the measured times" if x == "t" else "fitted"
+        ax.plot(rows[x], rows.fitted, "-" if x == "t" else "x-", lw=1, color="0.2", label=shown)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best")
