@@ -374,6 +374,7 @@ def calibrate(
     names, low, high = _ranges(model, vary, "t" if series else over)
     options = _options(loss, f_scale, level, starts, max_evaluations)
     check_count(transient, "transient", 0, 100_000)
+    check_count(seed, "seed", 0)
     measured, make = _model_of(model, data, names, series, over, int(transient))
     before, fits, rows = runs(), [], []
     for u0 in _starts(_first(model, names, low, high), int(starts), seed):
