@@ -137,10 +137,12 @@ def parameter_plane(case: Case, x: object, y: object) -> tuple[Axis, Axis]:
 CORNERS_UP_TO = 10
 
 
-def admitted_box(case: Case, ranges: Mapping[str, tuple[float, ...]], fields: Mapping[str, str], fix: str) -> None:
-    """Every corner of the box of parameter ``ranges`` admitted by the model (``case`` with those
-    values): each end alone, then every corner (the model's constraints are intervals or orderings
-    of two parameters, so the whole box is then admitted).  A refusal is an
+def admitted_box(
+    case: Case | FrictionChain, ranges: Mapping[str, tuple[float, ...]], fields: Mapping[str, str], fix: str
+) -> None:
+    """Every corner of the box of parameter ``ranges`` admitted by the model (``case``, or a
+    declared system, with those values): each end alone, then every corner (the model's
+    constraints are intervals or orderings of two parameters, so the whole box is then admitted).  A refusal is an
     :class:`~oscillator.errors.InputError` naming the values, with ``fields`` of the refused
     corner's last parameter (``"x"``, ``"vary"``) and ``fix``."""
     names = list(ranges)
@@ -150,7 +152,7 @@ def admitted_box(case: Case, ranges: Mapping[str, tuple[float, ...]], fields: Ma
         trials += list(itertools.product(*ends))
     for trial in trials:
         try:
-            resolve_case(case, **dict(trial))
+            case.with_values(dict(trial)) if isinstance(case, FrictionChain) else resolve_case(case, **dict(trial))
         except OscillatorError as error:
             where = ", ".join(f"{name} = {value:g}" for name, value in trial)
             field = fields[trial[-1][0]]

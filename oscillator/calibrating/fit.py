@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from oscillator.analysis.axes import admitted_box
 from oscillator.calibrating.events import Events
 from oscillator.calibrating.measured import Measured, check_events, check_measured, check_series
 from oscillator.calibrating.series import Series
@@ -44,8 +45,6 @@ __all__ = ["LOSSES", "TOLERANCE", "Calibration", "calibrate"]
 #: SciPy's three stopping tests (step, cost, gradient), relative: far below any estimate's
 #: standard error, above the measures' own accuracy (about 1e-9).
 TOLERANCE = 1e-8
-#: Up to this many fitted parameters every corner of their ranges is checked; beyond, each end.
-CORNERS = 10
 
 #: The losses of SciPy's least_squares, and the weight each gives a residual ``z = (r / f)^2``
 #: at the optimum (``rho'(z)``): what a point counts for in the covariance.
@@ -180,27 +179,9 @@ def _ranges(system: Case | FrictionChain, vary: object, over: str) -> tuple[tupl
         names.append(str(name))
         low.append(float(ends[0]))
         high.append(float(ends[1]))
-    _admitted(system, names, low, high)
+    box = dict(zip(names, zip(low, high, strict=True), strict=True))
+    admitted_box(system, box, dict.fromkeys(names, "vary"), "give ranges whose every combination it admits")
     return tuple(names), np.array(low), np.array(high)
-
-
-def _admitted(system: Case | FrictionChain, names: list[str], low: list[float], high: list[float]) -> None:
-    """Every corner of the ranges' box admitted by the model (its constraints are intervals and
-    orderings of two numbers, such as ``mu_s >= mu_k``: then so is the whole box, and no step of
-    the fit is refused)."""
-    import itertools
-
-    ends = [[(name, lo), (name, hi)] for name, lo, hi in zip(names, low, high, strict=True)]
-    corners = itertools.product(*ends) if len(names) <= CORNERS else [(end,) for pair in ends for end in pair]
-    for corner in corners:
-        try:
-            _with(system, dict(corner))
-        except InputError as error:
-            where = " with ".join(f"{name} = {value:g}" for name, value in corner)
-            raise InputError(
-                f"vary: the model refuses {where} ({error}); give ranges whose every combination it admits",
-                field="vary",
-            ) from None
 
 
 def _check_points(system: Case | FrictionChain, measured: Measured) -> None:

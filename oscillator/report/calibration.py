@@ -40,8 +40,7 @@ def _residual_panel(ax: Axes, found: Calibration, group: str) -> None:
     band = 2.0 * (found.uncertainty.scale if math.isfinite(found.uncertainty.scale) else 1.0)
     ax.axhspan(-band, band, color="0.92", zorder=0, label="two standard deviations")
     ax.axhline(0.0, color="0.4", lw=0.8)
-    unit = "sigma" if "sigma" in table.columns else "the noise's scale"
-    ax.set_ylabel(f"residual / {unit}" if found.uncertainty.scale == 1.0 else "residual / sigma")
+    ax.set_ylabel("residual / sigma")
     ax.grid(alpha=0.3)
 
 
