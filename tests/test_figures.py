@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from oscillator import SweepSettings, load_case, simulate
 from oscillator.analysis.sweep_points import run_point
-from oscillator.report.figures import KIND_STYLE, draw_figures, figure_window
+from oscillator.report.figures import KIND_STYLE, SAVED_DPI, draw_figures, figure_window, save_figure
 from oscillator.report.sweep_figures import draw_sweep_figures
 
 #: Runs that show, between them, every kind of event.
@@ -217,3 +217,33 @@ def test_a_both_ways_sweep_draws_each_way_and_hides_neither(tmp_path):
         assert {"m2 rests (sliding), going up", "m2 rests (sliding), going down"} <= labels, name
         assert any(label.endswith("going down") and "rests" not in label for label in labels), name
         assert hidden_markers(figure) == [], name
+
+
+def test_a_figure_laid_out_once_is_saved_as_matplotlib_saves_it_and_left_as_it_was(tmp_path):
+    """save_figure lays a figure out once for its two files: the PNG is matplotlib's own
+    ``bbox_inches="tight"`` file pixel for pixel, the SVG the same size, and the figure keeps its
+    layout engine and resolution."""
+    import matplotlib.image
+
+    result = simulate("instance-3")
+    case = result.case
+    start = (case.initial.t0, *case.initial.y)
+
+    def drawn():
+        return draw_figures(result.trajectory, result.events, case.parameters, start, title=case.name)["fig-d-forces"]
+
+    fig = drawn()
+    engine, dpi = fig.get_layout_engine(), fig.get_dpi()
+    save_figure(fig, tmp_path, "ours")
+    assert fig.get_layout_engine() is engine and fig.get_dpi() == dpi
+    reference = drawn()
+    for suffix in ("png", "svg"):
+        reference.savefig(tmp_path / f"theirs.{suffix}", format=suffix, dpi=SAVED_DPI, bbox_inches="tight")
+    ours, theirs = (matplotlib.image.imread(tmp_path / f"{n}.png") for n in ("ours", "theirs"))
+    assert ours.shape == theirs.shape and np.array_equal(ours, theirs)
+
+    def size(name: str) -> tuple[float, float]:
+        head = (tmp_path / f"{name}.svg").read_text(encoding="utf-8")[:2000]
+        return tuple(float(re.search(rf'{key}="([\d.]+)pt"', head).group(1)) for key in ("width", "height"))
+
+    assert size("ours") == pytest.approx(size("theirs"), rel=0.01)

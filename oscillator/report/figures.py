@@ -36,6 +36,7 @@ from oscillator.model.system import ARTICLE
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+    from matplotlib.transforms import Bbox
 
     from oscillator.io.cases import Case
 
@@ -86,6 +87,8 @@ _LAYER = {kind: 6 + rank for rank, kind in enumerate(sorted(KIND_STYLE, key=lamb
 #: A run longer than this many forcing periods is drawn over its last :data:`SHOWN_PERIODS`.
 LONG_RUN_PERIODS = 20
 SHOWN_PERIODS = 10
+#: Resolution of the PNG files (dots per inch).
+SAVED_DPI = 110
 
 
 @dataclass(frozen=True)
@@ -427,10 +430,34 @@ def save_figure(fig: Figure, directory: Path, name: str, *, tight: bool = True) 
     """Save a figure as PNG and SVG, each atomically (temporary name, then rename); ``tight``:
     cropped to what is drawn."""
     paths = [directory / f"{name}{suffix}" for suffix in (".png", ".svg")]
-    for path in paths:
-        with atomic_path(path) as temporary:
-            fig.savefig(temporary, format=path.suffix[1:], dpi=110, bbox_inches="tight" if tight else None)
+    engine, dpi = fig.get_layout_engine(), fig.get_dpi()
+    try:
+        box = _laid_out(fig, tight)
+        for path in paths:
+            with atomic_path(path) as temporary:
+                fig.savefig(temporary, format=path.suffix[1:], dpi=SAVED_DPI, bbox_inches=box)
+    finally:  # the figure as it was: its layout engine and resolution
+        fig.set_layout_engine(engine)
+        fig.set_dpi(dpi)
     return paths
+
+
+def _laid_out(fig: Figure, tight: bool) -> Bbox | None:
+    """Lay ``fig`` out once at :data:`SAVED_DPI` and hold that layout for each format saved; its
+    drawn extent, padded as matplotlib pads ``bbox_inches="tight"``, when ``tight``.
+
+    matplotlib lays a figure out and measures its text again for every file it writes; a figure
+    is most of a run's cost (``benchmarks/figures.py``), and laid out once it is drawn once per
+    format."""
+    import matplotlib as mpl
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig.set_dpi(SAVED_DPI)
+    renderer = FigureCanvasAgg(fig).get_renderer()  # type: ignore[no-untyped-call]
+    fig.draw_without_rendering()  # the layout engine places the axes
+    box = fig.get_tightbbox(renderer).padded(mpl.rcParams["savefig.pad_inches"]) if tight else None
+    fig.set_layout_engine("none")
+    return box
 
 
 def missing_figures(directory: Path) -> list[str]:
