@@ -4,6 +4,9 @@ as 1/sqrt(n), what the data cannot identify named, bad data refused by row and c
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from functools import cache
 from pathlib import Path
 
@@ -129,6 +132,43 @@ def test_several_starts_keep_the_best_and_say_each():
     assert len(found.starts) == 2 and found.starts.mu_k[0] == 0.1 and found.starts.K6[0] == 1.0
     assert found.cost == pytest.approx(found.starts.cost.min(), rel=1e-9)
     assert found.runs >= sum(found.starts.evaluations)  # every evaluation ran at least one simulation
+
+
+def test_a_calibration_kept_in_its_folder_resumes_with_the_starts_it_finished(tmp_path):
+    """Each start's fit is kept as it ends: run again, the folder's starts are read back (no
+    simulation) and a missing one is fitted again, to the same estimate and counts; a damaged
+    part is refused by name, and a folder of another calibration is refused."""
+    from oscillator.calibrating.store import calibration_store
+    from oscillator.hybrid.counting import runs
+
+    data = _noisy(_responses((1.4, 1.6), ("x_pp_m1", "impact_max_right")), 0.02, np.random.default_rng(8))
+    case, vary = osc.resolve_case("instance-1", **IMPACTING), {"mu_k": (0.05, 0.2), "K6": (0.5, 3)}
+
+    def store():
+        return calibration_store(tmp_path / "fit", case, data, vary, starts=3)
+
+    first_store, done = store(), []
+    first = calibrate(case, data, vary, starts=3, store=first_store, progress=lambda k, n: done.append((k, n)))
+    assert done == [(1, 3), (2, 3), (3, 3)] and sorted(p.name for p in (tmp_path / "fit" / "parts").iterdir()) == [
+        "start-000.parquet", "start-001.parquet", "start-002.parquet"
+    ]  # fmt: skip
+    before, again = runs(), store()
+    resumed = calibrate(case, data, vary, starts=3, store=again)
+    assert runs() == before and again.reused == 3
+    pd.testing.assert_frame_equal(resumed.table, first.table)
+    pd.testing.assert_frame_equal(resumed.starts, first.starts)
+    assert resumed.runs == first.runs == first.starts.runs.sum() and resumed.cost == first.cost
+    (tmp_path / "fit" / "parts" / "start-001.parquet").unlink()
+    partial = store()
+    refitted = calibrate(case, data, vary, starts=3, store=partial)
+    assert partial.reused == 2 and runs() - before == first.starts.runs[1]
+    pd.testing.assert_frame_equal(refitted.starts, first.starts)
+    (tmp_path / "fit" / "parts" / "start-002.parquet").write_bytes(b"garbage")
+    with pytest.raises(InputError, match=r"start-002.parquet is damaged \(it cannot be read\)"):
+        calibrate(case, data, vary, starts=3, store=store())
+    other = calibration_store(tmp_path / "fit", case, data, vary, starts=3, loss="soft_l1")
+    with pytest.raises(InputError, match="holds another calibration computation"):
+        other.check()
 
 
 def test_a_declared_systems_friction_is_recovered_by_element_and_field():
@@ -348,12 +388,62 @@ def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time
     assert found.runs == found.evaluations
 
 
-def test_a_declared_systems_event_times_are_refused_with_what_can_be_fitted():
+def test_a_declared_systems_event_times_derivatives_are_richardsons_differences():
+    """The rattler's switch times (sticking, slipping, passing the floor's speed, the stop closing
+    and opening) and ``dt_s/dc`` from its tangent pass, against Richardson differences of its runs'
+    switch times: 1e-7 of each plus the differences' resolution (1e-10 over the step)."""
+    from oscillator.calibrating.events import chain_event_sensitivities
+
     chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
-    data = pd.DataFrame({"kind": ["sticks", "slips", "sticks"], "t": [1.0, 2.0, 3.0]})
+    names = tuple(RATTLER_STEPS)
+    events = chain_event_sensitivities(chain, names, 20.0)
+    assert {"sticks", "slips", "passable", "stop_closes", "stop_opens"} <= set(events.kind)
+    for name in names:
+        value = chain.value(name)
+        step = RATTLER_STEPS[name] * max(abs(value), 1.0)
+
+        def times(v, name=name):
+            moved = chain_event_sensitivities(chain.with_values({name: v}), (), 20.0)
+            assert moved.kind.tolist() == events.kind.tolist()  # the same sequence either side
+            return moved.t.to_numpy()
+
+        exact = events[f"dt/d{name}"].to_numpy()
+        differenced = _richardson(times, value, step)
+        assert (np.abs(exact - differenced) <= 1e-7 * np.abs(exact) + 1e-10 / step).all(), (
+            name, np.abs(exact - differenced).max()
+        )  # fmt: skip
+
+
+def test_a_declared_systems_friction_and_stop_are_recovered_from_measured_stick_slip_and_impact_times(capsys):
+    """docs/calibration.md's declared system's event times: its block prints the block under it,
+    and the truth lies inside every interval."""
+    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    part = page.split("## From measured event times", 1)[1].split("element` (a", 1)[1]
+    code = part.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
+    namespace: dict = {}
+    exec(compile(code, "docs/calibration.md", "exec"), namespace)
+    assert capsys.readouterr().out == shown
+    found, picked = namespace["found"], namespace["picked"]
+    assert found.success and _inside(found, {"floor.mu_k": 0.1, "floor.mu_s": 0.15, "stop.K": 50.0}).all(), found.table
+    assert found.runs == found.evaluations and list(found.residuals.element) == list(picked.element)
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (lambda d: d.assign(element=["floor", "wall", "floor"]), "element", "data row 2: element is 'wall'; give one"),
+        (lambda d: d.assign(kind=["sticks", "grazing", "slips"]), "measure", "'grazing'"),
+        (lambda d: d.rename(columns={"element": "mass"}), "data", "the fit does not read 'mass'"),
+    ],
+)
+def test_a_declared_systems_bad_event_times_are_refused_by_row_and_column(change, field, words):
+    chain = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
+    good = pd.DataFrame({"kind": ["sticks", "stop_closes", "slips"], "element": ["floor", "stop", "floor"],
+                         "t": [1.0, 2.0, 3.0]})  # fmt: skip
     with pytest.raises(InputError) as refused:
-        osc.calibrate(chain, data, {"floor.mu_k": (0.05, 0.12)})
-    assert "a declared system's event times cannot be fitted yet; fit its steady" in str(refused.value)
+        osc.calibrate(chain, change(good), {"floor.mu_k": (0.05, 0.12)})
+    assert refused.value.field == field and words in str(refused.value), str(refused.value)
 
 
 def test_the_worked_time_series_prints_what_the_page_shows(capsys):
@@ -462,6 +552,51 @@ def test_the_command_fits_a_measurement_file_and_writes_what_the_library_finds(t
     residuals = pd.read_parquet(tmp_path / "fit" / "residuals.parquet")
     report = (tmp_path / "fit" / "report.md").read_text(encoding="utf-8")
     assert len(residuals) == len(picked) and f"K3 fitted to {len(picked)} measurements of event times" in report
+
+
+def test_the_command_resumes_its_folder_and_says_how_much_it_read_back(tmp_path):
+    data = _noisy(_responses((1.4, 1.6), ("x_pp_m1",)), 0.02, np.random.default_rng(9))
+    data.to_csv(tmp_path / "measured.csv", index=False)
+    command = ["calibrate", "instance-1", tmp_path / "measured.csv", "--vary", "mu_k=0.05,0.2", "--starts", "2",
+               "--set", "d=1", "--set", "d1=3.5", "--out", tmp_path / "fit", "--no-plots"]  # fmt: skip
+    first = _invoke(*command)
+    assert first.exit_code == 0 and "resumed" not in first.output, first.output
+    estimate = pd.read_csv(tmp_path / "fit" / "estimate.csv")
+    (tmp_path / "fit" / "parts" / "start-001.parquet").unlink()
+    (tmp_path / "fit" / "estimate.csv").unlink()
+    again = _invoke(*command, "--level", "0.9")  # the intervals' level is not the fits': it resumes
+    assert again.exit_code == 0 and "resumed: 1 starts read from" in again.stdout, again.output
+    rewritten = pd.read_csv(tmp_path / "fit" / "estimate.csv")
+    assert np.array_equal(rewritten.estimate, estimate.estimate) and np.array_equal(rewritten.stderr, estimate.stderr)
+    assert (rewritten.ci_high - rewritten.ci_low < estimate.ci_high - estimate.ci_low).all()
+    kept = json.loads((tmp_path / "fit" / "calibration.json").read_text(encoding="utf-8"))
+    assert kept["status"] == "computed" and kept["level"] == 0.9 and kept["estimate"]["mu_k"] == estimate.estimate[0]
+    other = _invoke(*command[:-3], "--out", tmp_path / "fit", "--loss", "huber")
+    assert other.exit_code == 2 and "holds another calibration computation" in other.stderr, other.output
+
+
+@pytest.mark.slow
+def test_ctrl_c_between_starts_keeps_the_finished_ones_and_the_same_command_resumes(tmp_path):
+    import signal
+
+    from conftest import start_reaching
+
+    _noisy(_responses((1.4, 1.6), ("x_pp_m1",)), 0.02, np.random.default_rng(9)).to_csv(
+        tmp_path / "measured.csv", index=False
+    )
+    command = ["calibrate", "instance-1", "measured.csv", "--vary", "mu_k=0.05,0.2", "--starts", "3",
+               "--set", "d=1", "--set", "d1=3.5", "--out", "fit", "--no-plots"]  # fmt: skip
+    process = start_reaching("oscillator.calibrating.fit._start", command, call=2, cwd=tmp_path)  # one start done
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 130, (out, err)
+    assert err.strip().endswith("interrupted; the starts finished so far are kept: run the same command to resume")
+    assert sorted(p.name for p in (tmp_path / "fit" / "parts").iterdir()) == ["start-000.parquet"]
+    assert json.loads((tmp_path / "fit" / "calibration.json").read_text(encoding="utf-8"))["status"] == "running"
+    again = subprocess.run([str(Path(sys.executable).with_name("oscillator")), *command], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert again.returncode == 0 and "resumed: 1 starts read from fit" in again.stdout, again.stdout + again.stderr
+    assert len(pd.read_parquet(tmp_path / "fit" / "starts.parquet")) == 3
 
 
 @pytest.mark.parametrize(

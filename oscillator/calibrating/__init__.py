@@ -11,5 +11,6 @@
   and their derivatives;
 * :mod:`~oscillator.calibrating.uncertainty`: covariance, confidence intervals, correlations and
   the combinations of parameters the data cannot tell apart;
-* :mod:`~oscillator.calibrating.fit`: :func:`calibrate`, least squares from one or several starts.
+* :mod:`~oscillator.calibrating.fit`: :func:`calibrate`, least squares from one or several starts;
+* :mod:`~oscillator.calibrating.store`: a calibration's resumable folder, each start kept as it ends.
 """

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -30,17 +30,21 @@ from oscillator.analysis.axes import admitted_box
 from oscillator.calibrating.events import Events
 from oscillator.calibrating.measured import Measured, check_events, check_measured, check_series
 from oscillator.calibrating.series import Series
-from oscillator.calibrating.steady import Responses
+from oscillator.calibrating.steady import Crossing, Responses
 from oscillator.calibrating.uncertainty import Uncertainty, uncertainty
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.counting import runs
 from oscillator.io.cases import Case, resolve_case
+from oscillator.model.chain_rules import ChainEventKind
 from oscillator.model.chains import FrictionChain
 from oscillator.model.events import EventKind
 from oscillator.model.parameters import Parameters, check_count, is_finite_number
 from oscillator.text import printable, shown
 
-__all__ = ["LOSSES", "TOLERANCE", "Calibration", "calibrate"]
+if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.calibrating.store import CalibrationStore
+
+__all__ = ["LOSSES", "TOLERANCE", "Calibration", "Fit", "calibrate"]
 
 #: SciPy's three stopping tests (step, cost, gradient), relative: far below any estimate's
 #: standard error, above the measures' own accuracy (about 1e-9).
@@ -76,7 +80,8 @@ class Calibration:
         The measured rows with ``fitted`` and ``residual`` (measured minus fitted) and ``weight``
         (1, or less where a robust loss discounted the row).
     starts : DataFrame
-        Each start's values, its end's ``cost``, ``evaluations`` and ``status``.
+        Each start's values, its end's ``cost``, ``evaluations``, ``runs`` (simulations) and
+        ``status``.
     crossings : DataFrame
         Where the switching sequence of a measured point's orbit changed during the best fit:
         ``evaluation``, the measured parameter's value, the switches per return before and after.
@@ -207,9 +212,10 @@ def _first(system: Case | FrictionChain, names: tuple[str, ...], low: np.ndarray
 
 
 @dataclass(frozen=True)
-class _Fit:
+class Fit:
     """One start's end: the scaled point, the weighted residuals and Jacobian there, SciPy's
-    verdict and the responses' record."""
+    verdict, the simulations it took, and where its points' switching sequences changed
+    (:class:`~oscillator.calibrating.steady.Crossing`) and what was noted on the way."""
 
     u: np.ndarray
     cost: float
@@ -219,12 +225,14 @@ class _Fit:
     evaluations: int
     message: str
     success: bool
-    responses: Responses | Series | Events
+    runs: int = 0
+    crossings: tuple[Crossing, ...] = ()
+    notes: tuple[str, ...] = ()
 
 
 def _fit(
     responses: Responses | Series | Events, low: np.ndarray, high: np.ndarray, u0: np.ndarray, options: dict[str, Any]
-) -> _Fit:
+) -> Fit:
     """Least squares from ``u0`` (scaled to the ranges) with the exact Jacobian."""
     from scipy.optimize import least_squares
 
@@ -263,17 +271,8 @@ def _fit(
         gtol=TOLERANCE,
     )
     r, jacobian, fitted = at(solved.x)
-    return _Fit(
-        solved.x,
-        float(solved.cost),
-        r,
-        jacobian / width,
-        fitted,
-        responses.evaluations,
-        solved.message,
-        bool(solved.success),
-        responses,
-    )
+    verdict = {"message": solved.message, "success": bool(solved.success)}
+    return Fit(solved.x, float(solved.cost), r, jacobian / width, fitted, responses.evaluations, **verdict)
 
 
 def _starts(first: np.ndarray, count: int, seed: int) -> np.ndarray:
@@ -312,6 +311,8 @@ def calibrate(
     transient: int = 100,
     seed: int = 0,
     max_evaluations: int = 100,
+    store: CalibrationStore | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Calibration:
     """Fit the parameters ``vary`` of ``system`` to the measured steady responses ``data``
     (module docstring; docs/calibration.md).
@@ -342,6 +343,13 @@ def calibrate(
         Forcing periods simulated from the model's start to settle on each point's orbit.
     seed, max_evaluations : int
         The spread starts' seed; model evaluations per start at most.
+    store : CalibrationStore, optional
+        A resumable folder (:func:`~oscillator.calibrating.store.calibration_store`): each start's
+        fit is kept in it as it ends, and a start it holds is read back instead of fitted again.
+        It is checked (a folder of another calibration is refused) and created once the data and
+        the ranges are admitted.
+    progress : callable, optional
+        ``progress(done, total)`` after each start.
 
     Raises
     ------
@@ -356,23 +364,55 @@ def calibrate(
     options = _options(loss, f_scale, level, starts, max_evaluations)
     check_count(transient, "transient", 0, 100_000)
     check_count(seed, "seed", 0)
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress must be a function of (done, total), got {shown(progress)}", field="progress")
     measured, make = _model_of(model, data, names, series, over, int(transient))
-    before, fits, rows = runs(), [], []
-    for u0 in _starts(_first(model, names, low, high), int(starts), seed):
-        responses = make()
-        start = dict(zip(names, low + u0 * (high - low), strict=True))
-        try:
-            fit = _fit(responses, low, high, u0, options)
-        except SimulationFailed as error:
-            rows.append(start | {"cost": math.nan, "evaluations": responses.evaluations, "status": str(error)})
-            continue
-        fits.append(fit)
-        status = "converged" if fit.success else fit.message
-        rows.append(start | {"cost": fit.cost, "evaluations": fit.evaluations, "status": status})
+    points = _starts(_first(model, names, low, high), int(starts), seed)
+    if store is not None:  # the data and the ranges admitted: the folder is made (or resumed)
+        store.check()
+        store.open()
+    ends, rows = [], []
+    for k, u0 in enumerate(points):
+        end = _start(make, (low, high), u0, options, (store, k, len(measured.table)))
+        ends.append(end)
+        status = "converged" if end.success else end.message
+        rows.append(
+            dict(zip(names, low + u0 * (high - low), strict=True))
+            | {"cost": end.cost, "evaluations": end.evaluations, "runs": end.runs, "status": status}
+        )
+        if progress is not None:
+            progress(k + 1, len(points))
+    fits = [end for end in ends if math.isfinite(end.cost)]
     if not fits:
         raise SimulationFailed(f"no start reached a fit: {rows[0]['status']}", reason=Reason.NO_ORBIT)
     best = min(fits, key=lambda f: f.cost)
-    return _result(model, measured, (names, low, high), best, pd.DataFrame(rows), runs() - before, options, level)
+    spent = sum(end.runs for end in ends)
+    return _result(model, measured, (names, low, high), best, pd.DataFrame(rows), spent, options, level)
+
+
+def _start(
+    make: Callable[[], Responses | Series | Events],
+    ranges: tuple[np.ndarray, np.ndarray],
+    u0: np.ndarray,
+    options: dict[str, Any],
+    kept: tuple[CalibrationStore | None, int, int],
+) -> Fit:
+    """The fit from ``u0``: read back from the store where it holds it (start ``k`` of a
+    resumed calibration of ``rows`` measurements), else computed and kept there. A start from
+    which no orbit is found ends with a NaN cost and the failure as its message."""
+    store, k, rows = kept
+    if store is not None and (found := store.read_fit(k, u0, rows)) is not None:
+        return found
+    before, responses = runs(), make()
+    try:
+        end = _fit(responses, *ranges, u0, options)
+    except SimulationFailed as error:
+        nothing = np.empty((0, len(u0)))
+        end = Fit(u0, math.nan, nothing[:, 0], nothing, nothing[:, 0], responses.evaluations, str(error), False)
+    end = replace(end, runs=runs() - before, crossings=tuple(responses.crossings), notes=tuple(responses.notes))
+    if store is not None:
+        store.write_fit(k, u0, end)
+    return end
 
 
 def _model_of(
@@ -385,13 +425,12 @@ def _model_of(
         _check_points(model, measured)
         return measured, lambda: Responses(model, measured, names, transient=transient)
     if isinstance(model, FrictionChain):
-        if "kind" in data.columns:  # type: ignore[attr-defined]
-            raise InputError(
-                "a declared system's event times cannot be fitted yet; fit its steady responses (columns "
-                f"{over!r}, 'measure', 'value') or its time series (t, variable, value)",
-                field="data",
-            )
         chain = model
+        if "kind" in data.columns:  # type: ignore[attr-defined]
+            kinds = tuple(kind.value for kind in ChainEventKind if kind is not ChainEventKind.GRAZING)
+            elements = tuple(element.name for element in chain.elements)
+            events = check_events(data, len(names), chain.t0, kinds, elements, by="element")
+            return events, lambda: Events(chain, events, names)
         measured = check_series(data, len(names), chain.t0, tuple(map(str, chain.system.state)))
         return measured, lambda: Series(chain, measured, names)
     if "kind" in data.columns:  # type: ignore[attr-defined]
@@ -414,7 +453,7 @@ def _result(
     model: Case | FrictionChain,
     measured: Measured,
     ranges: tuple[tuple[str, ...], np.ndarray, np.ndarray],
-    best: _Fit,
+    best: Fit,
     starts: pd.DataFrame,
     spent: int,
     options: dict[str, Any],
@@ -434,7 +473,7 @@ def _result(
     table["ci_low"], table["ci_high"] = found.intervals.low, found.intervals.high
     residuals = measured.table.assign(fitted=best.fitted, residual=measured.table.value - best.fitted, weight=weight)
     crossings = pd.DataFrame(
-        [(c.evaluation, c.at, c.before, c.after) for c in best.responses.crossings],
+        [(c.evaluation, c.at, c.before, c.after) for c in best.crossings],
         columns=["evaluation", measured.over, "switches_before", "switches_after"],
     )
     return Calibration(
@@ -446,7 +485,7 @@ def _result(
         residuals=residuals,
         starts=starts,
         crossings=crossings,
-        notes=tuple(best.responses.notes),
+        notes=best.notes,
         cost=best.cost,
         evaluations=best.evaluations,
         runs=spent,

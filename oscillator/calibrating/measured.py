@@ -178,33 +178,32 @@ def check_series(data: object, parameters: int, t0: float, variables: tuple[str,
 
 
 def check_events(
-    data: object, parameters: int, t0: float, kinds: tuple[str, ...], masses: tuple[object, ...]
+    data: object,
+    parameters: int,
+    t0: float,
+    kinds: tuple[str, ...],
+    masses: tuple[object, ...],
+    *,
+    by: str = "mass",
 ) -> Measured:
     """Measured event times (a DataFrame: ``kind``, one of ``kinds``, ``t``, and optionally
-    ``mass``, one of ``masses``, and ``sigma`` in seconds), checked by row and column; ``value``
-    is the time."""
+    ``sigma`` in seconds and the column ``by``: the article's ``mass``, one of ``masses``, or a
+    declared system's ``element``, one of its elements' names), checked by row and column;
+    ``value`` is the time. A row without ``by`` matches the kind's event of any mass or element."""
     if not isinstance(data, pd.DataFrame):
         raise InputError(f"data must be a pandas DataFrame of measurements, got {shown(data)}", field="data")
-    extra = [str(c) for c in data.columns if c not in ("kind", "mass", "t", "sigma")]
+    extra = [str(c) for c in data.columns if c not in ("kind", by, "t", "sigma")]
     if "t" not in data.columns or extra:
         raise InputError(
-            "measured events need the columns 'kind' and 't', and optionally 'mass' and 'sigma'"
+            f"measured events need the columns 'kind' and 't', and optionally {by!r} and 'sigma'"
             + (f"; the fit does not read {', '.join(map(repr, map(printable, extra)))}" if extra else ""),
             field="data",
         )
     given = data.assign(measure=data["kind"], value=data["t"]).drop(columns=["kind", "t"])
-    checked = check_measured(given.drop(columns="mass", errors="ignore").assign(at=0.0), "at", parameters, kinds)
+    checked = check_measured(given.drop(columns=by, errors="ignore").assign(at=0.0), "at", parameters, kinds)
     table = checked.table.drop(columns="at").rename(columns={"measure": "kind"})
     table.insert(1, "t", table.value)
-    mass = pd.to_numeric(data["mass"], errors="coerce") if "mass" in data.columns else pd.Series(0, index=data.index)
-    for row, value in enumerate(mass.to_numpy()):
-        if value != 0 and value not in masses:
-            raise InputError(
-                f"data row {row + 1}: mass is {shown(_plain(data['mass'].iloc[row]))}; give one of "
-                f"{', '.join(map(str, masses))} (or leave it out: either mass)",
-                field="mass",
-            )
-    table.insert(1, "mass", mass.fillna(0).astype(int).to_numpy())
+    table.insert(1, by, _which(data, by, masses))
     times = table.t.to_numpy()
     for k in np.flatnonzero(times < t0):
         raise InputError(f"data row {int(k) + 1}: t = {times[k]:g} s is before the model's start {t0:g} s", field="t")
@@ -215,3 +214,24 @@ def check_events(
             field="t",
         )
     return Measured("t", table, checked.known_sigma)
+
+
+def _which(data: pd.DataFrame, by: str, known: tuple[object, ...]) -> np.ndarray:
+    """Each row's mass (a number, 0 where not given) or element (a name, ``""`` where not
+    given), one of ``known``."""
+    if by == "mass":
+        given = pd.to_numeric(data[by], errors="coerce") if by in data.columns else pd.Series(0, index=data.index)
+        blank: object = 0
+    else:
+        given = data[by].map(lambda v: "" if pd.isna(v) else str(v).strip()) if by in data.columns else None
+        given = pd.Series("", index=data.index) if given is None else given
+        blank = ""
+    for row, value in enumerate(given.to_numpy()):
+        if value != blank and value not in known:
+            raise InputError(
+                f"data row {row + 1}: {by} is {shown(_plain(data[by].iloc[row]))}; give one of "
+                f"{', '.join(map(str, known))} (or leave it out: any {by})",
+                field=by,
+            )
+    column: np.ndarray = given.fillna(0).astype(int).to_numpy() if by == "mass" else given.to_numpy(dtype=object)
+    return column

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -9,11 +10,10 @@ import typer
 from rich.text import Text
 
 from oscillator.cli.commands import command
-from oscillator.cli.console import fail, load, message, out, say
+from oscillator.cli.console import fail, load, out, say
 from oscillator.cli.design import parse_ranges
-from oscillator.cli.options import CaseArgument, NoPlotsOption, QuietOption, SetOption
-from oscillator.cli.resumable import outputs, refusing
-from oscillator.errors import InputError, OscillatorError
+from oscillator.cli.options import CaseArgument, NoPlotsOption, QuietOption, ResumableOutOption, SetOption
+from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, say_reused, with_progress
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -31,7 +31,7 @@ DataArgument = Annotated[
     typer.Argument(
         metavar="DATA",
         help="A CSV file of measurements: Omega,measure,value[,sigma] (steady responses), t,variable,value[,sigma] "
-        "(a time series) or kind,t[,mass,sigma] (event times).",
+        "(a time series) or kind,t[,mass or element,sigma] (event times).",
     ),
 ]
 
@@ -74,7 +74,7 @@ def calibrate(
     ] = 1.0,
     level: Annotated[float, typer.Option("--level", metavar="P", help="The confidence intervals' level.")] = 0.95,
     set_: SetOption = None,
-    out_dir: Annotated[Path | None, typer.Option("--out", metavar="DIR", help="Output folder.")] = None,
+    out_dir: ResumableOutOption = None,
     no_plots: NoPlotsOption = False,
     quiet: QuietOption = False,
 ) -> None:
@@ -82,60 +82,58 @@ def calibrate(
     values of --over, a time series or event times (docs/calibration.md). Prints the estimate with
     its standard errors and intervals and what the data cannot determine; writes estimate.csv,
     residuals.csv, calibration.json, fitted.toml (the model at the estimate), the figure of the
-    data against the fitted model and a report.
+    data against the fitted model and a report. Each start's fit is kept as it ends: the same
+    command with the same --out resumes.
 
     \b
     Examples:
       oscillator calibrate docs/systems/rattler.toml docs/measured/rattler-response.csv --vary floor.mu_k=0.02,0.14 \
         --vary floor.mu_s=0.14,0.4 --vary stop.K=10,200 --set floor.mu_k=0.08 --set floor.mu_s=0.2 --set stop.K=30
     """
-    from oscillator.io.files import check_new
-
     with refusing():
         ranges = parse_ranges(vary)
         model = _model(case, set_)
-        if out_dir is not None:
-            check_new(out_dir, option="--out")
         from oscillator.io.measurements import read_measurements
 
         table = read_measurements(data)
-        load("oscillator.calibrating.fit", notice=not quiet)
-        from oscillator.report.runs import claim_output
+        load("oscillator.calibrating.fit", "oscillator.calibrating.store", notice=not quiet)
+        from oscillator.calibrating.store import calibration_store
 
-        claim = claim_output(out_dir, f"{_name(model, case)}-calibration")
-    from oscillator.calibrating.fit import calibrate as fit
+        options: dict[str, Any] = {"over": over, "starts": starts, "loss": loss, "f_scale": f_scale}
+        folder = out_dir if out_dir is not None else new_folder(_name(model, case), "calibration")
+        store = calibration_store(folder, model, table, ranges, **options)
+        store.check()
+        lock, client = locked(store.folder, None)
+    with computing(store, "starts", lock, client):
+        from oscillator.calibrating.fit import calibrate as fit
 
-    try:
-        options: dict[str, Any] = {"over": over, "starts": starts, "loss": loss, "f_scale": f_scale, "level": level}
-        found = fit(model, table, ranges, **options)
-    except OscillatorError as error:
-        claim.abandon()
-        raise fail(message(error), 2 if isinstance(error, InputError) else 1) from None
-    except BaseException:
-        claim.abandon()
-        raise
-    _finish(found, claim, not no_plots, quiet)
+        run = functools.partial(fit, model, table, ranges, level=level, store=store, **options)
+        found = with_progress(run, f"{_name(model, case)}: calibration", "starts", quiet)
+        from oscillator.report.calibration import summary
+
+        store.write_status("computed", **summary(found))
+    say_reused(store, store.reused, "starts", quiet)
+    _finish(found, store.folder, not no_plots, quiet)
 
 
-def _finish(found: Any, claim: Any, plots: bool, quiet: bool) -> None:
-    """The folder written (the model, the tables, the figure, the report) and put in place."""
+def _finish(found: Any, folder: Path, plots: bool, quiet: bool) -> None:
+    """The folder's outputs written (the model at the estimate, the tables, the figure, the
+    report), each file whole."""
     from oscillator.io.cases import Case, case_to_toml
     from oscillator.io.chains import chain_to_toml
+    from oscillator.io.files import atomic_path
     from oscillator.report.calibration import write_calibration
 
-    folder: Path = claim.temporary
-    try:
+    def write() -> list[str]:
         fitted = found.fitted
-        text = case_to_toml(fitted) if isinstance(fitted, Case) else chain_to_toml(fitted)
-        (folder / "fitted.toml").write_text(text, encoding="utf-8")  # the model at the estimate
-        problems = outputs(folder, "tables", lambda: write_calibration(found, folder, plots=plots))
-    except BaseException:
-        claim.abandon()
-        raise
-    written = claim.commit()
+        with atomic_path(folder / "fitted.toml") as temporary:  # the model at the estimate
+            temporary.write_text(case_to_toml(fitted) if isinstance(fitted, Case) else chain_to_toml(fitted), "utf-8")
+        return write_calibration(found, folder, plots=plots)
+
+    problems = outputs(folder, "starts", write)
     if not quiet:
         for line in str(found).splitlines():
             out.print(Text(line))
-    say("written to ", (printable(str(written)), "bold"))
+    say("written to ", (printable(str(folder)), "bold"))
     if problems:
-        raise fail("; ".join(problems) + f"; the tables are in {printable(str(written))}", 1)
+        raise fail("; ".join(problems) + f"; the tables are in {printable(str(folder))}", 1)

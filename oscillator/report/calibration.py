@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.calibrating.fit import Calibration
 
-__all__ = ["calibration_blocks", "calibration_figure", "write_calibration"]
+__all__ = ["calibration_blocks", "calibration_figure", "summary", "write_calibration"]
 
 
 def _group(table: pd.DataFrame) -> str:
@@ -142,19 +142,10 @@ def calibration_blocks(found: Calibration, plots: bool) -> list[mk.Block]:
     return blocks
 
 
-def write_calibration(found: Calibration, folder: Path, *, plots: bool = True) -> list[str]:
-    """``estimate.csv`` and ``.parquet`` (the table), ``residuals.csv`` and ``.parquet``,
-    ``starts.parquet``, ``correlation.parquet``, ``calibration.json``, the figure and the report;
-    what could not be drawn (the tables stay)."""
-    from oscillator.io.files import atomic_path
-    from oscillator.report.outputs import write_folder
-    from oscillator.report.runs import json_text
-
-    estimate = found.table.rename_axis("parameter").reset_index()
-    for name, frame in (("estimate", estimate), ("residuals", found.residuals)):
-        with atomic_path(folder / f"{name}.csv") as temporary:
-            frame.to_csv(temporary, index=False)
-    summary = {
+def summary(found: Calibration) -> dict[str, object]:
+    """What ``calibration.json`` keeps of a finished calibration beside its identity: the estimate,
+    its standard errors and level, the warnings, the cost, the counts and SciPy's verdict."""
+    return {
         "estimate": {n: float(v) for n, v in found.estimate.items()},
         "stderr": {n: _number(v) for n, v in found.table.stderr.items()},
         "level": found.uncertainty.level,
@@ -166,8 +157,20 @@ def write_calibration(found: Calibration, folder: Path, *, plots: bool = True) -
         "success": found.success,
         "loss": found.loss,
     }
-    with atomic_path(folder / "calibration.json") as temporary:
-        temporary.write_text(json_text(summary), encoding="utf-8")
+
+
+def write_calibration(found: Calibration, folder: Path, *, plots: bool = True) -> list[str]:
+    """``estimate.csv`` and ``.parquet`` (the table), ``residuals.csv`` and ``.parquet``,
+    ``starts.parquet``, ``correlation.parquet``, the figure and the report; what could not be
+    drawn (the tables stay). The summary (:func:`summary`) is the folder's ``calibration.json``
+    (:class:`~oscillator.calibrating.store.CalibrationStore`)."""
+    from oscillator.io.files import atomic_path
+    from oscillator.report.outputs import write_folder
+
+    estimate = found.table.rename_axis("parameter").reset_index()
+    for name, frame in (("estimate", estimate), ("residuals", found.residuals)):
+        with atomic_path(folder / f"{name}.csv") as temporary:
+            frame.to_csv(temporary, index=False)
     tables = {"estimate": estimate, "residuals": found.residuals, "starts": found.starts}
     tables["correlation"] = found.correlation.rename_axis("parameter").reset_index()
     figures = [("calibration", functools.partial(calibration_figure, found))] if plots else []
