@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 
 def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "oscillator", *map(str, args)], capture_output=True, text=True,
@@ -52,3 +54,29 @@ def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.stdout.split()[-2:] == ["0", "False"], (done.stdout, done.stderr)
     assert (tmp_path / "out" / "events.csv").is_file() and not (tmp_path / "out" / "figures").exists()
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["orbit", "instance-1", "--period", "1000000"],
+        ["continue", "instance-1", "--param", "mu_s", "--from", "0.2", "--to", "0.05"],
+        ["continue", "instance-1", "--param", "Q2", "--from", "71.3", "--to", "71.0", "--max-points", "1"],
+        ["frc", "instance-1", "--param", "Omega", "1.3", "1.3"],
+        ["lyapunov", "instance-1", "--periods", "0"],
+        ["explore", "instance-1", "--port", "-5"],
+    ],
+    ids=["orbit", "continue-range", "continue-points", "frc", "lyapunov", "explore"],
+)
+def test_a_refused_option_is_refused_before_the_numerical_libraries_load(arguments):
+    """A command's options are checked before it loads numba and the solvers (a second and more
+    of its start): a refusal is quick, and says what to fix."""
+    script = (
+        "import runpy, sys\n"
+        f"sys.argv = ['oscillator', *{arguments!r}]\n"
+        "try:\n    runpy.run_module('oscillator', run_name='__main__')\n"
+        "except SystemExit as done:\n    print(done.code, 'numba' in sys.modules, 'scipy.integrate' in sys.modules)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.stdout.split()[-3:] == ["2", "False", "False"], (done.stdout, done.stderr)
+    assert done.stderr.startswith("error: ") and done.stderr.count("\n") == 1, done.stderr

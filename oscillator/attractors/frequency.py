@@ -55,8 +55,8 @@ from oscillator.attractors.responding import continued, distinct, doubled, measu
 from oscillator.errors import InputError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.chains import FrictionChain
-from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.branch import Bifurcation, Branch
+from oscillator.orbits.settings import check_frequency
 from oscillator.presenting import Presented, presenter
 from oscillator.text import shown
 
@@ -255,29 +255,6 @@ def _of_chain(
         if value is not None:
             raise InputError(f"{name} applies to the article's cases, not a declared system", field=name)
     return chain_frequency_response(chain, param, span, seeds=seeds, states=states, sweep=sweep, progress=progress)
-
-
-def check_frequency(
-    case: Case, param: str, span: object, *, period: int = 1, seeds: int = 5, sweep: int = 41, max_points: int = 3000
-) -> tuple[float, float]:
-    """:func:`frequency_response`'s arguments checked before any work (the command line does so
-    before it creates its folder): the span, as ``(low, high)``; else the first refused, named."""
-    Parameters.check_name(param, "param")
-    check_count(max_points, "max_points", 2, 100_000)
-    check_count(period, "period", 1, 1000)
-    check_count(seeds, "seeds", 2, 1000)
-    check_count(sweep, "sweep", 2, 100_000)
-    try:
-        low, high = (float(value) for value in span)  # type: ignore[attr-defined]
-    except (TypeError, ValueError):
-        raise InputError(f"span must be two numbers (low, high), got {span!r}", field="span") from None
-    if not (np.isfinite(low) and np.isfinite(high) and low < high):
-        raise InputError(
-            f"span must be two finite numbers, low < high, got {span!r}; give the lower value first", field="span"
-        )
-    for value in (low, high):
-        resolve_case(case, **{param: value})  # each end must be a valid value, or it is refused by name
-    return low, high
 
 
 class _Tally:

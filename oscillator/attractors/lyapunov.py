@@ -30,7 +30,8 @@ from oscillator.analysis.execution import check_progress
 from oscillator.io.cases import Case, resolve_case, section_times
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import check_count
-from oscillator.orbits.shooting import check_guess, period_map, settled
+from oscillator.orbits.settings import check_guess
+from oscillator.orbits.shooting import period_map, settled
 from oscillator.presenting import Presented, presenter
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -242,12 +242,13 @@ def lyapunov(
         resolved, name = spectrum_target(case, set_)
         if out_dir is not None:
             check_new(out_dir, option="--out")
-        load("oscillator.attractors.lyapunov", notice=True)
-        from oscillator.attractors.lyapunov import lyapunov as spectrum_of
         from oscillator.model.parameters import check_count
 
-        check_count(periods, "--periods", 1, 10_000_000)
+        check_count(periods, "--periods", 1, 10_000_000)  # before the numerical libraries load
         check_count(transient, "--transient", 0, 10_000_000)
+        load("oscillator.attractors.lyapunov", notice=True)
+        from oscillator.attractors.lyapunov import lyapunov as spectrum_of
+
         claim = claim_folder(out_dir, option="--out") if out_dir is not None else None  # writable, before the work
     except OscillatorError as error:
         raise fail(message(error)) from None

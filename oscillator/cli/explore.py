@@ -68,14 +68,15 @@ def explore(
       oscillator explore runs/atlas --port 5007
     """
     try:
+        from oscillator.exploring.serving import check_address, is_loopback, serve
+
+        check_engine(engine, LANDING_ENGINES)
+        check_address(address, port)  # before the numerical libraries load
         load("oscillator.exploring.app", notice=True)
         from oscillator.exploring.app import Explorer
         from oscillator.exploring.scene import check_periods
-        from oscillator.exploring.serving import check_address, is_loopback, serve
 
         check_periods(periods)
-        check_engine(engine, LANDING_ENGINES)
-        check_address(address, port)
         case, picture = _opened(target, set_)
     except OscillatorError as error:
         raise fail(message(error)) from None

@@ -114,55 +114,50 @@ def frc(
         resolved = case_from(case, None, set_)
         name, low, high = param
         refuse_taken(set_, {name: "--param"})
-        settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
         seeded = 5 if seeds is None else seeds
         options: dict[str, Any] = {"period": period, "seeds": seeded, "sweep": sweep, "max_points": max_points}
-        store = _opened(resolved, (name, low, high), measure, starts, settings, options, out_dir)
+        _checked(resolved, (name, low, high), measure, starts, options)
+        settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
+        store = _opened(resolved, (name, low, high), starts, settings, options, out_dir)
         count = check_workers(workers, starts=2 * sweep + seeded * starts)  # the landings of sweeps and seeds
         lock, client = locked(store.folder, scheduler)
     with computing(store, "parts", lock, client):
         from oscillator.attractors.frequency import frequency_response
 
         store.open()
-        run = functools.partial(
-            frequency_response,
-            resolved,
-            name,
-            (low, high),
-            settings=settings,
-            workers=count,
-            client=client,
-            store=store,
-            **options,
-        )
+        pool = {"settings": settings, "workers": count, "client": client, "store": store}
+        run = functools.partial(frequency_response, resolved, name, (low, high), **pool, **options)
         found = with_progress(run, f"{resolved.name}: frequency response over {name}", "tasks", quiet)
         store.write_status("computed", branches=len(found.branches))
     _finish(found, store, measure, no_plots, quiet)
 
 
-def _opened(
-    case: Any,
-    param: SpanOption,
-    measure: str,
-    starts: int,
-    settings: Any,
-    options: dict[str, Any],
-    out_dir: Path | None,
-) -> Any:
-    """Everything refused before work (the span, the counts, the measure, the folder); the
-    frequency response's store, and ``options`` completed with the starts."""
+def _checked(case: Any, param: SpanOption, measure: str, starts: int, options: dict[str, Any]) -> None:
+    """Everything refused before work: the span and the counts (before the numerical libraries
+    load), then the measure."""
+    from oscillator.model.parameters import check_count
+    from oscillator.orbits.settings import check_frequency
+
+    name, low, high = param
+    check_frequency(case, name, (low, high), **options)
+    check_count(starts, "--starts", 1, 1000)
     from oscillator.report.frequency import MEASURES
 
     if measure not in MEASURES:
         raise InputError(f"--measure must be one of {', '.join(MEASURES)}, got {measure!r}", field="--measure")
+
+
+def _opened(
+    case: Any, param: SpanOption, starts: int, settings: Any, options: dict[str, Any], out_dir: Path | None
+) -> Any:
+    """The frequency response's store (its folder refused if it holds another computation), and
+    ``options`` completed with the starts."""
     load("oscillator.attractors.frequency", notice=True)
     from oscillator.attractors.atlas import fresh_starts
-    from oscillator.attractors.frequency import check_frequency, frequency_store
-    from oscillator.model.parameters import check_count
+    from oscillator.attractors.frequency import frequency_store
 
     name, low, high = param
-    check_frequency(case, name, (low, high), **options)
-    options["states"] = fresh_starts(case, check_count(starts, "--starts", 1, 1000))
+    options["states"] = fresh_starts(case, starts)
     folder = out_dir if out_dir is not None else new_folder(case, "frc")
     store = frequency_store(folder, case, name, (low, high), settings=settings, **options)
     store.check()

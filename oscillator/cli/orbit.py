@@ -116,6 +116,9 @@ def orbit(
         resolved = case_from(case, None, set_)
         start = _guess(guess)
         names = _names(sensitivities)
+        from oscillator.orbits.settings import check_orbit_settings
+
+        check_orbit_settings(period, max_iterations=max_iterations)  # before the numerical libraries load
         load("oscillator.orbits.shooting", notice=True)
         from oscillator.orbits.shooting import find_orbit
 
@@ -342,15 +345,15 @@ def _prepare_continue(
     refuse_taken(set_, {param: "--param (the continued parameter), with --from and --to"})
     resolved = case_from(case, None, set_)
     from oscillator.io.files import check_new
+    from oscillator.orbits.settings import check_settings
 
     if out_dir is not None:
         check_new(out_dir, option="--out")  # before the numerical libraries load: a refusal is quick
+    check_settings(resolved, **settings)
     load("oscillator.orbits.continuation", "oscillator.report.orbit_folders", "oscillator.report.runs", notice=True)
-    from oscillator.orbits.continuation import check_settings
     from oscillator.report.orbit_folders import read_sweep_points
     from oscillator.report.runs import claim_output
 
-    check_settings(resolved, **settings)
     sweep_points = read_sweep_points(over, param, coordinate or "x2") if over is not None else None
     return resolved, settings, sweep_points, claim_output(out_dir, f"{resolved.name}-continue")
 

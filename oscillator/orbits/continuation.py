@@ -22,29 +22,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from oscillator.engines import check_engine
-from oscillator.errors import InputError, Interrupted, Reason
-from oscillator.io.cases import Case, resolve_case
-from oscillator.model.parameters import Parameters, check_count, real_argument
+from oscillator.errors import Interrupted, Reason
+from oscillator.io.cases import Case
 from oscillator.orbits.branch import Branch, Skipped, point_columns
 from oscillator.orbits.corrector import Continuer, Located, OrbitPoint
 from oscillator.orbits.locating import between, end_point, own_kind
-from oscillator.orbits.shooting import (
-    MAX_TRANSIENT,
-    STATE,
-    check_guess,
-    check_orbit_settings,
-    orbit_case,
-    start_of,
-)
+from oscillator.orbits.settings import ContinuationSettings, check_settings
+from oscillator.orbits.shooting import STATE, orbit_case, start_of
 from oscillator.orbits.stroboscopic import ORBIT_ENGINE, ORBIT_ENGINES
-from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.chains import FrictionChain
@@ -53,40 +44,12 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ContinuationSettings", "check_settings", "continue_orbit"]
 
 
-#: The default largest step, the smallest allowed and the most points (``continue_orbit``).
-DEFAULT_STEP = 1 / 40
-MIN_STEP = 1e-6
-MAX_POINTS = 100_000
 #: The branch has stalled where, over this many steps, the parameter turned back at every other
 #: one or more and the steps' net advance is less than :data:`STALL_NET` of their length: the
 #: corrector goes back and forth at a point it cannot step across (a contact or a rest starting
 #: on an orbit whose mass rests all period: 1234 of 1315 points at one value, measured).
 STALL_WINDOW = 12
 STALL_NET = 0.25
-
-
-def _check_range(
-    case: Case | str, param: str, start: object, stop: object, overrides: dict[str, Any], locate_tol: float
-) -> tuple[float, float]:
-    """``start`` and ``stop`` as valid values of ``param``, far enough apart to continue."""
-    Parameters.check_name(param)
-    if param in overrides:
-        raise InputError(f"{param} is the continued parameter; give its range with start and stop", field=param)
-    values = real_argument(start, "start"), real_argument(stop, "stop")
-    for name, value in zip(("start", "stop"), values, strict=True):
-        try:
-            resolve_case(case, **{**overrides, param: value})
-        except InputError as error:
-            raise InputError(f"{name} = {value!r} is not a valid {param}: {error}", field=name) from None
-    width = abs(values[1] - values[0])
-    if width < 10 * locate_tol or width < 1e-12 * max(abs(values[0]), abs(values[1])):
-        least = max(10 * locate_tol, 1e-12 * abs(values[0]))
-        raise InputError(
-            f"`stop` must be at least {least:.3g} away from `start` (10 times the location "
-            f"tolerance), got {values[1]!r} and {values[0]!r}",
-            field="stop",
-        )
-    return values
 
 
 def _of_chain(
@@ -222,64 +185,6 @@ def continue_orbit(
         partial = trace.branch(base, section_, settings.period, False, f"interrupted at {param} = {last:.10g}")
         raise Interrupted(partial) from None
     return trace.branch(base, section_, settings.period, complete, message)
-
-
-@dataclass(frozen=True)
-class ContinuationSettings:
-    """:func:`continue_orbit`'s numeric settings, checked (:func:`check_settings`)."""
-
-    start: float
-    stop: float
-    period: int
-    tol: float
-    locate_tol: float
-    max_points: int
-    step: float  #: the largest step, as a fraction of ``|stop - start|``
-
-
-def check_settings(
-    case: Case | str,
-    *,
-    param: str,
-    start: object,
-    stop: object,
-    period: object = 1,
-    section: object = None,
-    guess: object = None,
-    transient: object = None,
-    step: object = None,
-    max_points: object = 400,
-    tol: object = 1e-9,
-    locate_tol: object = 1e-9,
-    progress: object = None,
-    **overrides: object,
-) -> ContinuationSettings:
-    """Check :func:`continue_orbit`'s arguments without computing anything (the command line
-    does so before it creates its folder).
-
-    Raises
-    ------
-    InputError
-        The first argument that is refused, named.
-    """
-    period_, tol_, _ = check_orbit_settings(period, tol, 1)
-    locate_tol_ = real_argument(locate_tol, "locate_tol", positive=True)
-    start_, stop_ = _check_range(case, param, start, stop, overrides, locate_tol_)
-    max_points_ = check_count(max_points, "max_points", 2, MAX_POINTS)
-    step_ = DEFAULT_STEP if step is None else real_argument(step, "step", positive=True)
-    if not MIN_STEP <= step_ <= 1:
-        raise InputError(
-            f"step must be from {MIN_STEP:g} to 1 (a fraction of |stop - start|), got {shown(step)}", field="step"
-        )
-    if progress is not None and not callable(progress):
-        raise InputError(f"progress must be a function of the fraction done, got {shown(progress)}", field="progress")
-    if guess is not None:
-        check_guess(guess)
-    if transient is not None:
-        check_count(transient, "transient", 0, MAX_TRANSIENT)
-    if section is not None:
-        real_argument(section, "section")
-    return ContinuationSettings(start_, stop_, period_, tol_, locate_tol_, max_points_, step_)
 
 
 def _trace_branch(

@@ -35,6 +35,7 @@ from oscillator.model.fields import kinetic_threshold, non_friction_force
 from oscillator.model.parameters import InitialState, check_count, real_argument
 from oscillator.model.system import ARTICLE
 from oscillator.orbits.multipliers import multipliers_of, verdict_of
+from oscillator.orbits.settings import MAX_TRANSIENT, check_guess, check_orbit_settings
 from oscillator.orbits.signature import Signature, cyclic_signature, event_signature
 from oscillator.orbits.stroboscopic import (
     ORBIT_ENGINE,
@@ -45,7 +46,6 @@ from oscillator.orbits.stroboscopic import (
     solve_step,
 )
 from oscillator.presenting import presenter
-from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -64,11 +64,6 @@ __all__ = [
 
 #: Forcing periods simulated before Newton starts, when the case has no sweep settings.
 TRANSIENT = 100
-#: The longest return looked for, in forcing periods: a longer one is a motion to simulate.
-MAX_PERIOD = 1000
-#: The most Newton steps allowed, and the longest transient (forcing periods).
-MAX_ITERATIONS = 200
-MAX_TRANSIENT = 1_000_000
 #: The tolerances of the period maps unless the caller sets them.
 ORBIT_RTOL = 1e-12
 #: The period map's own accuracy at :data:`ORBIT_RTOL`, relative to the state's scale: a residual
@@ -326,15 +321,6 @@ def start_of(
     return section, settled(case, case.initial.y, transient, engine=engine)
 
 
-def check_orbit_settings(period: object, tol: object, max_iterations: object) -> tuple[int, float, int]:
-    """``period``, ``tol`` and ``max_iterations`` checked (:func:`find_orbit`)."""
-    return (
-        check_count(period, "period", 1, MAX_PERIOD),
-        real_argument(tol, "tol", positive=True),
-        check_count(max_iterations, "max_iterations", 1, MAX_ITERATIONS),
-    )
-
-
 @overload
 def find_orbit(
     case: FrictionChain,
@@ -490,14 +476,3 @@ def _orbit(
         )
         orbit = dataclasses.replace(orbit, note=note)
     return orbit
-
-
-def check_guess(guess: object) -> np.ndarray:
-    """``guess`` as four finite floats ``(x1, v1, x2, v2)``."""
-    try:
-        values = [real_argument(v, "guess") for v in guess]  # type: ignore[attr-defined]
-    except (TypeError, InputError):
-        values = []
-    if len(values) != 4:
-        raise InputError(f"guess must be four finite numbers (x1, v1, x2, v2), got {shown(guess)}", field="guess")
-    return np.array(values)
