@@ -373,17 +373,17 @@ def test_a_declared_systems_trajectory_sensitivities_through_stick_slip_and_impa
         assert (np.abs(exact - differenced) <= bound).all(), (name, np.abs(exact - differenced).max())
 
 
-def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time_series():
-    from oscillator.hybrid.chain_run import simulate_chain
-
-    truth = osc.load_system(ROOT / "docs" / "systems" / "rattler.toml")
-    times = np.linspace(0.5, 20, 40)
-    run = simulate_chain(truth, t_end=20.01, at=times)
-    rows = np.searchsorted(run.times, times - 1e-9 * np.maximum(1, times))
-    noise = np.random.default_rng(9).normal(0, 0.01, len(times))
-    data = pd.DataFrame({"t": times, "variable": "x:part", "value": run.states[rows, 0] + noise, "sigma": 0.01})
-    start = truth.with_values({"floor.mu_k": 0.08, "floor.mu_s": 0.2, "stop.K": 30.0})
-    found = osc.calibrate(start, data, {"floor.mu_k": (0.02, 0.14), "floor.mu_s": (0.14, 0.4), "stop.K": (10, 200)})
+def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time_series(capsys):
+    """docs/calibration.md's declared system's time series: its block prints the block under it,
+    and the truth lies inside every interval."""
+    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    part = page.split("## From a measured time series", 1)[1].split("Its floor's two coefficients", 1)[1]
+    code = part.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
+    namespace: dict = {}
+    exec(compile(code, "docs/calibration.md", "exec"), namespace)
+    assert capsys.readouterr().out == shown
+    found = namespace["found"]
     assert found.success and _inside(found, {"floor.mu_k": 0.1, "floor.mu_s": 0.15, "stop.K": 50.0}).all(), found.table
     assert found.runs == found.evaluations
 
