@@ -238,14 +238,24 @@ def test_bad_options_are_refused_naming_the_field(vary, options, words):
     assert words in str(refused.value), str(refused.value)
 
 
+def _page_block(capsys, monkeypatch, *after: str) -> dict:
+    """The first Python block of docs/calibration.md after each of ``after`` in turn, run from the
+    repository (it reads docs/systems/), having printed the text block under it; its names."""
+    part = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
+    for marker in after:
+        part = part.split(marker, 1)[1]
+    code = part.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(ROOT)
+    namespace: dict = {}
+    exec(compile(code, "docs/calibration.md", "exec"), namespace)
+    assert capsys.readouterr().out == shown
+    return namespace
+
+
 def test_the_worked_calibration_prints_what_the_page_shows(capsys, monkeypatch):
     """docs/calibration.md: its Python block prints the block under it."""
-    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
-    code = page.split("```python\n", 1)[1].split("```", 1)[0]
-    shown = page.split("```text\n", 1)[1].split("```", 1)[0]
-    monkeypatch.chdir(ROOT)  # it reads docs/systems/rattler.toml
-    exec(compile(code, "docs/calibration.md", "exec"), {})
-    assert capsys.readouterr().out == shown
+    _page_block(capsys, monkeypatch)
 
 
 def test_the_page_quotes_the_warning_as_the_fit_words_it():
@@ -373,17 +383,10 @@ def test_a_declared_systems_trajectory_sensitivities_through_stick_slip_and_impa
         assert (np.abs(exact - differenced) <= bound).all(), (name, np.abs(exact - differenced).max())
 
 
-def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time_series(capsys):
+def test_a_declared_systems_friction_and_stop_are_recovered_from_a_measured_time_series(capsys, monkeypatch):
     """docs/calibration.md's declared system's time series: its block prints the block under it,
     and the truth lies inside every interval."""
-    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
-    part = page.split("## From a measured time series", 1)[1].split("Its floor's two coefficients", 1)[1]
-    code = part.split("```python\n", 1)[1].split("```", 1)[0]
-    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
-    namespace: dict = {}
-    exec(compile(code, "docs/calibration.md", "exec"), namespace)
-    assert capsys.readouterr().out == shown
-    found = namespace["found"]
+    found = _page_block(capsys, monkeypatch, "## From a measured time series", "Its floor's two coefficients")["found"]
     assert found.success and _inside(found, {"floor.mu_k": 0.1, "floor.mu_s": 0.15, "stop.K": 50.0}).all(), found.table
     assert found.runs == found.evaluations
 
@@ -414,16 +417,12 @@ def test_a_declared_systems_event_times_derivatives_are_richardsons_differences(
         )  # fmt: skip
 
 
-def test_a_declared_systems_friction_and_stop_are_recovered_from_measured_stick_slip_and_impact_times(capsys):
+def test_a_declared_systems_friction_and_stop_are_recovered_from_measured_stick_slip_and_impact_times(
+    capsys, monkeypatch
+):
     """docs/calibration.md's declared system's event times: its block prints the block under it,
     and the truth lies inside every interval."""
-    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
-    part = page.split("## From measured event times", 1)[1].split("element` (a", 1)[1]
-    code = part.split("```python\n", 1)[1].split("```", 1)[0]
-    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
-    namespace: dict = {}
-    exec(compile(code, "docs/calibration.md", "exec"), namespace)
-    assert capsys.readouterr().out == shown
+    namespace = _page_block(capsys, monkeypatch, "## From measured event times", "element` (a")
     found, picked = namespace["found"], namespace["picked"]
     assert found.success and _inside(found, {"floor.mu_k": 0.1, "floor.mu_s": 0.15, "stop.K": 50.0}).all(), found.table
     assert found.runs == found.evaluations and list(found.residuals.element) == list(picked.element)
@@ -446,14 +445,9 @@ def test_a_declared_systems_bad_event_times_are_refused_by_row_and_column(change
     assert refused.value.field == field and words in str(refused.value), str(refused.value)
 
 
-def test_the_worked_time_series_prints_what_the_page_shows(capsys):
+def test_the_worked_time_series_prints_what_the_page_shows(capsys, monkeypatch):
     """docs/calibration.md's second Python block prints the block under it."""
-    page = (ROOT / "docs" / "calibration.md").read_text(encoding="utf-8")
-    part = page.split("## From a measured time series", 1)[1]
-    code = part.split("```python\n", 1)[1].split("```", 1)[0]
-    shown = part.split("```text\n", 1)[1].split("```", 1)[0]
-    exec(compile(code, "docs/calibration.md", "exec"), {})
-    assert capsys.readouterr().out == shown
+    _page_block(capsys, monkeypatch, "## From a measured time series")
 
 
 # -- event times -------------------------------------------------------------------------------

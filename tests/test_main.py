@@ -43,16 +43,23 @@ def test_version():
     assert done.returncode == 0 and done.stdout.startswith("oscillator ")
 
 
-def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
-    """``--no-plots`` spares the command matplotlib's import (a third of a second of its start)."""
+def loaded(arguments: list[str], *modules: str) -> tuple[subprocess.CompletedProcess, list[str]]:
+    """``oscillator ARGUMENTS`` in a fresh process: the process, then its exit code and, for each of
+    ``modules``, whether it was loaded (``"True"`` or ``"False"``)."""
     script = (
         "import runpy, sys\n"
-        f"sys.argv = ['oscillator', 'run', 'instance-3', '--no-plots', '--quiet', '--out', {str(tmp_path / 'out')!r}]\n"
+        f"sys.argv = ['oscillator', *{arguments!r}]\n"
         "try:\n    runpy.run_module('oscillator', run_name='__main__')\n"
-        "except SystemExit as done:\n    print(done.code, 'matplotlib' in sys.modules)\n"
+        f"except SystemExit as done:\n    print(done.code, *(m in sys.modules for m in {modules!r}))\n"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert done.stdout.split()[-2:] == ["0", "False"], (done.stdout, done.stderr)
+    return done, done.stdout.split()[-1 - len(modules) :]
+
+
+def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
+    """``--no-plots`` spares the command matplotlib's import (a third of a second of its start)."""
+    done, said = loaded(["run", "instance-3", "--no-plots", "--quiet", "--out", str(tmp_path / "out")], "matplotlib")
+    assert said == ["0", "False"], (done.stdout, done.stderr)
     assert (tmp_path / "out" / "events.csv").is_file() and not (tmp_path / "out" / "figures").exists()
 
 
@@ -71,12 +78,6 @@ def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
 def test_a_refused_option_is_refused_before_the_numerical_libraries_load(arguments):
     """A command's options are checked before it loads numba and the solvers (a second and more
     of its start): a refusal is quick, and says what to fix."""
-    script = (
-        "import runpy, sys\n"
-        f"sys.argv = ['oscillator', *{arguments!r}]\n"
-        "try:\n    runpy.run_module('oscillator', run_name='__main__')\n"
-        "except SystemExit as done:\n    print(done.code, 'numba' in sys.modules, 'scipy.integrate' in sys.modules)\n"
-    )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert done.stdout.split()[-3:] == ["2", "False", "False"], (done.stdout, done.stderr)
+    done, said = loaded(arguments, "numba", "scipy.integrate")
+    assert said == ["2", "False", "False"], (done.stdout, done.stderr)
     assert done.stderr.startswith("error: ") and done.stderr.count("\n") == 1, done.stderr
