@@ -169,6 +169,8 @@ def test_a_calibration_kept_in_its_folder_resumes_with_the_starts_it_finished(tm
     other = calibration_store(tmp_path / "fit", case, data, vary, starts=3, loss="soft_l1")
     with pytest.raises(InputError, match="holds another calibration computation"):
         other.check()
+    with pytest.raises(InputError, match="store: it was made for another calibration"):
+        calibrate(case, data, vary, starts=2, store=store())  # the store's starts are 3
 
 
 def test_a_declared_systems_friction_is_recovered_by_element_and_field():

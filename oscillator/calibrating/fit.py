@@ -369,6 +369,8 @@ def calibrate(
     measured, make = _model_of(model, data, names, series, over, int(transient))
     points = _starts(_first(model, names, low, high), int(starts), seed)
     if store is not None:  # the data and the ranges admitted: the folder is made (or resumed)
+        fitted = {"over": over, "starts": starts, "loss": loss, "f_scale": f_scale, "transient": transient}
+        _check_store(store, model, data, vary, fitted | {"seed": seed, "max_evaluations": max_evaluations})
         store.check()
         store.open()
     ends, rows = [], []
@@ -388,6 +390,19 @@ def calibrate(
     best = min(fits, key=lambda f: f.cost)
     spent = sum(end.runs for end in ends)
     return _result(model, measured, (names, low, high), best, pd.DataFrame(rows), spent, options, level)
+
+
+def _check_store(store: CalibrationStore, model: object, data: object, vary: object, settings: dict[str, Any]) -> None:
+    """Refuse a store made for another calibration than this call's."""
+    from oscillator.calibrating.store import calibration_store
+
+    expected = calibration_store(store.folder, model, data, vary, **settings)  # type: ignore[arg-type]
+    if store.identity != expected.identity:
+        raise InputError(
+            "store: it was made for another calibration (another model, data, ranges or settings); make it with "
+            "calibration_store and this call's arguments",
+            field="store",
+        )
 
 
 def _start(

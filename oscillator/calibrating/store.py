@@ -13,6 +13,7 @@ setting a fit depends on (not the intervals' level, which only the summary uses)
 from __future__ import annotations
 
 import hashlib
+import inspect
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -25,7 +26,7 @@ from oscillator.analysis.store import Expected, TableFolder, identity
 from oscillator.calibrating.fit import Fit
 from oscillator.calibrating.steady import Crossing
 
-__all__ = ["CalibrationStore", "calibration_store"]
+__all__ = ["FITTED", "CalibrationStore", "calibration_store"]
 
 
 class CalibrationStore(TableFolder):
@@ -106,6 +107,10 @@ def _meta_problem(n: int, rows: int) -> Any:
     return problem
 
 
+#: The settings of :func:`~oscillator.calibrating.fit.calibrate` that its fits depend on.
+FITTED = ("over", "starts", "loss", "f_scale", "transient", "seed", "max_evaluations")
+
+
 def calibration_store(
     folder: Path,
     system: Any,
@@ -114,12 +119,20 @@ def calibration_store(
     **settings: Any,
 ) -> CalibrationStore:
     """The resumable folder of calibrating ``system`` to ``data`` over ``vary`` with ``settings``
-    (:func:`~oscillator.calibrating.fit.calibrate`'s ``over``, ``starts``, ``loss``, ``f_scale``,
-    ``transient``, ``seed``, ``max_evaluations``; what it leaves out takes its default)."""
+    (:func:`~oscillator.calibrating.fit.calibrate`'s :data:`FITTED` keywords; those left out take
+    its defaults). ``calibrate`` refuses a store made for other arguments than its own."""
+    from oscillator.calibrating.fit import _system, calibrate
+    from oscillator.errors import InputError
+    from oscillator.text import printable
+
+    unknown = sorted(set(settings) - set(FITTED))
+    if unknown:
+        raise InputError(
+            f"calibration_store takes {', '.join(FITTED)}, not {', '.join(map(printable, unknown))}", field="settings"
+        )
+    defaults = {name: p.default for name, p in inspect.signature(calibrate).parameters.items() if name in FITTED}
+    model = _system(system)
     digest = hashlib.sha256(data.to_csv(index=False).encode("utf-8")).hexdigest()
     ranges = {str(name): [float(v) for v in bounds] for name, bounds in vary.items()}
-    defaults = {"over": "Omega", "starts": 1, "loss": "linear", "f_scale": 1.0, "transient": 100, "seed": 0}
-    defaults["max_evaluations"] = 100
-    pieces = defaults | settings
-    name = str(getattr(system, "name", "") or "")
-    return CalibrationStore(folder, identity(system, data_sha256=digest, vary=ranges, **pieces), name=name)
+    pieces = identity(model, data_sha256=digest, vary=ranges, **(defaults | settings))
+    return CalibrationStore(folder, pieces, name=str(getattr(model, "name", "") or ""))
