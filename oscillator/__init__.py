@@ -65,6 +65,8 @@ _EXPORTS = {
     "FrequencyResponse": "oscillator.attractors.frequency",
     "frequency_response": "oscillator.attractors.frequency",
     "response": "oscillator.orbits.response",
+    "Noise": "oscillator.orbits.noise",
+    "noise": "oscillator.orbits.noise",
     "Sensitivities": "oscillator.orbits.sensitivity",
     "Design": "oscillator.designing.optimise",
     "design": "oscillator.designing.optimise",
@@ -122,6 +124,7 @@ __all__ = [
     "Interrupted",
     "LyapunovSpectrum",
     "Mode",
+    "Noise",
     "Orbit",
     "OscillatorError",
     "Parameters",
@@ -150,6 +153,7 @@ __all__ = [
     "load_case",
     "load_system",
     "lyapunov",
+    "noise",
     "read_run",
     "regime_atlas",
     "resolve_case",
@@ -194,6 +198,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.chain_sensitivity import ChainSensitivities
     from oscillator.orbits.continuation import continue_orbit
     from oscillator.orbits.curves import Curve, trace_curve
+    from oscillator.orbits.noise import Noise, noise
     from oscillator.orbits.response import Response, response
     from oscillator.orbits.sensitivity import Sensitivities, sensitivities
     from oscillator.orbits.shooting import Orbit, find_orbit

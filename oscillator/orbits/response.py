@@ -67,6 +67,7 @@ __all__ = [
     "Response",
     "branch_responses",
     "impact_speeds",
+    "left_force",
     "measured",
     "response",
     "unit_of",
@@ -208,7 +209,7 @@ class _Piece:
         speeds = [[abs(y[2 * i - 1]) for y in ends] for i in (1, 2)]
         for i in (1, 2):
             speeds[i - 1] += [abs(y[2 * i - 1]) for y in solved.states[solved.which == i - 1]]
-        forces = [abs(_left_force(y, c)) for y in [*ends, *solved.states[solved.which == 2]]]
+        forces = [abs(float(left_force(y, c))) for y in [*ends, *solved.states[solved.which == 2]]]
         right = [max(float(p.K6 * (y[0] - p.d1)), 0.0) for y in ends]
         return cls(
             segment,
@@ -218,9 +219,12 @@ class _Piece:
         )
 
 
-def _left_force(y: np.ndarray, c: np.ndarray) -> float:
-    """The force between the masses in contact (N): ``K3 (x1 - x2 + d) + C3 (v1 - v2)``."""
-    return float(c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3]))
+def left_force(y: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The force between the masses in contact (N): ``K3 (x1 - x2 + d) + C3 (v1 - v2)`` (negative
+    while the contact pushes m1 away from m2's stop); ``y`` a state ``(x1, v1, x2, v2)`` or one
+    such row of states each, ``c`` the coefficients (:func:`~oscillator.model.fields.coefficients`)."""
+    force: np.ndarray = c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3])
+    return force
 
 
 def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, float]:

@@ -51,6 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.orbits.chain_orbits import ChainOrbit
+    from oscillator.orbits.noise import Noise
     from oscillator.orbits.response import Response
     from oscillator.orbits.sensitivity import Sensitivities
 
@@ -154,6 +155,14 @@ class Orbit:
         from oscillator.orbits.response import response
 
         return response(self.one_period(), self.period)
+
+    def noise(self, harmonics: int = 200) -> Noise:
+        """The orbit's noise measures over one return (:func:`oscillator.orbits.noise.noise`: per
+        contact the impact rate, impulse, energy lost per impact, impact power and the contact
+        force's spectrum to ``harmonics`` harmonics of the return's frequency)."""
+        from oscillator.orbits.noise import noise
+
+        return noise(self.one_period(), self.period, harmonics)
 
     def sensitivities(self, params: str | Sequence[str]) -> Sensitivities:
         """The exact derivatives of the orbit in ``params`` through every switch: of its section

@@ -1,0 +1,87 @@
+"""Fourier series of a periodic signal known piece by piece, and the levels engineers read off
+them (docs/noise.md).
+
+A signal ``f`` of period ``P`` that is smooth on each of its pieces (a contact force over each
+smooth piece of an orbit, zero between contacts) has the coefficients
+
+    c_k = 1/P integral_0^P f(t) exp(-2 pi i k t / P) dt,   k = 0, 1, ..., K,
+
+computed here by Gauss-Legendre quadrature on each piece, split so that no sub-interval is longer
+than the highest harmonic's period: with :data:`NODES` nodes a sub-interval integrates a
+polynomial of degree ``2 NODES - 1`` exactly (and the harmonic's half turn on each side of its
+middle to about 1e-30), so a smooth piece's coefficients are exact to rounding, however the signal
+jumps between pieces (a sampled FFT would alias the jumps).  The
+mean square is ``|c_0|^2 + 2 sum_k |c_k|^2`` (Parseval), the harmonic ``k`` at ``k / P`` Hz.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from oscillator.errors import InputError
+from oscillator.model.parameters import check_count
+
+__all__ = ["NODES", "Piece", "a_weighting", "fourier_coefficients", "level_db", "mean_square_above"]
+
+#: A piece of a signal: ``(t0, t1, f)``, ``f`` its values at an array of times in ``[t0, t1]``.
+Piece = tuple[float, float, Callable[[np.ndarray], np.ndarray]]
+
+#: Gauss-Legendre nodes per sub-interval.
+NODES = 16
+#: The decibel reference of a force level (1 N): ``L = 10 log10(mean square / 1 N^2)``.
+FORCE_REFERENCE = 1.0
+
+
+def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int) -> np.ndarray:
+    """``c_0, ..., c_K`` (``K = harmonics``) of the signal of period ``period`` that is ``f(t)`` on
+    each piece ``(t0, t1, f)`` (``f`` takes an array of times) and zero elsewhere (module
+    docstring); the pieces lie in one period and do not overlap."""
+    check_count(harmonics, "harmonics", 0, 100_000)
+    if not period > 0 or not math.isfinite(period):
+        raise InputError(f"period must be a positive number of seconds, got {period!r}", field="period")
+    nodes, weights = np.polynomial.legendre.leggauss(NODES)
+    k = np.arange(harmonics + 1)
+    longest = period / max(harmonics, 1)
+    total = np.zeros(harmonics + 1, dtype=complex)
+    for t0, t1, f in pieces:
+        if not t1 > t0:
+            continue
+        count = max(1, math.ceil((t1 - t0) / longest))
+        edges = np.linspace(t0, t1, count + 1)
+        half = 0.5 * np.diff(edges)
+        times = ((edges[:-1] + edges[1:]) * 0.5)[:, None] + half[:, None] * nodes[None, :]
+        values = np.asarray(f(times.ravel()), dtype=float) * np.repeat(half, NODES) * np.tile(weights, count)
+        total += np.exp(-2j * np.pi * np.outer(k, times.ravel()) / period) @ values
+    coefficients: np.ndarray = total / period
+    return coefficients
+
+
+def a_weighting(frequency: np.ndarray) -> np.ndarray:
+    """The A-weighting gain (dB) at ``frequency`` (Hz), IEC 61672-1: 0 dB at 1 kHz, about -19 dB
+    at 100 Hz, -50 dB at 20 Hz; ``-inf`` at 0 Hz."""
+    f2 = np.asarray(frequency, dtype=float) ** 2
+    with np.errstate(divide="ignore"):
+        ra = (12194.0**2 * f2**2) / ((f2 + 20.6**2) * np.sqrt((f2 + 107.7**2) * (f2 + 737.9**2)) * (f2 + 12194.0**2))
+        gain: np.ndarray = 20.0 * np.log10(ra) + 2.0
+    return gain
+
+
+def mean_square_above(
+    coefficients: np.ndarray, fundamental: float, cutoff: float = 0.0, *, weighted: bool = False
+) -> float:
+    """The mean square of the harmonics above ``cutoff`` Hz (``2 |c_k|^2`` each, the harmonic ``k``
+    at ``k fundamental`` Hz; the mean ``c_0`` never counts), A-weighted if ``weighted``."""
+    k = np.arange(1, len(coefficients))
+    frequency = k * fundamental
+    power = 2.0 * np.abs(coefficients[1:]) ** 2
+    if weighted:
+        power = power * 10.0 ** (a_weighting(frequency) / 10.0)
+    return float(power[frequency > cutoff].sum())
+
+
+def level_db(mean_square: float, reference: float = FORCE_REFERENCE) -> float:
+    """``10 log10(mean_square / reference^2)`` (dB re ``reference``); ``-inf`` for nothing."""
+    return 10.0 * math.log10(mean_square / reference**2) if mean_square > 0 else -math.inf
