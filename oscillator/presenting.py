@@ -29,6 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.noise import Noise
     from oscillator.orbits.shooting import Orbit
 else:
     Protocol = object
@@ -75,6 +76,8 @@ class Presenter(Protocol):
     def save_chain_result(self, result: ChainResult, folder: str | Path, *, figures: bool, report: bool) -> Path: ...
 
     def plot_chain_design(self, design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None) -> Figure: ...
+
+    def plot_noise(self, found: Noise) -> Figure: ...
 
 
 _registered: list[Presenter] = []

@@ -20,6 +20,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.noise import Noise
     from oscillator.orbits.shooting import Orbit
 
 __all__ = ["Views"]
@@ -105,6 +106,11 @@ class Views:
         from oscillator.report.chain_frequency import design_figure
 
         return design_figure(design, sweeps)
+
+    def plot_noise(self, found: Noise) -> Figure:
+        from oscillator.report.noise import noise_figure
+
+        return noise_figure(found)
 
     def plot_chain_basins(self, basins: ChainBasins) -> Figure:
         from oscillator.report.attractors import basins_figure

@@ -51,7 +51,7 @@ def test_a_mass_struck_once_by_the_elastic_stop_feels_a_half_sine_force_and_twic
     right = noise(case, 1, 120).contacts["right"]
     m1, w, period = case.parameters.m1, np.sqrt(2.5 / case.parameters.m1), case.parameters.period
     exact = half_sine_series(m1 * 1.0 * w, np.pi / w, period, 0.1, 120)
-    assert np.abs(right.coefficients - exact).max() < 1e-9 * np.abs(exact).max()
+    assert np.abs(right.force.coefficients - exact).max() < 1e-9 * np.abs(exact).max()
     assert right.onsets == 1 and right.impulse == pytest.approx(2 * m1 * 1.0, rel=1e-9)
     assert right.energy == right.power == 0.0  # K6 has no damper
     assert noise(case, 1, 120).contacts["left"].rate == 0.0
@@ -66,10 +66,34 @@ def test_the_impact_power_is_the_energy_the_contacts_damper_dissipates():
     assert left.rate == pytest.approx(response.contact["left"]["onsets"] / period, rel=1e-12)
     assert found.power == left.power and left.impact_max == response.contact["left"]["impact_max"]
     columns = found.columns(cutoff=1.0)
-    assert columns["force_level_left"] == pytest.approx(left.level(1.0)) and left.level(1.0) < left.level()
-    spectrum = left.spectrum()
-    assert spectrum.frequency[1] == pytest.approx(1 / (orbit.period * period))
-    assert spectrum.amplitude[0] == pytest.approx(left.impulse_rate, rel=1e-12)  # the mean force
+    assert columns["force_level_left"] == left.force.level(1.0) < left.force.level()
+    table = left.force.table()
+    assert table.frequency[1] == pytest.approx(1 / (orbit.period * period))
+    assert table.amplitude[0] == pytest.approx(left.impulse_rate, rel=1e-12)  # the mean force
+
+
+def test_the_accelerations_steps_where_a_mass_sticks_and_slips_are_cvodes_slopes_either_side():
+    """At each of m2's rest onsets and ends on this orbit, the step of its acceleration against
+    the slopes of ``v2`` on either side in CVODE's own trajectory (a cubic through its steps
+    up to the neighbouring event, 0.02 s at most)."""
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6)
+    m2 = orbit.noise(0).masses[2]
+    run = osc.simulate(orbit.one_period())
+    events, trajectory = run.events, run.trajectory
+    times = np.sort(events.t.unique())
+    rests = events[(events.mass == 2) & events.kind.isin(["sliding_onset", "sliding_vanish"])].t.to_numpy()
+    assert m2.slips == len(rests) == 4 and orbit.noise(0).masses[1].slips == 0
+
+    def slope(t: float, side: int) -> float:
+        near = times[(side * (times - t)) > 1e-9]
+        edge = near[np.argmin(np.abs(near - t))] if len(near) else t + side * 0.02
+        edge = t + side * min(abs(edge - t), 0.02)  # a cubic over at most 0.02 s
+        rows = trajectory[(side * (trajectory.t - t) > 1e-9) & (side * (trajectory.t - edge) < 0)]
+        return float(np.polyval(np.polyder(np.polyfit(rows.t, rows.v2, 3)), t)) if len(rows) > 4 else 0.0
+
+    steps = [abs(slope(t, 1) - slope(t, -1)) for t in rests]
+    assert m2.step_max == pytest.approx(max(steps), rel=1e-3)
+    assert min(steps) > 0.5  # every transition steps
 
 
 def test_the_page_prints_what_it_shows(capsys):
@@ -93,3 +117,22 @@ def test_bad_arguments_are_refused_naming_the_field(call, field):
     with pytest.raises(InputError) as refused:
         call()
     assert refused.value.field == field
+
+
+def test_the_spectra_figure_has_a_panel_per_contact_that_struck_and_per_mass_with_omega_named():
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6)
+    fig = orbit.noise(300).plot()
+    panels = [ax for ax in fig.axes if ax.get_ylabel()]
+    assert [ax.get_title(loc="left") for ax in panels] == [
+        "contact force, right stop (x1 = d1)", "contact force, m1 on m2's stop", "acceleration of m1",
+        "acceleration of m2",
+    ]  # fmt: skip
+    assert [ax.get_ylabel() for ax in panels] == ["level (dB re 1 N)"] * 2 + ["level (dB re 1e-6 m/s^2)"] * 2
+    assert all(ax.get_xscale() == "log" for ax in panels)
+    omega = orbit.case.parameters.Omega / (2 * np.pi)
+    top = panels[0].child_axes[0]  # the secondary axis on top
+    named = {tick.get_text(): position for tick, position in zip(top.get_xticklabels(), top.get_xticks(), strict=True)}
+    assert named["Ω"] == pytest.approx(omega) and named["100Ω"] == pytest.approx(100 * omega)
+    free = osc.find_orbit("instance-1", Omega=1.8).noise().plot()  # no contact: the masses alone
+    titles = [ax.get_title(loc="left") for ax in free.axes if ax.get_ylabel()]
+    assert titles == ["acceleration of m1", "acceleration of m2"]

@@ -1,5 +1,5 @@
 """Noise measures of a periodic motion of the article's system: what engineers who fight rattle
-read off a motion, per contact (docs/noise.md).
+read off a motion, per contact and per mass (docs/noise.md).
 
 Over one return of ``n`` forcing periods (``nT`` seconds), per contact (``right``: m1 on the
 stop at ``x1 = d1``; ``left``: m1 on m2's stop, ``z1 = -d``), with ``F`` the contact force,
@@ -13,11 +13,16 @@ the left) and ``N`` the contacts begun in the return:
   (its damper) and 0 on the right (``K6`` has no damper: its impacts are elastic);
 * ``power`` (W): ``rate * energy``, the power the contact dissipates (the response's ``contact``
   energy per period over ``T``: the energy audit);
-* the contact force's Fourier coefficients over the return, harmonic ``k`` at ``k / nT`` Hz
-  (:func:`~oscillator.orbits.spectra.fourier_coefficients`, exact on each smooth piece), and
-  its level above a cut-off, in dB re 1 N, A-weighted if asked.
+* ``force``: the contact force's spectrum over the return, harmonic ``k`` at ``k / nT`` Hz
+  (:class:`~oscillator.orbits.spectra.Spectrum`, exact on each smooth piece), levels in dB re
+  1 N;
 
-Each contact piece is integrated again from its start as the response measures integrate it
+and per mass ``i``: ``acceleration``, the spectrum of ``a_i`` (the mode's field, 0 at rest;
+levels in dB re 1e-6 m/s^2, ISO 1683), and the steps of ``a_i`` where the mass sticks or slips
+(``slips``: how many in the return; ``step_max``: the largest, m/s^2; the jerk there is an
+impulse of that size).
+
+Each smooth piece is integrated again from its start as the response measures integrate it
 (:mod:`oscillator.orbits.pieces`, DOP853 at 1e-12, compiled) and its dense output is read at the
 quadrature's nodes: the measures come from the motion's own pieces, not from samples.
 """
@@ -25,27 +30,37 @@ quadrature's nodes: the measures come from the motion's own pieces, not from sam
 from __future__ import annotations
 
 import functools
-import math
+import itertools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from oscillator.errors import InputError
+from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case
 from oscillator.model.fields import C3, D1, K6, coefficients
+from oscillator.model.kernels import rates
 from oscillator.model.parameters import check_count
+from oscillator.model.phase_space import Mode
 from oscillator.orbits.pieces import ARTICLE_PIECE, IntegratedPiece, article_data, integrate_piece, mode_flags
 from oscillator.orbits.response import TOLERANCE, left_force, measured
-from oscillator.orbits.spectra import Piece, fourier_coefficients, level_db, mean_square_above
+from oscillator.orbits.spectra import (
+    ACCELERATION_REFERENCE,
+    FORCE_REFERENCE,
+    Piece,
+    Spectrum,
+    fourier_coefficients,
+)
 from oscillator.orbits.tangent import INTEGRALS
+from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
-    import pandas as pd
+    from matplotlib.figure import Figure
 
-__all__ = ["HARMONICS", "ContactNoise", "Noise", "noise"]
+__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "noise"]
 
 #: Harmonics of the return's frequency kept in each contact force's spectrum by default.
 HARMONICS = 200
@@ -63,39 +78,39 @@ class ContactNoise:
     power: float
     impact_max: float
     impact_mean: float
-    coefficients: np.ndarray
-    fundamental: float
+    force: Spectrum
 
     @property
     def impulse_rate(self) -> float:
         """The contact's mean force (N): impulses per second times the mean impulse."""
         return self.rate * self.impulse
 
-    def level(self, cutoff: float = 0.0, *, weighted: bool = False) -> float:
-        """The contact force's level (dB re 1 N) from its harmonics above ``cutoff`` Hz, A-weighted
-        if ``weighted``; ``-inf`` without contact."""
-        return level_db(mean_square_above(self.coefficients, self.fundamental, cutoff, weighted=weighted))
 
-    def spectrum(self) -> pd.DataFrame:
-        """The contact force's harmonics: ``harmonic`` ``k``, ``frequency`` (Hz), ``amplitude`` (N,
-        ``2 |c_k|``, the mean ``|c_0|`` at ``k = 0``) and ``level`` (dB re 1 N of its mean square)."""
-        import pandas as pd
+@dataclass(frozen=True)
+class MassNoise:
+    """One mass's noise measures over a return (module docstring)."""
 
-        k = np.arange(len(self.coefficients))
-        amplitude = np.abs(self.coefficients) * np.where(k == 0, 1.0, 2.0)
-        square = np.abs(self.coefficients) ** 2 * np.where(k == 0, 1.0, 2.0)
-        with np.errstate(divide="ignore"):
-            level = 10.0 * np.log10(square)
-        return pd.DataFrame({"harmonic": k, "frequency": k * self.fundamental, "amplitude": amplitude, "level": level})
+    mass: int
+    acceleration: Spectrum
+    slips: int
+    step_max: float
 
 
 @dataclass(frozen=True)
 class Noise:
-    """The noise measures of a return (:func:`noise`): ``contacts["right"]``, ``contacts["left"]``."""
+    """The noise measures of a return (:func:`noise`): ``contacts["right"]``, ``contacts["left"]``,
+    ``masses[1]``, ``masses[2]``; ``case`` the motion's start, ``span`` the return (s)."""
 
+    case: Case
     periods: int
     span: float
     contacts: dict[str, ContactNoise]
+    masses: dict[int, MassNoise]
+
+    def plot(self) -> Figure:
+        """The contact forces' and the masses' accelerations' spectra in dB against frequency,
+        the harmonics of Omega marked (docs/noise.md)."""
+        return presenter().plot_noise(self)
 
     @property
     def power(self) -> float:
@@ -104,12 +119,15 @@ class Noise:
 
     def columns(self, cutoff: float = 0.0) -> dict[str, float]:
         """Every measure as a flat mapping: ``impact_rate_right``, ``impulse_left``, ...,
-        ``force_level_right`` (dB re 1 N above ``cutoff`` Hz)."""
+        ``force_level_right`` (dB re 1 N above ``cutoff`` Hz), ``acceleration_level_m1`` (dB re
+        1e-6 m/s^2 above ``cutoff`` Hz), ``slip_step_max_m2``."""
         flat: dict[str, float] = {}
         for name, c in self.contacts.items():
             flat |= {f"impact_rate_{name}": c.rate, f"impulse_{name}": c.impulse}
             flat |= {f"impulse_rate_{name}": c.impulse_rate, f"impact_energy_{name}": c.energy}
-            flat |= {f"impact_power_{name}": c.power, f"force_level_{name}": c.level(cutoff)}
+            flat |= {f"impact_power_{name}": c.power, f"force_level_{name}": c.force.level(cutoff)}
+        for i, m in self.masses.items():
+            flat |= {f"acceleration_level_m{i}": m.acceleration.level(cutoff), f"slip_step_max_m{i}": m.step_max}
         return flat
 
 
@@ -131,6 +149,60 @@ def _left_loss(piece: IntegratedPiece, c: np.ndarray, t: np.ndarray) -> np.ndarr
     return loss
 
 
+def _accelerations(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[float, float]:
+    """``(a1, a2)``: the mode's field at ``(t, y)`` (0 for a resting mass)."""
+    s1, s2, left, right = mode_flags(mode)
+    r = rates(t, float(y[0]), float(y[1]), float(y[2]), float(y[3]), c, s1, s2, left, right)
+    return float(r[1]), float(r[3])
+
+
+def _acceleration(piece: IntegratedPiece, mode: Mode, c: np.ndarray, mass: int, t: np.ndarray) -> np.ndarray:
+    """Mass ``mass``'s acceleration on the piece at times ``t``."""
+    y = piece(t)
+    return np.array([_accelerations(float(s), y[:4, k], mode, c)[mass - 1] for k, s in enumerate(t)])
+
+
+def _steps(segments: list[Segment], c: np.ndarray, mass: int) -> list[float]:
+    """The steps of mass ``mass``'s acceleration where it sticks or starts to slip."""
+    steps = []
+    for before, after in itertools.pairwise(segments):
+        if (before.mode.sign(mass) == 0) != (after.mode.sign(mass) == 0):
+            a0 = _accelerations(before.t1, before.y1, before.mode, c)[mass - 1]
+            a1 = _accelerations(after.t0, after.y0, after.mode, c)[mass - 1]
+            steps.append(abs(a1 - a0))
+    return steps
+
+
+def _contact(
+    name: str,
+    pieces: list[tuple[Segment, IntegratedPiece]],
+    c: np.ndarray,
+    given: dict[str, float],
+    sizes: tuple[float, int, int],
+) -> ContactNoise:
+    """Contact ``name``'s measures over the pieces (module docstring); ``given`` its response
+    measures, ``sizes`` the return's span, forcing periods and harmonics kept."""
+    span, periods, harmonics = sizes
+    force = _left_force if name == "left" else _right_force
+    touching = [(s, piece) for s, piece in pieces if (s.mode.left if name == "left" else s.mode.right)]
+    parts: list[Piece] = [(s.t0, s.t1, functools.partial(force, piece, c)) for s, piece in touching]
+    losses: list[Piece] = [(s.t0, s.t1, functools.partial(_left_loss, piece, c)) for s, piece in touching]
+    lost = span * float(fourier_coefficients(losses, span, 0)[0].real) if name == "left" else 0.0
+    spectrum = Spectrum(fourier_coefficients(parts, span, harmonics), 1.0 / span, "N", FORCE_REFERENCE)
+    onsets = round(given["onsets"] * periods)
+    return ContactNoise(
+        contact=name,
+        onsets=onsets,
+        rate=onsets / span,
+        impulse=spectrum.mean * span / onsets if onsets else 0.0,
+        energy=lost / onsets if onsets else 0.0,
+        power=lost / span,
+        impact_max=given["impact_max"],
+        impact_mean=given["impact_mean"],
+        force=spectrum,
+    )
+
+
 def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
     """The noise measures of the case's motion from its start over ``periods`` forcing periods
     (module docstring): of an orbit, over its return (:meth:`oscillator.Orbit.noise`)."""
@@ -138,42 +210,26 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
         raise InputError(not_a_case(case), field="case")
     check_count(periods, "periods", 1, 100_000)
     check_count(harmonics, "harmonics", 0, 100_000)
-    p, c = case.parameters, coefficients(case.parameters)
-    span = periods * p.period
+    c = coefficients(case.parameters)
+    span = periods * case.parameters.period
     result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
     response = measured(result, periods)
-    forces: dict[str, list[Piece]] = {"right": [], "left": []}
-    losses: list[Piece] = []
-    for segment in result.segments:
-        mode = segment.mode
-        if not segment.t1 > segment.t0 or not (mode.left or mode.right):
-            continue
-        data = article_data(mode_flags(mode), np.zeros(0, np.int64), c)
-        start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
-        span_ = (segment.t0, segment.t1)
-        solved = integrate_piece(ARTICLE_PIECE, data, span_, start, rtol=TOLERANCE, atol=TOLERANCE, dense=True)
-        if mode.right:
-            forces["right"].append((*span_, functools.partial(_right_force, solved, c)))
-        if mode.left:
-            forces["left"].append((*span_, functools.partial(_left_force, solved, c)))
-            losses.append((*span_, functools.partial(_left_loss, solved, c)))
-    lost = {"right": 0.0, "left": span * float(fourier_coefficients(losses, span, 0)[0].real)}
-    contacts = {}
-    for name in ("right", "left"):
-        series = fourier_coefficients(forces[name], span, harmonics)
-        given = response.contact[name]
-        onsets = round(given["onsets"] * periods)
-        per = 1.0 / onsets if onsets else math.nan
-        contacts[name] = ContactNoise(
-            contact=name,
-            onsets=onsets,
-            rate=onsets / span,
-            impulse=float(series[0].real) * span * per if onsets else 0.0,
-            energy=lost[name] * per if onsets else 0.0,
-            power=lost[name] / span,
-            impact_max=given["impact_max"],
-            impact_mean=given["impact_mean"],
-            coefficients=series,
-            fundamental=1.0 / span,
-        )
-    return Noise(periods, span, contacts)
+    segments = [segment for segment in result.segments if segment.t1 > segment.t0]
+    pieces = [(segment, _dense(segment, c)) for segment in segments]
+    sizes = (span, periods, harmonics)
+    contacts = {name: _contact(name, pieces, c, response.contact[name], sizes) for name in ("right", "left")}
+    masses = {}
+    for i in (1, 2):
+        parts: list[Piece] = [(s.t0, s.t1, functools.partial(_acceleration, p, s.mode, c, i)) for s, p in pieces]
+        spectrum = Spectrum(fourier_coefficients(parts, span, harmonics), 1.0 / span, "m/s^2", ACCELERATION_REFERENCE)
+        steps = _steps(segments, c, i)
+        masses[i] = MassNoise(i, spectrum, len(steps), max(steps, default=0.0))
+    return Noise(case, periods, span, contacts, masses)
+
+
+def _dense(segment: Segment, c: np.ndarray) -> IntegratedPiece:
+    """The segment integrated again from its start, with its dense output."""
+    data = article_data(mode_flags(segment.mode), np.zeros(0, np.int64), c)
+    start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
+    span = (segment.t0, segment.t1)
+    return integrate_piece(ARTICLE_PIECE, data, span, start, rtol=TOLERANCE, atol=TOLERANCE, dense=True)

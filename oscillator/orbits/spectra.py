@@ -18,21 +18,26 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from oscillator.errors import InputError
 from oscillator.model.parameters import check_count
 
-__all__ = ["NODES", "Piece", "a_weighting", "fourier_coefficients", "level_db", "mean_square_above"]
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+__all__ = ["NODES", "Piece", "Spectrum", "a_weighting", "fourier_coefficients", "level_db", "mean_square_above"]
 
 #: A piece of a signal: ``(t0, t1, f)``, ``f`` its values at an array of times in ``[t0, t1]``.
 Piece = tuple[float, float, Callable[[np.ndarray], np.ndarray]]
 
 #: Gauss-Legendre nodes per sub-interval.
 NODES = 16
-#: The decibel reference of a force level (1 N): ``L = 10 log10(mean square / 1 N^2)``.
-FORCE_REFERENCE = 1.0
+#: The decibel references: of a force level, 1 N; of an acceleration level, 1e-6 m/s^2 (ISO 1683).
+FORCE_REFERENCE, ACCELERATION_REFERENCE = 1.0, 1e-6
 
 
 def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int) -> np.ndarray:
@@ -85,3 +90,37 @@ def mean_square_above(
 def level_db(mean_square: float, reference: float = FORCE_REFERENCE) -> float:
     """``10 log10(mean_square / reference^2)`` (dB re ``reference``); ``-inf`` for nothing."""
     return 10.0 * math.log10(mean_square / reference**2) if mean_square > 0 else -math.inf
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """A periodic signal's Fourier coefficients ``c_0, ..., c_K`` (:func:`fourier_coefficients`),
+    harmonic ``k`` at ``k fundamental`` Hz, in ``unit``, its levels in dB re ``reference``."""
+
+    coefficients: np.ndarray
+    fundamental: float
+    unit: str
+    reference: float
+
+    @property
+    def mean(self) -> float:
+        """The signal's mean, ``c_0``."""
+        return float(self.coefficients[0].real)
+
+    def level(self, cutoff: float = 0.0, *, weighted: bool = False) -> float:
+        """The level (dB re :attr:`reference`) of the harmonics above ``cutoff`` Hz, the mean left
+        out, A-weighted if ``weighted``; ``-inf`` for a constant signal."""
+        square = mean_square_above(self.coefficients, self.fundamental, cutoff, weighted=weighted)
+        return level_db(square, self.reference)
+
+    def table(self) -> pd.DataFrame:
+        """One row per harmonic: ``harmonic`` ``k``, ``frequency`` (Hz), ``amplitude`` (``2 |c_k|``;
+        the mean ``|c_0|`` at ``k = 0``) and ``level`` (dB re :attr:`reference` of its mean square)."""
+        import pandas as pd
+
+        k = np.arange(len(self.coefficients))
+        twice = np.where(k == 0, 1.0, 2.0)
+        with np.errstate(divide="ignore"):
+            level = 10.0 * np.log10(twice * np.abs(self.coefficients) ** 2 / self.reference**2)
+        amplitude = twice * np.abs(self.coefficients)
+        return pd.DataFrame({"harmonic": k, "frequency": k * self.fundamental, "amplitude": amplitude, "level": level})
