@@ -136,3 +136,20 @@ def test_the_spectra_figure_has_a_panel_per_contact_that_struck_and_per_mass_wit
     free = osc.find_orbit("instance-1", Omega=1.8).noise().plot()  # no contact: the masses alone
     titles = [ax.get_title(loc="left") for ax in free.axes if ax.get_ylabel()]
     assert titles == ["acceleration of m1", "acceleration of m2"]
+
+
+def test_the_orbit_command_prints_the_noise_measures_the_library_finds():
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    done = CliRunner().invoke(app, ["orbit", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--set", "Omega=1.6",
+                                    "--noise"], env={"COLUMNS": "200"})  # fmt: skip
+    assert done.exit_code == 0, done.output
+    found = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6).noise()
+    lines = {line.split()[0]: line.split()[1:] for line in done.stdout.splitlines() if line.strip()}
+    left, m2 = found.contacts["left"], found.masses[2]
+    assert lines["left"] == [f"{left.rate:.6g}", f"{left.impulse:.6g}", f"{left.energy:.6g}", f"{left.power:.6g}",
+                             f"{left.force.level():.2f}"]  # fmt: skip
+    assert lines["m2"] == [f"{m2.acceleration.level():.2f}", "4", f"{m2.step_max:.6g}"]
+    assert "Noise measures of the contacts" in done.stdout and "Noise measures of the masses" in done.stdout

@@ -56,6 +56,9 @@ SensitivitiesOption = Annotated[
         help="Also print the orbit's exact derivatives in these parameters (comma-separated, e.g. d1,K3,Omega).",
     ),
 ]
+NoiseOption = Annotated[
+    bool, typer.Option("--noise", help="Also print its noise measures: impacts, impulses, impact power, levels.")
+]
 SectionOption = Annotated[
     float | None,
     typer.Option("--section", metavar="T", help="The section's time in s (default: the case's t0; needs --guess)."),
@@ -92,9 +95,11 @@ def orbit(
         int, typer.Option("--max-iterations", metavar="N", help="Newton steps before giving up (1 to 200).")
     ] = 20,
     sensitivities: SensitivitiesOption = None,
+    noise: NoiseOption = False,
 ) -> None:
     """Find the periodic orbit of the stroboscopic map by Newton's method; print it, its events
-    and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md).
+    and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md;
+    its noise measures: docs/noise.md).
 
     \b
     A system file (docs/systems.md) takes --set by its names (platform.F=0.5) and --guess as one
@@ -106,6 +111,7 @@ def orbit(
       oscillator orbit instance-1 --set Q2=70.5
       oscillator orbit instance-1 --set Q2=70.5 --transient 20 --max-iterations 40
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.5 --sensitivities d1,K3,Omega
+      oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise
       oscillator orbit docs/systems/blade-damper.toml --set platform.F=0.5 --transient 60
     """
     from oscillator.cli.system import orbit_system
@@ -151,6 +157,8 @@ def orbit(
     out.print(_events_table(found.events))
     if names:
         _print_sensitivities(found, names)
+    if noise:
+        _print_noise(found)
 
 
 def _names(text: str | None) -> tuple[str, ...]:
@@ -209,6 +217,29 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
         else "none"
     )
     out.print(Text(f"nearest point without a derivative: {nearest}"))
+
+
+def _print_noise(found: Orbit) -> None:
+    """The orbit's noise measures (docs/noise.md), after the orbit itself."""
+    try:
+        measures = found.noise()
+    except OscillatorError as error:
+        raise fail(message(error), code=_code(error)) from None
+    table = Table(title="Noise measures of the contacts", title_justify="left", box=box.SIMPLE_HEAD)
+    headers = ("contact", "impacts/s", "impulse (N s)", "energy/impact (J)", "power (W)", "force level (dB re 1 N)")
+    for k, column in enumerate(headers):
+        table.add_column(column, justify="left" if k == 0 else "right", no_wrap=True)
+    for name, c in measures.contacts.items():
+        values = (c.rate, c.impulse, c.energy, c.power)
+        table.add_row(name, *(f"{v:.6g}" for v in values), f"{c.force.level():.2f}" if c.onsets else "-")
+    out.print(table)
+    table = Table(title="Noise measures of the masses", title_justify="left", box=box.SIMPLE_HEAD)
+    columns = ("mass", "acceleration level (dB re 1e-6 m/s^2)", "stick-slip steps", "largest step (m/s^2)")
+    for k, column in enumerate(columns):
+        table.add_column(column, justify="left" if k == 0 else "right", no_wrap=True)
+    for i, m in measures.masses.items():
+        table.add_row(f"m{i}", f"{m.acceleration.level():.2f}", str(m.slips), f"{m.step_max:.6g}")
+    out.print(table)
 
 
 def _complex_text(value: complex) -> str:
