@@ -138,13 +138,15 @@ def test_the_spectra_figure_has_a_panel_per_contact_that_struck_and_per_mass_wit
     assert titles == ["acceleration of m1", "acceleration of m2"]
 
 
-def test_the_orbit_command_prints_the_noise_measures_the_library_finds():
+def test_the_orbit_command_prints_the_noise_measures_the_library_finds(monkeypatch):
     from typer.testing import CliRunner
 
+    from oscillator.cli import console
     from oscillator.cli.app import app
 
+    monkeypatch.setattr(console.out, "width", 200)  # as COLUMNS sets it for the command: no column cut
     done = CliRunner().invoke(app, ["orbit", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--set", "Omega=1.6",
-                                    "--noise"], env={"COLUMNS": "200"})  # fmt: skip
+                                    "--noise"])  # fmt: skip
     assert done.exit_code == 0, done.output
     found = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6).noise()
     lines = {line.split()[0]: line.split()[1:] for line in done.stdout.splitlines() if line.strip()}
