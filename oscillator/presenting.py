@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
 
     from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.attractors.chain_frequency import ChainFrequencyResponse
+    from oscillator.attractors.frequency import FrequencyResponse
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -78,6 +79,8 @@ class Presenter(Protocol):
     def plot_chain_design(self, design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None) -> Figure: ...
 
     def plot_noise(self, found: Noise) -> Figure: ...
+
+    def plot_noise_response(self, found: FrequencyResponse, table: pd.DataFrame, column: str) -> Figure: ...
 
 
 _registered: list[Presenter] = []

@@ -15,6 +15,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.attractors.chain_attractors import ChainBasins
     from oscillator.attractors.chain_frequency import ChainFrequencyResponse
+    from oscillator.attractors.frequency import FrequencyResponse
     from oscillator.designing.chain_design import ChainDesign
     from oscillator.hybrid.chain_run import ChainResult
     from oscillator.hybrid.result import Result
@@ -111,6 +112,11 @@ class Views:
         from oscillator.report.noise import noise_figure
 
         return noise_figure(found)
+
+    def plot_noise_response(self, found: FrequencyResponse, table: pd.DataFrame, column: str) -> Figure:
+        from oscillator.report.noise import noise_response_figure
+
+        return noise_response_figure(found, table, column)
 
     def plot_chain_basins(self, basins: ChainBasins) -> Figure:
         from oscillator.report.attractors import basins_figure

@@ -155,3 +155,21 @@ def test_the_orbit_command_prints_the_noise_measures_the_library_finds(monkeypat
                              f"{left.force.level():.2f}"]  # fmt: skip
     assert lines["m2"] == [f"{m2.acceleration.level():.2f}", "4", f"{m2.step_max:.6g}"]
     assert "Noise measures of the contacts" in done.stdout and "Noise measures of the masses" in done.stdout
+
+
+def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parameter():
+    case = osc.resolve_case("instance-1", d=1, d1=3.5)
+    found = osc.frequency_response(case, "Omega", (1.45, 1.6), seeds=2, sweep=3, max_points=12, workers=1)
+    table = found.noise(harmonics=20, cutoff=1.0)
+    assert len(table) == len(found.points) and list(table.columns[:4]) == ["branch", "Omega", "stable", "piece"]
+    assert (table.branch.to_numpy() == found.points.branch.to_numpy()).all()
+    assert np.allclose(table.Omega, found.points.Omega, rtol=0, atol=0)
+    row, branch = table.iloc[5], found.branches[int(table.branch.iloc[5])]
+    point = branch.points[branch.points.Omega == row.Omega].iloc[0]
+    state = {name: float(point[name]) for name in case.system.state}
+    alone = noise(osc.resolve_case(branch.case, Omega=row.Omega, t0=branch.section, **state), branch.period, 20)
+    assert alone.columns(1.0)["impact_power_left"] == row.impact_power_left > 0
+    fig = found.plot_noise(table, "impact_power_left")
+    assert fig.axes[0].get_ylabel() == "impact power left (W)" and len(fig.axes[0].lines) >= len(found.branches)
+    with pytest.raises(InputError, match="column must be one of"):
+        found.plot_noise(table, "x_pp_m1")

@@ -128,6 +128,20 @@ class FrequencyResponse(Presented):
         dashed, bifurcations marked, the sweeps with their jumps, sticking and contact shaded."""
         return presenter().plot_global(self, measure=measure)
 
+    def noise(self, harmonics: int = 200, cutoff: float = 0.0) -> pd.DataFrame:
+        """The noise measures at every branch point (docs/noise.md), one row per point as in
+        :attr:`points`: ``branch``, the parameter, ``stable``, ``piece`` and every column of
+        :meth:`oscillator.Noise.columns` (levels above ``cutoff`` Hz). Each point's return is
+        integrated again: about 0.05 s a point."""
+        frames = [branch.noise(harmonics, cutoff).assign(branch=k) for k, branch in enumerate(self.branches)]
+        table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame({"branch": []})
+        return table[["branch", *[c for c in table.columns if c != "branch"]]]
+
+    def plot_noise(self, table: pd.DataFrame, column: str = "impact_power_left") -> Figure:
+        """The noise measure ``column`` of :meth:`noise`'s ``table`` against the parameter, each
+        branch in its colour, stable solid and unstable dashed."""
+        return presenter().plot_noise_response(self, table, column)
+
     @property
     def bifurcations(self) -> pd.DataFrame:
         """Every branch's bifurcations, with ``branch`` (its index in ``branches``) first."""

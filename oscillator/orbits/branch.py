@@ -166,6 +166,13 @@ class Branch:
 
         return branch_responses(self)
 
+    def noise(self, harmonics: int = 200, cutoff: float = 0.0) -> pd.DataFrame:
+        """The noise measures at every point (:func:`oscillator.orbits.noise.branch_noise`; levels
+        above ``cutoff`` Hz): against ``Omega``, the branch's noise response."""
+        from oscillator.orbits.noise import branch_noise
+
+        return branch_noise(self, harmonics, cutoff)
+
     def plot_multipliers(self) -> Figure:
         """The multipliers' moduli against the parameter (``figures/multipliers.png``)."""
         return presenter().plot_multipliers(self)

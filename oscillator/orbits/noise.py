@@ -58,9 +58,12 @@ from oscillator.orbits.tangent import INTEGRALS
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
     from matplotlib.figure import Figure
 
-__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "noise"]
+    from oscillator.orbits.branch import Branch
+
+__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise"]
 
 #: Harmonics of the return's frequency kept in each contact force's spectrum by default.
 HARMONICS = 200
@@ -233,3 +236,27 @@ def _dense(segment: Segment, c: np.ndarray) -> IntegratedPiece:
     start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
     span = (segment.t0, segment.t1)
     return integrate_piece(ARTICLE_PIECE, data, span, start, rtol=TOLERANCE, atol=TOLERANCE, dense=True)
+
+
+def branch_noise(branch: Branch, harmonics: int = HARMONICS, cutoff: float = 0.0) -> pd.DataFrame:
+    """The noise measures at every point of a continued branch: one row per point with the
+    parameter, ``stable``, ``piece`` and every column of :meth:`Noise.columns` (levels above
+    ``cutoff`` Hz); against ``Omega``, the branch's noise response. Each point is measured from its
+    section state over its return, as the branch holds it."""
+    import pandas as pd
+
+    from oscillator.io.cases import resolve_case
+
+    if branch.case is None:
+        raise InputError(
+            "the branch carries no case to run its orbits from; continue it with continue_orbit", field="branch"
+        )
+    check_count(harmonics, "harmonics", 0, 100_000)
+    rows = []
+    for point in branch.points.itertuples(index=False):
+        values = point._asdict()
+        state = {name: float(values[name]) for name in branch.case.system.state}
+        case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
+        row = {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
+        rows.append(row | noise(case, branch.period, harmonics).columns(cutoff))
+    return pd.DataFrame(rows)

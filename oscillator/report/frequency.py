@@ -19,6 +19,7 @@ from oscillator.report.orbits import bifurcation_style, modified_blocks
 from oscillator.report.outputs import color_of, quantity_label, wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
+    from collections.abc import Iterator
     from pathlib import Path
 
     import pandas as pd
@@ -35,6 +36,7 @@ __all__ = [
     "frequency_blocks",
     "frequency_figure",
     "read_frequency",
+    "stability_runs",
     "write_frequency",
 ]
 
@@ -104,18 +106,22 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
     return fig
 
 
+def stability_runs(piece: pd.DataFrame) -> Iterator[tuple[pd.DataFrame, bool]]:
+    """A branch piece's runs of equal stability (its ``stable`` column), each with whether it is
+    stable; each run reaches the next point, so that a curve has no gap where stability changes."""
+    stable = piece.stable.to_numpy(bool)
+    cuts = np.flatnonzero(stable[1:] != stable[:-1]) + 1
+    for run in np.split(np.arange(len(piece)), cuts):
+        yield piece.iloc[run[0] : run[-1] + 2], bool(stable[run[0]])
+
+
 def _branches(ax: Axes, found: FrequencyResponse, column: str) -> None:
     """Each branch: runs of equal stability along each piece, solid or dashed; its bifurcations."""
     points = found.points
     for k, branch in enumerate(found.branches):
         mine = points[points.branch == k]
         for _, piece in mine.groupby("piece", sort=False):
-            stable = piece.stable.to_numpy(bool)
-            cuts = np.flatnonzero(stable[1:] != stable[:-1]) + 1
-            for run in np.split(np.arange(len(piece)), cuts):
-                # each run reaches the next point, so that the curve has no gap where stability changes
-                span = piece.iloc[run[0] : run[-1] + 2]
-                solid = bool(stable[run[0]])
+            for span, solid in stability_runs(piece):
                 ax.plot(span[found.param], span[column], color=color_of(k), ls="-" if solid else "--", lw=1.4)
         _bifurcations(ax, found.param, branch.bifurcations, mine, column)
 

@@ -12,13 +12,15 @@ import numpy as np
 from oscillator.report.outputs import wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from oscillator.attractors.frequency import FrequencyResponse
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.spectra import Spectrum
 
-__all__ = ["noise_figure"]
+__all__ = ["noise_figure", "noise_response_figure"]
 
 #: Harmonics of Omega named on the top axis.
 NAMED = (1, 2, 3, 5, 10, 20, 50, 100)
@@ -66,3 +68,43 @@ def noise_figure(found: Noise) -> Figure:
     periods = "one forcing period" if found.periods == 1 else f"{found.periods} forcing periods"
     fig.suptitle(wrapped_title(found.case, f"spectra over a return of {periods}"), fontsize=9)
     return fig
+
+
+def noise_response_figure(found: FrequencyResponse, table: pd.DataFrame, column: str) -> Figure:
+    """``column`` of a frequency response's noise measures (:meth:`FrequencyResponse.noise`)
+    against the parameter: each branch in its colour, runs of equal stability solid (stable) or
+    dashed, as the response measures are drawn."""
+    from matplotlib.figure import Figure
+
+    from oscillator.errors import InputError
+    from oscillator.report.frequency import stability_runs
+    from oscillator.report.outputs import color_of, quantity_label
+    from oscillator.text import shown
+
+    measures = [c for c in table.columns if c not in ("branch", found.param, "stable", "piece")]
+    if column not in measures:
+        raise InputError(f"column must be one of {', '.join(measures)}, got {shown(column)}", field="column")
+    fig = Figure(figsize=(8.0, 3.8), layout="constrained")
+    ax = fig.subplots()
+    for k, rows in table.groupby("branch", sort=True):
+        for _, piece in rows.groupby("piece", sort=False):
+            for span, solid in stability_runs(piece):
+                ax.plot(span[found.param], span[column], color=color_of(int(k)), ls="-" if solid else "--", lw=1.4)
+    ax.set_xlabel(quantity_label(found.param))
+    ax.set_ylabel(column.replace("_", " ") + _UNITS.get(column.rsplit("_", 1)[0], ""))
+    ax.grid(alpha=0.3)
+    ax.set_title(wrapped_title(found.case, f"{column} over {found.param}: stable solid, unstable dashed"), fontsize=9)
+    return fig
+
+
+#: The noise columns' units, by the column's name without its contact or mass.
+_UNITS = {
+    "impact_rate": " (1/s)",
+    "impulse": " (N s)",
+    "impulse_rate": " (N)",
+    "impact_energy": " (J)",
+    "impact_power": " (W)",
+    "force_level": " (dB re 1 N)",
+    "acceleration_level": " (dB re 1e-6 m/s^2)",
+    "slip_step_max": " (m/s^2)",
+}
