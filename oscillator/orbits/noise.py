@@ -45,8 +45,8 @@ from oscillator.model.fields import C3, D1, K6, coefficients
 from oscillator.model.kernels import rates
 from oscillator.model.parameters import check_count
 from oscillator.model.phase_space import Mode
-from oscillator.orbits.pieces import ARTICLE_PIECE, IntegratedPiece, article_data, integrate_piece, mode_flags
-from oscillator.orbits.response import TOLERANCE, left_force, measured
+from oscillator.orbits.pieces import IntegratedPiece, mode_flags
+from oscillator.orbits.response import branch_points, integrated, left_force, measured
 from oscillator.orbits.spectra import (
     ACCELERATION_REFERENCE,
     FORCE_REFERENCE,
@@ -54,7 +54,6 @@ from oscillator.orbits.spectra import (
     Spectrum,
     fourier_coefficients,
 )
-from oscillator.orbits.tangent import INTEGRALS
 from oscillator.presenting import presenter
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -216,9 +215,9 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
     c = coefficients(case.parameters)
     span = periods * case.parameters.period
     result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
-    response = measured(result, periods)
     segments = [segment for segment in result.segments if segment.t1 > segment.t0]
-    pieces = [(segment, _dense(segment, c)) for segment in segments]
+    pieces = [(segment, integrated(segment, c, dense=True)) for segment in segments]
+    response = measured(result, periods, [piece for _, piece in pieces])
     sizes = (span, periods, harmonics)
     contacts = {name: _contact(name, pieces, c, response.contact[name], sizes) for name in ("right", "left")}
     masses = {}
@@ -230,14 +229,6 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
     return Noise(case, periods, span, contacts, masses)
 
 
-def _dense(segment: Segment, c: np.ndarray) -> IntegratedPiece:
-    """The segment integrated again from its start, with its dense output."""
-    data = article_data(mode_flags(segment.mode), np.zeros(0, np.int64), c)
-    start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
-    span = (segment.t0, segment.t1)
-    return integrate_piece(ARTICLE_PIECE, data, span, start, rtol=TOLERANCE, atol=TOLERANCE, dense=True)
-
-
 def branch_noise(branch: Branch, harmonics: int = HARMONICS, cutoff: float = 0.0) -> pd.DataFrame:
     """The noise measures at every point of a continued branch: one row per point with the
     parameter, ``stable``, ``piece`` and every column of :meth:`Noise.columns` (levels above
@@ -245,18 +236,6 @@ def branch_noise(branch: Branch, harmonics: int = HARMONICS, cutoff: float = 0.0
     section state over its return, as the branch holds it."""
     import pandas as pd
 
-    from oscillator.io.cases import resolve_case
-
-    if branch.case is None:
-        raise InputError(
-            "the branch carries no case to run its orbits from; continue it with continue_orbit", field="branch"
-        )
     check_count(harmonics, "harmonics", 0, 100_000)
-    rows = []
-    for point in branch.points.itertuples(index=False):
-        values = point._asdict()
-        state = {name: float(values[name]) for name in branch.case.system.state}
-        case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
-        row = {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
-        rows.append(row | noise(case, branch.period, harmonics).columns(cutoff))
+    rows = [row | noise(case, branch.period, harmonics).columns(cutoff) for row, case in branch_points(branch)]
     return pd.DataFrame(rows)

@@ -36,8 +36,9 @@ contact + friction`` (:attr:`Response.balance`, zero to the integration's tolera
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -50,7 +51,7 @@ from oscillator.io.cases import Case, not_a_case, resolve_case
 from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.parameters import Parameters, check_count
-from oscillator.orbits.pieces import ARTICLE_PIECE, article_data, integrate_piece, mode_flags
+from oscillator.orbits.pieces import ARTICLE_PIECE, IntegratedPiece, article_data, integrate_piece, mode_flags
 from oscillator.orbits.tangent import INTEGRALS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -65,8 +66,10 @@ __all__ = [
     "MASS_MEASURES",
     "UNITS",
     "Response",
+    "branch_points",
     "branch_responses",
     "impact_speeds",
+    "integrated",
     "left_force",
     "measured",
     "response",
@@ -130,11 +133,14 @@ def response(case: Case, periods: int = 1) -> Response:
     return measured(simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True)), periods)
 
 
-def measured(result: Result, periods: int) -> Response:
-    """The response measures of a run of ``periods`` forcing periods that kept its segments."""
+def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | None = None) -> Response:
+    """The response measures of a run of ``periods`` forcing periods that kept its segments;
+    ``solved``: its pieces of positive length already integrated again (:func:`integrated`)."""
     p = result.case.parameters
     span = periods * p.period
-    pieces = [_Piece.of(segment, p) for segment in result.segments if segment.t1 > segment.t0]
+    segments = [segment for segment in result.segments if segment.t1 > segment.t0]
+    again = [None] * len(segments) if solved is None else list(solved)
+    pieces = [_Piece.of(segment, p, piece) for segment, piece in zip(segments, again, strict=True)]
     mass = {i: _mass_measures(pieces, i, span) for i in (1, 2)}
     rows = result.event_rows
     events = result.events if rows is None else rows  # the rows while the table is not built: none built
@@ -150,6 +156,20 @@ def measured(result: Result, periods: int) -> Response:
 REFINE = 1e-12
 
 
+def branch_points(branch: Branch) -> Iterator[tuple[dict[str, Any], Case]]:
+    """Each point of a continued branch: its row's parameter, ``stable`` and ``piece``, and the
+    case that starts on its orbit at the branch's section."""
+    if branch.case is None:
+        raise InputError(
+            "the branch carries no case to run its orbits from; continue it with continue_orbit", field="branch"
+        )
+    for point in branch.points.itertuples(index=False):
+        values = point._asdict()
+        state = {name: float(values[name]) for name in branch.case.system.state}
+        case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
+        yield {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}, case
+
+
 def branch_responses(branch: Branch) -> pd.DataFrame:
     """The response measures at every point of a continued branch: one row per point with the
     parameter, ``stable``, ``piece`` and every measure of :meth:`Response.columns` (the
@@ -162,23 +182,15 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
     from oscillator.errors import OscillatorError
     from oscillator.orbits.shooting import newton, tightened
 
-    if branch.case is None:
-        raise InputError(
-            "the branch carries no case to run its orbits from; continue it with continue_orbit", field="branch"
-        )
     rows = []
-    for point in branch.points.itertuples(index=False):
-        values = point._asdict()
-        state = {name: float(values[name]) for name in branch.case.system.state}
-        case = resolve_case(branch.case, **{branch.param: float(values[branch.param])}, t0=branch.section, **state)
-        guess, period = np.array(list(state.values())), branch.period
+    for row, case in branch_points(branch):
+        state = np.array(case.initial.y, dtype=float)
         try:
             tight = tightened(case, {})
-            _, image, _ = newton(tight, branch.section, guess, period, tol=REFINE, max_iterations=20, floor=True)
-            measures = measured(image.result, period)
+            _, image, _ = newton(tight, branch.section, state, branch.period, tol=REFINE, max_iterations=20, floor=True)
+            measures = measured(image.result, branch.period)
         except OscillatorError:
-            measures = response(case, period)
-        row = {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}
+            measures = response(case, branch.period)
         rows.append(row | measures.columns())
     return pd.DataFrame(rows)
 
@@ -200,11 +212,10 @@ class _Piece:
     force: tuple[float, float]
 
     @classmethod
-    def of(cls, segment: Segment, p: Parameters) -> _Piece:
+    def of(cls, segment: Segment, p: Parameters, solved: IntegratedPiece | None = None) -> _Piece:
+        """The piece's measures, from ``solved`` (:func:`integrated`) where it is given."""
         c, mode = coefficients(p), segment.mode
-        data = article_data(mode_flags(mode), np.zeros(0, np.int64), c)
-        start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
-        solved = integrate_piece(ARTICLE_PIECE, data, (segment.t0, segment.t1), start, rtol=TOLERANCE, atol=TOLERANCE)
+        solved = integrated(segment, c) if solved is None else solved
         ends = [segment.y0, solved.end[:4]]
         speeds = [[abs(y[2 * i - 1]) for y in ends] for i in (1, 2)]
         for i in (1, 2):
@@ -217,6 +228,16 @@ class _Piece:
             (max(speeds[0]), max(speeds[1])),
             (max(right) if mode.right else 0.0, max(forces) if mode.left else 0.0),
         )
+
+
+def integrated(segment: Segment, c: np.ndarray, *, dense: bool = False) -> IntegratedPiece:
+    """``segment`` integrated again from its start with the response integrals (``c`` the
+    coefficients, :func:`~oscillator.model.fields.coefficients`), with its dense output if
+    ``dense``: the one place a piece is measured from."""
+    data = article_data(mode_flags(segment.mode), np.zeros(0, np.int64), c)
+    start = np.concatenate([segment.y0, np.zeros(INTEGRALS)])
+    span = (segment.t0, segment.t1)
+    return integrate_piece(ARTICLE_PIECE, data, span, start, rtol=TOLERANCE, atol=TOLERANCE, dense=dense)
 
 
 def left_force(y: np.ndarray, c: np.ndarray) -> np.ndarray:
