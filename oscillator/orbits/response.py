@@ -25,6 +25,11 @@ per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the mas
   ``|K3 (x1 - x2 + d) + C3 (v1 - v2)|`` between the masses (its interior extrema located where
   ``K3 zdot1 + C3 (a1 - a2) = 0``);
 * ``time``: the fraction of the return in contact;
+* ``impact_rate`` (1/s): impacts per second, ``onsets / T``;
+* ``impact_energy`` (J): the energy an impact loses, ``contact / onsets`` between the masses (the
+  damper ``C3``) and 0 on the right stop (``K6`` has no damper: its impacts are elastic);
+* ``impact_power`` (W): the power the contact dissipates, ``impact_rate * impact_energy`` (the
+  noise measures of docs/noise.md that the integrals give exactly);
 
 and per forcing period (J): ``forcing`` (work of ``Q_i sin(Omega t + phi_i)``), ``feedback``
 (work of the constant forces ``-P_i s_i``), ``dampers`` (lost in ``C1, C2, C4, C5``),
@@ -69,6 +74,7 @@ __all__ = [
     "branch_points",
     "branch_responses",
     "impact_speeds",
+    "impacts",
     "integrated",
     "left_force",
     "measured",
@@ -78,7 +84,16 @@ __all__ = [
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
 MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
-CONTACT_MEASURES = ("onsets", "impact_max", "impact_mean", "force_peak", "time")
+CONTACT_MEASURES = (
+    "onsets",
+    "impact_max",
+    "impact_mean",
+    "force_peak",
+    "time",
+    "impact_rate",
+    "impact_energy",
+    "impact_power",
+)
 ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
 #: Every measure's column, in :meth:`Response.columns`'s order: ``x_max_m1, ..., impact_max_right,
 #: ..., energy_friction``.
@@ -90,6 +105,7 @@ COLUMNS = (
 #: The unit of each measure (empty: a fraction or a count per period); energies in J per period.
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
 UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
+UNITS |= {"impact_rate": "1/s", "impact_energy": "J", "impact_power": "W"}
 UNITS |= {name: "J per period" for name in ENERGY_MEASURES}
 
 
@@ -147,7 +163,19 @@ def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | N
     contact = {stop: _contact_measures(pieces, events, stop, span, periods) for stop in ("right", "left")}
     totals = np.sum([piece.integrals for piece in pieces], axis=0)
     energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
+    for stop, lost in (("right", 0.0), ("left", energy["contact"])):
+        contact[stop] |= impacts(contact[stop]["onsets"], lost, p.period)
     return Response(periods, mass, contact, energy)
+
+
+def impacts(onsets: float, lost: float, period: float) -> dict[str, float]:
+    """A contact's ``impact_rate``, ``impact_energy`` and ``impact_power`` (module docstring) from
+    its ``onsets`` and the energy ``lost`` in it per forcing ``period``."""
+    return {
+        "impact_rate": onsets / period,
+        "impact_energy": lost / onsets if onsets else 0.0,
+        "impact_power": lost / period,
+    }
 
 
 #: Newton's tolerance on ``|P(y) - y|`` where a branch point is refined before it is measured: the

@@ -9,7 +9,8 @@ acceleration jumps at a switch, the state does not); a value at an interior extr
 its integrand's derivative, carried by the tangent system, plus ``g(t1) tau1 - g(t0) tau0`` at each
 piece's ends (the integrand may jump at a switch: a contact damper's loss does).  A fraction of
 the return (``rest``, contact ``time``) is a sum of durations ``t1 - t0`` over the span ``n T``,
-which moves with ``Omega``.  A count (``onsets``) does not move.
+which moves with ``Omega``.  A count (``onsets``) does not move; a rate (``impact_rate``,
+``impact_power``) is a count or an integral over the span.
 """
 
 from __future__ import annotations
@@ -196,6 +197,18 @@ def _contact(
     }
 
 
+def _impact_rates(onsets: int, lost: Valued, span: float, dspan: np.ndarray) -> dict[str, Valued]:
+    """A contact's impact rate, energy per impact and power (:func:`~oscillator.orbits.response.impacts`)
+    from its ``onsets`` and the energy ``lost`` in it over the return, with their derivatives: the
+    count does not move, the span moves with ``Omega``."""
+    energy = (lost[0] / onsets, lost[1] / onsets) if onsets else (0.0, np.zeros_like(dspan))
+    return {
+        "impact_rate": _fraction((float(onsets), np.zeros_like(dspan)), span, dspan),
+        "impact_energy": energy,
+        "impact_power": _fraction(lost, span, dspan),
+    }
+
+
 def measure_derivatives(
     along: Pass, p: Parameters, names: tuple[str, ...], periods: int, span: float, dspan: np.ndarray
 ) -> pd.DataFrame:
@@ -217,6 +230,10 @@ def measure_derivatives(
     for q, name in enumerate(ENERGY_MEASURES):
         total, derivative = ends.integral(4 + q)
         found[f"energy_{name}"] = (total / periods, derivative / periods)
+    lost = {"right": (0.0, np.zeros(k)), "left": ends.integral(4 + ENERGY_MEASURES.index("contact"))}
+    for stop in ("right", "left"):
+        onsets = round(found[f"onsets_{stop}"][0] * periods)
+        found |= {f"{name}_{stop}": value for name, value in _impact_rates(onsets, lost[stop], span, dspan).items()}
     rows = {column: [found[column][0], *np.asarray(found[column][1], dtype=float)] for column in COLUMNS}
     return pd.DataFrame.from_dict(rows, orient="index", columns=["value", *(f"d/d{name}" for name in names)])
 

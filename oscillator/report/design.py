@@ -150,7 +150,7 @@ def front_figure(found: Design) -> Figure:
 
     problem, table, front = found.problem, found.candidates, found.front
     (second,) = problem.also
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = plt.subplots(figsize=(8.5, 5))
     feasible, infeasible = table[table.violation == 0], table[table.violation > 0]
     ax.scatter(feasible.second, feasible.objective, color="0.6", label="candidates")
     ax.scatter(infeasible.second, infeasible.objective, color="0.6", marker="x", label="breaks a constraint")
@@ -161,9 +161,20 @@ def front_figure(found: Design) -> Figure:
     ax.scatter(
         sketched.second, sketched.objective, facecolor="white", edgecolor="C3", zorder=3, label="candidates on it"
     )
-    for _, row in front.iterrows():
-        text = ", ".join(f"{n} = {row[n]:.4g}" for n in problem.names)
-        ax.annotate(text, (row.second, row.objective), fontsize=7, xytext=(4, 4), textcoords="offset points")
+    key = []  # each point numbered beside it, its parameters listed beside the axes: a flat front crowds labels
+    for k, (_, row) in enumerate(front.iterrows(), start=1):
+        ax.annotate(str(k), (row.second, row.objective), fontsize=7, xytext=(4, 4), textcoords="offset points")
+        key.append(f"{k}: " + ", ".join(f"{n} = {row[n]:.4g}" for n in problem.names))
+    ax.text(
+        1.02,
+        1.0,
+        "\n".join(key),
+        transform=ax.transAxes,
+        fontsize=7,
+        ha="left",
+        va="top",
+        bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "0.8"},
+    )
     ax.set_xlabel(quantity_label(second, "worst "))
     ax.set_ylabel(quantity_label(problem.objective, "worst "))
     ax.legend(fontsize=7)
