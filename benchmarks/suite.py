@@ -50,7 +50,8 @@ def main() -> None:
             print(f"oscillator run instance-3, {label}: {wall:.1f} s (figures and report included)")
         if options.no_tests:
             return
-        pytest = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+        # the pytest script, as the README runs it: the installed package, not the source tree
+        pytest = [str(Path(sys.executable).with_name("pytest")), "-q", "-p", "no:cacheprovider"]
         env = {**os.environ, "NUMBA_CACHE_DIR": str(work / "suite-cache")}
         for label in ("empty cache (a fresh install)", "cache filled"):
             wall, last = timed(pytest, env, ROOT)

@@ -21,6 +21,11 @@ settings.register_profile(
 settings.register_profile("thorough", max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
+# The Pythons the tests start import the package the tests import: the installed one, as the
+# commands do. Started in a checkout, `python -c` would put the source tree first, numba would
+# compile every kernel again for that second copy, and Python its modules on every start.
+os.environ["PYTHONSAFEPATH"] = "1"
+
 # A shell without job control starts a background command ('pytest ... &') with SIGINT ignored,
 # and every process the tests start would inherit that: the tests of Ctrl-C would then see a
 # command that cannot be interrupted.  They need the disposition a terminal gives.
