@@ -114,6 +114,7 @@ def test_sensitivities_in_element_fields_equal_richardson_differences(case):
     found = orbit.sensitivities(params)
     measures = orbit_measures(orbit)
     kinds = ("x_max", "x_min", "x_pp", "stuck", "closed", "closings", "impact_velocity", "a_max", "force_max", "slip")
+    kinds += ("impact_rate",)
     sliders = {f"dissipated:{e.name}" for e in orbit.chain.elements if e.type == "jenkins"}  # F times the slip
     derived = [name for name in measures if name.split(":")[0] in kinds or name in sliders]
     assert list(found.measures.index) == derived
@@ -217,3 +218,21 @@ def test_each_elements_energy_over_an_orbit_balances_and_the_slips_agree_with_it
             if element.with_:
                 rate = rate - rows[chain.system.velocity(element.with_)].to_numpy()
             assert math.isclose(measures[f"impact_velocity:{name}"], np.abs(rate).max(), rel_tol=1e-12)
+
+
+def test_a_stops_impact_rate_energy_and_power_are_measures_and_say_which_have_no_derivative():
+    """A stop's and a contact's noise measures (docs/noise.md) are what they dissipate per closing
+    and per second; the rate's derivative is in the table (Richardson: the test above), the
+    power's is refused saying that it has none yet, not that there is no such measure."""
+    orbit = find_chain_orbit(impact_chain(), transient=150)
+    measures, span = orbit_measures(orbit), orbit.period * orbit.chain.period
+    for name in ("wall", "gap"):
+        closings, lost = measures[f"closings:{name}"], measures[f"dissipated:{name}"]
+        assert closings > 0 and lost > 0
+        assert measures[f"impact_rate:{name}"] == closings / span
+        assert measures[f"impact_energy:{name}"] * closings == pytest.approx(lost, rel=1e-15)
+        assert measures[f"impact_power:{name}"] * span == pytest.approx(lost, rel=1e-15)
+    found = orbit.sensitivities("wall.C")
+    assert found.of("impact_rate:wall")["d/dwall.C"] == 0.0
+    with pytest.raises(InputError, match=r"impact_power:wall has no exact derivative yet"):
+        found.of("impact_power:wall")

@@ -8,14 +8,14 @@ from types import SimpleNamespace
 import pandas as pd
 import pytest
 
-import oscillator
 from oscillator.model.events import EventKind
 from oscillator.orbits.branch import Bifurcation
 from oscillator.report.figures import KIND_STYLE
 from oscillator.report.orbits import BIFURCATION_MARKERS, BIFURCATION_STYLE
 from oscillator.report.transitions import BOTH_MASSES_SENTENCES, SENTENCES, transition_log
 
-PACKAGE = Path(oscillator.__file__).parent
+#: The package's source, as the checkout holds it (the tests import the installed copy).
+PACKAGE = Path(__file__).resolve().parents[1] / "oscillator"
 #: Where the kinds are defined, the only places their text may be written.
 DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "branch.py", PACKAGE / "model" / "chain_rules.py"}
 #: The same words meaning something else.

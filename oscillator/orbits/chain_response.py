@@ -53,8 +53,13 @@ MEASURE_UNITS = {
     "work": "J",
     "dissipated": "J",
     "slip": "m",
+    "impact_rate": "1/s",
+    "impact_energy": "J",
+    "impact_power": "W",
 }
 _SLIDING = ("friction", "jenkins")
+#: The noise measures of each stop and contact (:func:`orbit_measures`).
+_NOISE = ("impact_rate", "impact_energy", "impact_power")
 _CLOSING = ("stop", "contact")
 
 
@@ -100,7 +105,10 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     and ``force_max:<element>`` (N, the largest force while closed) for each stop and contact;
     ``a_max:<mass>`` (m/s^2, the largest acceleration) for each mass
     (:func:`~oscillator.orbits.chain_peaks.peaks`); ``work:<element>`` and
-    ``dissipated:<element>`` (J) for every element."""
+    ``dissipated:<element>`` (J) for every element; and the noise measures of each stop and
+    contact (docs/noise.md): ``impact_rate:<element>`` (closings per second),
+    ``impact_energy:<element>`` (J: what it dissipates per closing) and ``impact_power:<element>``
+    (W: what it dissipates per second)."""
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
@@ -118,6 +126,8 @@ def measure_names(chain: FrictionChain) -> tuple[str, ...]:
     for element in chain.elements:
         names += [f"work:{element.name}", f"dissipated:{element.name}"]
         names += [f"slip:{element.name}"] if element.type in _SLIDING else []
+    for element in chain.elements:
+        names += [f"{kind}:{element.name}" for kind in _NOISE] if element.type in _CLOSING else []
     return tuple(names)
 
 
@@ -154,7 +164,14 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
             found[f"stuck:{element.name}"] = float(sum(b - a for a, b in spans) / span)
         elif element.type in _CLOSING:
             found |= _contact_measures(run, element.name, start, span)
-    return found | peaks(run) | _energy_measures(run, start, span)
+    found |= peaks(run) | _energy_measures(run, start, span)
+    for element in run.chain.elements:  # what each closing loses, per closing and per second
+        if element.type in _CLOSING:
+            closings, lost = found[f"closings:{element.name}"], found[f"dissipated:{element.name}"]
+            found[f"impact_rate:{element.name}"] = closings / span
+            found[f"impact_energy:{element.name}"] = lost / closings if closings else 0.0
+            found[f"impact_power:{element.name}"] = lost / span
+    return found
 
 
 def _contact_measures(run: ChainResult, name: str, start: float, span: float) -> dict[str, float]:

@@ -45,8 +45,9 @@ from oscillator.hybrid.chain_run import closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_orbits import ChainOrbit
 from oscillator.orbits.chain_peaks import Peak, peak_places
-from oscillator.orbits.chain_response import extremes, orbit_measures
+from oscillator.orbits.chain_response import extremes, measure_names, orbit_measures
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
+from oscillator.text import printable
 
 __all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
 
@@ -85,9 +86,14 @@ class ChainSensitivities:
     def of(self, measure: str) -> pd.Series:
         """One measure's derivatives (``x_max:blade``, ``stuck:platform``)."""
         if measure not in self.measures.index:
-            raise InputError(
-                f"no measure named {measure!r}; choose one of {', '.join(self.measures.index)}", field="measure"
-            )
+            known = ", ".join(self.measures.index)
+            if measure in measure_names(self.orbit.chain):  # a measure, but one without a derivative yet
+                raise InputError(
+                    f"{printable(measure)} has no exact derivative yet (the works and the energies dissipated, "
+                    f"but a Jenkins slider's, have none); choose one of {known}",
+                    field="measure",
+                )
+            raise InputError(f"no measure named {printable(measure)}; choose one of {known}", field="measure")
         return self.measures.loc[measure, [f"d/d{name}" for name in self.params]]
 
 
@@ -297,6 +303,8 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
             by_f = np.array([1.0 if p == f"{element.name}.F" else 0.0 for p in params])
             found[f"dissipated:{element.name}"] = by_f * values[f"slip:{element.name}"] + element.values["F"] * rate
         found[f"slip:{element.name}"] = rate
+    for element in (e for e in chain.elements if e.type in ("stop", "contact")):  # a count over the span
+        found[f"impact_rate:{element.name}"] = -values[f"impact_rate:{element.name}"] * stretch / span
     table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
     return table
