@@ -387,3 +387,17 @@ def test_the_page_says_what_changed_keeps_it_in_its_address_and_resets():
     assert explorer.values()["Omega"] == 1.6 and explorer._address() == "" and explorer.scene.periods == 5
     assert "Both masses start at rest" in explorer.description.text  # the case's own description
     assert osc.explore(resolve_case("instance-1", K3=2.5), periods=2).description.text == ""
+
+
+def test_the_orbit_pane_shows_the_orbits_multipliers_and_measures_with_its_impact_power():
+    """"Orbit and multipliers" on the impacting system of docs/noise.md: the orbit Newton finds from
+    the motion's end, its multipliers, and its measures (the impact power between the masses among
+    them) as the library gives them."""
+    explorer = osc.explore("instance-1", periods=30, d=1, d1=3.5, Omega=1.6)
+    explorer._orbit()
+    shown = html.unescape(explorer.orbit_text.object)
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6, transient=30)
+    measures = orbit.response().columns()
+    assert "Period-1 orbit" in shown and f"{abs(orbit.multipliers[0]):.6g}" in shown
+    for name in ("impact_max_right", "impact_max_left", "impact_power_left"):
+        assert f"{name} = {measures[name]:.6g}" in shown, name

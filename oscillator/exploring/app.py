@@ -60,6 +60,7 @@ MEASURES = (
     "rest_m2",
     "impact_max_right",
     "impact_max_left",
+    "impact_power_left",
 )
 #: The integrator that draws each change: the compiled one, checked against CVODE after it.
 DRAWING_ENGINE = "dop853"
