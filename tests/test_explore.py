@@ -390,9 +390,9 @@ def test_the_page_says_what_changed_keeps_it_in_its_address_and_resets():
 
 
 def test_the_orbit_pane_shows_the_orbits_multipliers_and_measures_with_its_impact_power():
-    """"Orbit and multipliers" on the impacting system of docs/noise.md: the orbit Newton finds from
-    the motion's end, its multipliers, and its measures (the impact power between the masses among
-    them) as the library gives them."""
+    """The "Orbit and multipliers" button on the impacting system of docs/noise.md: the orbit Newton
+    finds from the motion's end, its multipliers, and its measures (the impact power between the
+    masses among them) as the library gives them."""
     explorer = osc.explore("instance-1", periods=30, d=1, d1=3.5, Omega=1.6)
     explorer._orbit()
     shown = html.unescape(explorer.orbit_text.object)
