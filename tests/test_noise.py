@@ -157,6 +157,30 @@ def test_the_orbit_command_prints_the_noise_measures_the_library_finds(monkeypat
     assert "Noise measures of the contacts" in done.stdout and "Noise measures of the masses" in done.stdout
 
 
+def test_the_orbit_command_draws_the_spectra_to_a_file_it_checks_before_computing(tmp_path, monkeypatch):
+    """``--noise-figure FILE`` prints the measures and draws the spectra (a whole PNG); a name that
+    is not a figure's, or in a folder that does not exist, is refused at once (exit 2) and nothing
+    is written."""
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    orbit = ["orbit", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--set", "Omega=1.6"]
+    done = CliRunner().invoke(app, [*orbit, "--noise-figure", "spectra.png"])
+    assert done.exit_code == 0, done.output
+    assert "Noise measures of the contacts" in done.stdout and "spectra drawn to spectra.png" in done.stdout
+    assert (tmp_path / "spectra.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for name, words in (("spectra.txt", "must end in .png, .svg or .pdf"), ("no/spectra.svg", "does not exist")):
+        refused = CliRunner().invoke(app, [*orbit, "--noise-figure", name])
+        assert refused.exit_code == 2 and words in refused.stderr and "--noise-figure" in refused.stderr
+        assert "Noise measures" not in refused.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spectra.png"]
+    system = Path(__file__).resolve().parents[1] / "docs" / "systems" / "impacts.toml"
+    refused = CliRunner().invoke(app, ["orbit", str(system), "--noise"])
+    assert refused.exit_code == 2 and "--noise and --noise-figure take the article's cases" in refused.stderr
+
+
 def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parameter():
     case = osc.resolve_case("instance-1", d=1, d1=3.5)
     found = osc.frequency_response(case, "Omega", (1.45, 1.6), seeds=2, sweep=3, max_points=12, workers=1)

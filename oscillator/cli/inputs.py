@@ -1,10 +1,12 @@
-"""The command line's inputs: a case with its ``--set`` overrides, ``--sample`` and sweep settings."""
+"""The command line's inputs: a case with its ``--set`` overrides, ``--sample`` and sweep settings,
+and a figure's file."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from oscillator.errors import InputError
@@ -15,8 +17,46 @@ from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
+    from matplotlib.figure import Figure
 
-__all__ = ["case_from", "check_engine", "overrides", "refuse_taken", "sample_grid", "sweep_settings"]
+__all__ = [
+    "case_from",
+    "check_engine",
+    "figure_file",
+    "overrides",
+    "refuse_taken",
+    "sample_grid",
+    "sweep_settings",
+    "write_figure",
+]
+
+#: What a figure's file may be.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def figure_file(target: Path, option: str) -> Path:
+    """``target`` if a figure can be written there as ``option`` names it: a ``.png``, ``.svg`` or
+    ``.pdf`` name, writable as given, not a link, in a folder that exists (checked before anything
+    is computed)."""
+    from oscillator.io.files import check_name, refuse_link
+
+    if target.suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(f"{option} must end in .png, .svg or .pdf, got {printable(str(target))}", field=option)
+    check_name(target, option=option)
+    refuse_link(target, option=option)
+    if not target.absolute().parent.is_dir():
+        raise InputError(
+            f"{option} {printable(str(target))}: its folder does not exist; create it or give another", field=option
+        )
+    return target
+
+
+def write_figure(fig: Figure, target: Path) -> None:
+    """``fig`` written to ``target`` (:func:`figure_file`) atomically: the whole file or none."""
+    from oscillator.io.files import atomic_path
+
+    with atomic_path(target) as temporary:
+        fig.savefig(temporary, format=target.suffix[1:].lower(), dpi=120, bbox_inches="tight")
 
 
 def check_engine(engine: str | None, among: tuple[str, ...] | None = None) -> None:

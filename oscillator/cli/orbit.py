@@ -23,7 +23,7 @@ from rich.text import Text
 
 from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from, refuse_taken
+from oscillator.cli.inputs import case_from, figure_file, refuse_taken, write_figure
 from oscillator.cli.options import CaseArgument, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
@@ -58,6 +58,14 @@ SensitivitiesOption = Annotated[
 ]
 NoiseOption = Annotated[
     bool, typer.Option("--noise", help="Also print its noise measures: impacts, impulses, impact power, levels.")
+]
+NoiseFigureOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--noise-figure",
+        metavar="FILE",
+        help="Also draw its spectra (contact forces, accelerations: dB against frequency) to FILE (.png, .svg, .pdf).",
+    ),
 ]
 SectionOption = Annotated[
     float | None,
@@ -96,6 +104,7 @@ def orbit(
     ] = 20,
     sensitivities: SensitivitiesOption = None,
     noise: NoiseOption = False,
+    noise_figure: NoiseFigureOption = None,
 ) -> None:
     """Find the periodic orbit of the stroboscopic map by Newton's method; print it, its events
     and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md;
@@ -112,10 +121,12 @@ def orbit(
       oscillator orbit instance-1 --set Q2=70.5 --transient 20 --max-iterations 40
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.5 --sensitivities d1,K3,Omega
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise
+      oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise-figure spectra.png
       oscillator orbit docs/systems/blade-damper.toml --set platform.F=0.5 --transient 60
     """
     from oscillator.cli.system import orbit_system
 
+    figure = _noise_figure(case, noise, noise_figure)
     if orbit_system(case, set_, period, guess, transient, section, max_iterations, sensitivities):
         return
     try:
@@ -157,8 +168,24 @@ def orbit(
     out.print(_events_table(found.events))
     if names:
         _print_sensitivities(found, names)
-    if noise:
-        _print_noise(found)
+    if noise or figure is not None:
+        _print_noise(found, figure)
+
+
+def _noise_figure(case: str, noise: bool, target: Path | None) -> Path | None:
+    """``--noise-figure``'s file, checked before anything is computed; ``--noise`` and it refused
+    for a system file (its noise measures are among its orbits' measures)."""
+    from oscillator.io.chains import system_path
+
+    if (noise or target is not None) and system_path(case) is not None:
+        raise fail(
+            "--noise and --noise-figure take the article's cases; a system file's impact rates, energies and "
+            "powers are among the measures of its orbits (docs/noise.md, oscillator frc or atlas --measures)"
+        )
+    try:
+        return None if target is None else figure_file(target, "--noise-figure")
+    except OscillatorError as error:
+        raise fail(message(error)) from None
 
 
 def _names(text: str | None) -> tuple[str, ...]:
@@ -219,8 +246,9 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
     out.print(Text(f"nearest point without a derivative: {nearest}"))
 
 
-def _print_noise(found: Orbit) -> None:
-    """The orbit's noise measures (docs/noise.md), after the orbit itself."""
+def _print_noise(found: Orbit, figure: Path | None) -> None:
+    """The orbit's noise measures (docs/noise.md), after the orbit itself; their spectra drawn to
+    ``figure`` if given (the tables printed first: a figure that cannot be written loses nothing)."""
     try:
         measures = found.noise()
     except OscillatorError as error:
@@ -240,6 +268,12 @@ def _print_noise(found: Orbit) -> None:
     for i, m in measures.masses.items():
         table.add_row(f"m{i}", f"{m.acceleration.level():.2f}", str(m.slips), f"{m.step_max:.6g}")
     out.print(table)
+    if figure is not None:
+        try:
+            write_figure(measures.plot(), figure)
+        except OSError as error:
+            raise fail(f"--noise-figure {printable(str(figure))}: {printable(error.strerror or str(error))}") from None
+        say("spectra drawn to ", (str(figure), "bold"))
 
 
 def _complex_text(value: complex) -> str:

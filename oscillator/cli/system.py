@@ -16,9 +16,10 @@ from rich.table import Table
 from rich.text import Text
 
 from oscillator.cli.console import fail, load, message, out, say
+from oscillator.cli.inputs import figure_file, write_figure
 from oscillator.cli.resumable import with_progress
 from oscillator.errors import InputError, OscillatorError, SimulationFailed
-from oscillator.io.files import check_name, check_new, refuse_link
+from oscillator.io.files import check_new
 from oscillator.text import printable
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -154,11 +155,7 @@ def show_system(path: Path, figure: Path | None) -> None:
         from oscillator.io.chains import load_system
 
         chain = load_system(path)
-        target = figure if figure is not None else Path(f"{path.stem}-schematic.png")
-        if target.suffix.lower() not in (".png", ".svg", ".pdf"):
-            raise InputError(f"--figure must end in .png, .svg or .pdf, got {printable(str(target))}", field="--figure")
-        check_name(target, option="--figure")
-        refuse_link(target, option="--figure")
+        target = figure_file(figure if figure is not None else Path(f"{path.stem}-schematic.png"), "--figure")
     except OscillatorError as error:
         raise fail(message(error)) from None
     say(
@@ -182,11 +179,9 @@ def show_system(path: Path, figure: Path | None) -> None:
         )
         elements.add_row(printable(e.name), e.type, printable(e.on), printable(e.with_ or "ground"), values)
     out.print(elements)
-    from oscillator.io.files import atomic_path
     from oscillator.report.chain_figures import schematic_figure
 
-    with atomic_path(target) as temporary:
-        schematic_figure(chain).savefig(temporary, format=target.suffix[1:], dpi=120, bbox_inches="tight")
+    write_figure(schematic_figure(chain), target)
     say("schematic written to ", (str(target), "bold"))
 
 
