@@ -176,6 +176,10 @@ def test_the_orbit_command_draws_the_spectra_to_a_file_it_checks_before_computin
         assert refused.exit_code == 2 and words in refused.stderr and "--noise-figure" in refused.stderr
         assert "Noise measures" not in refused.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spectra.png"]
+    (tmp_path / "taken.png").mkdir()  # a figure that cannot be written: the measures are printed all the same
+    failed = CliRunner().invoke(app, [*orbit, "--noise-figure", "taken.png"])
+    assert failed.exit_code == 1 and "the measures above are complete" in failed.stderr
+    assert "Noise measures of the masses" in failed.stdout and (tmp_path / "taken.png").is_dir()
     system = Path(__file__).resolve().parents[1] / "docs" / "systems" / "impacts.toml"
     refused = CliRunner().invoke(app, ["orbit", str(system), "--noise"])
     assert refused.exit_code == 2 and "--noise and --noise-figure take the article's cases" in refused.stderr

@@ -272,7 +272,8 @@ def _print_noise(found: Orbit, figure: Path | None) -> None:
         try:
             write_figure(measures.plot(), figure)
         except OSError as error:
-            raise fail(f"--noise-figure {printable(str(figure))}: {printable(error.strerror or str(error))}") from None
+            why = f"{printable(str(figure))}: {printable(error.strerror or str(error))}"
+            raise fail(f"--noise-figure {why}; the measures above are complete", code=1) from None
         say("spectra drawn to ", (str(figure), "bold"))
 
 
