@@ -62,6 +62,8 @@ def test_the_impact_power_is_the_energy_the_contacts_damper_dissipates():
     found, response = orbit.noise(), orbit.response()
     left, period = found.contacts["left"], orbit.case.parameters.period
     assert left.power * period == pytest.approx(response.energy["contact"], rel=1e-9)
+    e = response.energy  # the audit: what goes in less what the dampers and friction take out
+    assert left.power * period == pytest.approx(e["forcing"] + e["feedback"] - e["dampers"] - e["friction"], rel=1e-9)
     assert left.energy * left.onsets == pytest.approx(response.energy["contact"] * orbit.period, rel=1e-9)
     assert left.rate == pytest.approx(response.contact["left"]["onsets"] / period, rel=1e-12)
     assert found.power == left.power and left.impact_max == response.contact["left"]["impact_max"]

@@ -12,7 +12,8 @@ the left) and ``N`` the contacts begun in the return:
 * ``energy`` (J): the energy an impact loses, ``integral C3 (v1 - v2)^2 dt / N`` on the left
   (its damper) and 0 on the right (``K6`` has no damper: its impacts are elastic);
 * ``power`` (W): ``rate * energy``, the power the contact dissipates (the response's ``contact``
-  energy per period over ``T``: the energy audit);
+  energy per period over ``T``: the energy audit; ``rate``, ``energy`` and ``power`` are the
+  response measures' own, :func:`~oscillator.orbits.response.impacts`);
 * ``force``: the contact force's spectrum over the return, harmonic ``k`` at ``k / nT`` Hz
   (:class:`~oscillator.orbits.spectra.Spectrum`, exact on each smooth piece), levels in dB re
   1 N;
@@ -41,7 +42,7 @@ from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case
-from oscillator.model.fields import C3, D1, K6, coefficients
+from oscillator.model.fields import D1, K6, coefficients
 from oscillator.model.kernels import rates
 from oscillator.model.parameters import check_count
 from oscillator.model.phase_space import Mode
@@ -144,13 +145,6 @@ def _left_force(piece: IntegratedPiece, c: np.ndarray, t: np.ndarray) -> np.ndar
     return -left_force(piece(t), c)
 
 
-def _left_loss(piece: IntegratedPiece, c: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The power the left contact's damper dissipates at times ``t``: ``C3 (v1 - v2)^2``."""
-    y = piece(t)
-    loss: np.ndarray = c[C3] * (y[1] - y[3]) ** 2
-    return loss
-
-
 def _accelerations(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[float, float]:
     """``(a1, a2)``: the mode's field at ``(t, y)`` (0 for a resting mass)."""
     s1, s2, left, right = mode_flags(mode)
@@ -188,17 +182,15 @@ def _contact(
     force = _left_force if name == "left" else _right_force
     touching = [(s, piece) for s, piece in pieces if (s.mode.left if name == "left" else s.mode.right)]
     parts: list[Piece] = [(s.t0, s.t1, functools.partial(force, piece, c)) for s, piece in touching]
-    losses: list[Piece] = [(s.t0, s.t1, functools.partial(_left_loss, piece, c)) for s, piece in touching]
-    lost = span * float(fourier_coefficients(losses, span, 0)[0].real) if name == "left" else 0.0
     spectrum = Spectrum(fourier_coefficients(parts, span, harmonics), 1.0 / span, "N", FORCE_REFERENCE)
     onsets = round(given["onsets"] * periods)
     return ContactNoise(
         contact=name,
         onsets=onsets,
-        rate=onsets / span,
+        rate=given["impact_rate"],
         impulse=spectrum.mean * span / onsets if onsets else 0.0,
-        energy=lost / onsets if onsets else 0.0,
-        power=lost / span,
+        energy=given["impact_energy"],
+        power=given["impact_power"],
         impact_max=given["impact_max"],
         impact_mean=given["impact_mean"],
         force=spectrum,
