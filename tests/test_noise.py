@@ -205,19 +205,27 @@ def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parame
         found.plot_noise(table, "x_pp_m1")
 
 
-def test_the_impact_rates_energies_and_powers_are_response_measures_with_exact_derivatives():
-    """``impact_rate``, ``impact_energy`` and ``impact_power`` of each contact are response measures
-    (so the atlas, the frequency response and the design take them), equal to the noise measures'
-    own, and their derivatives in the contact's damper, the clearance and Omega (which moves the
-    span) agree with Richardson differences to 1e-7 (test_sensitivities.check)."""
+def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_with_exact_derivatives():
+    """``impact_rate``, ``impact_energy``, ``impact_power``, ``impulse`` and ``impulse_rate`` of each
+    contact are response measures (so the atlas, the frequency response and the design take them),
+    equal to the noise measures' own, and their derivatives in the contact's damper and Omega
+    (which moves the span) agree with Richardson differences to 1e-7 (test_sensitivities.check).
+    The impulse, integrated along the pieces with the state, is the contact force spectrum's mean
+    (its own quadrature on the pieces' dense output) times the return over the impacts."""
     from test_sensitivities import NEWTON, TIGHT, check
 
     orbit = osc.find_orbit("instance-1", Omega=1.5, d=1, d1=3.5, tol=NEWTON, **TIGHT)
-    columns, heard = orbit.response().columns(), orbit.noise().columns()
-    for name in ("impact_rate", "impact_energy", "impact_power"):
+    found_noise = orbit.noise()
+    columns, heard = orbit.response().columns(), found_noise.columns()
+    for name in ("impact_rate", "impact_energy", "impact_power", "impulse", "impulse_rate"):
         for stop in ("right", "left"):
             column = f"{name}_{stop}"
             assert columns[column] == pytest.approx(heard[column], rel=1e-9, abs=1e-12), column
+    for stop, contact in found_noise.contacts.items():
+        assert contact.onsets > 0
+        mean_force = contact.force.mean  # the spectrum's own integral, not the response's
+        assert columns[f"impulse_rate_{stop}"] == pytest.approx(mean_force, rel=1e-9)
+        assert columns[f"impulse_{stop}"] == pytest.approx(mean_force * found_noise.span / contact.onsets, rel=1e-9)
     period = orbit.case.parameters.period
     assert columns["impact_power_left"] == pytest.approx(columns["energy_contact"] / period, rel=1e-15)
     assert columns["impact_rate_left"] == 2 / period and columns["impact_power_right"] == 0.0
@@ -225,6 +233,7 @@ def test_the_impact_rates_energies_and_powers_are_response_measures_with_exact_d
     slopes = found.measures.loc["impact_rate_left"]
     assert slopes["d/dOmega"] == pytest.approx(2 / (2 * np.pi), rel=1e-12) and slopes["d/dC3"] == 0.0
     assert found.measures.loc["impact_power_left", "d/dC3"] != 0.0
+    assert found.measures.loc[["impulse_left", "impulse_right"], "d/dC3"].abs().min() > 0.0
 
 
 #: docs/noise.md's worked design: the clearance between the masses and their contact's damper that

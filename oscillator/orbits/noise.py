@@ -12,8 +12,8 @@ the left) and ``N`` the contacts begun in the return:
 * ``energy`` (J): the energy an impact loses, ``integral C3 (v1 - v2)^2 dt / N`` on the left
   (its damper) and 0 on the right (``K6`` has no damper: its impacts are elastic);
 * ``power`` (W): ``rate * energy``, the power the contact dissipates (the response's ``contact``
-  energy per period over ``T``: the energy audit; ``rate``, ``energy`` and ``power`` are the
-  response measures' own, :func:`~oscillator.orbits.response.impacts`);
+  energy per period over ``T``: the energy audit; ``rate``, ``impulse``, ``energy`` and ``power``
+  are the response measures' own, :func:`~oscillator.orbits.response.impacts`);
 * ``force``: the contact force's spectrum over the return, harmonic ``k`` at ``k / nT`` Hz
   (:class:`~oscillator.orbits.spectra.Spectrum`, exact on each smooth piece), levels in dB re
   1 N;
@@ -188,7 +188,7 @@ def _contact(
         contact=name,
         onsets=onsets,
         rate=given["impact_rate"],
-        impulse=spectrum.mean * span / onsets if onsets else 0.0,
+        impulse=given["impulse"],
         energy=given["impact_energy"],
         power=given["impact_power"],
         impact_max=given["impact_max"],

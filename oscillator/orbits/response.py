@@ -28,7 +28,11 @@ per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the mas
 * ``impact_rate`` (1/s): impacts per second, ``onsets / T``;
 * ``impact_energy`` (J): the energy an impact loses, ``contact / onsets`` between the masses (the
   damper ``C3``) and 0 on the right stop (``K6`` has no damper: its impacts are elastic);
-* ``impact_power`` (W): the power the contact dissipates, ``impact_rate * impact_energy`` (the
+* ``impact_power`` (W): the power the contact dissipates, ``impact_rate * impact_energy``;
+* ``impulse`` (N s): the mean impulse of an impact, ``integral F dt / (onsets n)`` with ``F`` the
+  contact force, compressive positive (``K6 (x1 - d1)`` on the right stop, ``-(K3 (x1 - x2 + d) +
+  C3 (v1 - v2))`` between the masses), integrated along the pieces in contact;
+* ``impulse_rate`` (N): ``impact_rate * impulse``, the contact's mean force over the return (the
   noise measures of docs/noise.md that the integrals give exactly);
 
 and per forcing period (J): ``forcing`` (work of ``Q_i sin(Omega t + phi_i)``), ``feedback``
@@ -68,6 +72,7 @@ __all__ = [
     "COLUMNS",
     "CONTACT_MEASURES",
     "ENERGY_MEASURES",
+    "FORCE_INTEGRAL",
     "MASS_MEASURES",
     "UNITS",
     "Response",
@@ -93,6 +98,8 @@ CONTACT_MEASURES = (
     "impact_rate",
     "impact_energy",
     "impact_power",
+    "impulse",
+    "impulse_rate",
 )
 ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
 #: Every measure's column, in :meth:`Response.columns`'s order: ``x_max_m1, ..., impact_max_right,
@@ -105,7 +112,7 @@ COLUMNS = (
 #: The unit of each measure (empty: a fraction or a count per period); energies in J per period.
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
 UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
-UNITS |= {"impact_rate": "1/s", "impact_energy": "J", "impact_power": "W"}
+UNITS |= {"impact_rate": "1/s", "impact_energy": "J", "impact_power": "W", "impulse": "N s", "impulse_rate": "N"}
 UNITS |= {name: "J per period" for name in ENERGY_MEASURES}
 
 
@@ -164,17 +171,21 @@ def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | N
     totals = np.sum([piece.integrals for piece in pieces], axis=0)
     energy = {name: float(totals[_ENERGY + k]) / periods for k, name in enumerate(ENERGY_MEASURES)}
     for stop, lost in (("right", 0.0), ("left", energy["contact"])):
-        contact[stop] |= impacts(contact[stop]["onsets"], lost, p.period)
+        pushed = float(totals[FORCE_INTEGRAL[stop]]) / periods
+        contact[stop] |= impacts(contact[stop]["onsets"], lost, pushed, p.period)
     return Response(periods, mass, contact, energy)
 
 
-def impacts(onsets: float, lost: float, period: float) -> dict[str, float]:
-    """A contact's ``impact_rate``, ``impact_energy`` and ``impact_power`` (module docstring) from
-    its ``onsets`` and the energy ``lost`` in it per forcing ``period``."""
+def impacts(onsets: float, lost: float, pushed: float, period: float) -> dict[str, float]:
+    """A contact's ``impact_rate``, ``impact_energy``, ``impact_power``, ``impulse`` and
+    ``impulse_rate`` (module docstring) from its ``onsets``, the energy ``lost`` in it and the
+    impulse ``pushed`` (its force's integral) per forcing ``period``."""
     return {
         "impact_rate": onsets / period,
         "impact_energy": lost / onsets if onsets else 0.0,
         "impact_power": lost / period,
+        "impulse": pushed / onsets if onsets else 0.0,
+        "impulse_rate": pushed / period,
     }
 
 
@@ -223,8 +234,10 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-# The integrals carried along a piece: x1^2, x2^2, a1^2, a2^2, then the energies.
+# The integrals carried along a piece: x1^2, x2^2, a1^2, a2^2, the energies, the contact forces.
 _SQUARES, _ENERGY = 0, 4
+#: Each contact's force integral among them (its impulse over the piece).
+FORCE_INTEGRAL = {"right": 9, "left": 10}
 #: The re-integration's tolerances (the run's own are CVODE's 1e-10).
 TOLERANCE = 1e-12
 

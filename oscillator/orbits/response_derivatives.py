@@ -10,7 +10,8 @@ its integrand's derivative, carried by the tangent system, plus ``g(t1) tau1 - g
 piece's ends (the integrand may jump at a switch: a contact damper's loss does).  A fraction of
 the return (``rest``, contact ``time``) is a sum of durations ``t1 - t0`` over the span ``n T``,
 which moves with ``Omega``.  A count (``onsets``) does not move; a rate (``impact_rate``,
-``impact_power``) is a count or an integral over the span.
+``impact_power``, ``impulse_rate``) is a count or an integral over the span, and a mean per
+impact (``impact_energy``, ``impulse``) an integral over the count.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from oscillator.model.fields import (
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.system import ARTICLE
-from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES
+from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES, FORCE_INTEGRAL
 from oscillator.orbits.sensitivity import Pass, Piece, domains_text
 from oscillator.orbits.tangent import INTEGRALS, tangent_rates
 
@@ -49,7 +50,7 @@ Valued = tuple[float, np.ndarray]
 
 
 def _field(t: float, y: np.ndarray, c: np.ndarray, mode: Mode) -> tuple[np.ndarray, np.ndarray]:
-    """The mode's field ``f`` (4) and the response integrands ``g`` (9) at ``(t, y)``."""
+    """The mode's field ``f`` (4) and the response integrands ``g`` (11) at ``(t, y)``."""
     state = np.concatenate([y, np.zeros(INTEGRALS)])
     out = np.empty_like(state)
     tangent_rates(t, state, c, np.zeros(0, dtype=np.int64), mode.sign(1), mode.sign(2), mode.left, mode.right, out)
@@ -197,15 +198,21 @@ def _contact(
     }
 
 
-def _impact_rates(onsets: int, lost: Valued, span: float, dspan: np.ndarray) -> dict[str, Valued]:
-    """A contact's impact rate, energy per impact and power (:func:`~oscillator.orbits.response.impacts`)
-    from its ``onsets`` and the energy ``lost`` in it over the return, with their derivatives: the
-    count does not move, the span moves with ``Omega``."""
-    energy = (lost[0] / onsets, lost[1] / onsets) if onsets else (0.0, np.zeros_like(dspan))
+def _impact_rates(onsets: int, lost: Valued, pushed: Valued, span: float, dspan: np.ndarray) -> dict[str, Valued]:
+    """A contact's impact rate, energy and impulse per impact, power and impulse rate
+    (:func:`~oscillator.orbits.response.impacts`) from its ``onsets``, the energy ``lost`` in it
+    and its force's integral ``pushed`` over the return, with their derivatives: the count does not
+    move, the span moves with ``Omega``."""
+
+    def each(total: Valued) -> Valued:
+        return (total[0] / onsets, total[1] / onsets) if onsets else (0.0, np.zeros_like(dspan))
+
     return {
         "impact_rate": _fraction((float(onsets), np.zeros_like(dspan)), span, dspan),
-        "impact_energy": energy,
+        "impact_energy": each(lost),
         "impact_power": _fraction(lost, span, dspan),
+        "impulse": each(pushed),
+        "impulse_rate": _fraction(pushed, span, dspan),
     }
 
 
@@ -233,7 +240,9 @@ def measure_derivatives(
     lost = {"right": (0.0, np.zeros(k)), "left": ends.integral(4 + ENERGY_MEASURES.index("contact"))}
     for stop in ("right", "left"):
         onsets = round(found[f"onsets_{stop}"][0] * periods)
-        found |= {f"{name}_{stop}": value for name, value in _impact_rates(onsets, lost[stop], span, dspan).items()}
+        pushed = ends.integral(FORCE_INTEGRAL[stop])
+        rates = _impact_rates(onsets, lost[stop], pushed, span, dspan)
+        found |= {f"{name}_{stop}": value for name, value in rates.items()}
     rows = {column: [found[column][0], *np.asarray(found[column][1], dtype=float)] for column in COLUMNS}
     return pd.DataFrame.from_dict(rows, orient="index", columns=["value", *(f"d/d{name}" for name in names)])
 

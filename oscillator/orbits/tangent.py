@@ -2,8 +2,8 @@
 
 In a mode the state obeys ``y' = f(t, y, c)`` (``c`` the parameter vector, :func:`~oscillator.model.
 fields.coefficients`), and the response integrals ``I' = g(t, y, c)`` (:mod:`oscillator.orbits.response`:
-``x1^2, x2^2, a1^2, a2^2`` and the five powers).  Their derivatives along a parameter ``c_j`` at fixed
-time, ``sigma_j = dy/dc_j`` and ``dI/dc_j``, obey the tangent equations
+``x1^2, x2^2, a1^2, a2^2``, the five powers and the two contact forces).  Their derivatives along a
+parameter ``c_j`` at fixed time, ``sigma_j = dy/dc_j`` and ``dI/dc_j``, obey the tangent equations
 
     sigma_j' = J sigma_j + df/dc_j,        (dI/dc_j)' = dg/dy sigma_j + dg/dc_j,
 
@@ -63,8 +63,9 @@ __all__ = [
     "threshold_gradient",
 ]
 
-#: The response integrals carried with the state, in :mod:`oscillator.orbits.response`'s order.
-INTEGRALS = 9
+#: The response integrals carried with the state, in :mod:`oscillator.orbits.response`'s order:
+#: ``x1^2, x2^2, a1^2, a2^2``, the five powers, the right stop's and the left contact's force.
+INTEGRALS = 11
 #: The parameter vector's length.
 _SIZE = 25
 
@@ -133,9 +134,17 @@ def field_gradient(
 
 @njit(cache=True)
 def _integrand_gradients(
-    t: float, y: Vector, a1: float, a2: float, c: Vector, s1: int, s2: int, left: bool, grad: Vector, partial: Vector
+    t: float,
+    y: Vector,
+    c: Vector,
+    s1: int,
+    s2: int,
+    left: bool,
+    right: bool,
+    grad: Vector,
+    partial: Vector,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``grad`` (9 x 4) with ``dg/dy`` and ``partial`` (9 x 25) with ``dg/dc`` for the response
+    """Fill ``grad`` (11 x 4) with ``dg/dy`` and ``partial`` (11 x 25) with ``dg/dc`` for the response
     integrands but the two accelerations' squares (their derivatives need the field's own)."""
     x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
     grad[:, :] = 0.0
@@ -163,6 +172,12 @@ def _integrand_gradients(
     moving = c[M1] * s1 * v1 + c[M2] * s2 * v2
     partial[8, MU_K], partial[8, G] = c[G] * moving, c[MU_K] * moving
     partial[8, M1], partial[8, M2] = friction * s1 * v1, friction * s2 * v2
+    if right:  # the stop's force K6 (x1 - d1)
+        grad[9, 0] = c[K6]
+        partial[9, K6], partial[9, D1] = x1 - c[D1], -c[K6]
+    if left:  # the compressive force -(K3 (x1 - x2 + d) + C3 (v1 - v2))
+        grad[10, 0], grad[10, 1], grad[10, 2], grad[10, 3] = -c[K3], -c[C3], c[K3], c[C3]
+        partial[10, K3], partial[10, C3], partial[10, D] = -(x1 - x2 + c[D]), -(v1 - v2), -c[K3]
 
 
 @njit(cache=True)
@@ -171,7 +186,7 @@ def tangent_rates(
 ) -> None:  # pragma: no cover - compiled
     """The right-hand side of the tangent system (module docstring) for the parameters ``columns``
     (their positions in ``c``, ``k`` of them).  Layout of ``state`` and ``out``: ``y`` (4), the
-    integrals (9), ``sigma`` (4 x k, row by row), ``dI/dc`` (9 x k, row by row)."""
+    integrals (11), ``sigma`` (4 x k, row by row), ``dI/dc`` (11 x k, row by row)."""
     k = len(columns)
     y = state[:4]
     r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
@@ -180,6 +195,8 @@ def tangent_rates(
     contact = c[C3] * (y[1] - y[3]) ** 2 if left else 0.0
     out[4], out[5], out[6], out[7] = y[0] * y[0], y[2] * y[2], a1 * a1, a2 * a2
     out[8], out[9], out[10], out[11], out[12] = r[4], r[5], r[6] - contact, contact, r[7]
+    out[13] = c[K6] * (y[0] - c[D1]) if right else 0.0
+    out[14] = -(c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3])) if left else 0.0
     if k == 0:  # the response integrals alone (oscillator.orbits.response): no gradient to build
         return
     sigma = state[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
@@ -187,7 +204,7 @@ def tangent_rates(
     _sigma_rates(t, y, c, columns, s1, s2, left, right, sigma, tangent)
     grad = np.empty((INTEGRALS, 4))
     partial = np.empty((INTEGRALS, _SIZE))
-    _integrand_gradients(t, y, a1, a2, c, s1, s2, left, grad, partial)
+    _integrand_gradients(t, y, c, s1, s2, left, right, grad, partial)
     integral = out[4 + INTEGRALS + 4 * k :]
     for j in range(k):
         p = int(columns[j])
