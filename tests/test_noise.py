@@ -184,7 +184,41 @@ def test_the_orbit_command_draws_the_spectra_to_a_file_it_checks_before_computin
     assert "Noise measures of the masses" in failed.stdout and (tmp_path / "taken.png").is_dir()
     system = Path(__file__).resolve().parents[1] / "docs" / "systems" / "impacts.toml"
     refused = CliRunner().invoke(app, ["orbit", str(system), "--noise"])
-    assert refused.exit_code == 2 and "--noise and --noise-figure take the article's cases" in refused.stderr
+    assert refused.exit_code == 2 and "--noise, --noise-figure and --noise-table take the article's" in refused.stderr
+
+
+def test_the_orbit_command_writes_the_spectra_table_the_library_gives(tmp_path, monkeypatch):
+    """``--noise-table FILE`` writes :meth:`Noise.spectra` (CSV or Parquet by its name): each
+    signal's harmonics with their frequency, amplitude and level, the contact force's mean at
+    harmonic 0 (the impulse rate); a name that is not a table's, or the figure's own, is refused
+    before anything is computed, and a file that cannot be written exits 1 after the measures."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    orbit = ["orbit", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--set", "Omega=1.6"]
+    done = CliRunner().invoke(app, [*orbit, "--noise-table", "spectra.parquet", "--noise-figure", "spectra.svg"])
+    assert done.exit_code == 0, done.output
+    assert "spectra written to spectra.parquet" in done.stdout and "spectra drawn to spectra.svg" in done.stdout
+    found = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6).noise()
+    written, expected = pd.read_parquet(tmp_path / "spectra.parquet"), found.spectra()
+    assert list(written.signal.unique()) == ["force_right", "force_left", "acceleration_m1", "acceleration_m2"]
+    assert (written.groupby("signal").size() == 201).all()
+    numbers = ["harmonic", "frequency", "amplitude", "level"]
+    assert np.allclose(written[numbers].to_numpy(), expected[numbers].to_numpy(), rtol=1e-6, atol=1e-12)
+    means = written[written.harmonic == 0].set_index("signal").amplitude
+    assert means["force_left"] == pytest.approx(found.contacts["left"].impulse_rate, rel=1e-6)
+    assert written[written.signal == "acceleration_m1"].unit.iloc[0] == "m/s^2"
+    same = ["--noise-table", "same.png", "--noise-figure", "same.png"]
+    for extra, words in ((["--noise-table", "spectra.txt"], "must end in .csv or .parquet"), (same, "the same file")):
+        refused = CliRunner().invoke(app, [*orbit, *extra])
+        assert refused.exit_code == 2 and words in refused.stderr and "Noise measures" not in refused.stdout
+    (tmp_path / "taken.csv").mkdir()
+    failed = CliRunner().invoke(app, [*orbit, "--noise-table", "taken.csv"])
+    assert failed.exit_code == 1 and "--noise-table" in failed.stderr and "Noise measures" in failed.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spectra.parquet", "spectra.svg", "taken.csv"]
 
 
 def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parameter():

@@ -17,31 +17,38 @@ from oscillator.text import printable, shown
 
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
+    import pandas as pd
     from matplotlib.figure import Figure
 
 __all__ = [
     "case_from",
     "check_engine",
     "figure_file",
+    "output_file",
     "overrides",
     "refuse_taken",
     "sample_grid",
     "sweep_settings",
+    "table_file",
     "write_figure",
+    "write_table",
 ]
 
 #: What a figure's file may be.
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+#: What a table's file may be.
+TABLE_SUFFIXES = (".csv", ".parquet")
 
 
-def figure_file(target: Path, option: str) -> Path:
-    """``target`` if a figure can be written there as ``option`` names it: a ``.png``, ``.svg`` or
-    ``.pdf`` name, writable as given, not a link, in a folder that exists (checked before anything
+def output_file(target: Path, option: str, suffixes: tuple[str, ...] = FIGURE_SUFFIXES) -> Path:
+    """``target`` if a file can be written there as ``option`` names it: a name with one of
+    ``suffixes``, writable as given, not a link, in a folder that exists (checked before anything
     is computed)."""
     from oscillator.io.files import check_name, refuse_link
 
-    if target.suffix.lower() not in FIGURE_SUFFIXES:
-        raise InputError(f"{option} must end in .png, .svg or .pdf, got {printable(str(target))}", field=option)
+    if target.suffix.lower() not in suffixes:
+        kinds = ", ".join(suffixes[:-1]) + f" or {suffixes[-1]}"
+        raise InputError(f"{option} must end in {kinds}, got {printable(str(target))}", field=option)
     check_name(target, option=option)
     refuse_link(target, option=option)
     if not target.absolute().parent.is_dir():
@@ -51,12 +58,33 @@ def figure_file(target: Path, option: str) -> Path:
     return target
 
 
+def figure_file(target: Path, option: str) -> Path:
+    """``target`` if a figure can be written there (:func:`output_file`: ``.png``, ``.svg``, ``.pdf``)."""
+    return output_file(target, option, FIGURE_SUFFIXES)
+
+
+def table_file(target: Path, option: str) -> Path:
+    """``target`` if a table can be written there (:func:`output_file`: ``.csv``, ``.parquet``)."""
+    return output_file(target, option, TABLE_SUFFIXES)
+
+
 def write_figure(fig: Figure, target: Path) -> None:
     """``fig`` written to ``target`` (:func:`figure_file`) atomically: the whole file or none."""
     from oscillator.io.files import atomic_path
 
     with atomic_path(target) as temporary:
         fig.savefig(temporary, format=target.suffix[1:].lower(), dpi=120, bbox_inches="tight")
+
+
+def write_table(frame: pd.DataFrame, target: Path) -> None:
+    """``frame`` written to ``target`` (:func:`table_file`) atomically, as CSV or Parquet by its name."""
+    from oscillator.io.files import atomic_path
+
+    with atomic_path(target) as temporary:
+        if target.suffix.lower() == ".csv":
+            frame.to_csv(temporary, index=False)
+        else:
+            frame.to_parquet(temporary, index=False)
 
 
 def check_engine(engine: str | None, among: tuple[str, ...] | None = None) -> None:

@@ -23,7 +23,7 @@ from rich.text import Text
 
 from oscillator.cli.commands import command
 from oscillator.cli.console import err, fail, load, message, out, say
-from oscillator.cli.inputs import case_from, figure_file, refuse_taken, write_figure
+from oscillator.cli.inputs import case_from, figure_file, refuse_taken, table_file, write_figure, write_table
 from oscillator.cli.options import CaseArgument, QuietOption, SetOption
 from oscillator.errors import InputError, Interrupted, OscillatorError, Reason, SimulationFailed
 from oscillator.io.expressions import parse_value
@@ -67,6 +67,14 @@ NoiseFigureOption = Annotated[
         help="Also draw its spectra (contact forces, accelerations: dB against frequency) to FILE (.png, .svg, .pdf).",
     ),
 ]
+NoiseTableOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--noise-table",
+        metavar="FILE",
+        help="Also write its spectra, harmonic by harmonic, to FILE (.csv, .parquet).",
+    ),
+]
 SectionOption = Annotated[
     float | None,
     typer.Option("--section", metavar="T", help="The section's time in s (default: the case's t0; needs --guess)."),
@@ -105,6 +113,7 @@ def orbit(
     sensitivities: SensitivitiesOption = None,
     noise: NoiseOption = False,
     noise_figure: NoiseFigureOption = None,
+    noise_table: NoiseTableOption = None,
 ) -> None:
     """Find the periodic orbit of the stroboscopic map by Newton's method; print it, its events
     and its Floquet multipliers (and, asked, its derivatives in parameters: docs/sensitivities.md;
@@ -122,11 +131,12 @@ def orbit(
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.5 --sensitivities d1,K3,Omega
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise-figure spectra.png
+      oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise-table spectra.csv
       oscillator orbit docs/systems/blade-damper.toml --set platform.F=0.5 --transient 60
     """
     from oscillator.cli.system import orbit_system
 
-    figure = _noise_figure(case, noise, noise_figure)
+    files = _noise_files(case, noise, noise_figure, noise_table)
     if orbit_system(case, set_, period, guess, transient, section, max_iterations, sensitivities):
         return
     try:
@@ -151,10 +161,19 @@ def orbit(
         raise fail(message(error), code=_code(error)) from None
     except KeyboardInterrupt:
         raise fail("interrupted", code=130) from None
+    _print_orbit(resolved.name, found)
+    if names:
+        _print_sensitivities(found, names)
+    if noise or files != (None, None):
+        _print_noise(found, *files)
+
+
+def _print_orbit(name: str, found: Orbit) -> None:
+    """The orbit found: its section point, Newton's residual, its multipliers and its events."""
     from oscillator.cli.run import _events_table
 
-    state = ", ".join(f"{name} = {value:.10g}" for name, value in zip(COORDINATES, found.state, strict=True))
-    out.print(Text(f"{printable(resolved.name)}: period-{found.period} orbit at t = {found.section:g} s (the section)"))
+    state = ", ".join(f"{axis} = {value:.10g}" for axis, value in zip(COORDINATES, found.state, strict=True))
+    out.print(Text(f"{printable(name)}: period-{found.period} orbit at t = {found.section:g} s (the section)"))
     out.print(Text(f"  {state}"))
     out.print(Text(f"  residual {found.residual:.1e} after {found.iterations} Newton step(s); {found.verdict}"))
     if found.note:
@@ -166,24 +185,26 @@ def orbit(
         table.add_row(_complex_text(mu), f"{abs(mu):.6e}")
     out.print(table)
     out.print(_events_table(found.events))
-    if names:
-        _print_sensitivities(found, names)
-    if noise or figure is not None:
-        _print_noise(found, figure)
 
 
-def _noise_figure(case: str, noise: bool, target: Path | None) -> Path | None:
-    """``--noise-figure``'s file, checked before anything is computed; ``--noise`` and it refused
-    for a system file (its noise measures are among its orbits' measures)."""
+def _noise_files(case: str, noise: bool, figure: Path | None, table: Path | None) -> tuple[Path | None, Path | None]:
+    """``--noise-figure``'s and ``--noise-table``'s files, checked before anything is computed;
+    they and ``--noise`` refused for a system file (its noise measures are among its orbits' measures)."""
     from oscillator.io.chains import system_path
 
-    if (noise or target is not None) and system_path(case) is not None:
+    if (noise or figure is not None or table is not None) and system_path(case) is not None:
         raise fail(
-            "--noise and --noise-figure take the article's cases; a system file's impact rates, energies and "
-            "powers are among the measures of its orbits (docs/noise.md, oscillator frc or atlas --measures)"
+            "--noise, --noise-figure and --noise-table take the article's cases; a system file's impact rates, "
+            "energies and powers are among the measures of its orbits (docs/noise.md, oscillator frc or atlas "
+            "--measures)"
         )
+    if figure is not None and table is not None and figure.absolute() == table.absolute():
+        raise fail("--noise-figure and --noise-table name the same file; give each its own")
     try:
-        return None if target is None else figure_file(target, "--noise-figure")
+        return (
+            None if figure is None else figure_file(figure, "--noise-figure"),
+            None if table is None else table_file(table, "--noise-table"),
+        )
     except OscillatorError as error:
         raise fail(message(error)) from None
 
@@ -246,9 +267,10 @@ def _print_sensitivities(found: Orbit, names: tuple[str, ...]) -> None:
     out.print(Text(f"nearest point without a derivative: {nearest}"))
 
 
-def _print_noise(found: Orbit, figure: Path | None) -> None:
+def _print_noise(found: Orbit, figure: Path | None, spectra: Path | None) -> None:
     """The orbit's noise measures (docs/noise.md), after the orbit itself; their spectra drawn to
-    ``figure`` if given (the tables printed first: a figure that cannot be written loses nothing)."""
+    ``figure`` and written to ``spectra`` if given (the tables printed first: a file that cannot be
+    written loses nothing)."""
     try:
         measures = found.noise()
     except OscillatorError as error:
@@ -268,13 +290,26 @@ def _print_noise(found: Orbit, figure: Path | None) -> None:
     for i, m in measures.masses.items():
         table.add_row(f"m{i}", f"{m.acceleration.level():.2f}", str(m.slips), f"{m.step_max:.6g}")
     out.print(table)
-    if figure is not None:
+
+    def table_to(path: Path) -> None:
+        write_table(measures.spectra(), path)
+
+    def figure_to(path: Path) -> None:
+        write_figure(measures.plot(), path)
+
+    files: tuple[tuple[Path | None, str, Callable[[Path], None], str], ...] = (
+        (spectra, "--noise-table", table_to, "spectra written to "),
+        (figure, "--noise-figure", figure_to, "spectra drawn to "),
+    )
+    for target, option, write, done in files:
+        if target is None:
+            continue
         try:
-            write_figure(measures.plot(), figure)
+            write(target)
         except OSError as error:
-            why = f"{printable(str(figure))}: {printable(error.strerror or str(error))}"
-            raise fail(f"--noise-figure {why}; the measures above are complete", code=1) from None
-        say("spectra drawn to ", (str(figure), "bold"))
+            why = f"{printable(str(target))}: {printable(error.strerror or str(error))}"
+            raise fail(f"{option} {why}; the measures above are complete", code=1) from None
+        say(done, (str(target), "bold"))
 
 
 def _complex_text(value: complex) -> str:

@@ -120,6 +120,21 @@ class Noise:
         """The power both contacts dissipate (W)."""
         return sum(contact.power for contact in self.contacts.values())
 
+    def spectra(self) -> pd.DataFrame:
+        """Every spectrum as one table: ``signal`` (``force_right``, ``force_left``,
+        ``acceleration_m1``, ``acceleration_m2``), its ``unit`` and ``reference`` (of the levels),
+        then :meth:`~oscillator.orbits.spectra.Spectrum.table`'s columns, harmonic by harmonic."""
+        import pandas as pd
+
+        named = {f"force_{name}": c.force for name, c in self.contacts.items()}
+        named |= {f"acceleration_m{i}": m.acceleration for i, m in self.masses.items()}
+        parts = [
+            spectrum.table().assign(signal=signal, unit=spectrum.unit, reference=spectrum.reference)
+            for signal, spectrum in named.items()
+        ]
+        columns = ["signal", "unit", "reference", "harmonic", "frequency", "amplitude", "level"]
+        return pd.concat(parts, ignore_index=True)[columns]
+
     def columns(self, cutoff: float = 0.0) -> dict[str, float]:
         """Every measure as a flat mapping: ``impact_rate_right``, ``impulse_left``, ...,
         ``force_level_right`` (dB re 1 N above ``cutoff`` Hz), ``acceleration_level_m1`` (dB re
