@@ -240,8 +240,8 @@ def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parame
 
 
 def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_with_exact_derivatives():
-    """``impact_rate``, ``impact_energy``, ``impact_power``, ``impulse`` and ``impulse_rate`` of each
-    contact are response measures (so the atlas, the frequency response and the design take them),
+    """``impact_rate``, ``impact_energy``, ``impact_power``, ``impulse``, ``impulse_rate`` and
+    ``force_rms`` of each contact are response measures (so the atlas, the frequency response and the design take them),
     equal to the noise measures' own, and their derivatives in the contact's damper and Omega
     (which moves the span) agree with Richardson differences to 1e-7 (test_sensitivities.check).
     The impulse, integrated along the pieces with the state, is the contact force spectrum's mean
@@ -260,6 +260,18 @@ def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_wit
         mean_force = contact.force.mean  # the spectrum's own integral, not the response's
         assert columns[f"impulse_rate_{stop}"] == pytest.approx(mean_force, rel=1e-9)
         assert columns[f"impulse_{stop}"] == pytest.approx(mean_force * found_noise.span / contact.onsets, rel=1e-9)
+    # Parseval: the force's mean square about its mean is all its harmonics above 0 Hz; a spectrum
+    # of K harmonics falls short by its tail, as 1/K^3 for the stop's force (a kink at each end: its
+    # harmonics fall as 1/k^2) and as 1/K for the damped contact's (it jumps: 1/k)
+    more = orbit.noise(600)
+    for stop, power in (("right", 3), ("left", 1)):
+        square = columns[f"force_rms_{stop}"] ** 2
+        short = [
+            square / mean_square_above(spectrum.force.coefficients, spectrum.force.fundamental) - 1
+            for spectrum in (found_noise.contacts[stop], more.contacts[stop])
+        ]
+        assert 0 < short[1] < short[0] < (1e-5 if stop == "right" else 2e-2), stop
+        assert short[0] / short[1] == pytest.approx(3**power, rel=0.1), stop
     period = orbit.case.parameters.period
     assert columns["impact_power_left"] == pytest.approx(columns["energy_contact"] / period, rel=1e-15)
     assert columns["impact_rate_left"] == 2 / period and columns["impact_power_right"] == 0.0
@@ -267,7 +279,7 @@ def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_wit
     slopes = found.measures.loc["impact_rate_left"]
     assert slopes["d/dOmega"] == pytest.approx(2 / (2 * np.pi), rel=1e-12) and slopes["d/dC3"] == 0.0
     assert found.measures.loc["impact_power_left", "d/dC3"] != 0.0
-    assert found.measures.loc[["impulse_left", "impulse_right"], "d/dC3"].abs().min() > 0.0
+    assert found.measures.loc[["impulse_left", "impulse_right", "force_rms_left"], "d/dC3"].abs().min() > 0.0
 
 
 #: docs/noise.md's worked design: the clearance between the masses and their contact's damper that

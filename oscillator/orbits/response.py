@@ -32,8 +32,11 @@ per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the mas
 * ``impulse`` (N s): the mean impulse of an impact, ``integral F dt / (onsets n)`` with ``F`` the
   contact force, compressive positive (``K6 (x1 - d1)`` on the right stop, ``-(K3 (x1 - x2 + d) +
   C3 (v1 - v2))`` between the masses), integrated along the pieces in contact;
-* ``impulse_rate`` (N): ``impact_rate * impulse``, the contact's mean force over the return (the
-  noise measures of docs/noise.md that the integrals give exactly);
+* ``impulse_rate`` (N): ``impact_rate * impulse``, the contact's mean force over the return;
+* ``force_rms`` (N): the contact force's fluctuation about that mean, ``sqrt(1/nT integral F^2 dt
+  - impulse_rate^2)``: by Parseval, its spectrum's every harmonic above 0 Hz, whose level is
+  ``20 log10(force_rms / 1 N)`` dB (the noise measures of docs/noise.md that the integrals give
+  exactly);
 
 and per forcing period (J): ``forcing`` (work of ``Q_i sin(Omega t + phi_i)``), ``feedback``
 (work of the constant forces ``-P_i s_i``), ``dampers`` (lost in ``C1, C2, C4, C5``),
@@ -73,6 +76,7 @@ __all__ = [
     "CONTACT_MEASURES",
     "ENERGY_MEASURES",
     "FORCE_INTEGRAL",
+    "FORCE_SQUARE",
     "MASS_MEASURES",
     "UNITS",
     "Response",
@@ -100,6 +104,7 @@ CONTACT_MEASURES = (
     "impact_power",
     "impulse",
     "impulse_rate",
+    "force_rms",
 )
 ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
 #: Every measure's column, in :meth:`Response.columns`'s order: ``x_max_m1, ..., impact_max_right,
@@ -113,6 +118,7 @@ COLUMNS = (
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
 UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
 UNITS |= {"impact_rate": "1/s", "impact_energy": "J", "impact_power": "W", "impulse": "N s", "impulse_rate": "N"}
+UNITS |= {"force_rms": "N"}
 UNITS |= {name: "J per period" for name in ENERGY_MEASURES}
 
 
@@ -173,6 +179,8 @@ def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | N
     for stop, lost in (("right", 0.0), ("left", energy["contact"])):
         pushed = float(totals[FORCE_INTEGRAL[stop]]) / periods
         contact[stop] |= impacts(contact[stop]["onsets"], lost, pushed, p.period)
+        squared = float(totals[FORCE_SQUARE[stop]]) / periods
+        contact[stop]["force_rms"] = math.sqrt(max(squared / p.period - (pushed / p.period) ** 2, 0.0))
     return Response(periods, mass, contact, energy)
 
 
@@ -238,6 +246,8 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
 _SQUARES, _ENERGY = 0, 4
 #: Each contact's force integral among them (its impulse over the piece).
 FORCE_INTEGRAL = {"right": 9, "left": 10}
+#: And the integral of its square.
+FORCE_SQUARE = {"right": 11, "left": 12}
 #: The re-integration's tolerances (the run's own are CVODE's 1e-10).
 TOLERANCE = 1e-12
 

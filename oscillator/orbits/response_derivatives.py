@@ -10,8 +10,9 @@ its integrand's derivative, carried by the tangent system, plus ``g(t1) tau1 - g
 piece's ends (the integrand may jump at a switch: a contact damper's loss does).  A fraction of
 the return (``rest``, contact ``time``) is a sum of durations ``t1 - t0`` over the span ``n T``,
 which moves with ``Omega``.  A count (``onsets``) does not move; a rate (``impact_rate``,
-``impact_power``, ``impulse_rate``) is a count or an integral over the span, and a mean per
-impact (``impact_energy``, ``impulse``) an integral over the count.
+``impact_power``, ``impulse_rate``) is a count or an integral over the span, a mean per
+impact (``impact_energy``, ``impulse``) an integral over the count, and ``force_rms`` the root of
+a mean square less a squared mean, each an integral over the span.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from oscillator.model.fields import (
 from oscillator.model.parameters import Parameters
 from oscillator.model.phase_space import Mode
 from oscillator.model.system import ARTICLE
-from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES, FORCE_INTEGRAL
+from oscillator.orbits.response import COLUMNS, ENERGY_MEASURES, FORCE_INTEGRAL, FORCE_SQUARE
 from oscillator.orbits.sensitivity import Pass, Piece, domains_text
 from oscillator.orbits.tangent import INTEGRALS, tangent_rates
 
@@ -50,7 +51,7 @@ Valued = tuple[float, np.ndarray]
 
 
 def _field(t: float, y: np.ndarray, c: np.ndarray, mode: Mode) -> tuple[np.ndarray, np.ndarray]:
-    """The mode's field ``f`` (4) and the response integrands ``g`` (11) at ``(t, y)``."""
+    """The mode's field ``f`` (4) and the response integrands ``g`` (13) at ``(t, y)``."""
     state = np.concatenate([y, np.zeros(INTEGRALS)])
     out = np.empty_like(state)
     tangent_rates(t, state, c, np.zeros(0, dtype=np.int64), mode.sign(1), mode.sign(2), mode.left, mode.right, out)
@@ -216,6 +217,14 @@ def _impact_rates(onsets: int, lost: Valued, pushed: Valued, span: float, dspan:
     }
 
 
+def _fluctuation(square: Valued, mean: Valued) -> Valued:
+    """``sqrt(mean square - mean^2)``, a signal's RMS about its mean, and its derivative."""
+    spread = square[0] - mean[0] ** 2
+    value = math.sqrt(max(spread, 0.0))
+    derivative = (square[1] - 2.0 * mean[0] * mean[1]) / (2.0 * value) if value > 0 else np.zeros_like(square[1])
+    return value, derivative
+
+
 def measure_derivatives(
     along: Pass, p: Parameters, names: tuple[str, ...], periods: int, span: float, dspan: np.ndarray
 ) -> pd.DataFrame:
@@ -242,6 +251,9 @@ def measure_derivatives(
         onsets = round(found[f"onsets_{stop}"][0] * periods)
         pushed = ends.integral(FORCE_INTEGRAL[stop])
         rates = _impact_rates(onsets, lost[stop], pushed, span, dspan)
+        rates["force_rms"] = _fluctuation(
+            _fraction(ends.integral(FORCE_SQUARE[stop]), span, dspan), rates["impulse_rate"]
+        )
         found |= {f"{name}_{stop}": value for name, value in rates.items()}
     rows = {column: [found[column][0], *np.asarray(found[column][1], dtype=float)] for column in COLUMNS}
     return pd.DataFrame.from_dict(rows, orient="index", columns=["value", *(f"d/d{name}" for name in names)])

@@ -2,7 +2,7 @@
 
 In a mode the state obeys ``y' = f(t, y, c)`` (``c`` the parameter vector, :func:`~oscillator.model.
 fields.coefficients`), and the response integrals ``I' = g(t, y, c)`` (:mod:`oscillator.orbits.response`:
-``x1^2, x2^2, a1^2, a2^2``, the five powers and the two contact forces).  Their derivatives along a
+``x1^2, x2^2, a1^2, a2^2``, the five powers, the two contact forces and their squares).  Their derivatives along a
 parameter ``c_j`` at fixed time, ``sigma_j = dy/dc_j`` and ``dI/dc_j``, obey the tangent equations
 
     sigma_j' = J sigma_j + df/dc_j,        (dI/dc_j)' = dg/dy sigma_j + dg/dc_j,
@@ -64,8 +64,9 @@ __all__ = [
 ]
 
 #: The response integrals carried with the state, in :mod:`oscillator.orbits.response`'s order:
-#: ``x1^2, x2^2, a1^2, a2^2``, the five powers, the right stop's and the left contact's force.
-INTEGRALS = 11
+#: ``x1^2, x2^2, a1^2, a2^2``, the five powers, the right stop's and the left contact's force,
+#: and the squares of the two forces.
+INTEGRALS = 13
 #: The parameter vector's length.
 _SIZE = 25
 
@@ -144,7 +145,7 @@ def _integrand_gradients(
     grad: Vector,
     partial: Vector,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``grad`` (11 x 4) with ``dg/dy`` and ``partial`` (11 x 25) with ``dg/dc`` for the response
+    """Fill ``grad`` (13 x 4) with ``dg/dy`` and ``partial`` (13 x 25) with ``dg/dc`` for the response
     integrands but the two accelerations' squares (their derivatives need the field's own)."""
     x1, v1, x2, v2 = y[0], y[1], y[2], y[3]
     grad[:, :] = 0.0
@@ -178,6 +179,12 @@ def _integrand_gradients(
     if left:  # the compressive force -(K3 (x1 - x2 + d) + C3 (v1 - v2))
         grad[10, 0], grad[10, 1], grad[10, 2], grad[10, 3] = -c[K3], -c[C3], c[K3], c[C3]
         partial[10, K3], partial[10, C3], partial[10, D] = -(x1 - x2 + c[D]), -(v1 - v2), -c[K3]
+    forces = (c[K6] * (x1 - c[D1]) if right else 0.0, -(c[K3] * (x1 - x2 + c[D]) + c[C3] * (v1 - v2)) if left else 0.0)
+    for q in range(2):  # d(F^2) = 2 F dF
+        for m in range(4):
+            grad[11 + q, m] = 2.0 * forces[q] * grad[9 + q, m]
+        for m in range(_SIZE):
+            partial[11 + q, m] = 2.0 * forces[q] * partial[9 + q, m]
 
 
 @njit(cache=True)
@@ -186,7 +193,7 @@ def tangent_rates(
 ) -> None:  # pragma: no cover - compiled
     """The right-hand side of the tangent system (module docstring) for the parameters ``columns``
     (their positions in ``c``, ``k`` of them).  Layout of ``state`` and ``out``: ``y`` (4), the
-    integrals (11), ``sigma`` (4 x k, row by row), ``dI/dc`` (11 x k, row by row)."""
+    integrals (13), ``sigma`` (4 x k, row by row), ``dI/dc`` (13 x k, row by row)."""
     k = len(columns)
     y = state[:4]
     r = rates(t, y[0], y[1], y[2], y[3], c, s1, s2, left, right)
@@ -197,6 +204,7 @@ def tangent_rates(
     out[8], out[9], out[10], out[11], out[12] = r[4], r[5], r[6] - contact, contact, r[7]
     out[13] = c[K6] * (y[0] - c[D1]) if right else 0.0
     out[14] = -(c[K3] * (y[0] - y[2] + c[D]) + c[C3] * (y[1] - y[3])) if left else 0.0
+    out[15], out[16] = out[13] * out[13], out[14] * out[14]
     if k == 0:  # the response integrals alone (oscillator.orbits.response): no gradient to build
         return
     sigma = state[4 + INTEGRALS : 4 + INTEGRALS + 4 * k]
