@@ -342,6 +342,17 @@ def test_an_aperiodic_attractor_is_told_chaotic_by_its_largest_exponent():
     (attractor,) = found.attractors
     assert attractor.period == 0 and attractor.kind == "chaotic" and attractor.lyapunov > 0.05
     assert attractor.name.startswith("A0: chaotic")
+    # its response measures (the atlas's colours) are a long run's, from its first recorded point:
+    # the first landing's 40 section points lie on that run, within its extremes
+    from oscillator.attractors.features import APERIODIC_PERIODS, Measured
+
+    names = ("x_max_m1", "x_min_m1", "v_peak_m1", "rest_m1", "onsets_right", "energy_forcing", "energy_dampers")
+    measured = Measured(responses=names)(found.case, attractor).measures
+    recorded = attractor.points[:40]
+    assert measured["x_max_m1"] >= recorded[:, 0].max() and measured["x_min_m1"] <= recorded[:, 0].min()
+    assert measured["v_peak_m1"] >= np.abs(recorded[:, 1]).max() and 0 <= measured["rest_m1"] < 0.5
+    assert measured["onsets_right"] == 0 and measured["energy_forcing"] > 0 and measured["energy_dampers"] > 0
+    assert min(len(attractor.points), APERIODIC_PERIODS) >= 40
 
 
 def test_the_basins_report_escapes_the_case_s_text(tmp_path):

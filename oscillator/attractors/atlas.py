@@ -298,8 +298,10 @@ def regime_atlas(
         Local processes or a Dask client, as for :func:`~oscillator.attractors.finding.find_attractors`.
     measures : sequence of str
         Response measures (:data:`~oscillator.orbits.response.COLUMNS`: ``x_pp_m2``,
-        ``impact_max_right``, ...) each periodic attractor gets as a column, over one return from
-        its last section point; NaN for an aperiodic one.  About 20 ms an attractor.  A chain's:
+        ``impact_max_right``, ...) each attractor gets as a column, over one return from its last
+        section point; an aperiodic one over its recorded points' span, at most
+        :data:`~oscillator.attractors.features.APERIODIC_PERIODS` periods.  About 20 ms a periodic
+        attractor.  A chain's:
         names of :func:`~oscillator.orbits.chain_response.measure_names` (``x_max:blade``,
         ``impact_velocity:wall``), of its refined orbit.
     progress : callable, optional
