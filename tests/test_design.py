@@ -256,6 +256,7 @@ def test_a_design_saves_reads_back_and_rebuilds_its_report(tmp_path, worked, mon
     computing nothing; ``oscillator report`` writes its tables, figures and report again; in
     Jupyter the case's name is text."""
     import dataclasses
+    import json
 
     import pandas as pd
 
@@ -284,9 +285,38 @@ def test_a_design_saves_reads_back_and_rebuilds_its_report(tmp_path, worked, mon
     what, problems = rebuild(folder)
     assert what == "the design" and problems == [] and (folder / "report.md").is_file()
     assert (folder / "figures" / "design-response.png").is_file()
+    marker = folder / "design.json"
+    stored = json.loads(marker.read_text())
+    marker.write_text(json.dumps(stored | {"format": stored["format"] - 1}))  # an earlier version's folder
+    with pytest.raises(InputError, match=r"written by another version of oscillator .* with a new --out"):
+        osc.read_run(folder)
+    marker.write_text(json.dumps(stored))
     (folder / "best.json").write_text('{"judged": {}}')
     with pytest.raises(InputError, match=r"best.json is damaged"):
         osc.read_run(folder)
     shown = dataclasses.replace(worked, problem=dataclasses.replace(worked.problem, case=dataclasses.replace(
         worked.problem.case, name="<script>")))  # fmt: skip
     assert "<script>" not in shown._repr_html_() and "&lt;script&gt;" in shown._repr_html_()
+
+
+@pytest.mark.parametrize("store", ["frequency", "design"])
+def test_a_resumable_folder_of_an_earlier_format_is_refused_as_another_versions(tmp_path, store):
+    """A frequency response's or a design's folder written before its parts gained the impulses and
+    force_rms is refused as another version's, not read part by part as damaged."""
+    import json
+
+    from oscillator.attractors.frequency_parts import FrequencyStore
+    from oscillator.designing.optimise import DesignStore
+    from oscillator.errors import InputError
+
+    kind = FrequencyStore if store == "frequency" else DesignStore
+    identity = {"case": "[parameters]\nOmega = 1.5\n", "settings": {"band": 3}}
+    kind(tmp_path / "f", identity).open()
+    marker = next(path for path in (tmp_path / "f").glob("*.json"))
+    again = kind(tmp_path / "f", identity)
+    again.check()  # this version's folder resumes
+    assert again.resuming
+    stored = json.loads(marker.read_text())
+    marker.write_text(json.dumps(stored | {"format": kind.FORMAT - 1}))
+    with pytest.raises(InputError, match="written by another version of oscillator"):
+        kind(tmp_path / "f", identity).check()

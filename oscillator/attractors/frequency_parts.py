@@ -50,7 +50,9 @@ class FrequencyStore(TableFolder):
     branches), per period doubling (the branches born there), per branch (its measures) and per
     sweep (module docstring)."""
 
-    FORMAT = 2  # 2: each part keyed by its task, every sweep row with every measure's column
+    #: 2: each part keyed by its task, every sweep row with every measure's column; 3: the impulses
+    #: and force_rms among the measures (a folder of an earlier format is refused, not read as damaged).
+    FORMAT = 3
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "frc.json", identity, name=name)

@@ -129,7 +129,9 @@ class DesignStore(TableFolder):
     :func:`~oscillator.designing.judging.seen_table` and its simulations in the metadata.  The
     refinement and the check are computed again on resuming (a few percent of the work)."""
 
-    FORMAT = 3  # 2: a survey's table has a failure column; 3: each part keyed by its task
+    #: 2: a survey's table has a failure column; 3: each part keyed by its task; 4: the impulses and
+    #: force_rms among a survey's measures (a folder of an earlier format is refused, not read as damaged).
+    FORMAT = 4
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "design.json", identity, name=name)

@@ -345,13 +345,15 @@ def read_design(folder: Path) -> Design:
 def _problem_of(folder: Path) -> tuple[Problem, AttractorSettings]:
     """The problem and the settings a design folder's ``design.json`` and ``case.toml`` hold."""
     from oscillator.attractors.mapping import AttractorSettings
+    from oscillator.designing.optimise import DesignStore
     from oscillator.designing.problem import Problem
     from oscillator.errors import InputError, OscillatorError
     from oscillator.report.global_results import marker_identity
     from oscillator.report.outputs import folder_case
     from oscillator.text import printable
 
-    known = marker_identity(folder / "design.json")
+    remake = "run the oscillator design command that made it again with a new --out"
+    known = marker_identity(folder / "design.json", DesignStore.FORMAT, remake)
     case = folder_case(folder, "design.json")
     try:
         vary = {str(name): (float(low), float(high)) for name, low, high in known["vary"]}

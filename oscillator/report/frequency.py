@@ -239,6 +239,7 @@ def _branch_rows(found: FrequencyResponse) -> tuple[tuple[str, ...], ...]:
 RESPONSE = "response.json"
 #: How a frequency-response folder that cannot be read is made again.
 _REMAKE = "run the oscillator frc command that made it again with the same --out"
+_ANEW = "run the oscillator frc command that made it again with a new --out"
 
 
 def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp", *, plots: bool = True) -> list[str]:
@@ -334,7 +335,9 @@ def _identity_of(folder: Path) -> tuple[str, tuple[float, float], int]:
     def damaged(why: str) -> InputError:
         return InputError(f"{printable(str(folder))}/frc.json is damaged ({why}); {_REMAKE}", field="folder")
 
-    known = marker_identity(folder / "frc.json")
+    from oscillator.attractors.frequency_parts import FrequencyStore
+
+    known = marker_identity(folder / "frc.json", FrequencyStore.FORMAT, _ANEW)
     try:
         param = Parameters.check_name(known.get("param"), "folder")
         low, high = (float(value) for value in known["span"])

@@ -27,14 +27,23 @@ from oscillator.text import printable
 __all__ = ["marker_identity", "read_basins", "read_following", "read_lyapunov"]
 
 
-def marker_identity(marker: Path) -> dict[str, Any]:
-    """The identity a folder's marker file holds (checked as untrusted text)."""
+def marker_identity(marker: Path, form: int | None = None, remake: str = "give a new folder") -> dict[str, Any]:
+    """The identity a folder's marker file holds (checked as untrusted text); ``form``: the format
+    its store writes today (:attr:`~oscillator.analysis.store.TableFolder.FORMAT`), another one
+    refused as another version's, with ``remake`` as the fix."""
     try:
-        identity = json.loads(read_untrusted(marker, what="marker file", field="folder", limit=1_000_000))["identity"]
+        stored = json.loads(read_untrusted(marker, what="marker file", field="folder", limit=1_000_000))
+        identity = stored["identity"]
         if not isinstance(identity, dict):
             raise TypeError("not a table")
     except (ValueError, KeyError, TypeError, RecursionError) as error:
         raise InputError(f"{printable(str(marker))} is damaged ({error}); give a new folder", field="folder") from None
+    if form is not None and stored.get("format") != form:
+        raise InputError(
+            f"{printable(str(marker.parent))} was written by another version of oscillator (its tables hold other "
+            f"measures); {remake}",
+            field="folder",
+        )
     return identity
 
 
