@@ -33,7 +33,7 @@ def test_the_measure_names_are_those_of_the_orbits_in_their_order(make):
     orbit = find_chain_orbit(make(), transient=150)
     names = list(orbit_measures(orbit))
     assert list(measure_names(orbit.chain)) == names
-    assert {measure_unit(name) for name in names} <= {"m", "", "m/s", "m/s^2", "N", "J", "1/s", "W"}
+    assert {measure_unit(name) for name in names} <= {"m", "", "m/s", "m/s^2", "N", "J", "1/s", "W", "N s"}
 
 
 @pytest.fixture(scope="module")

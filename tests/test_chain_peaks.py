@@ -51,6 +51,21 @@ def test_an_undamped_stops_largest_force_is_its_stiffness_times_the_largest_pene
     assert set(orbit.events.kind) == {"stop_closes", "stop_opens"}
     measured = orbit_measures(orbit)
     assert measured["force_max:wall"] == pytest.approx(50.0 * (measured["x_max:m"] - 0.5), rel=1e-9)
+    # momentum over a period: the stop's impulse (pushing back, a negative force) is what the spring
+    # takes, k times the integral of x (the damper's and the force's integrals vanish; x's is
+    # negative, the stop holding the mass back); that integral by Simpson's rule on the
+    # states the solver stops at, a grid of 4000 steps
+    from oscillator.hybrid.chain_run import simulate_chain
+
+    span = 2 * math.pi / 0.8
+    grid = orbit.section + np.linspace(0.0, span, 4001)
+    run = simulate_chain(chain, orbit.section + span, start_state=orbit.state, at=grid[1:-1])
+    run_t, x = run.times, run.states[:, 0]
+    x_at = np.array([x[np.flatnonzero(run_t == t)[-1]] if t in run_t else np.interp(t, run_t, x) for t in grid])
+    h = span / 4000
+    integral = h / 3 * (x_at[0] + x_at[-1] + 4 * x_at[1:-1:2].sum() + 2 * x_at[2:-1:2].sum())
+    assert integral < 0 and measured["impulse_rate:wall"] == pytest.approx(-1.0 * integral / span, rel=1e-6)
+    assert measured["impulse:wall"] == pytest.approx(-integral / measured["closings:wall"], rel=1e-6)
 
 
 def test_the_peaks_are_an_independent_implementations_sampled_densely():
@@ -263,3 +278,25 @@ def test_the_exact_derivatives_are_the_independent_implementations_differences()
     central = {k: (measured[k * h] - measured[-k * h]) / (2 * k * h) for k in (1, 2)}
     richardson = (4 * central[1] - central[2]) / 3
     assert richardson == pytest.approx(exact, rel=1e-6)
+
+
+@pytest.mark.parametrize("damper", [0.0, 0.5])
+def test_a_stops_impulse_is_the_momentum_it_turns_round(damper):
+    """A free mass (no spring, friction or force) meets a stop at speed 1: while closed the stop's
+    force is the only one, so its integral is ``m (v_out - v_in)`` (2 m with no damper), to the
+    solver's tolerance; the orbit measures give it per closing and per second."""
+    from oscillator import SolverOptions
+    from oscillator.errors import InputError
+    from oscillator.hybrid.chain_run import simulate_chain
+    from oscillator.orbits.chain_peaks import impulses
+
+    chain = FrictionChain(Omega=1.0).mass("m", m=2.0, x=0.0, v=1.0).stop("m", name="wall", side="right", at=0.5,
+                                                                          K=50.0, C=damper)  # fmt: skip
+    with pytest.raises(InputError, match="options must be a SolverOptions"):
+        simulate_chain(chain, 3.0, options={"rtol": 1e-12})
+    run = simulate_chain(chain, 3.0, options=SolverOptions(rtol=1e-12, atol=1e-12))
+    events = run.events
+    assert list(events.kind[events.element == "wall"]) == ["stop_closes", "stop_opens"]
+    out = float(run.states[-1, 1])  # free flight after the stop: the speed it left with
+    assert out < 0 and (out == pytest.approx(-1.0, rel=1e-9) if damper == 0 else out > -0.99)
+    assert impulses(run)["wall"] == pytest.approx(2.0 * (out - 1.0), rel=1e-9)

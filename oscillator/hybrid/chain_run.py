@@ -26,6 +26,7 @@ from oscillator.model.chain_rules import ChainEvent, ChatterError, Names, start,
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import SolverOptions
 from oscillator.presenting import presenter
+from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -277,6 +278,11 @@ def simulate_chain(
     Raises :class:`~oscillator.errors.SimulationFailed` (its ``result`` the run so far) when the
     solver fails or the events storm."""
     chain = chain.checked()
+    if options is not None and not isinstance(options, SolverOptions):
+        raise InputError(
+            f"options must be a SolverOptions (e.g. SolverOptions(rtol=1e-12)) or None, got {shown(options)}",
+            field="options",
+        )
     options = options or SolverOptions()
     end = run_end(chain, t_end)
     counted()

@@ -27,7 +27,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.hybrid.chain_run import ChainResult, closed_spans, mode_spans, stuck_spans
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
-from oscillator.orbits.chain_peaks import peaks, rates_at
+from oscillator.orbits.chain_peaks import impulses, peaks, rates_at
 
 __all__ = [
     "MEASURE_UNITS",
@@ -56,10 +56,12 @@ MEASURE_UNITS = {
     "impact_rate": "1/s",
     "impact_energy": "J",
     "impact_power": "W",
+    "impulse": "N s",
+    "impulse_rate": "N",
 }
 _SLIDING = ("friction", "jenkins")
 #: The noise measures of each stop and contact (:func:`orbit_measures`).
-_NOISE = ("impact_rate", "impact_energy", "impact_power")
+_NOISE = ("impact_rate", "impact_energy", "impact_power", "impulse", "impulse_rate")
 _CLOSING = ("stop", "contact")
 
 
@@ -107,8 +109,10 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     (:func:`~oscillator.orbits.chain_peaks.peaks`); ``work:<element>`` and
     ``dissipated:<element>`` (J) for every element; and the noise measures of each stop and
     contact (docs/noise.md): ``impact_rate:<element>`` (closings per second),
-    ``impact_energy:<element>`` (J: what it dissipates per closing) and ``impact_power:<element>``
-    (W: what it dissipates per second)."""
+    ``impact_energy:<element>`` (J: what it dissipates per closing), ``impact_power:<element>``
+    (W: what it dissipates per second), ``impulse:<element>`` (N s: its force's integral while
+    closed per closing, :func:`~oscillator.orbits.chain_peaks.impulses`, its size) and
+    ``impulse_rate:<element>`` (N: that integral per second, the mean force)."""
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
@@ -165,12 +169,16 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
         elif element.type in _CLOSING:
             found |= _contact_measures(run, element.name, start, span)
     found |= peaks(run) | _energy_measures(run, start, span)
-    for element in run.chain.elements:  # what each closing loses, per closing and per second
+    pushed = impulses(run)
+    for element in run.chain.elements:  # what each closing loses and gives, per closing and per second
         if element.type in _CLOSING:
-            closings, lost = found[f"closings:{element.name}"], found[f"dissipated:{element.name}"]
-            found[f"impact_rate:{element.name}"] = closings / span
-            found[f"impact_energy:{element.name}"] = lost / closings if closings else 0.0
-            found[f"impact_power:{element.name}"] = lost / span
+            name = element.name
+            closings, lost, given = found[f"closings:{name}"], found[f"dissipated:{name}"], abs(pushed[name])
+            found[f"impact_rate:{name}"] = closings / span
+            found[f"impact_energy:{name}"] = lost / closings if closings else 0.0
+            found[f"impact_power:{name}"] = lost / span
+            found[f"impulse:{name}"] = given / closings if closings else 0.0
+            found[f"impulse_rate:{name}"] = given / span
     return found
 
 

@@ -89,8 +89,8 @@ class ChainSensitivities:
             known = ", ".join(self.measures.index)
             if measure in measure_names(self.orbit.chain):  # a measure, but one without a derivative yet
                 raise InputError(
-                    f"{printable(measure)} has no exact derivative yet (the works and the energies dissipated, "
-                    f"but a Jenkins slider's, have none); choose one of {known}",
+                    f"{printable(measure)} has no exact derivative yet (the works, the energies dissipated but "
+                    f"a Jenkins slider's, and the impulses have none); choose one of {known}",
                     field="measure",
                 )
             raise InputError(f"no measure named {printable(measure)}; choose one of {known}", field="measure")
