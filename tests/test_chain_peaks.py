@@ -300,3 +300,22 @@ def test_a_stops_impulse_is_the_momentum_it_turns_round(damper):
     out = float(run.states[-1, 1])  # free flight after the stop: the speed it left with
     assert out < 0 and (out == pytest.approx(-1.0, rel=1e-9) if damper == 0 else out > -0.99)
     assert impulses(run)["wall"] == pytest.approx(2.0 * (out - 1.0), rel=1e-9)
+
+
+def test_a_mass_slipping_off_its_belt_steps_its_acceleration_by_the_friction_gap():
+    """On the belt chain's orbit the mass sticks to its belt and slips off it once a period: slipping
+    off, the force that held it falls from the static threshold to the kinetic one, a step of
+    ``(mu_s - mu_k) N / m`` (1e-9); sticking, the step is the acceleration it had relative to the
+    belt; the orbit measures count both and keep the larger."""
+    from oscillator.orbits.chain_peaks import slip_steps
+    from test_chain_sensitivities import belt_chain
+
+    orbit = find_chain_orbit(belt_chain(), transient=100)
+    kinds = list(orbit.events.kind[orbit.events.element == "belt"])
+    steps = slip_steps(orbit.run)["belt"]
+    assert sorted(kinds) == ["slips", "sticks"] and len(steps) == 2
+    slipped = steps[kinds.index("slips")]
+    assert slipped == pytest.approx((0.4 - 0.25) * 1.0 / 1.0, rel=1e-9)
+    stuck = steps[kinds.index("sticks")]
+    measured = orbit_measures(orbit)
+    assert measured["slip_steps:belt"] == 2 and measured["slip_step_max:belt"] == max(slipped, stuck) > 0

@@ -33,7 +33,7 @@ from oscillator.compiled import njit
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["Peak", "impulses", "peak_places", "peaks", "quintic", "rates_at"]
+__all__ = ["Peak", "impulses", "peak_places", "peaks", "quintic", "rates_at", "slip_steps"]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
@@ -144,6 +144,27 @@ def impulses(run: ChainResult) -> dict[str, float]:
         middle = (t[:-1] + t[1:]) / 2
         total = sum(float(h[k, 0] * element_force(middle[k], mean[k], data[k], row)) for k in closed.tolist())
         found[chain.elements[row].name] = total
+    return found
+
+
+def slip_steps(run: ChainResult) -> dict[str, list[float]]:
+    """Each friction element's steps of its mass's acceleration (m/s^2) where the mass sticks to
+    its floor or belt or slips off it, in the run's order: ``|a(t+) - a(t-)|``, the field at the
+    switch's row in its own mode against the step before's (the jerk there is an impulse of this
+    size).  Slipping off, the force that held the mass passes from the static threshold to the
+    kinetic one: the step is ``(mu_s - mu_k) N / m``."""
+    chain, t, states, modes = run.chain, run.times, run.states, run.modes()
+    field = _Field(run)
+    found: dict[str, list[float]] = {}
+    sliding = [(row, e) for row, e in enumerate(chain.elements) if e.type == "friction"]
+    if not sliding or len(t) < 2:
+        return {e.name: [] for _, e in sliding}
+    own, right, _ = _ends(field, t, states, modes, [])
+    masses = [mass.name for mass in chain.masses]
+    for row, element in sliding:
+        i = masses.index(element.on)
+        turned = np.flatnonzero((modes[:-1, row] == 0.0) != (modes[1:, row] == 0.0)).tolist()
+        found[element.name] = [abs(float(own.rates[k + 1, 2 * i + 1] - right.rates[k, 2 * i + 1])) for k in turned]
     return found
 
 

@@ -27,7 +27,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.hybrid.chain_run import ChainResult, closed_spans, mode_spans, stuck_spans
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
-from oscillator.orbits.chain_peaks import impulses, peaks, rates_at
+from oscillator.orbits.chain_peaks import impulses, peaks, rates_at, slip_steps
 
 __all__ = [
     "MEASURE_UNITS",
@@ -58,11 +58,15 @@ MEASURE_UNITS = {
     "impact_power": "W",
     "impulse": "N s",
     "impulse_rate": "N",
+    "slip_steps": "",
+    "slip_step_max": "m/s^2",
 }
 _SLIDING = ("friction", "jenkins")
 #: The noise measures of each stop and contact (:func:`orbit_measures`).
 _NOISE = ("impact_rate", "impact_energy", "impact_power", "impulse", "impulse_rate")
 _CLOSING = ("stop", "contact")
+#: The stick-slip measures of each friction element (:func:`~oscillator.orbits.chain_peaks.slip_steps`).
+_STEPS = ("slip_steps", "slip_step_max")
 
 
 def turning_points(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -112,7 +116,10 @@ def orbit_measures(orbit: ChainOrbit) -> dict[str, float]:
     ``impact_energy:<element>`` (J: what it dissipates per closing), ``impact_power:<element>``
     (W: what it dissipates per second), ``impulse:<element>`` (N s: its force's integral while
     closed per closing, :func:`~oscillator.orbits.chain_peaks.impulses`, its size) and
-    ``impulse_rate:<element>`` (N: that integral per second, the mean force)."""
+    ``impulse_rate:<element>`` (N: that integral per second, the mean force); and each friction
+    element's stick-slip measures: ``slip_steps:<element>`` (its mass's sticks and slips in the
+    return) and ``slip_step_max:<element>`` (m/s^2: the largest step of its acceleration there,
+    :func:`~oscillator.orbits.chain_peaks.slip_steps`)."""
     return _measures(orbit.run, orbit.section, orbit.period * orbit.chain.period)
 
 
@@ -132,6 +139,7 @@ def measure_names(chain: FrictionChain) -> tuple[str, ...]:
         names += [f"slip:{element.name}"] if element.type in _SLIDING else []
     for element in chain.elements:
         names += [f"{kind}:{element.name}" for kind in _NOISE] if element.type in _CLOSING else []
+    names += [f"{kind}:{e.name}" for e in chain.elements if e.type == "friction" for kind in _STEPS]
     return tuple(names)
 
 
@@ -179,6 +187,8 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
             found[f"impact_power:{name}"] = lost / span
             found[f"impulse:{name}"] = given / closings if closings else 0.0
             found[f"impulse_rate:{name}"] = given / span
+    for name, steps in slip_steps(run).items():
+        found[f"slip_steps:{name}"], found[f"slip_step_max:{name}"] = float(len(steps)), max(steps, default=0.0)
     return found
 
 
