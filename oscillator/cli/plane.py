@@ -88,7 +88,8 @@ def atlas(
     """The regime atlas over two parameters: at every point the attractors (from the case's start
     and seeds from the row before), each one's period, rests and contacts per period, impact
     velocity and largest Lyapunov exponent; the regime of each, and where several coexist; with
-    --measures, the response measures named (over one return of each periodic attractor).
+    --measures, the response measures named (over one return of a periodic attractor, over its
+    recorded periods for an aperiodic one).
 
     One fresh start a point (--starts), run 40 forcing periods (--transient), then 10 recorded
     (--record). Writes atlas.parquet, figures/atlas.png (Fig. 14's lines marked) and a report.
