@@ -33,7 +33,7 @@ from oscillator.compiled import njit
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["Peak", "impulses", "peak_places", "peaks", "quintic", "rates_at", "slip_steps"]
+__all__ = ["Peak", "Sides", "impulses", "peak_places", "peaks", "quintic", "rates_at", "sides", "slip_steps"]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
@@ -84,20 +84,41 @@ class Peak:
     mode: np.ndarray
 
 
-def peaks(run: ChainResult) -> dict[str, float]:
+@dataclass(frozen=True)
+class Sides:
+    """The field at both ends of every step of a run, each in the step's mode, with the stops' and
+    contacts' forces (:func:`sides`): computed once, read by :func:`peak_places`,
+    :func:`impulses` and :func:`slip_steps`."""
+
+    field: _Field
+    contacts: list[int]
+    left: _Rows
+    right: _Rows
+    data: list[np.ndarray]
+
+
+def sides(run: ChainResult) -> Sides:
+    """The run's :class:`Sides`: one compiled pass over its rows."""
+    field = _Field(run)
+    contacts = [k for k, e in enumerate(run.chain.elements) if e.type in _CONTACTS]
+    left, right, data = _ends(field, run.times, run.states, run.modes(), contacts)
+    return Sides(field, contacts, left, right, data)
+
+
+def peaks(run: ChainResult, at: Sides | None = None) -> dict[str, float]:
     """``a_max:<mass>`` (m/s^2: the largest ``|x''|`` of each mass) and ``force_max:<element>`` (N:
     the largest ``|force|`` of each stop and contact while closed, 0 if it never closes) over
-    ``run`` (module docstring)."""
-    return {name: abs(peak.value) for name, peak in peak_places(run).items()}
+    ``run`` (module docstring); ``at`` its :func:`sides` if computed already."""
+    return {name: abs(peak.value) for name, peak in peak_places(run, at).items()}
 
 
-def peak_places(run: ChainResult) -> dict[str, Peak]:
+def peak_places(run: ChainResult, at: Sides | None = None) -> dict[str, Peak]:
     """:func:`peaks` with where each is (a stop or contact that never closes: value 0 at the
     run's start).  Each quantity's candidates, in the run's order (each step's left end, its
     right end, its turn), are valued at once; the first of the largest is the peak."""
     chain, t, states, modes = run.chain, run.times, run.states, run.modes()
-    field, rows = _Field(run), [k for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
-    left, right, data = _ends(field, t, states, modes, rows)
+    at = at or sides(run)
+    field, rows, left, right, data = at.field, at.contacts, at.left, at.right, at.data
     best: dict[str, Peak] = {}
     for i, mass in enumerate(chain.masses):
         ends = (
@@ -120,18 +141,20 @@ def peak_places(run: ChainResult) -> dict[str, Peak]:
     return best
 
 
-def impulses(run: ChainResult) -> dict[str, float]:
+def impulses(run: ChainResult, at: Sides | None = None) -> dict[str, float]:
     """Each stop's and contact's force integrated over ``run`` while closed (N s; the force on its
     ``on`` mass, :func:`~oscillator.model.chain_fields.element_force`).  A closed element's force
     is affine in the state, so each step's integral is the step's length times the force at the
     step's mean state, and the mean state is the integral of the quintic through both rows' states,
     rates and second rates, ``(y0 + y1) / 2 + h (y0' - y1') / 10 + h^2 (y0'' + y1'') / 120``
-    (exact to the step's seventh power, as the quintic is to its sixth)."""
+    (exact to the step's seventh power, as the quintic is to its sixth); ``at`` the run's
+    :func:`sides` if computed already."""
     chain, t, states, modes = run.chain, run.times, run.states, run.modes()
-    field, rows = _Field(run), [k for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
+    rows = [k for k, e in enumerate(chain.elements) if e.type in _CONTACTS]
     if not rows or len(t) < 2:
         return {chain.elements[row].name: 0.0 for row in rows}
-    left, right, data = _ends(field, t, states, modes, rows)
+    at = at or sides(run)
+    left, right, data = at.left, at.right, at.data
     h = np.diff(t)[:, None]
     mean = (
         (states[:-1] + states[1:]) / 2
@@ -147,19 +170,20 @@ def impulses(run: ChainResult) -> dict[str, float]:
     return found
 
 
-def slip_steps(run: ChainResult) -> dict[str, list[float]]:
+def slip_steps(run: ChainResult, at: Sides | None = None) -> dict[str, list[float]]:
     """Each friction element's steps of its mass's acceleration (m/s^2) where the mass sticks to
     its floor or belt or slips off it, in the run's order: ``|a(t+) - a(t-)|``, the field at the
     switch's row in its own mode against the step before's (the jerk there is an impulse of this
     size).  Slipping off, the force that held the mass passes from the static threshold to the
-    kinetic one: the step is ``(mu_s - mu_k) N / m``."""
-    chain, t, states, modes = run.chain, run.times, run.states, run.modes()
-    field = _Field(run)
+    kinetic one: the step is ``(mu_s - mu_k) N / m``; ``at`` the run's :func:`sides` if computed
+    already."""
+    chain, t, modes = run.chain, run.times, run.modes()
     found: dict[str, list[float]] = {}
     sliding = [(row, e) for row, e in enumerate(chain.elements) if e.type == "friction"]
     if not sliding or len(t) < 2:
         return {e.name: [] for _, e in sliding}
-    own, right, _ = _ends(field, t, states, modes, [])
+    at = at or sides(run)
+    own, right = at.left, at.right
     masses = [mass.name for mass in chain.masses]
     for row, element in sliding:
         i = masses.index(element.on)

@@ -27,7 +27,7 @@ from oscillator.errors import InputError, OscillatorError
 from oscillator.hybrid.chain_run import ChainResult, closed_spans, mode_spans, stuck_spans
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit, find_chain_orbit
-from oscillator.orbits.chain_peaks import impulses, peaks, rates_at, slip_steps
+from oscillator.orbits.chain_peaks import impulses, peaks, rates_at, sides, slip_steps
 
 __all__ = [
     "MEASURE_UNITS",
@@ -176,8 +176,9 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
             found[f"stuck:{element.name}"] = float(sum(b - a for a, b in spans) / span)
         elif element.type in _CLOSING:
             found |= _contact_measures(run, element.name, start, span)
-    found |= peaks(run) | _energy_measures(run, start, span)
-    pushed = impulses(run)
+    at = sides(run)  # the field at every step's ends, once for the peaks, impulses and stick-slip steps
+    found |= peaks(run, at) | _energy_measures(run, start, span)
+    pushed = impulses(run, at)
     for element in run.chain.elements:  # what each closing loses and gives, per closing and per second
         if element.type in _CLOSING:
             name = element.name
@@ -187,7 +188,7 @@ def _measures(run: ChainResult, start: float, span: float) -> dict[str, float]:
             found[f"impact_power:{name}"] = lost / span
             found[f"impulse:{name}"] = given / closings if closings else 0.0
             found[f"impulse_rate:{name}"] = given / span
-    for name, steps in slip_steps(run).items():
+    for name, steps in slip_steps(run, at).items():
         found[f"slip_steps:{name}"], found[f"slip_step_max:{name}"] = float(len(steps)), max(steps, default=0.0)
     return found
 
