@@ -59,6 +59,8 @@ _EXPORTS = {
     "find_orbit": "oscillator.orbits.shooting",
     "ChainOrbit": "oscillator.orbits.chain_orbits",
     "ChainSensitivities": "oscillator.orbits.chain_sensitivity",
+    "ChainNoise": "oscillator.orbits.chain_noise",
+    "chain_noise": "oscillator.orbits.chain_noise",
     "frequency_sweep": "oscillator.orbits.chain_response",
     "worst_over": "oscillator.designing.chain_design",
     "Response": "oscillator.orbits.response",
@@ -107,6 +109,7 @@ __all__ = [
     "Branch",
     "Calibration",
     "Case",
+    "ChainNoise",
     "ChainOrbit",
     "ChainResult",
     "ChainSensitivities",
@@ -141,6 +144,7 @@ __all__ = [
     "SweepSettings",
     "calibrate",
     "case_names",
+    "chain_noise",
     "continue_orbit",
     "design",
     "explore",
@@ -193,6 +197,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.model.parameters import InitialState, Parameters, SolverOptions, SweepSettings
     from oscillator.model.phase_space import Mode
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_noise import ChainNoise, chain_noise
     from oscillator.orbits.chain_orbits import ChainOrbit
     from oscillator.orbits.chain_response import frequency_sweep
     from oscillator.orbits.chain_sensitivity import ChainSensitivities

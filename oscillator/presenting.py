@@ -30,6 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only: this module imports no
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_noise import ChainNoise
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.shooting import Orbit
 else:
@@ -78,7 +79,7 @@ class Presenter(Protocol):
 
     def plot_chain_design(self, design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None) -> Figure: ...
 
-    def plot_noise(self, found: Noise) -> Figure: ...
+    def plot_noise(self, found: Noise | ChainNoise) -> Figure: ...
 
     def plot_noise_response(self, found: FrequencyResponse, table: pd.DataFrame, column: str) -> Figure: ...
 

@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.hybrid.result import Result
     from oscillator.model.chains import FrictionChain
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_noise import ChainNoise
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.shooting import Orbit
 
@@ -108,7 +109,7 @@ class Views:
 
         return design_figure(design, sweeps)
 
-    def plot_noise(self, found: Noise) -> Figure:
+    def plot_noise(self, found: Noise | ChainNoise) -> Figure:
         from oscillator.report.noise import noise_figure
 
         return noise_figure(found)

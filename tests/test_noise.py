@@ -182,9 +182,6 @@ def test_the_orbit_command_draws_the_spectra_to_a_file_it_checks_before_computin
     failed = CliRunner().invoke(app, [*orbit, "--noise-figure", "taken.png"])
     assert failed.exit_code == 1 and "the measures above are complete" in failed.stderr
     assert "Noise measures of the masses" in failed.stdout and (tmp_path / "taken.png").is_dir()
-    system = Path(__file__).resolve().parents[1] / "docs" / "systems" / "impacts.toml"
-    refused = CliRunner().invoke(app, ["orbit", str(system), "--noise"])
-    assert refused.exit_code == 2 and "--noise, --noise-figure and --noise-table take the article's" in refused.stderr
 
 
 def test_the_orbit_command_writes_the_spectra_table_the_library_gives(tmp_path, monkeypatch):

@@ -35,9 +35,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.cases import Case
     from oscillator.io.files import FolderClaim
     from oscillator.orbits.branch import Branch
+    from oscillator.orbits.chain_noise import ChainNoise
+    from oscillator.orbits.noise import Noise
     from oscillator.orbits.shooting import Orbit
 
-__all__ = ["continue_", "orbit"]
+__all__ = ["continue_", "orbit", "write_spectra"]
 
 PeriodOption = Annotated[int, typer.Option("--period", metavar="N", help="Forcing periods per return (1 to 1000).")]
 GuessOption = Annotated[
@@ -121,7 +123,8 @@ def orbit(
 
     \b
     A system file (docs/systems.md) takes --set by its names (platform.F=0.5) and --guess as one
-    number per name of its state (x:blade,v:blade,...,z:platform).
+    number per name of its state (x:blade,v:blade,...,z:platform); --noise gives its stops',
+    contacts', masses' and friction elements' measures and its spectra.
 
     \b
     Examples:
@@ -133,11 +136,13 @@ def orbit(
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise-figure spectra.png
       oscillator orbit instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --noise-table spectra.csv
       oscillator orbit docs/systems/blade-damper.toml --set platform.F=0.5 --transient 60
+      oscillator orbit docs/systems/rattler.toml --noise --noise-figure rattler-spectra.png
     """
     from oscillator.cli.system import orbit_system
 
-    files = _noise_files(case, noise, noise_figure, noise_table)
-    if orbit_system(case, set_, period, guess, transient, section, max_iterations, sensitivities):
+    files = _noise_files(noise_figure, noise_table)
+    asked = (noise or files != (None, None), *files)
+    if orbit_system(case, set_, period, guess, transient, section, max_iterations, sensitivities, asked):
         return
     try:
         resolved = case_from(case, None, set_)
@@ -164,7 +169,7 @@ def orbit(
     _print_orbit(resolved.name, found)
     if names:
         _print_sensitivities(found, names)
-    if noise or files != (None, None):
+    if asked[0]:
         _print_noise(found, *files)
 
 
@@ -187,17 +192,8 @@ def _print_orbit(name: str, found: Orbit) -> None:
     out.print(_events_table(found.events))
 
 
-def _noise_files(case: str, noise: bool, figure: Path | None, table: Path | None) -> tuple[Path | None, Path | None]:
-    """``--noise-figure``'s and ``--noise-table``'s files, checked before anything is computed;
-    they and ``--noise`` refused for a system file (its noise measures are among its orbits' measures)."""
-    from oscillator.io.chains import system_path
-
-    if (noise or figure is not None or table is not None) and system_path(case) is not None:
-        raise fail(
-            "--noise, --noise-figure and --noise-table take the article's cases; a system file's impact rates, "
-            "energies and powers are among the measures of its orbits (docs/noise.md, oscillator frc or atlas "
-            "--measures)"
-        )
+def _noise_files(figure: Path | None, table: Path | None) -> tuple[Path | None, Path | None]:
+    """``--noise-figure``'s and ``--noise-table``'s files, checked before anything is computed."""
     if figure is not None and table is not None and figure.absolute() == table.absolute():
         raise fail("--noise-figure and --noise-table name the same file; give each its own")
     try:
@@ -290,6 +286,13 @@ def _print_noise(found: Orbit, figure: Path | None, spectra: Path | None) -> Non
     for i, m in measures.masses.items():
         table.add_row(f"m{i}", f"{m.acceleration.level():.2f}", str(m.slips), f"{m.step_max:.6g}")
     out.print(table)
+    write_spectra(measures, figure, spectra)
+
+
+def write_spectra(measures: Noise | ChainNoise, figure: Path | None, spectra: Path | None) -> None:
+    """The spectra written to ``spectra`` (``--noise-table``) and drawn to ``figure``
+    (``--noise-figure``) where given, after the measures are printed: a file that cannot be written
+    exits 1 and loses nothing printed."""
 
     def table_to(path: Path) -> None:
         write_table(measures.spectra(), path)

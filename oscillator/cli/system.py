@@ -210,10 +210,12 @@ def orbit_system(
     section: float | None,
     max_iterations: int,
     sensitivities: str | None,
+    noise: tuple[bool, Path | None, Path | None] = (False, None, None),
 ) -> bool:
     """``oscillator orbit FILE`` if ``target`` is a system file: the chain's periodic orbit
-    (:func:`~oscillator.orbits.chain_orbits.find_chain_orbit`), its multipliers and events; whether
-    it was one."""
+    (:func:`~oscillator.orbits.chain_orbits.find_chain_orbit`), its multipliers and events, and
+    where ``noise`` asks (whether to, the figure's and the table's files) its noise measures and
+    spectra; whether it was one."""
     from oscillator.io.chains import load_system, system_path
 
     path = system_path(target)
@@ -257,7 +259,48 @@ def orbit_system(
         out.print(_events_table(found.events))
     if names:
         _print_sensitivities(found, names)
+    if noise[0]:
+        _print_noise(found, noise[1], noise[2])
     return True
+
+
+def _print_noise(found: ChainOrbit, figure: Path | None, spectra: Path | None) -> None:
+    """The orbit's noise measures and levels (docs/noise.md), after the orbit; its spectra drawn
+    and written where asked (:func:`~oscillator.cli.orbit.write_spectra`)."""
+    from oscillator.cli.orbit import write_spectra
+
+    try:
+        measured = found.noise()
+    except OscillatorError as error:
+        raise fail(message(error), code=1 if isinstance(error, SimulationFailed) else 2) from None
+    kinds = ("impact_rate", "impact_velocity", "impulse", "impact_energy", "impact_power")
+    headers = ("closings /s", "fastest (m/s)", "impulse (N s)", "energy per closing (J)", "power (W)")
+    rows = [
+        (name, *(f"{measured.measures[f'{kind}:{name}']:.4g}" for kind in kinds), f"{spectrum.level():.2f}")
+        for name, spectrum in measured.forces.items()
+    ]
+    _print_rows("Noise measures of the stops and contacts", ("element", *headers, "force level (dB re 1 N)"), rows)
+    rows = [(name, f"{spectrum.level():.2f}") for name, spectrum in measured.accelerations.items()]
+    _print_rows("Noise measures of the masses", ("mass", "acceleration level (dB re 1e-6 m/s^2)"), rows)
+    sliding = [e.name for e in found.chain.elements if e.type == "friction"]
+    rows = [
+        (name, f"{measured.measures[f'slip_steps:{name}']:.0f}", f"{measured.measures[f'slip_step_max:{name}']:.6g}")
+        for name in sliding
+    ]
+    if rows:
+        _print_rows("Stick-slip of the friction elements", ("element", "steps", "largest step (m/s^2)"), rows)
+    write_spectra(measured, figure, spectra)
+
+
+def _print_rows(title: str, headers: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
+    """A table of ``rows`` under ``headers``, the first column (a name from the file) printable."""
+    table = Table(title=title, title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    for k, header in enumerate(headers):  # a header wraps; a value is never cut
+        widest = max((len(row[k]) for row in rows), default=0)
+        table.add_column(header, justify="left" if k == 0 else "right", overflow="fold", min_width=widest)
+    for name, *values in rows:
+        table.add_row(printable(name), *values)
+    out.print(table)
 
 
 def _print_sensitivities(found: ChainOrbit, names: tuple[str, ...]) -> None:

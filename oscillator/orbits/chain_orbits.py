@@ -38,6 +38,7 @@ from oscillator.model.parameters import SolverOptions
 from oscillator.orbits.chain_tangents import RTOL, tangent_pass
 
 if TYPE_CHECKING:  # pragma: no cover
+    from oscillator.orbits.chain_noise import ChainNoise
     from oscillator.orbits.chain_sensitivity import ChainSensitivities
 
 __all__ = ["ORBIT_OPTIONS", "ChainOrbit", "chain_period_map", "find_chain_orbit", "held_coordinates"]
@@ -116,6 +117,14 @@ class ChainOrbit:
         from oscillator.orbits.chain_sensitivity import chain_sensitivities
 
         return chain_sensitivities(self, params)
+
+    def noise(self, harmonics: int = 200) -> ChainNoise:
+        """The spectra of each stop's and contact's force and each mass's acceleration over one
+        return, with the orbit's noise measures
+        (:func:`oscillator.orbits.chain_noise.chain_noise`, docs/noise.md)."""
+        from oscillator.orbits.chain_noise import chain_noise
+
+        return chain_noise(self, harmonics)
 
     @property
     def verdict(self) -> str:

@@ -33,13 +33,24 @@ from oscillator.compiled import njit
 from oscillator.hybrid.chain_run import ChainResult
 from oscillator.model.chain_fields import arrays_of, chain_derivative, chain_jacobian, element_force, element_rate, pack
 
-__all__ = ["Peak", "Sides", "impulses", "peak_places", "peaks", "quintic", "rates_at", "sides", "slip_steps"]
+__all__ = [
+    "Peak",
+    "Sides",
+    "impulses",
+    "peak_places",
+    "peaks",
+    "quintic",
+    "rates_at",
+    "sides",
+    "slip_steps",
+    "within",
+]
 
 #: The element types whose force is a contact's.
 _CONTACTS = ("stop", "contact")
 
 
-def quintic(s: float, h: float, ends: tuple[np.ndarray, ...]) -> np.ndarray:
+def quintic(s: float | np.ndarray, h: float | np.ndarray, ends: tuple[np.ndarray, ...]) -> np.ndarray:
     """The state at ``s`` (0 to 1) of a step of length ``h`` from its ends' states, rates and
     second rates ``(y0, y0', y0'', y1, y1', y1'')``: the quintic Hermite through them (exact to
     the step's sixth power)."""
@@ -103,6 +114,23 @@ def sides(run: ChainResult) -> Sides:
     contacts = [k for k, e in enumerate(run.chain.elements) if e.type in _CONTACTS]
     left, right, data = _ends(field, run.times, run.states, run.modes(), contacts)
     return Sides(field, contacts, left, right, data)
+
+
+def within(run: ChainResult, at: Sides, steps: tuple[int, int], times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The field ``y'`` and the stops' and contacts' forces (in ``at.contacts``' order) at
+    ``times`` inside the run's steps ``first`` to ``last`` (``steps``; from ``t[first]`` to
+    ``t[last + 1]``, all in one mode), each at the quintic's state through its step's ends, in the
+    mode: arrays ``(len(times), state)`` and ``(len(times), contacts)``."""
+    t, states = run.times, run.states
+    first, last = steps
+    times = np.asarray(times, dtype=float)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, first, last)
+    h = (t[k + 1] - t[k])[:, None]
+    ends = (states[k], at.left.rates[k], at.left.seconds[k], states[k + 1], at.right.rates[k], at.right.seconds[k])
+    y = quintic((times[:, None] - t[k][:, None]) / h, h, ends)
+    which = np.zeros(len(y), dtype=np.int64)
+    found = _rows_at(at.field, times, y, at.data[first][None, :], which, np.asarray(at.contacts, np.int64))
+    return found.rates, found.forces
 
 
 def peaks(run: ChainResult, at: Sides | None = None) -> dict[str, float]:

@@ -20,9 +20,16 @@ stuck or closed share as the times that bound its spans, over the return's span
 place(a)|``, the place ``x - w t`` of a mass on its belt or a slider's ``z``) moves by the sign of
 each slip times the moves of the places at its ends, each end riding its switch (or the section,
 whose end moves with ``Omega``); a Jenkins slider's dissipated energy, ``F`` times its slip,
-with it.  The works and the other dissipated energies of
-:func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet (they need the
-tangents of the integrals): their rows are left out.  A fastest closing speed
+with it.  A stop's or contact's force integral ``I`` and work ``W`` (its power ``F (v_on -
+v_with)`` integrated) over its closed spans move by each span's ends riding their switches
+(``F`` or the power there, on the closed side, times the end's time's move) and inside by
+``integral (grad f . delta(t) + df/dc) dt``, Gauss-Legendre on each solver step (:data:`GAUSS`
+nodes; the state there the quintic through the step's ends): ``dissipated = -W`` (nothing is
+stored over a return), the impact energy and power ``-W`` per closing and per second, the impulse
+and impulse rate ``|I|`` per closing and per second.  The works and energies of the other elements
+and the stick-slip steps' sizes of
+:func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet: their rows
+are left out (a count of stick-slip steps has zero).  A fastest closing speed
 moves as the gap's rate at that closing, at the closing's moving time.  A peak (``a_max``,
 ``force_max``: :func:`~oscillator.orbits.chain_peaks.peak_places`) moves as the quantity at its
 time: inside a piece its rate is zero there, so ``grad f . delta(t*) + df/dc``; on a switch it
@@ -43,16 +50,19 @@ import pandas as pd
 from oscillator.errors import InputError, Reason, SimulationFailed
 from oscillator.hybrid.chain_run import closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
+from oscillator.model.chains import Element, FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit
-from oscillator.orbits.chain_peaks import Peak, peak_places
+from oscillator.orbits.chain_peaks import Peak, impulses, peak_places, quintic, sides
 from oscillator.orbits.chain_response import extremes, measure_names, orbit_measures
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 from oscillator.text import printable
 
-__all__ = ["MARGIN", "ChainSensitivities", "chain_sensitivities"]
+__all__ = ["GAUSS", "MARGIN", "ChainSensitivities", "chain_sensitivities"]
 
 #: The smallest crossing speed, relative to its terms, at which a switch counts as transversal.
 MARGIN = 1e-6
+#: Gauss-Legendre nodes per solver step in the derivatives of the stops' and contacts' integrals.
+GAUSS = 6
 
 
 @dataclass(frozen=True)
@@ -89,8 +99,8 @@ class ChainSensitivities:
             known = ", ".join(self.measures.index)
             if measure in measure_names(self.orbit.chain):  # a measure, but one without a derivative yet
                 raise InputError(
-                    f"{printable(measure)} has no exact derivative yet (the works, the energies dissipated but "
-                    f"a Jenkins slider's, and the impulses have none); choose one of {known}",
+                    f"{printable(measure)} has no exact derivative yet (the works and energies of the springs, "
+                    f"dampers, friction and forces, and the stick-slip steps' sizes have none); choose one of {known}",
                     field="measure",
                 )
             raise InputError(f"no measure named {printable(measure)}; choose one of {known}", field="measure")
@@ -197,6 +207,16 @@ def _slip_derivative(
     return total
 
 
+def _closing_weights(chain: FrictionChain, element: Element) -> np.ndarray:
+    """The weights over the state of a stop's or contact's closing speed: ``v_on - v_with``."""
+    names = list(chain.system.state)
+    weights = np.zeros(len(names))
+    weights[names.index(chain.system.velocity(element.on))] = 1.0
+    if element.with_ is not None:
+        weights[names.index(chain.system.velocity(element.with_))] = -1.0
+    return weights
+
+
 def _impact_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np.ndarray) -> np.ndarray:
     """The derivative of a stop's or contact's fastest closing speed: the gap's rate at that
     closing, at its moving time (``delta- + f- dt_s``, the rate's row), signed as the speed."""
@@ -206,12 +226,7 @@ def _impact_derivative(orbit: ChainOrbit, name: str, along: ChainPass, moved: np
         return np.zeros(len(along.params))
     fastest = closings.loc[closings.G0.abs().idxmax()]
     crossing = next(c for c in along.crossings if c.t == fastest.t)
-    element = next(e for e in chain.elements if e.name == name)
-    names = list(chain.system.state)
-    rate = np.zeros(len(names))
-    rate[names.index(chain.system.velocity(element.on))] = 1.0
-    if element.with_ is not None:
-        rate[names.index(chain.system.velocity(element.with_))] = -1.0
+    rate = _closing_weights(chain, next(e for e in chain.elements if e.name == name))
     found: np.ndarray = np.sign(fastest.G0) * (rate @ crossing.state_derivative(moved))
     return found
 
@@ -255,6 +270,112 @@ def _peak_derivative(
         start = point(orbit.section)
         total = grad @ crossing.state_derivative(start)[:n] + rate * crossing.time_derivative(start) + by_number
     found: np.ndarray = np.sign(peak.value) * total
+    return found
+
+
+def _contact_integrals(
+    orbit: ChainOrbit, along: ChainPass, motion: tuple[np.ndarray, Callable[[float], np.ndarray], np.ndarray]
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each stop's and contact's derivatives of its force's integral over the return and of its
+    work, the integral of its power ``F (v_on - v_with)`` (module docstring); ``motion``:
+    ``dy*/dc``, the point's move at a time and the return's end's.  Each closed span's ends ride
+    their switches (the return's end moves with ``Omega``, its start not at all); inside, the
+    integrand moves by its gradient in the state times ``delta(t)`` plus its central difference in
+    each number (exact: the force is affine in both), by :data:`GAUSS` Gauss-Legendre nodes on each
+    solver step, the state there the quintic through the step's ends."""
+    moved, point, stretch = motion
+    run, chain = orbit.run, orbit.chain
+    t, states, modes = run.times, run.states, run.modes()
+    at, numbers = sides(run), NumberData(chain, along.params)
+    start, span = orbit.section, orbit.period * chain.period
+    when = {c.t: c.time_derivative(moved) for c in along.crossings}
+    nodes, weights = np.polynomial.legendre.leggauss(GAUSS)
+    found, packed = {}, {}
+    for row in at.contacts:
+        element = chain.elements[row]
+        rel = _closing_weights(chain, element)
+        closed = np.flatnonzero((modes[:-1, row] != 0.0) & (np.diff(t) > 0.0))
+        total = np.zeros((2, len(along.params)))
+        for k in closed.tolist():
+            key = modes[k].tobytes()
+            if key not in packed:
+                packed[key] = numbers.of(modes[k])
+            h, data = float(t[k + 1] - t[k]), packed[key]
+            ends = (
+                states[k],
+                at.left.rates[k],
+                at.left.seconds[k],
+                states[k + 1],
+                at.right.rates[k],
+                at.right.seconds[k],
+            )
+            for s, weight in zip((nodes + 1.0) / 2.0, weights, strict=True):
+                y = quintic(float(s), h, ends)
+                total += 0.5 * h * weight * _integrands_moved(float(t[k] + s * h), y, point, data, (row, rel), numbers)
+        for a, b in closed_spans(run, element.name, start, span):  # the ends, each on its closed side
+            for time, side in ((a, -1.0), (b, 1.0)):
+                moves = (
+                    stretch if time == start + span else np.zeros(len(along.params)) if time == start else when[time]
+                )
+                k = int(closed[np.argmin(np.abs(t[closed + (side > 0)] - time))])
+                y, d = states[k + (side > 0)], at.data[k]
+                force = element_force(time, y, d, row)
+                total += side * np.outer([force, force * (rel @ y)], moves)
+        found[element.name] = (total[0], total[1])
+    return found
+
+
+def _integrands_moved(
+    t: float,
+    y: np.ndarray,
+    point: Callable[[float], np.ndarray],
+    data: tuple[np.ndarray, np.ndarray, np.ndarray],
+    element: tuple[int, np.ndarray],
+    numbers: NumberData,
+) -> np.ndarray:
+    """How a closed element's force and power at ``(t, y)`` move in each number (two rows): the
+    state moving by ``point(t)``, the data ``(d, ahead, behind)`` by each number's step;
+    ``element``: its row and its relative velocity's weights ``rel`` (``v_on - v_with = rel . y``)."""
+    row, rel = element
+    d, ahead, behind = data
+    n = len(rel)
+    grad = np.empty(n)
+    element_gradient(t, y, d, row, grad)
+    delta = point(t)[:n]
+    force = element_force(t, y, d, row)
+    by_number = np.array(
+        [
+            (element_force(t, y, ahead[p], row) - element_force(t, y, behind[p], row)) / (2 * step)
+            for p, step in enumerate(numbers.steps)
+        ]
+    )
+    by_force = grad @ delta + by_number
+    return np.stack([by_force, (rel @ y) * by_force + force * (rel @ delta)])
+
+
+def _closing_measures(
+    orbit: ChainOrbit,
+    along: ChainPass,
+    motion: tuple[np.ndarray, Callable[[float], np.ndarray], np.ndarray],
+    values: dict[str, float],
+) -> dict[str, np.ndarray]:
+    """Each stop's and contact's work, dissipated energy, impact rate, energy and power, impulse
+    and impulse rate moved (module docstring); ``values`` the orbit's measures."""
+    chain, stretch = orbit.chain, motion[2]
+    span, zero = orbit.period * chain.period, np.zeros(len(along.params))
+    integrals = _contact_integrals(orbit, along, motion)
+    pushed = impulses(orbit.run)
+    found = {}
+    for element in (e for e in chain.elements if e.type in ("stop", "contact")):  # per closing and per second
+        name, closings = element.name, values[f"closings:{element.name}"]
+        by_force, by_work = integrals[name]
+        found[f"work:{name}"], found[f"dissipated:{name}"] = by_work, -by_work  # nothing stored over a return
+        found[f"impact_rate:{name}"] = -values[f"impact_rate:{name}"] * stretch / span  # a count over the span
+        found[f"impact_energy:{name}"] = -by_work / closings if closings else zero
+        found[f"impact_power:{name}"] = -by_work / span - values[f"impact_power:{name}"] * stretch / span
+        by_size = np.sign(pushed[name]) * by_force  # the impulse is the integral's size
+        found[f"impulse:{name}"] = by_size / closings if closings else zero
+        found[f"impulse_rate:{name}"] = by_size / span - values[f"impulse_rate:{name}"] * stretch / span
     return found
 
 
@@ -303,8 +424,10 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
             by_f = np.array([1.0 if p == f"{element.name}.F" else 0.0 for p in params])
             found[f"dissipated:{element.name}"] = by_f * values[f"slip:{element.name}"] + element.values["F"] * rate
         found[f"slip:{element.name}"] = rate
-    for element in (e for e in chain.elements if e.type in ("stop", "contact")):  # a count over the span
-        found[f"impact_rate:{element.name}"] = -values[f"impact_rate:{element.name}"] * stretch / span
-    table = pd.DataFrame.from_dict(found, orient="index", columns=[f"d/d{name}" for name in params])
+    found |= _closing_measures(orbit, along, (moved, point, stretch), values)
+    for element in (e for e in chain.elements if e.type == "friction"):  # a count: it moves where the orbit changes
+        found[f"slip_steps:{element.name}"] = np.zeros(len(params))
+    ordered = {name: found[name] for name in values if name in found}  # in orbit_measures' order
+    table = pd.DataFrame.from_dict(ordered, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
     return table

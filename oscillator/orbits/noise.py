@@ -51,9 +51,11 @@ from oscillator.orbits.response import branch_points, integrated, left_force, me
 from oscillator.orbits.spectra import (
     ACCELERATION_REFERENCE,
     FORCE_REFERENCE,
+    HARMONICS,
     Piece,
     Spectrum,
     fourier_coefficients,
+    spectra_table,
 )
 from oscillator.presenting import presenter
 
@@ -64,9 +66,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.branch import Branch
 
 __all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise"]
-
-#: Harmonics of the return's frequency kept in each contact force's spectrum by default.
-HARMONICS = 200
 
 
 @dataclass(frozen=True)
@@ -124,16 +123,9 @@ class Noise:
         """Every spectrum as one table: ``signal`` (``force_right``, ``force_left``,
         ``acceleration_m1``, ``acceleration_m2``), its ``unit`` and ``reference`` (of the levels),
         then :meth:`~oscillator.orbits.spectra.Spectrum.table`'s columns, harmonic by harmonic."""
-        import pandas as pd
-
         named = {f"force_{name}": c.force for name, c in self.contacts.items()}
         named |= {f"acceleration_m{i}": m.acceleration for i, m in self.masses.items()}
-        parts = [
-            spectrum.table().assign(signal=signal, unit=spectrum.unit, reference=spectrum.reference)
-            for signal, spectrum in named.items()
-        ]
-        columns = ["signal", "unit", "reference", "harmonic", "frequency", "amplitude", "level"]
-        return pd.concat(parts, ignore_index=True)[columns]
+        return spectra_table(named)
 
     def columns(self, cutoff: float = 0.0) -> dict[str, float]:
         """Every measure as a flat mapping: ``impact_rate_right``, ``impulse_left``, ...,

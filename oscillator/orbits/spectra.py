@@ -17,7 +17,7 @@ mean square is ``|c_0|^2 + 2 sum_k |c_k|^2`` (Parseval), the harmonic ``k`` at `
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -29,10 +29,24 @@ from oscillator.model.parameters import check_count
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-__all__ = ["NODES", "Piece", "Spectrum", "a_weighting", "fourier_coefficients", "level_db", "mean_square_above"]
+__all__ = [
+    "HARMONICS",
+    "NODES",
+    "Piece",
+    "Spectrum",
+    "a_weighting",
+    "fourier_coefficients",
+    "level_db",
+    "mean_square_above",
+    "spectra_table",
+]
 
-#: A piece of a signal: ``(t0, t1, f)``, ``f`` its values at an array of times in ``[t0, t1]``.
+#: A piece of a signal: ``(t0, t1, f)``, ``f`` its values at an array of times in ``[t0, t1]``
+#: (or, for several signals at once, an array ``(times, signals)``).
 Piece = tuple[float, float, Callable[[np.ndarray], np.ndarray]]
+
+#: Harmonics of a return's frequency kept in a spectrum by default.
+HARMONICS = 200
 
 #: Gauss-Legendre nodes per sub-interval.
 NODES = 16
@@ -43,14 +57,16 @@ FORCE_REFERENCE, ACCELERATION_REFERENCE = 1.0, 1e-6
 def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int) -> np.ndarray:
     """``c_0, ..., c_K`` (``K = harmonics``) of the signal of period ``period`` that is ``f(t)`` on
     each piece ``(t0, t1, f)`` (``f`` takes an array of times) and zero elsewhere (module
-    docstring); the pieces lie in one period and do not overlap."""
+    docstring); the pieces lie in one period and do not overlap.  Where ``f`` gives several
+    signals at once (an array ``(times, signals)``), their coefficients are the columns of an
+    array ``(harmonics + 1, signals)``."""
     check_count(harmonics, "harmonics", 0, 100_000)
     if not period > 0 or not math.isfinite(period):
         raise InputError(f"period must be a positive number of seconds, got {period!r}", field="period")
     nodes, weights = np.polynomial.legendre.leggauss(NODES)
     k = np.arange(harmonics + 1)
     longest = period / max(harmonics, 1)
-    total = np.zeros(harmonics + 1, dtype=complex)
+    total: np.ndarray | float = 0.0
     for t0, t1, f in pieces:
         if not t1 > t0:
             continue
@@ -58,9 +74,13 @@ def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int)
         edges = np.linspace(t0, t1, count + 1)
         half = 0.5 * np.diff(edges)
         times = ((edges[:-1] + edges[1:]) * 0.5)[:, None] + half[:, None] * nodes[None, :]
-        values = np.asarray(f(times.ravel()), dtype=float) * np.repeat(half, NODES) * np.tile(weights, count)
-        total += np.exp(-2j * np.pi * np.outer(k, times.ravel()) / period) @ values
-    coefficients: np.ndarray = total / period
+        scale = np.repeat(half, NODES) * np.tile(weights, count)
+        values = np.asarray(f(times.ravel()), dtype=float)
+        values = values * (scale if values.ndim == 1 else scale[:, None])
+        total = total + np.exp(-2j * np.pi * np.outer(k, times.ravel()) / period) @ values
+    coefficients: np.ndarray = np.asarray(total, dtype=complex) / period
+    if coefficients.ndim == 0:  # no piece: the signal is zero
+        coefficients = np.zeros(harmonics + 1, dtype=complex)
     return coefficients
 
 
@@ -124,3 +144,16 @@ class Spectrum:
             level = 10.0 * np.log10(twice * np.abs(self.coefficients) ** 2 / self.reference**2)
         amplitude = twice * np.abs(self.coefficients)
         return pd.DataFrame({"harmonic": k, "frequency": k * self.fundamental, "amplitude": amplitude, "level": level})
+
+
+def spectra_table(named: Mapping[str, Spectrum]) -> pd.DataFrame:
+    """Several spectra as one table: ``signal`` (the mapping's key), its ``unit`` and the
+    ``reference`` of its levels, then :meth:`Spectrum.table`'s columns, harmonic by harmonic."""
+    import pandas as pd
+
+    parts = [
+        spectrum.table().assign(signal=signal, unit=spectrum.unit, reference=spectrum.reference)
+        for signal, spectrum in named.items()
+    ]
+    columns = ["signal", "unit", "reference", "harmonic", "frequency", "amplitude", "level"]
+    return pd.concat(parts, ignore_index=True)[columns]

@@ -5,11 +5,12 @@ the forcing frequency marked, as an engineer reads a spectrum."""
 from __future__ import annotations
 
 import math
+import textwrap
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from oscillator.report.outputs import wrapped_title
+from oscillator.report.outputs import plain_label, wrapped_title
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -17,6 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.attractors.frequency import FrequencyResponse
+    from oscillator.orbits.chain_noise import ChainNoise
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.spectra import Spectrum
 
@@ -27,13 +29,15 @@ NAMED = (1, 2, 3, 5, 10, 20, 50, 100)
 _NAMES = {"right": "contact force, right stop (x1 = d1)", "left": "contact force, m1 on m2's stop"}
 
 
-def _panel(ax: Axes, spectrum: Spectrum, what: str, periods: int, omega: float) -> None:
+def _panel(ax: Axes, spectrum: Spectrum, what: str, periods: float, omega: float) -> None:
     """One spectrum: each harmonic's level as a stem from the panel's floor, those of Omega
-    filled (a return of ``periods`` forcing periods has ``periods - 1`` between them)."""
+    filled (a return of ``periods`` forcing periods has ``periods - 1`` between them; a span of
+    a fractional number has none)."""
     table = spectrum.table().iloc[1:]
     shown = table[np.isfinite(table.level)]
     floor = float(shown.level.max()) - 80.0 if len(shown) else -100.0
-    forcing = (shown.harmonic % periods == 0).to_numpy()
+    whole = round(periods) if abs(periods - round(periods)) < 1e-9 * max(periods, 1.0) else 0
+    forcing = (shown.harmonic % whole == 0).to_numpy() if whole else np.zeros(len(shown), bool)
     for mask, color, label in ((forcing, "C0", "harmonics of Omega"), (~forcing, "0.6", "subharmonics of the return")):
         rows = shown[mask & (shown.level > floor).to_numpy()]
         if len(rows):
@@ -51,22 +55,41 @@ def _panel(ax: Axes, spectrum: Spectrum, what: str, periods: int, omega: float) 
     top.tick_params(labelsize=7)
 
 
-def noise_figure(found: Noise) -> Figure:
-    """The spectra of the contact forces (of the contacts that struck) and of both masses'
-    accelerations, one panel each, frequency (Hz) on a logarithmic axis."""
+def noise_figure(found: Noise | ChainNoise) -> Figure:
+    """The spectra of the contact forces (of the contacts that struck) and of the masses'
+    accelerations, one panel each, frequency (Hz) on a logarithmic axis; of the article's system
+    or of a declared one."""
+    from oscillator.orbits.noise import Noise
+
+    if isinstance(found, Noise):
+        spectra = [(c.force, _NAMES[name]) for name, c in found.contacts.items() if c.onsets]
+        spectra += [(m.acceleration, f"acceleration of m{i}") for i, m in found.masses.items()]
+        periods = "one forcing period" if found.periods == 1 else f"{found.periods} forcing periods"
+        title = wrapped_title(found.case, f"spectra over a return of {periods}")
+        return _spectra_figure(spectra, found.periods, found.case.parameters.Omega, title)
+    elements = {element.name: element for element in found.chain.elements}
+    spectra = [
+        (s, f'{elements[name].type} "{plain_label(name)}": its force on {plain_label(elements[name].on)}')
+        for name, s in found.forces.items()
+        if np.any(s.coefficients)
+    ]
+    spectra += [(s, f"acceleration of {plain_label(name)}") for name, s in found.accelerations.items()]
+    periods = "one forcing period" if found.periods == 1 else f"{found.periods:g} forcing periods"
+    title = textwrap.fill(f"{plain_label(found.chain.title or 'friction chain')}: spectra over {periods}", 100)
+    return _spectra_figure(spectra, found.periods, found.chain.Omega, title)
+
+
+def _spectra_figure(spectra: list[tuple[Spectrum, str]], periods: float, omega: float, title: str) -> Figure:
+    """One panel per ``(spectrum, what)``, stacked, ``title`` above."""
     from matplotlib.figure import Figure
 
-    spectra = [(c.force, _NAMES[name]) for name, c in found.contacts.items() if c.onsets]
-    spectra += [(m.acceleration, f"acceleration of m{i}") for i, m in found.masses.items()]
     fig = Figure(figsize=(8.5, 2.3 * len(spectra) + 0.8), layout="constrained")
     axes = fig.subplots(len(spectra), 1, sharex=True, squeeze=False)[:, 0]
-    omega = found.case.parameters.Omega
     for ax, (spectrum, what) in zip(axes, spectra, strict=True):
-        _panel(ax, spectrum, what, found.periods, omega)
+        _panel(ax, spectrum, what, periods, omega)
     axes[0].legend(fontsize=7, loc="upper right")
     axes[-1].set_xlabel("frequency (Hz)")
-    periods = "one forcing period" if found.periods == 1 else f"{found.periods} forcing periods"
-    fig.suptitle(wrapped_title(found.case, f"spectra over a return of {periods}"), fontsize=9)
+    fig.suptitle(title, fontsize=9)
     return fig
 
 

@@ -1,0 +1,161 @@
+"""A declared system's spectra (docs/noise.md, "Declared systems"): a stop's half-sine force
+against its closed-form series, the article's system declared as a chain against the article's
+own spectra (another integrator, another interpolation), Parseval against the orbit's force RMS."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import oscillator as osc
+from oscillator import FrictionChain, SolverOptions
+from oscillator.errors import InputError
+from oscillator.hybrid.chain_run import simulate_chain
+from oscillator.model.chains import article_chain
+from oscillator.orbits.chain_noise import chain_noise
+from oscillator.orbits.chain_orbits import find_chain_orbit
+from oscillator.orbits.spectra import mean_square_above
+from test_noise import half_sine_series
+
+TIGHT = SolverOptions(rtol=1e-12, atol=1e-12)
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_a_free_mass_struck_by_an_elastic_stop_feels_a_half_sine_force():
+    """A free mass (m = 2) at 1 m/s meets a stop (K = 50) 0.5 m ahead: the stop's force on it is
+    ``-m v0 w sin(w (t - 0.5))`` for ``pi / w`` s (``w^2 = K / m``), and its acceleration that
+    divided by ``m``; over the run's 3 s, taken as the period, their coefficients are the
+    closed-form series' (1e-9 of the largest)."""
+    chain = FrictionChain(Omega=1.0).mass("m", m=2.0, x=0.0, v=1.0).stop("m", name="wall", side="right", at=0.5, K=50.0)
+    found = chain_noise(simulate_chain(chain, 3.0, options=TIGHT), harmonics=150)
+    w = np.sqrt(50.0 / 2.0)
+    exact = half_sine_series(-2.0 * 1.0 * w, np.pi / w, 3.0, 0.5, 150)
+    wall, acceleration = found.forces["wall"].coefficients, found.accelerations["m"].coefficients
+    assert np.abs(wall - exact).max() < 1e-9 * np.abs(exact).max()
+    assert np.abs(acceleration - exact / 2.0).max() < 1e-9 * np.abs(exact).max()
+    assert found.span == 3.0 and found.periods == pytest.approx(3.0 / (2 * np.pi)) and found.measures == {}
+    assert found.forces["wall"].unit == "N" and found.accelerations["m"].reference == 1e-6
+
+
+@pytest.fixture(scope="module")
+def article():
+    """The orbit of docs/noise.md (both contacts struck, m2 sticking twice), found by the article's
+    path and by the chain's from its section state."""
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6)
+    case = orbit.one_period()
+    chained = find_chain_orbit(article_chain(case.parameters, case.initial), orbit.state.copy(), transient=0)
+    return orbit, chained
+
+
+def test_the_article_declared_as_a_chain_has_the_articles_spectra(article):
+    """The chain's spectra (CVODE's steps, the quintic through them) equal the article's (each
+    smooth piece integrated again by DOP853) to 1e-9 of each spectrum's largest harmonic: the
+    contact forces as the force on m1 (the article's are compressive: the right stop's with the
+    other sign), the accelerations as they are."""
+    orbit, chained = article
+    found, theirs = chained.noise(harmonics=100), orbit.noise(harmonics=100)
+    assert abs(chained.section - orbit.section) < 1e-12 and np.abs(chained.state - orbit.state).max() < 1e-8
+    names = {"contact-9": ("left", 1.0), "stop-10": ("right", -1.0)}
+    assert list(found.forces) == list(names)
+    for element, (contact, sign) in names.items():
+        ours, article_force = found.forces[element].coefficients, theirs.contacts[contact].force.coefficients
+        assert np.abs(ours - sign * article_force).max() < 1e-9 * np.abs(article_force).max()
+    for mass, i in (("m1", 1), ("m2", 2)):
+        ours, article_acceleration = found.accelerations[mass].coefficients, theirs.masses[i].acceleration.coefficients
+        assert np.abs(ours - article_acceleration).max() < 1e-9 * np.abs(article_acceleration).max()
+    assert found.columns(1.0)["force_level:contact-9"] == pytest.approx(
+        theirs.columns(1.0)["force_level_left"], abs=1e-6
+    )
+
+
+def test_the_chains_noise_measures_are_its_orbit_measures_and_parseval_holds(article):
+    """The measures kept are the orbit's own; the stop's mean force is its impulse rate (the
+    force's integral by the quintic's mean, another quadrature); the harmonics' mean square
+    approaches the article's force RMS squared from below, as Parseval says."""
+    orbit, chained = article
+    found = chained.noise(harmonics=600)
+    response = orbit.response()
+    measures = osc.orbits.chain_response.orbit_measures(chained)
+    assert found.measures == {k: v for k, v in measures.items() if k.partition(":")[0] in {
+        "impact_rate", "impact_velocity", "impulse", "impulse_rate", "impact_energy", "impact_power", "force_max",
+        "slip_steps", "slip_step_max"}}  # fmt: skip
+    assert found.measures["impulse_rate:stop-10"] == pytest.approx(abs(found.forces["stop-10"].mean), rel=1e-9)
+    assert found.measures["slip_steps:friction-8"] == 4 and found.measures["slip_steps:friction-4"] == 0
+    rms = response.contact["right"]["force_rms"]
+    harmonics = mean_square_above(found.forces["stop-10"].coefficients, found.forces["stop-10"].fundamental)
+    assert 0 < rms**2 - harmonics < 1e-6 * rms**2  # a force with kinks: its tail falls as 1/K^3
+
+
+def test_the_spectra_table_and_figure_name_every_signal(article):
+    _, chained = article
+    found = chained.noise(harmonics=50)
+    table = found.spectra()
+    assert list(table.signal.unique()) == ["force:contact-9", "force:stop-10", "acceleration:m1", "acceleration:m2"]
+    assert (table.groupby("signal").size() == 51).all()
+    assert table[table.signal == "acceleration:m2"].unit.iloc[0] == "m/s^2"
+    fig = found.plot()
+    titles = [ax.get_title(loc="left") for ax in fig.axes if ax.get_title(loc="left")]
+    assert titles == ['contact "contact-9": its force on m1', 'stop "stop-10": its force on m1',
+                      "acceleration of m1", "acceleration of m2"]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("call", "field"),
+    [
+        (lambda: chain_noise("instance-1"), "motion"),
+        (
+            lambda: chain_noise(simulate_chain(FrictionChain(Omega=1.0).mass("m", m=1.0), 1.0), harmonics=-1),
+            "harmonics",
+        ),
+    ],
+)
+def test_bad_arguments_are_refused_naming_the_field(call, field):
+    with pytest.raises(InputError) as caught:
+        call()
+    assert caught.value.field == field
+
+
+def test_the_orbit_command_prints_a_systems_noise_and_writes_its_spectra(tmp_path, monkeypatch):
+    """``oscillator orbit FILE --noise --noise-table T --noise-figure F`` prints the library's
+    measures and levels for each stop, mass and friction element, writes its spectra table and
+    draws its figure; a name of another kind is refused before anything is computed."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli import console
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(console.out, "width", 200)
+    system = str(ROOT / "docs" / "systems" / "rattler.toml")
+    done = CliRunner().invoke(
+        app, ["orbit", system, "--noise", "--noise-table", "s.parquet", "--noise-figure", "s.png"]
+    )
+    assert done.exit_code == 0, done.output
+    found = find_chain_orbit(osc.load_system(system), transient=100).noise()
+    lines = {line.split()[0]: line.split()[1:] for line in done.stdout.splitlines() if line.strip()}
+    kinds = ("impact_rate", "impact_velocity", "impulse", "impact_energy", "impact_power")
+    assert lines["stop"] == [
+        *(f"{found.measures[f'{k}:stop']:.4g}" for k in kinds),
+        f"{found.forces['stop'].level():.2f}",
+    ]
+    assert lines["part"] == [f"{found.accelerations['part'].level():.2f}"]
+    assert lines["floor"] == ["2", f"{found.measures['slip_step_max:floor']:.6g}"]
+    written = pd.read_parquet(tmp_path / "s.parquet")
+    assert list(written.signal.unique()) == ["force:stop", "acceleration:part"]
+    assert np.allclose(written.amplitude, found.spectra().amplitude, rtol=1e-6, atol=1e-12)
+    assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    refused = CliRunner().invoke(app, ["orbit", system, "--noise-table", "s.txt"])
+    assert refused.exit_code == 2 and "must end in .csv or .parquet" in refused.stderr and not refused.stdout
+
+
+def test_the_page_prints_what_it_shows(capsys, monkeypatch):
+    """docs/noise.md's declared system's example prints what the page shows."""
+    page = (ROOT / "docs" / "noise.md").read_text(encoding="utf-8").split("## Declared systems", 1)[1]
+    code = page.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = page.split("```text\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(ROOT)  # the example reads docs/systems/rattler.toml
+    exec(compile(code, "docs/noise.md", "exec"), {})
+    assert capsys.readouterr().out == shown
