@@ -344,7 +344,8 @@ def test_an_aperiodic_attractor_is_told_chaotic_by_its_largest_exponent():
     assert attractor.name.startswith("A0: chaotic")
     # its response measures (the atlas's colours) are a long run's, from its first recorded point:
     # the first landing's 40 section points lie on that run, within its extremes
-    from oscillator.attractors.features import APERIODIC_PERIODS, Measured
+    from oscillator.attractors.features import Measured
+    from oscillator.attractors.grouping import APERIODIC_PERIODS
 
     names = ("x_max_m1", "x_min_m1", "v_peak_m1", "rest_m1", "onsets_right", "energy_forcing", "energy_dampers")
     measured = Measured(responses=names)(found.case, attractor).measures

@@ -159,3 +159,61 @@ def test_the_page_prints_what_it_shows(capsys, monkeypatch):
     monkeypatch.chdir(ROOT)  # the example reads docs/systems/rattler.toml
     exec(compile(code, "docs/noise.md", "exec"), {})
     assert capsys.readouterr().out == shown
+
+
+def test_an_attractors_spectra_are_its_orbits_or_a_windows(basins_like):
+    """``Attractors.noise(k)``: a refined periodic attractor's are its orbit's; an aperiodic set's
+    are those of the run of its window (from its first section point, a forcing period per
+    recorded point), whose acceleration's mean is the velocity's change over the window divided by
+    its span (the theorem of calculus: a check of the window's ends; 1e-7); a number not found is refused
+    naming the field."""
+    import dataclasses
+
+    from oscillator.attractors.finding import Attractors
+
+    found = basins_like
+    (periodic,) = found.attractors
+    ours, orbit = found.noise(0, harmonics=30), periodic.orbit.noise(harmonics=30)
+    assert np.array_equal(ours.contacts["left"].force.coefficients, orbit.contacts["left"].force.coefficients)
+    initial = found.case.initial  # a window is its first point, a forcing period a point recorded
+    start = np.array([initial.x1, initial.v1, initial.x2, initial.v2])
+    window = dataclasses.replace(periodic, period=0, orbit=None, points=np.array([start, start, start]))
+    aperiodic = Attractors(found.case, found.settings, (window,), found.labels).noise(0, harmonics=30)
+    assert aperiodic.periods == 3 and aperiodic.span == pytest.approx(3 * found.case.parameters.period, rel=1e-15)
+    end = osc.simulate(found.case, t_end=found.case.initial.t0 + 3 * found.case.parameters.period).final_state[1:]
+    for i, v in ((1, 1), (2, 3)):
+        change = (end[v] - start[v]) / aperiodic.span
+        assert aperiodic.masses[i].acceleration.mean == pytest.approx(change, rel=1e-7)
+    with pytest.raises(InputError) as refused:
+        found.noise(1)
+    assert refused.value.field == "attractor" and "(0)" in str(refused.value)
+
+
+@pytest.fixture(scope="module")
+def basins_like():
+    """docs/noise.md's rattling orbit as the one attractor of two starts, from a start away from
+    its orbit (so that a window's velocity changes)."""
+    case = osc.resolve_case("instance-1", d=1, d1=3.5, Omega=1.6, x1=0.5, v1=2.0)
+    return osc.find_attractors(
+        case, states=[[0.5, 2.0, 0.0, 0.0]], settings=osc.AttractorSettings(transient=40, record=4)
+    )
+
+
+def test_a_chain_attractors_spectra_are_its_orbits_or_a_windows():
+    """The same for a declared system's attractors: the refined orbit's spectra and measures, or a
+    window's (the acceleration's mean the velocity's change over the span)."""
+    import dataclasses
+
+    from oscillator.attractors.chain_attractors import ChainAttractors
+
+    chain = FrictionChain(Omega=0.6).mass("m", 1.0, x=1.0).spring("m", k=1.0).damper("m", c=0.05)
+    chain = chain.friction("m", name="belt", mu_s=0.4, mu_k=0.25, N=1.0, w=0.3).force("m", Q=0.4)
+    found = osc.find_attractors(chain, states=[[0.0, 0.0]], settings=osc.AttractorSettings(transient=100, record=4))
+    (periodic,) = found.attractors
+    assert found.noise(0, 20).measures == periodic.orbit.noise(20).measures != {}
+    window = dataclasses.replace(periodic, period=0, orbit=None, points=np.array([[1.0, 0.0], [0.0, 0.0]]))
+    spectra = ChainAttractors(chain, found.settings, (window,), found.labels).noise(0, 20)
+    run = simulate_chain(chain, chain.t0 + 2 * chain.period, options=TIGHT, start_state=np.array([1.0, 0.0]))
+    change = (run.states[-1, 1] - 0.0) / spectra.span
+    assert spectra.periods == pytest.approx(2.0) and spectra.measures == {}
+    assert spectra.accelerations["m"].mean == pytest.approx(change, abs=1e-9)

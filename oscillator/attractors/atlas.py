@@ -300,7 +300,7 @@ def regime_atlas(
         Response measures (:data:`~oscillator.orbits.response.COLUMNS`: ``x_pp_m2``,
         ``impact_max_right``, ...) each attractor gets as a column, over one return from its last
         section point; an aperiodic one over its recorded points' span, at most
-        :data:`~oscillator.attractors.features.APERIODIC_PERIODS` periods.  About 20 ms a periodic
+        :data:`~oscillator.attractors.grouping.APERIODIC_PERIODS` periods.  About 20 ms a periodic
         attractor.  A chain's:
         names of :func:`~oscillator.orbits.chain_response.measure_names` (``x_max:blade``,
         ``impact_velocity:wall``), of its refined orbit.

@@ -34,7 +34,7 @@ from oscillator.analysis.axes import Axis, state_plane
 from oscillator.analysis.execution import Executor, check_progress
 from oscillator.analysis.periods import detect_period
 from oscillator.attractors.basins import grid_landings
-from oscillator.attractors.finding import described_landings, fractions_of, largest_exponent
+from oscillator.attractors.finding import attractor_numbered, described_landings, fractions_of, largest_exponent
 from oscillator.attractors.grouping import Attractor
 from oscillator.attractors.lyapunov import MAX_PERIODS, LyapunovSpectrum, qr_average
 from oscillator.attractors.mapping import MAX_STARTS, AttractorSettings, Landing, settled
@@ -54,6 +54,8 @@ from oscillator.presenting import Presented, presenter
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
+
+    from oscillator.orbits.chain_noise import ChainNoise
 
 __all__ = [
     "ChainAttractors",
@@ -270,6 +272,21 @@ class ChainAttractors:
         """Each attractor's share of the starts, with Wilson's interval
         (:meth:`oscillator.attractors.finding.Attractors.fractions`)."""
         return fractions_of(self.attractors, self.labels, confidence)
+
+    def noise(self, attractor: int, harmonics: int = 200) -> ChainNoise:
+        """The spectra (docs/noise.md) of the attractor numbered ``attractor``: over one return of
+        its refined orbit, with its noise measures (:meth:`ChainOrbit.noise`); else of the run of
+        :meth:`~oscillator.attractors.grouping.Attractor.window` from the chain's ``t0`` (an
+        aperiodic set: that window's spectra, the window taken as the period)."""
+        from oscillator.orbits.chain_noise import chain_noise
+        from oscillator.orbits.chain_orbits import ORBIT_OPTIONS, ChainOrbit
+
+        found = attractor_numbered(self.attractors, attractor)
+        if isinstance(found.orbit, ChainOrbit):
+            return found.orbit.noise(harmonics)
+        point, periods = found.window()
+        end = self.chain.t0 + periods * self.chain.period
+        return chain_noise(simulate_chain(self.chain, end, options=ORBIT_OPTIONS, start_state=point), harmonics)
 
 
 @dataclass(frozen=True)

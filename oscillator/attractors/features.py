@@ -24,7 +24,7 @@ from oscillator.errors import OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.orbits.shooting import period_map
 
-__all__ = ["APERIODIC_PERIODS", "MEASURES", "Measured", "impact_velocity"]
+__all__ = ["MEASURES", "Measured", "impact_velocity"]
 
 
 def impact_velocity(case: Case, attractor: Attractor) -> float:
@@ -47,9 +47,6 @@ def impact_velocity(case: Case, attractor: Attractor) -> float:
     )
     return float(np.max(speeds)) if len(speeds) else 0.0
 
-
-#: The most forcing periods an aperiodic attractor's response measures are taken over.
-APERIODIC_PERIODS = 100
 
 #: The measures an attractor can carry, by name: ``measure(case, attractor) -> float``.
 MEASURES: dict[str, Callable[[Case, Attractor], float]] = {"impact_velocity": impact_velocity}
@@ -76,20 +73,16 @@ class Measured:
         )
 
     def _responses(self, case: Case, attractor: Attractor) -> dict[str, float]:
-        """The ``responses`` named: of a periodic attractor over one return run from its last
-        section point (without Newton's refinement, as the exponent); of an aperiodic one over as
-        many forcing periods as it has recorded section points (at most :data:`APERIODIC_PERIODS`)
-        from its first: a long-run average, its peaks the largest seen.  NaN where the run fails."""
+        """The ``responses`` named, over the run of
+        :meth:`~oscillator.attractors.grouping.Attractor.window`: of a periodic attractor one
+        return from its last section point (without Newton's refinement, as the exponent); of an
+        aperiodic one a long-run average, its peaks the largest seen.  NaN where the run fails."""
         from oscillator.orbits.response import response
 
         if not self.responses:
             return {}
         try:
-            point, periods = (
-                (attractor.points[-1], attractor.period)
-                if attractor.period
-                else (attractor.points[0], max(1, min(len(attractor.points), APERIODIC_PERIODS)))
-            )
+            point, periods = attractor.window()
             begin = dict(zip(case.system.state, (float(v) for v in point), strict=True))
             columns = response(resolve_case(case, **begin), periods).columns()
         except OscillatorError:

@@ -24,18 +24,21 @@ from oscillator.analysis.execution import Executor
 from oscillator.attractors.grouping import Attractor, group, unsettled
 from oscillator.attractors.lyapunov import lyapunov
 from oscillator.attractors.mapping import STATE, AttractorSettings, Landing, check_settings, check_states, land
-from oscillator.errors import OscillatorError
+from oscillator.errors import InputError, OscillatorError
 from oscillator.io.cases import Case, resolve_case
 from oscillator.model.chains import FrictionChain
 from oscillator.orbits.shooting import Orbit, find_orbit
+from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.attractors.chain_attractors import ChainAttractors
+    from oscillator.orbits.noise import Noise
 
 __all__ = [
     "Attractors",
     "Refined",
     "assemble",
+    "attractor_numbered",
     "described_landings",
     "find_attractors",
     "fractions_of",
@@ -121,6 +124,31 @@ class Attractors:
         """Each attractor's share of the starts (failed ones counted, as ``-1``), with its
         :func:`share_interval`: ``attractor, name, starts, fraction, low, high``."""
         return fractions_of(self.attractors, self.labels, confidence)
+
+    def noise(self, attractor: int, harmonics: int = 200) -> Noise:
+        """The noise measures and spectra (docs/noise.md) of the attractor numbered ``attractor``:
+        over one return of its refined orbit (:meth:`Orbit.noise`), or of the run from its last
+        section point where Newton did not refine it; of an aperiodic set over the run of
+        :meth:`~oscillator.attractors.grouping.Attractor.window` (from its first section point,
+        as many forcing periods as it has recorded points, at most 100), that window's spectra:
+        harmonic ``k`` at ``k / (n T)`` Hz, the window taken as the period."""
+        from oscillator.orbits.noise import noise
+
+        found = attractor_numbered(self.attractors, attractor)
+        if isinstance(found.orbit, Orbit):
+            return found.orbit.noise(harmonics)
+        point, periods = found.window()
+        begin = dict(zip(self.case.system.state, (float(v) for v in point), strict=True))
+        return noise(resolve_case(self.case, **begin), periods, harmonics)
+
+
+def attractor_numbered(attractors: Sequence[Attractor], number: object) -> Attractor:
+    """The attractor whose :attr:`~oscillator.attractors.grouping.Attractor.id` is ``number``."""
+    found = next((a for a in attractors if not isinstance(number, bool) and a.id == number), None)
+    if found is None:
+        known = ", ".join(str(a.id) for a in attractors) or "none were found"
+        raise InputError(f"attractor must be the number of one found ({known}), got {shown(number)}", field="attractor")
+    return found
 
 
 def fractions_of(attractors: Sequence[Attractor], labels: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:

@@ -28,6 +28,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.chain_orbits import ChainOrbit
 
 __all__ = [
+    "APERIODIC_PERIODS",
     "CHAOTIC",
     "Attractor",
     "group",
@@ -51,6 +52,9 @@ UNSETTLED = 0.1
 
 #: The most section points an aperiodic attractor pools from its landings, to tell later ones by.
 SET_POINTS = 4096
+
+#: The most forcing periods an aperiodic attractor is measured over (:meth:`Attractor.window`).
+APERIODIC_PERIODS = 100
 
 
 @dataclass(frozen=True)
@@ -130,6 +134,16 @@ class Attractor:
             1,
             rest_time=landing.rest_time,
         )
+
+    def window(self) -> tuple[np.ndarray, int]:
+        """Where a run that measures the attractor starts (a section point) and over how many
+        forcing periods: one return from its last section point (a periodic one); from its first
+        over as many forcing periods as it has recorded points, at most
+        :data:`APERIODIC_PERIODS` (an aperiodic one: a long run's average, its peaks the largest
+        seen)."""
+        if self.period:
+            return self.points[-1], self.period
+        return self.points[0], max(1, min(len(self.points), APERIODIC_PERIODS))
 
     def response_columns(self) -> dict[str, float]:
         """The response measures of its refined orbit by column

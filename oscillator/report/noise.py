@@ -38,7 +38,7 @@ def _panel(ax: Axes, spectrum: Spectrum, what: str, periods: float, omega: float
     floor = float(shown.level.max()) - 80.0 if len(shown) else -100.0
     whole = round(periods) if abs(periods - round(periods)) < 1e-9 * max(periods, 1.0) else 0
     forcing = (shown.harmonic % whole == 0).to_numpy() if whole else np.zeros(len(shown), bool)
-    for mask, color, label in ((forcing, "C0", "harmonics of Omega"), (~forcing, "0.6", "subharmonics of the return")):
+    for mask, color, label in ((forcing, "C0", "harmonics of Omega"), (~forcing, "0.6", "other harmonics of 1/span")):
         rows = shown[mask & (shown.level > floor).to_numpy()]
         if len(rows):
             ax.vlines(rows.frequency, floor, rows.level, lw=0.8, color=color)
@@ -65,7 +65,7 @@ def noise_figure(found: Noise | ChainNoise) -> Figure:
         spectra = [(c.force, _NAMES[name]) for name, c in found.contacts.items() if c.onsets]
         spectra += [(m.acceleration, f"acceleration of m{i}") for i, m in found.masses.items()]
         periods = "one forcing period" if found.periods == 1 else f"{found.periods} forcing periods"
-        title = wrapped_title(found.case, f"spectra over a return of {periods}")
+        title = wrapped_title(found.case, f"spectra over {periods}")
         return _spectra_figure(spectra, found.periods, found.case.parameters.Omega, title)
     elements = {element.name: element for element in found.chain.elements}
     spectra = [
