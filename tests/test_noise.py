@@ -106,6 +106,14 @@ def test_the_page_prints_what_it_shows(capsys):
     assert capsys.readouterr().out == shown
 
 
+def test_the_levels_section_prints_what_it_shows(capsys):
+    page = (ROOT / "docs" / "noise.md").read_text(encoding="utf-8").split("## The levels' derivatives", 1)[1]
+    code = page.split("```python\n", 1)[1].split("```", 1)[0]
+    shown = page.split("```text\n", 1)[1].split("```", 1)[0]
+    exec(compile(code, "docs/noise.md", "exec"), {})
+    assert capsys.readouterr().out == shown
+
+
 @pytest.mark.parametrize(
     ("call", "field"),
     [
@@ -277,6 +285,53 @@ def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_wit
     assert slopes["d/dOmega"] == pytest.approx(2 / (2 * np.pi), rel=1e-12) and slopes["d/dC3"] == 0.0
     assert found.measures.loc["impact_power_left", "d/dC3"] != 0.0
     assert found.measures.loc[["impulse_left", "impulse_right", "force_rms_left"], "d/dC3"].abs().min() > 0.0
+
+
+def test_the_levels_above_a_cut_off_are_every_harmonic_above_it():
+    """``orbit.sensitivities(params).levels(cutoff)``: each level is every harmonic above the
+    cut-off (the RMS of the response integrals less the harmonics below it), so a spectrum of 600
+    harmonics gives it but for its tail (1/K^3 on the stop, 1/K on the damped contact); above 0 Hz
+    a force's level is ``20 log10(force_rms)``; a contact that never closes has no level."""
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6)
+    found = orbit.sensitivities(["C3"])
+    levels, heard = found.levels(cutoff=1.0), orbit.noise(600).columns(1.0)
+    for name, tail in (("force_level_right", 1e-5), ("force_level_left", 0.03), ("acceleration_level_m1", 1e-3)):
+        assert heard[name] == pytest.approx(levels.loc[name, "value"], abs=tail), name
+    assert heard["force_level_left"] < levels.loc["force_level_left", "value"]  # the tail is missing
+    whole = found.levels(0.0)
+    for stop in ("right", "left"):
+        rms = found.measures.loc[f"force_rms_{stop}", "value"]
+        assert whole.loc[f"force_level_{stop}", "value"] == pytest.approx(20 * np.log10(rms), abs=1e-12)
+    with pytest.raises(InputError, match="cutoff must be a frequency"):
+        found.levels(-1.0)
+    apart = osc.find_orbit("instance-1", Omega=1.6).sensitivities(["C3"]).levels(1.0)  # the masses never touch
+    assert apart.loc["force_level_left", "value"] == -np.inf and np.isnan(apart.loc["force_level_left", "d/dC3"])
+
+
+def test_the_levels_above_a_cut_off_move_as_richardson_says():
+    """The levels' derivatives in C3, Omega (which moves the harmonics) and d1 (which moves the
+    stop's switches) equal Richardson differences of the levels of the orbits found nearby, each
+    level to 1e-7 of its own scale."""
+    from test_sensitivities import NEWTON
+
+    orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6, tol=NEWTON)
+    params = ["C3", "Omega", "d1"]
+    levels = orbit.sensitivities(params).levels(cutoff=1.0)
+
+    def seen(name: str, value: float) -> np.ndarray:
+        moved = osc.find_orbit(osc.resolve_case(orbit.case, **{name: value}), guess=orbit.state, tol=NEWTON)
+        return moved.sensitivities(["C3"]).levels(1.0)["value"].to_numpy()
+
+    richardson = []
+    for name in params:
+        value = getattr(orbit.case.parameters, name)
+        h = 1e-4 * max(1.0, abs(value))
+        wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
+        narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
+        richardson.append((4 * narrow - wide) / 3)
+    exact = levels[[f"d/d{name}" for name in params]].to_numpy()
+    error = np.abs(np.array(richardson).T - exact).max(axis=1)
+    assert (error <= 1e-7 * np.abs(exact).max(axis=1)).all(), dict(zip(levels.index, error, strict=True))
 
 
 #: docs/noise.md's worked design: the clearance between the masses and their contact's damper that

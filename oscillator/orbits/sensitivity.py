@@ -431,6 +431,14 @@ class Sensitivities:
         """The smallest distance in :attr:`margins` (``inf`` without any)."""
         return float(self.margins.distance.min()) if len(self.margins) else float("inf")
 
+    def levels(self, cutoff: float = 0.0) -> pd.DataFrame:
+        """The spectral levels above ``cutoff`` Hz (dB: each contact's force and each mass's
+        acceleration, every harmonic above the cut-off) and their exact derivatives
+        (:func:`oscillator.orbits.level_derivatives.level_derivatives`, docs/noise.md)."""
+        from oscillator.orbits.level_derivatives import level_derivatives
+
+        return level_derivatives(self, cutoff)
+
     def of(self, measure: str) -> pd.Series:
         """The derivatives of one measure (``impact_max_right``, ...) in each parameter."""
         if measure not in self.measures.index:
