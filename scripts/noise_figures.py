@@ -1,5 +1,6 @@
 """Draw the figures of docs/noise.md into docs/images/: the spectra of its first orbit
-(``noise.png``) and of the rattler's (``noise-rattler.png``), and the worked design's worst
+(``noise.png``), of its frequency response's stable points (``frequency-spectra.png``) and of the
+rattler's orbit (``noise-rattler.png``), and the worked design's worst
 impact power and right-stop strike over the band before and after (``noise-design-response.png``)
 and the Pareto front between them (``noise-design-front.png``).
 
@@ -13,6 +14,7 @@ import matplotlib as mpl
 
 import oscillator as osc
 from oscillator.io.cases import resolve_case
+from oscillator.report.noise import spectra_response_figure
 
 IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 #: docs/noise.md's problem: the clearance between the masses and the contact's damper.
@@ -31,6 +33,9 @@ def spectra() -> None:
     orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6)
     orbit.noise().plot().savefig(IMAGES / "noise.png", dpi=110, bbox_inches="tight")
     print(f"wrote {IMAGES / 'noise.png'}")
+    response = osc.frequency_response(resolve_case("instance-1", d=1, d1=3.5), "Omega", (1.45, 1.6), seeds=2)
+    spectra_response_figure(response, response.noise_tables()[1]).savefig(IMAGES / "frequency-spectra.png", dpi=72)
+    print(f"wrote {IMAGES / 'frequency-spectra.png'}")
     machine = osc.load_system(IMAGES.parent / "systems" / "rattler.toml")
     orbit = osc.find_orbit(machine, transient=100)
     orbit.noise().plot().savefig(IMAGES / "noise-rattler.png", dpi=110, bbox_inches="tight")

@@ -255,6 +255,7 @@ def _page_block(capsys, monkeypatch, *after: str) -> dict:
     return namespace
 
 
+@pytest.mark.slow  # an end-to-end worked example of 20 s: CI runs it with the slow tier
 def test_the_worked_calibration_prints_what_the_page_shows(capsys, monkeypatch):
     """docs/calibration.md: its Python block prints the block under it."""
     _page_block(capsys, monkeypatch)

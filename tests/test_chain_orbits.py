@@ -147,6 +147,7 @@ def test_bad_input_and_a_motion_without_an_orbit_are_refused():
     assert failed.value.reason == Reason.NO_CONVERGENCE
 
 
+@pytest.mark.slow  # an end-to-end worked example of 20 s: CI runs it with the slow tier
 def test_the_python_examples_of_the_systems_page_run(tmp_path, monkeypatch, capsys):
     """docs/systems.md's ```python blocks run as shown (in a fresh folder holding docs/systems/, as
     the repository does), and the orbit's, its sensitivities', the sweeps', the branch's and the

@@ -244,6 +244,45 @@ def test_a_frequency_responses_noise_is_each_points_and_draws_against_the_parame
         found.plot_noise(table, "x_pp_m1")
 
 
+@pytest.mark.slow
+def test_the_frc_command_writes_every_points_noise_and_spectra_and_the_report_keeps_them(tmp_path, monkeypatch):
+    """``oscillator frc ... --noise``: noise.parquet is the frequency response's noise table
+    (:meth:`FrequencyResponse.noise`), spectra.parquet each point's spectra (201 harmonics of four
+    signals), the figure is drawn and the report names them; ``oscillator report DIR`` written
+    again keeps them; a system file refuses --noise."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    frc = ["frc", "instance-1", "--set", "d=1", "--set", "d1=3.5", "--param", "Omega", "1.5", "1.6", "--seeds", "2",
+           "--sweep", "3", "--max-points", "6", "--workers", "1"]  # fmt: skip
+    done = CliRunner().invoke(app, [*frc, "--noise", "--out", "frc"])
+    assert done.exit_code == 0, done.output
+    found = osc.read_run(tmp_path / "frc")
+    written, spectra = (
+        pd.read_parquet(tmp_path / "frc" / "noise.parquet"),
+        pd.read_parquet(tmp_path / "frc" / "spectra.parquet"),
+    )
+    expected = found.noise()
+    assert list(written.columns) == list(expected.columns) and len(written) == len(found.points) > 0
+    assert np.allclose(written.impact_power_left, expected.impact_power_left, rtol=1e-9, atol=0)
+    assert len(spectra) == len(found.points) * 4 * 201
+    assert list(spectra.columns[:4]) == ["branch", "point", "Omega", "stable"]
+    figure = tmp_path / "frc" / "figures" / "frequency-spectra.png"
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    report = (tmp_path / "frc" / "report.md").read_text(encoding="utf-8")
+    assert "## Noise" in report and "figures/frequency-spectra.png" in report
+    figure.unlink()
+    again = CliRunner().invoke(app, ["report", "frc"])
+    assert again.exit_code == 0, again.output
+    assert figure.is_file() and "## Noise" in (tmp_path / "frc" / "report.md").read_text(encoding="utf-8")
+    system = str(ROOT / "docs" / "systems" / "impacts.toml")
+    refused = CliRunner().invoke(app, ["frc", system, "--param", "Omega", "1.0", "1.6", "--noise"])
+    assert refused.exit_code == 2 and "--noise" in refused.stderr
+
+
 def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_with_exact_derivatives():
     """``impact_rate``, ``impact_energy``, ``impact_power``, ``impulse``, ``impulse_rate`` and
     ``force_rms`` of each contact are response measures (so the atlas, the frequency response and the design take them),
@@ -356,6 +395,7 @@ def quieter():
     return osc.design(case, settings=osc.AttractorSettings(transient=100, record=8), **QUIETER)
 
 
+@pytest.mark.slow  # an end-to-end worked example of 20 s: CI runs it with the slow tier
 def test_the_quieter_design_rattles_less_and_strikes_the_stop_at_its_bound(quieter):
     """The masses touching shield the right stop: the optimum opens the clearance and softens the
     contact's damper until the stop is struck at its bound (the constraint active, to 1e-6), inside

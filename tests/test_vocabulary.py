@@ -22,6 +22,7 @@ DEFINITIONS = {PACKAGE / "model" / "events.py", PACKAGE / "orbits" / "branch.py"
 OTHER_MEANINGS = {
     ("analysis/locate.py", "grazing"): "the word `oscillator locate --what` takes",
     ("cli/run.py", "fold"): "rich's overflow mode",
+    ("cli/system.py", "fold"): "rich's overflow mode",
 }
 
 

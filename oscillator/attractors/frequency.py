@@ -132,10 +132,33 @@ class FrequencyResponse(Presented):
         """The noise measures at every branch point (docs/noise.md), one row per point as in
         :attr:`points`: ``branch``, the parameter, ``stable``, ``piece`` and every column of
         :meth:`oscillator.Noise.columns` (levels above ``cutoff`` Hz). Each point's return is
-        integrated again: about 0.05 s a point."""
-        frames = [branch.noise(harmonics, cutoff).assign(branch=k) for k, branch in enumerate(self.branches)]
-        table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame({"branch": []})
-        return table[["branch", *[c for c in table.columns if c != "branch"]]]
+        integrated again: about 0.02 s a point (measured ad hoc, 88 points in 1.8 s)."""
+        return self.noise_tables(harmonics, cutoff)[0]
+
+    def noise_tables(
+        self, harmonics: int = 200, cutoff: float = 0.0, progress: Callable[[int, int], None] | None = None
+    ) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """:meth:`noise`'s table and every point's spectra (:meth:`oscillator.Noise.spectra`, each
+        row with ``branch``, ``point``, its index in the branch, and the parameter first), from one
+        pass over the points; ``progress(done, total)`` is told after each point."""
+        from oscillator.orbits.noise import point_noise
+
+        total, done = sum(len(branch.points) for branch in self.branches), 0
+        rows, spectra = [], []
+        for k, branch in enumerate(self.branches):
+            for index, (row, found) in enumerate(point_noise(branch, harmonics)):
+                rows.append({"branch": k} | row | found.columns(cutoff))
+                where = {"branch": k, "point": index, self.param: row[self.param], "stable": row["stable"]}
+                spectra.append(found.spectra().assign(**where))
+                done += 1
+                if progress is not None:
+                    progress(done, total)
+        table = pd.DataFrame(rows) if rows else pd.DataFrame({"branch": pd.Series(dtype=int)})
+        if not spectra:
+            return table, pd.DataFrame({"branch": pd.Series(dtype=int), "point": pd.Series(dtype=int)})
+        joined = pd.concat(spectra, ignore_index=True)
+        first = ["branch", "point", self.param, "stable"]
+        return table, joined[[*first, *[c for c in joined.columns if c not in first]]]
 
     def plot_noise(self, table: pd.DataFrame, column: str = "impact_power_left") -> Figure:
         """The noise measure ``column`` of :meth:`noise`'s ``table`` against the parameter, each

@@ -53,6 +53,7 @@ _DEFAULTS: dict[str, object] = {
     "--scheduler": None,
     "--period": 1,
     "--measure": "x_pp",
+    "--noise": False,
 }
 
 
@@ -80,6 +81,13 @@ def frc(
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
     set_: SetOption = None,
+    noise: Annotated[
+        bool,
+        typer.Option(
+            "--noise",
+            help="Also measure every branch point's noise and spectra: noise.parquet, spectra.parquet, a figure.",
+        ),
+    ] = False,
     no_plots: NoPlotsOption = False,
     quiet: QuietOption = False,
 ) -> None:
@@ -90,8 +98,10 @@ def frc(
     down with their jumps.
 
     Writes points.parquet, bifurcations.parquet, sweeps.parquet, figures/frequency-*.png (the
-    --measure of each mass, and the impact velocities where there are contacts) and a report.
-    Parts are kept as they finish: the same command with the same --out resumes.  A system file
+    --measure of each mass, and the impact velocities where there are contacts) and a report;
+    with --noise, each point's noise measures and spectra too (noise.parquet, spectra.parquet,
+    figures/frequency-spectra.png; docs/noise.md).  Parts are kept as they finish: the same
+    command with the same --out resumes.  A system file
     (docs/systems.md) is swept up and down over --sweep values, its orbit followed from value to
     value (sweeps.parquet, figures/frequency.png); with --seeds N (and --starts) every period-1
     branch its attractors at N values and its sweeps reach, through folds (branches.parquet).
@@ -101,12 +111,13 @@ def frc(
       oscillator frc instance-1 --param Omega 1.3 1.85 --out runs/frc
       oscillator frc instance-1 --param Omega 1.5 1.7 --seeds 3 --sweep 21 --measure v_peak
       oscillator frc instance-1 --set Q2=71.165 --param Omega 1.5999 1.6001 --starts 16 --out runs/frc-window
+      oscillator frc instance-1 --set d=1 --set d1=3.5 --param Omega 1.45 1.6 --seeds 2 --noise --out runs/frc-noise
       oscillator frc docs/systems/blade-damper.toml --param Omega 0.6 1.6 --sweep 21 --out runs/blade-frc
       oscillator frc docs/systems/impacts.toml --param Omega 1.0 1.6 --seeds 3 --sweep 21 --out runs/impacts-frc
     """
     from oscillator.cli.system import frc_system
 
-    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure)
+    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure, noise)
     case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
     if frc_system(case, set_, param, (sweep, seeds, starts), transient, out_dir, case_only, not no_plots, quiet):
         return
@@ -129,7 +140,7 @@ def frc(
         run = functools.partial(frequency_response, resolved, name, (low, high), **pool, **options)
         found = with_progress(run, f"{resolved.name}: frequency response over {name}", "tasks", quiet)
         store.write_status("computed", branches=len(found.branches))
-    _finish(found, store, measure, no_plots, quiet)
+    _finish(found, store, (measure, noise), no_plots, quiet)
 
 
 def _checked(case: Any, param: SpanOption, measure: str, starts: int, options: dict[str, Any]) -> None:
@@ -164,12 +175,27 @@ def _opened(
     return store
 
 
-def _finish(found: Any, store: Any, measure: str, no_plots: bool, quiet: bool) -> None:
+def _finish(found: Any, store: Any, asked: tuple[str, bool], no_plots: bool, quiet: bool) -> None:
+    """The folder written (with the noise tables where ``asked``: the measure drawn, whether to
+    measure the noise), what was found said."""
     folder: Path = store.folder
+    measure, noise = asked
     say_reused(store, store.reused, "parts", quiet)
     from oscillator.report.frequency import write_frequency
 
-    problems = outputs(folder, "parts", lambda: write_frequency(found, folder, measure, plots=not no_plots))
+    tables, interrupted = None, False
+    if noise and found.branches:
+        try:
+            tables = with_progress(
+                found.noise_tables, f"{found.case.name}: noise of the branch points", "points", quiet
+            )
+        except KeyboardInterrupt:  # the frequency response is written all the same, without its noise
+            interrupted = True
+    problems = outputs(
+        folder, "parts", lambda: write_frequency(found, folder, measure, plots=not no_plots, noise=tables)
+    )
+    if interrupted:
+        raise fail(f"interrupted while measuring the noise; the frequency response is in {printable(str(folder))}", 130)
     if not quiet and found.branches:
         points = found.points
         out.print(Text(f"  {len(found.branches)} branches, {len(points)} points, {points.stable.mean():.0%} stable"))

@@ -32,11 +32,13 @@ from __future__ import annotations
 
 import functools
 import itertools
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from oscillator.compiled import njit
 from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
@@ -65,7 +67,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.branch import Branch
 
-__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise"]
+__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise", "point_noise"]
 
 
 @dataclass(frozen=True)
@@ -141,15 +143,32 @@ class Noise:
         return flat
 
 
-def _right_force(piece: IntegratedPiece, c: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The right stop's force on the piece at times ``t``: ``K6 (x1 - d1)``."""
-    force: np.ndarray = c[K6] * (piece(t)[0] - c[D1])
-    return force
+def _signals(piece: IntegratedPiece, mode: Mode, c: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The four signals on the piece at times ``t``, ``(len(t), 4)``: the right stop's force and
+    the left contact's (compressive, 0 while open), m1's and m2's accelerations (the mode's field,
+    0 for a resting mass)."""
+    y = np.ascontiguousarray(piece(t)[:4].T)
+    s1, s2, left, right = mode_flags(mode)
+    found = np.zeros((len(t), 4))
+    if right:
+        found[:, 0] = c[K6] * (y[:, 0] - c[D1])
+    if left:
+        found[:, 1] = -left_force(y.T, c)
+    field = np.empty((len(t), 2))
+    _field_rows(np.asarray(t, dtype=float), y, c, (s1, s2, left, right), field)
+    found[:, 2:] = field
+    return found
 
 
-def _left_force(piece: IntegratedPiece, c: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The left contact's compressive force on the piece at times ``t``."""
-    return -left_force(piece(t), c)
+@njit(cache=True)
+def _field_rows(
+    t: np.ndarray, y: np.ndarray, c: np.ndarray, mode: tuple[int, int, bool, bool], out: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """``out[k] = (a1, a2)``, the mode's field at ``(t[k], y[k])``."""
+    s1, s2, left, right = mode
+    for k in range(len(t)):
+        r = rates(t[k], y[k, 0], y[k, 1], y[k, 2], y[k, 3], c, s1, s2, left, right)
+        out[k, 0], out[k, 1] = r[1], r[3]
 
 
 def _accelerations(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[float, float]:
@@ -157,12 +176,6 @@ def _accelerations(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[
     s1, s2, left, right = mode_flags(mode)
     r = rates(t, float(y[0]), float(y[1]), float(y[2]), float(y[3]), c, s1, s2, left, right)
     return float(r[1]), float(r[3])
-
-
-def _acceleration(piece: IntegratedPiece, mode: Mode, c: np.ndarray, mass: int, t: np.ndarray) -> np.ndarray:
-    """Mass ``mass``'s acceleration on the piece at times ``t``."""
-    y = piece(t)
-    return np.array([_accelerations(float(s), y[:4, k], mode, c)[mass - 1] for k, s in enumerate(t)])
 
 
 def _steps(segments: list[Segment], c: np.ndarray, mass: int) -> list[float]:
@@ -176,20 +189,11 @@ def _steps(segments: list[Segment], c: np.ndarray, mass: int) -> list[float]:
     return steps
 
 
-def _contact(
-    name: str,
-    pieces: list[tuple[Segment, IntegratedPiece]],
-    c: np.ndarray,
-    given: dict[str, float],
-    sizes: tuple[float, int, int],
-) -> ContactNoise:
-    """Contact ``name``'s measures over the pieces (module docstring); ``given`` its response
-    measures, ``sizes`` the return's span, forcing periods and harmonics kept."""
-    span, periods, harmonics = sizes
-    force = _left_force if name == "left" else _right_force
-    touching = [(s, piece) for s, piece in pieces if (s.mode.left if name == "left" else s.mode.right)]
-    parts: list[Piece] = [(s.t0, s.t1, functools.partial(force, piece, c)) for s, piece in touching]
-    spectrum = Spectrum(fourier_coefficients(parts, span, harmonics), 1.0 / span, "N", FORCE_REFERENCE)
+def _contact(name: str, coefficients: np.ndarray, given: dict[str, float], sizes: tuple[float, int]) -> ContactNoise:
+    """Contact ``name``'s measures (module docstring) from its force's Fourier coefficients;
+    ``given`` its response measures, ``sizes`` the return's span and forcing periods."""
+    span, periods = sizes
+    spectrum = Spectrum(coefficients, 1.0 / span, "N", FORCE_REFERENCE)
     onsets = round(given["onsets"] * periods)
     return ContactNoise(
         contact=name,
@@ -217,12 +221,15 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
     segments = [segment for segment in result.segments if segment.t1 > segment.t0]
     pieces = [(segment, integrated(segment, c, dense=True)) for segment in segments]
     response = measured(result, periods, [piece for _, piece in pieces])
-    sizes = (span, periods, harmonics)
-    contacts = {name: _contact(name, pieces, c, response.contact[name], sizes) for name in ("right", "left")}
+    parts: list[Piece] = [(s.t0, s.t1, functools.partial(_signals, piece, s.mode, c)) for s, piece in pieces]
+    found = fourier_coefficients(parts, span, harmonics).reshape(harmonics + 1, 4)  # the four signals at once
+    contacts = {
+        name: _contact(name, found[:, k], response.contact[name], (span, periods))
+        for k, name in enumerate(("right", "left"))
+    }
     masses = {}
     for i in (1, 2):
-        parts: list[Piece] = [(s.t0, s.t1, functools.partial(_acceleration, p, s.mode, c, i)) for s, p in pieces]
-        spectrum = Spectrum(fourier_coefficients(parts, span, harmonics), 1.0 / span, "m/s^2", ACCELERATION_REFERENCE)
+        spectrum = Spectrum(found[:, 1 + i], 1.0 / span, "m/s^2", ACCELERATION_REFERENCE)
         steps = _steps(segments, c, i)
         masses[i] = MassNoise(i, spectrum, len(steps), max(steps, default=0.0))
     return Noise(case, periods, span, contacts, masses)
@@ -235,6 +242,12 @@ def branch_noise(branch: Branch, harmonics: int = HARMONICS, cutoff: float = 0.0
     section state over its return, as the branch holds it."""
     import pandas as pd
 
+    return pd.DataFrame([row | found.columns(cutoff) for row, found in point_noise(branch, harmonics)])
+
+
+def point_noise(branch: Branch, harmonics: int = HARMONICS) -> Iterator[tuple[dict[str, Any], Noise]]:
+    """Each point of a continued branch: its row (the parameter, ``stable``, ``piece``) and its
+    :class:`Noise` over its return from its section state, as the branch holds it."""
     check_count(harmonics, "harmonics", 0, 100_000)
-    rows = [row | noise(case, branch.period, harmonics).columns(cutoff) for row, case in branch_points(branch)]
-    return pd.DataFrame(rows)
+    for row, case in branch_points(branch):
+        yield row, noise(case, branch.period, harmonics)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -64,7 +64,6 @@ def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int)
     if not period > 0 or not math.isfinite(period):
         raise InputError(f"period must be a positive number of seconds, got {period!r}", field="period")
     nodes, weights = np.polynomial.legendre.leggauss(NODES)
-    k = np.arange(harmonics + 1)
     longest = period / max(harmonics, 1)
     total: np.ndarray | float = 0.0
     for t0, t1, f in pieces:
@@ -77,11 +76,29 @@ def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int)
         scale = np.repeat(half, NODES) * np.tile(weights, count)
         values = np.asarray(f(times.ravel()), dtype=float)
         values = values * (scale if values.ndim == 1 else scale[:, None])
-        total = total + np.exp(-2j * np.pi * np.outer(k, times.ravel()) / period) @ values
+        total = total + _waves(times.ravel(), period, harmonics) @ values
     coefficients: np.ndarray = np.asarray(total, dtype=complex) / period
     if coefficients.ndim == 0:  # no piece: the signal is zero
         coefficients = np.zeros(harmonics + 1, dtype=complex)
     return coefficients
+
+
+#: Harmonics between two whose waves :func:`_waves` computes directly (the others by products).
+_BLOCK = 32
+
+
+def _waves(times: np.ndarray, period: float, harmonics: int) -> np.ndarray:
+    """``exp(-2 pi i k t / period)`` for ``k = 0 .. harmonics`` (rows) at ``times`` (columns):
+    every :data:`_BLOCK`-th harmonic's directly, those between as its product with the powers of
+    the first (a few roundings each, not ``k``: an exponential costs tens of products)."""
+    first = np.exp(-2j * np.pi * times / period)
+    steps = np.empty((_BLOCK, len(times)), dtype=complex)
+    steps[0] = 1.0
+    if _BLOCK > 1:
+        steps[1:] = np.cumprod(np.broadcast_to(first, (_BLOCK - 1, len(times))), axis=0)
+    anchors = np.exp(-2j * np.pi * np.outer(np.arange(0, harmonics + 1, _BLOCK), times) / period)
+    waves = (anchors[:, None, :] * steps[None, :, :]).reshape(-1, len(times))
+    return waves[: harmonics + 1]
 
 
 def a_weighting(frequency: np.ndarray) -> np.ndarray:
@@ -151,9 +168,13 @@ def spectra_table(named: Mapping[str, Spectrum]) -> pd.DataFrame:
     ``reference`` of its levels, then :meth:`Spectrum.table`'s columns, harmonic by harmonic."""
     import pandas as pd
 
-    parts = [
-        spectrum.table().assign(signal=signal, unit=spectrum.unit, reference=spectrum.reference)
-        for signal, spectrum in named.items()
-    ]
-    columns = ["signal", "unit", "reference", "harmonic", "frequency", "amplitude", "level"]
-    return pd.concat(parts, ignore_index=True)[columns]
+    tables = [spectrum.table() for spectrum in named.values()]
+    sizes = [len(table) for table in tables]
+    columns: dict[str, Any] = {
+        "signal": np.repeat(list(named), sizes),
+        "unit": np.repeat([spectrum.unit for spectrum in named.values()], sizes),
+        "reference": np.repeat([spectrum.reference for spectrum in named.values()], sizes),
+    }
+    for name in ("harmonic", "frequency", "amplitude", "level"):
+        columns[name] = np.concatenate([table[name].to_numpy() for table in tables]) if tables else []
+    return pd.DataFrame(columns)

@@ -242,16 +242,26 @@ _REMAKE = "run the oscillator frc command that made it again with the same --out
 _ANEW = "run the oscillator frc command that made it again with a new --out"
 
 
-def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp", *, plots: bool = True) -> list[str]:
+def write_frequency(
+    found: FrequencyResponse,
+    folder: Path,
+    measure: str = "x_pp",
+    *,
+    plots: bool = True,
+    noise: tuple[pd.DataFrame, pd.DataFrame] | None = None,
+) -> list[str]:
     """``points.parquet`` (every branch point with its measures; the multipliers as real and
     imaginary parts), ``bifurcations.parquet``, ``sweeps.parquet``, ``response.json`` (what
     :func:`read_frequency` needs besides), the figures of :func:`figure_measures` and the report;
-    what could not be drawn (the tables stay)."""
+    with ``noise`` (:meth:`~oscillator.FrequencyResponse.noise_tables`: given, or kept in the
+    folder from before) ``noise.parquet``, ``spectra.parquet`` and their figure; what could not be
+    drawn (the tables stay)."""
     import json
 
     from oscillator.attractors.frequency_parts import branches_on_disk
     from oscillator.io.files import atomic_path
     from oscillator.orbits.branch import points_on_disk
+    from oscillator.report.noise import SPECTRA_FIGURE, spectra_response_figure
     from oscillator.report.outputs import write_folder
 
     measures = figure_measures(found, measure)
@@ -259,11 +269,53 @@ def write_frequency(found: FrequencyResponse, folder: Path, measure: str = "x_pp
         [(frequency_figure_name(m), functools.partial(frequency_figure, found, m)) for m in measures] if plots else []
     )
     tables = {"points": points_on_disk(found.points), "bifurcations": found.bifurcations, "sweeps": found.sweeps}
+    noise = noise if noise is not None else kept_noise(folder)
+    if noise is not None:
+        tables |= {"noise": noise[0], "spectra": noise[1]}
+        figures += [(SPECTRA_FIGURE, functools.partial(spectra_response_figure, found, noise[1]))] if plots else []
     _, branches = branches_on_disk(found.param, list(found.branches))
     with atomic_path(folder / RESPONSE) as temporary:  # NaN kept as JSON's NaN, as the parts keep it
         temporary.write_text(json.dumps({"measure": measure, "branches": branches}, indent=1), encoding="utf-8")
     title = f"{found.case.name}: frequency response"
-    return write_folder(folder, tables, figures, frequency_blocks(found, measures if plots else []), title)
+    blocks = frequency_blocks(found, measures if plots else []) + noise_blocks(found, noise, plots)
+    return write_folder(folder, tables, figures, blocks, title)
+
+
+def kept_noise(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame] | None:
+    """The noise tables an earlier ``oscillator frc --noise`` wrote into ``folder``, if both are
+    there and readable (a report written again keeps them)."""
+    import pandas as pd
+
+    try:
+        return pd.read_parquet(folder / "noise.parquet"), pd.read_parquet(folder / "spectra.parquet")
+    except (OSError, ValueError):
+        return None
+
+
+def noise_blocks(
+    found: FrequencyResponse, noise: tuple[pd.DataFrame, pd.DataFrame] | None, plots: bool
+) -> list[mk.Block]:
+    """The report's noise section: where the tables are, the loudest stable point, the figure."""
+    if noise is None:
+        return []
+    from oscillator.report.noise import SPECTRA_FIGURE
+
+    table, spectra = noise
+    harmonics = int(spectra.harmonic.max()) if len(spectra) else 0
+    text = (
+        f"The noise measures of every branch point (noise.parquet: impacts, impulses, impact power, levels; "
+        f"docs/noise.md) and their spectra, {harmonics} harmonics of each return (spectra.parquet)."
+    )
+    blocks: list[mk.Block] = [mk.Heading(2, ("Noise",)), mk.Paragraph((text,))]
+    stable = table[table.stable.astype(bool)] if len(table) else table
+    if len(stable) and "impact_power_left" in stable:
+        loudest = stable.loc[(stable.impact_power_left + stable.impact_power_right).idxmax()]
+        power = float(loudest.impact_power_left + loudest.impact_power_right)
+        where = f"{found.param} = {float(loudest[found.param]):.6g} (branch {int(loudest.branch)})"
+        blocks += [mk.Paragraph((f"The largest impact power of a stable point: {power:.4g} W at {where}.",))]
+    if plots:
+        blocks += [mk.Figure(SPECTRA_FIGURE, f"the stable orbits' spectra against {found.param}")]
+    return blocks
 
 
 def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:

@@ -22,7 +22,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.spectra import Spectrum
 
-__all__ = ["noise_figure", "noise_response_figure"]
+__all__ = ["SPECTRA_FIGURE", "noise_figure", "noise_response_figure", "spectra_response_figure"]
+
+#: The name of a frequency response's spectra figure in its folder's figures/.
+SPECTRA_FIGURE = "frequency-spectra"
 
 #: Harmonics of Omega named on the top axis.
 NAMED = (1, 2, 3, 5, 10, 20, 50, 100)
@@ -117,6 +120,37 @@ def noise_response_figure(found: FrequencyResponse, table: pd.DataFrame, column:
     ax.set_ylabel(column.replace("_", " ") + _UNITS.get(column.rsplit("_", 1)[0], ""))
     ax.grid(alpha=0.3)
     ax.set_title(wrapped_title(found.case, f"{column} over {found.param}: stable solid, unstable dashed"), fontsize=9)
+    return fig
+
+
+def spectra_response_figure(found: FrequencyResponse, spectra: pd.DataFrame) -> Figure:
+    """Every stable point's spectra (:meth:`FrequencyResponse.noise_tables`) against the
+    parameter: one panel per signal that is not zero throughout, each harmonic a dot at the point's
+    parameter and the harmonic's frequency (logarithmic), coloured by its level, the panel's top
+    60 dB (a Campbell diagram of the response)."""
+    from matplotlib.figure import Figure
+
+    from oscillator.report.outputs import quantity_label
+
+    stable = spectra[spectra.stable.astype(bool) & (spectra.harmonic > 0) & np.isfinite(spectra.level)]
+    names = {"force_right": "contact force, right stop", "force_left": "contact force, m1 on m2's stop"}
+    names |= {"acceleration_m1": "acceleration of m1", "acceleration_m2": "acceleration of m2"}
+    shown = [(signal, rows) for signal, rows in stable.groupby("signal", sort=False) if len(rows)]
+    fig = Figure(figsize=(8.5, 2.4 * max(len(shown), 1) + 0.8), layout="constrained")
+    axes = fig.subplots(max(len(shown), 1), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (signal, rows) in zip(axes, shown, strict=False):
+        top = float(rows.level.max())
+        style = {"s": 3, "marker": "s", "cmap": "viridis", "vmin": top - 60.0, "vmax": top, "rasterized": True}
+        dots = ax.scatter(rows[found.param], rows.frequency, c=rows.level, **style)
+        ax.set_yscale("log")
+        ax.set_ylabel("frequency (Hz)")
+        ax.set_title(names.get(str(signal), str(signal)), fontsize=9, loc="left")
+        unit = "1 N" if str(signal).startswith("force") else "1e-6 m/s^2"
+        fig.colorbar(dots, ax=ax, label=f"dB re {unit}", pad=0.01)
+    if not shown:
+        axes[0].text(0.5, 0.5, "no stable point", transform=axes[0].transAxes, ha="center")
+    axes[-1].set_xlabel(quantity_label(found.param))
+    fig.suptitle(wrapped_title(found.case, f"the stable orbits' spectra over {found.param}"), fontsize=9)
     return fig
 
 
