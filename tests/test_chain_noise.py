@@ -217,3 +217,23 @@ def test_a_chain_attractors_spectra_are_its_orbits_or_a_windows():
     change = (run.states[-1, 1] - 0.0) / spectra.span
     assert spectra.periods == pytest.approx(2.0) and spectra.measures == {}
     assert spectra.accelerations["m"].mean == pytest.approx(change, abs=1e-9)
+
+
+def test_a_hostile_element_name_is_printed_and_drawn_as_text(tmp_path, monkeypatch):
+    """A stop named like markup (rich's, matplotlib's mathtext) is printed as it is and titled
+    with its dollars escaped (drawn as dollars, not as mathematics)."""
+    from typer.testing import CliRunner
+
+    from oscillator.cli import console
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(console.out, "width", 200)
+    text = (ROOT / "docs" / "systems" / "rattler.toml").read_text(encoding="utf-8")
+    (tmp_path / "odd.toml").write_text(text.replace('name = "stop"', 'name = "[bold]$x^2$"'), encoding="utf-8")
+    done = CliRunner().invoke(app, ["orbit", "odd.toml", "--noise"])
+    assert done.exit_code == 0, done.output
+    assert "[bold]$x^2$" in done.stdout
+    fig = find_chain_orbit(osc.load_system(tmp_path / "odd.toml"), transient=100).noise(20).plot()
+    titles = [ax.get_title(loc="left") for ax in fig.axes]
+    assert 'stop "[bold]\\$x^2\\$": its force on part' in titles

@@ -295,11 +295,12 @@ def _print_noise(found: ChainOrbit, figure: Path | None, spectra: Path | None) -
 def _print_rows(title: str, headers: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
     """A table of ``rows`` under ``headers``, the first column (a name from the file) printable."""
     table = Table(title=title, title_justify="left", header_style="bold", box=box.SIMPLE_HEAD)
+    shown = [(printable(name), *values) for name, *values in rows]
     for k, header in enumerate(headers):  # a header wraps; a value is never cut
-        widest = max((len(row[k]) for row in rows), default=0)
+        widest = max((len(row[k]) for row in shown), default=0)
         table.add_column(header, justify="left" if k == 0 else "right", overflow="fold", min_width=widest)
-    for name, *values in rows:
-        table.add_row(printable(name), *values)
+    for row in shown:
+        table.add_row(*row)
     out.print(table)
 
 
