@@ -4,6 +4,8 @@ own spectra (another integrator, another interpolation), Parseval against the or
 
 from __future__ import annotations
 
+import functools
+import math
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +20,7 @@ from oscillator.orbits.chain_noise import chain_noise
 from oscillator.orbits.chain_orbits import find_chain_orbit
 from oscillator.orbits.spectra import mean_square_above
 from test_noise import half_sine_series
+from test_sensitivities import richardson
 
 TIGHT = SolverOptions(rtol=1e-12, atol=1e-12)
 ROOT = Path(__file__).resolve().parents[1]
@@ -237,3 +240,42 @@ def test_a_hostile_element_name_is_printed_and_drawn_as_text(tmp_path, monkeypat
     fig = find_chain_orbit(osc.load_system(tmp_path / "odd.toml"), transient=100).noise(20).plot()
     titles = [ax.get_title(loc="left") for ax in fig.axes]
     assert 'stop "[bold]\\$x^2\\$": its force on part' in titles
+
+
+def test_a_declared_systems_levels_above_a_cut_off_are_every_harmonic_above_it():
+    """``orbit.sensitivities(names).levels(cutoff)`` on a chain with a damped stop, a damped
+    contact and a floor: each level is a 600-harmonic spectrum's but for its tail."""
+    from test_chain_sensitivities import impact_chain
+
+    orbit = find_chain_orbit(impact_chain(), transient=150)
+    levels = orbit.sensitivities(["wall.C"]).levels(cutoff=0.3)
+    assert list(levels.index) == ["force_level:wall", "force_level:gap", "acceleration_level:a", "acceleration_level:b"]
+    heard = orbit.noise(600).columns(0.3)
+    for name in levels.index:
+        assert heard[name] == pytest.approx(levels.loc[name, "value"], abs=1e-3), name
+    with pytest.raises(InputError, match="cutoff must be a frequency"):
+        orbit.sensitivities(["wall.C"]).levels(math.nan)
+
+
+@pytest.mark.slow
+def test_a_declared_systems_levels_move_as_richardson_says():
+    """Their derivatives in the stop's damper and in Omega (which moves every harmonic and the
+    return's end) equal Richardson differences of the nearby orbits' levels, each level to 1e-7
+    of its own scale."""
+    from test_chain_sensitivities import impact_chain
+
+    orbit = find_chain_orbit(impact_chain(), transient=150)
+    params = ["wall.C", "Omega"]
+    levels = orbit.sensitivities(params).levels(cutoff=0.3)
+
+    def seen(name: str, value: float) -> np.ndarray:
+        moved = find_chain_orbit(orbit.chain.with_values({name: value}), orbit.state, transient=0, tol=1e-13)
+        return moved.sensitivities(["wall.C"]).levels(0.3)["value"].to_numpy()
+
+    differences = []
+    for name in params:
+        value = orbit.chain.value(name)
+        differences.append(richardson(functools.partial(seen, name), value, 1e-4 * max(1.0, abs(value))))
+    exact = levels[[f"d/d{name}" for name in params]].to_numpy()
+    error = np.abs(np.array(differences).T - exact).max(axis=1)
+    assert (error <= 1e-7 * np.abs(exact).max(axis=1)).all(), dict(zip(levels.index, error, strict=True))

@@ -7,6 +7,7 @@ linear chain's against its closed form; the refusals."""
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from oscillator.orbits.chain_orbits import chain_period_map, find_chain_orbit
 from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_sensitivity import chain_sensitivities
 from test_chain_orbits import OMEGA, linear_chain
+from test_sensitivities import richardson
 
 SYSTEMS = Path(__file__).resolve().parents[1] / "docs" / "systems"
 
@@ -246,15 +248,12 @@ def test_a_stops_noise_measures_have_exact_derivatives_and_the_others_say_they_h
         moved = find_chain_orbit(orbit.chain.with_values({name: value}), orbit.state, transient=0, tol=1e-13)
         return np.array([orbit_measures(moved)[row] for row in rows])
 
-    richardson = []
+    differences = []
     for name in params:
         value = orbit.chain.value(name)
-        h = 1e-4 * max(1.0, abs(value))
-        wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
-        narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
-        richardson.append((4 * narrow - wide) / 3)
+        differences.append(richardson(functools.partial(seen, name), value, 1e-4 * max(1.0, abs(value))))
     exact = found.measures.loc[rows, [f"d/d{name}" for name in params]].to_numpy()
-    error = np.abs(np.array(richardson).T - exact).max(axis=1)
+    error = np.abs(np.array(differences).T - exact).max(axis=1)
     assert (error <= 1e-7 * np.abs(exact).max(axis=1)).all(), dict(zip(rows, error, strict=True))
     assert np.abs(exact).min(axis=1).max() > 0  # every measure moves
     for refused in ("dissipated:damper-3", "slip_step_max:floor"):

@@ -3,6 +3,7 @@ model's own half-sine contact pulse and its impulse, the impact power against th
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -351,7 +352,7 @@ def test_the_levels_above_a_cut_off_move_as_richardson_says():
     """The levels' derivatives in C3, Omega (which moves the harmonics) and d1 (which moves the
     stop's switches) equal Richardson differences of the levels of the orbits found nearby, each
     level to 1e-7 of its own scale."""
-    from test_sensitivities import NEWTON
+    from test_sensitivities import NEWTON, richardson
 
     orbit = osc.find_orbit("instance-1", d=1, d1=3.5, Omega=1.6, tol=NEWTON)
     params = ["C3", "Omega", "d1"]
@@ -361,15 +362,12 @@ def test_the_levels_above_a_cut_off_move_as_richardson_says():
         moved = osc.find_orbit(osc.resolve_case(orbit.case, **{name: value}), guess=orbit.state, tol=NEWTON)
         return moved.sensitivities(["C3"]).levels(1.0)["value"].to_numpy()
 
-    richardson = []
+    differences = []
     for name in params:
         value = getattr(orbit.case.parameters, name)
-        h = 1e-4 * max(1.0, abs(value))
-        wide = (seen(name, value + h) - seen(name, value - h)) / (2 * h)
-        narrow = (seen(name, value + h / 2) - seen(name, value - h / 2)) / h
-        richardson.append((4 * narrow - wide) / 3)
+        differences.append(richardson(functools.partial(seen, name), value, 1e-4 * max(1.0, abs(value))))
     exact = levels[[f"d/d{name}" for name in params]].to_numpy()
-    error = np.abs(np.array(richardson).T - exact).max(axis=1)
+    error = np.abs(np.array(differences).T - exact).max(axis=1)
     assert (error <= 1e-7 * np.abs(exact).max(axis=1)).all(), dict(zip(levels.index, error, strict=True))
 
 

@@ -50,7 +50,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.chain_orbits import ChainOrbit
 
-__all__ = ["NOISE_MEASURES", "ChainNoise", "chain_noise"]
+__all__ = ["NOISE_MEASURES", "ChainNoise", "chain_noise", "smooth_stretches"]
 
 #: The kinds of the orbit's measures kept as its noise measures (per stop and contact, then per
 #: friction element: :func:`~oscillator.orbits.chain_response.orbit_measures`).
@@ -123,7 +123,7 @@ def _signals(run: ChainResult, at: Sides, steps: tuple[int, int], closed: np.nda
     return np.column_stack([forces * closed[None, :], rates[:, 1 : 2 * len(run.chain.masses) : 2]])
 
 
-def _smooth(t: np.ndarray, modes: np.ndarray) -> list[tuple[int, int]]:
+def smooth_stretches(t: np.ndarray, modes: np.ndarray) -> list[tuple[int, int]]:
     """The run's smooth pieces: the first and last step of each stretch of steps in one mode
     (steps of no length, at an event, left out)."""
     steps = np.flatnonzero(np.diff(t) > 0.0)
@@ -155,7 +155,7 @@ def chain_noise(motion: ChainOrbit | ChainResult, harmonics: int = HARMONICS) ->
     at = sides(run)
     modes = run.modes()
     pieces: list[Piece] = []
-    for first, last in _smooth(t, modes):
+    for first, last in smooth_stretches(t, modes):
         closed = modes[first, at.contacts] != 0.0
         pieces.append(
             (float(t[first]), float(t[last + 1]), functools.partial(_signals, run, at, (first, last), closed))

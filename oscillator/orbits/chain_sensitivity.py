@@ -42,7 +42,7 @@ its terms, :data:`MARGIN`), the map has no derivative there: refused, naming the
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -57,7 +57,7 @@ from oscillator.orbits.chain_response import extremes, measure_names, orbit_meas
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 from oscillator.text import printable
 
-__all__ = ["GAUSS", "MARGIN", "ChainSensitivities", "chain_sensitivities"]
+__all__ = ["GAUSS", "MARGIN", "ChainSensitivities", "chain_sensitivities", "moving_point"]
 
 #: The smallest crossing speed, relative to its terms, at which a switch counts as transversal.
 MARGIN = 1e-6
@@ -92,6 +92,16 @@ class ChainSensitivities:
     state: pd.DataFrame
     switches: pd.DataFrame
     measures: pd.DataFrame
+    #: What :meth:`levels` needs: the tangent pass and ``dy*/dc``.
+    _motion: tuple[ChainPass, np.ndarray] = field(repr=False, compare=False)
+
+    def levels(self, cutoff: float = 0.0) -> pd.DataFrame:
+        """Each stop's and contact's force's and each mass's acceleration's level above ``cutoff``
+        Hz (dB, every harmonic) and its exact derivatives
+        (:func:`oscillator.orbits.chain_levels.chain_level_derivatives`, docs/noise.md)."""
+        from oscillator.orbits.chain_levels import chain_level_derivatives
+
+        return chain_level_derivatives(self, cutoff)
 
     def of(self, measure: str) -> pd.Series:
         """One measure's derivatives (``x_max:blade``, ``stuck:platform``)."""
@@ -172,6 +182,7 @@ def chain_sensitivities(orbit: ChainOrbit, params: str | Sequence[str]) -> Chain
         table,
         switches,
         _measures(orbit, along, moved),
+        (along, moved),
     )
 
 
@@ -379,11 +390,10 @@ def _closing_measures(
     return found
 
 
-def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.DataFrame:
-    chain, names = orbit.chain, list(orbit.chain.system.state)
-    n, params = len(names), along.params
-    span = orbit.period * chain.period
-    stretch = np.array([-span / chain.Omega if name == "Omega" else 0.0 for name in params])
+def moving_point(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> Callable[[float], np.ndarray]:
+    """``delta(t)``: how the orbit's state at the time ``t`` moves in each number (``Phi(t)
+    dy*/dc + Psi(t)``; at the section, ``dy*/dc``)."""
+    n, span = orbit.chain.system.size, orbit.period * orbit.chain.period
 
     def point(t: float) -> np.ndarray:
         if t in (orbit.section, orbit.section + span):  # the section: the orbit's own start
@@ -391,6 +401,16 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
         block = along.at(t)
         found: np.ndarray = block[:, :n] @ moved + block[:, n:]
         return found
+
+    return point
+
+
+def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.DataFrame:
+    chain, names = orbit.chain, list(orbit.chain.system.state)
+    params = along.params
+    span = orbit.period * chain.period
+    stretch = np.array([-span / chain.Omega if name == "Omega" else 0.0 for name in params])
+    point = moving_point(orbit, along, moved)
 
     found: dict[str, np.ndarray] = {}
     for mass, (t_high, _, t_low, _) in extremes(orbit.run).items():
