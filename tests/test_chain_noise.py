@@ -279,3 +279,33 @@ def test_a_declared_systems_levels_move_as_richardson_says():
     exact = levels[[f"d/d{name}" for name in params]].to_numpy()
     error = np.abs(np.array(differences).T - exact).max(axis=1)
     assert (error <= 1e-7 * np.abs(exact).max(axis=1)).all(), dict(zip(levels.index, error, strict=True))
+
+
+def test_the_frc_command_measures_a_systems_sweeps_noise(tmp_path, monkeypatch):
+    """``oscillator frc FILE ... --noise``: noise.parquet holds each orbit the sweeps found (both
+    ways) with its levels, spectra.parquet its spectra, each the orbit's found again from its state
+    at its value; the spectra's figure is drawn."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from oscillator.cli.app import app
+
+    monkeypatch.chdir(tmp_path)
+    system = str(ROOT / "docs" / "systems" / "impacts.toml")
+    done = CliRunner().invoke(
+        app, ["frc", system, "--param", "Omega", "1.3", "1.4", "--sweep", "3", "--noise", "--out", "s"]
+    )
+    assert done.exit_code == 0, done.output
+    sweeps, heard = (
+        pd.read_parquet(tmp_path / "s" / "sweeps.parquet"),
+        pd.read_parquet(tmp_path / "s" / "noise.parquet"),
+    )
+    spectra = pd.read_parquet(tmp_path / "s" / "spectra.parquet")
+    assert len(heard) == (sweeps.status != "failed").sum() == 6
+    assert list(heard.columns) == ["direction", "Omega", "stable", "force_level:wall", "acceleration_level:m"]
+    assert len(spectra) == 6 * 2 * 201 and list(spectra.columns[:3]) == ["direction", "Omega", "stable"]
+    row = sweeps.iloc[1]
+    chain = osc.load_system(system).with_values({"Omega": float(row.Omega)})
+    alone = find_chain_orbit(chain, row[["x:m", "v:m"]].to_numpy(float), transient=0).noise()
+    assert heard.iloc[1]["acceleration_level:m"] == pytest.approx(alone.columns()["acceleration_level:m"], abs=1e-9)
+    assert (tmp_path / "s" / "figures" / "frequency-spectra.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

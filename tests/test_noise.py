@@ -250,7 +250,7 @@ def test_the_frc_command_writes_every_points_noise_and_spectra_and_the_report_ke
     """``oscillator frc ... --noise``: noise.parquet is the frequency response's noise table
     (:meth:`FrequencyResponse.noise`), spectra.parquet each point's spectra (201 harmonics of four
     signals), the figure is drawn and the report names them; ``oscillator report DIR`` written
-    again keeps them; a system file refuses --noise."""
+    again keeps them."""
     import pandas as pd
     from typer.testing import CliRunner
 
@@ -279,9 +279,6 @@ def test_the_frc_command_writes_every_points_noise_and_spectra_and_the_report_ke
     again = CliRunner().invoke(app, ["report", "frc"])
     assert again.exit_code == 0, again.output
     assert figure.is_file() and "## Noise" in (tmp_path / "frc" / "report.md").read_text(encoding="utf-8")
-    system = str(ROOT / "docs" / "systems" / "impacts.toml")
-    refused = CliRunner().invoke(app, ["frc", system, "--param", "Omega", "1.0", "1.6", "--noise"])
-    assert refused.exit_code == 2 and "--noise" in refused.stderr
 
 
 def test_the_impact_rates_energies_impulses_and_powers_are_response_measures_with_exact_derivatives():

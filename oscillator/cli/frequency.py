@@ -53,7 +53,6 @@ _DEFAULTS: dict[str, object] = {
     "--scheduler": None,
     "--period": 1,
     "--measure": "x_pp",
-    "--noise": False,
 }
 
 
@@ -104,7 +103,8 @@ def frc(
     command with the same --out resumes.  A system file
     (docs/systems.md) is swept up and down over --sweep values, its orbit followed from value to
     value (sweeps.parquet, figures/frequency.png); with --seeds N (and --starts) every period-1
-    branch its attractors at N values and its sweeps reach, through folds (branches.parquet).
+    branch its attractors at N values and its sweeps reach, through folds (branches.parquet);
+    with --noise every orbit's levels and spectra (noise.parquet, spectra.parquet).
 
     \b
     Examples:
@@ -114,12 +114,14 @@ def frc(
       oscillator frc instance-1 --set d=1 --set d1=3.5 --param Omega 1.45 1.6 --seeds 2 --noise --out runs/frc-noise
       oscillator frc docs/systems/blade-damper.toml --param Omega 0.6 1.6 --sweep 21 --out runs/blade-frc
       oscillator frc docs/systems/impacts.toml --param Omega 1.0 1.6 --seeds 3 --sweep 21 --out runs/impacts-frc
+      oscillator frc docs/systems/impacts.toml --param Omega 1.0 1.6 --sweep 21 --noise --out runs/impacts-noise
     """
     from oscillator.cli.system import frc_system
 
-    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure, noise)
+    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure)
     case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
-    if frc_system(case, set_, param, (sweep, seeds, starts), transient, out_dir, case_only, not no_plots, quiet):
+    counts = (sweep, seeds, starts)
+    if frc_system(case, set_, param, counts, transient, out_dir, case_only, not no_plots, quiet, noise):
         return
     with refusing():
         resolved = case_from(case, None, set_)

@@ -333,13 +333,15 @@ def frc_system(
     case_only: list[str],
     plots: bool,
     quiet: bool,
+    noise: bool = False,
 ) -> bool:
     """``oscillator frc FILE`` if ``target`` is a system file: the chain's period-1 orbit swept up
     and down ``param``'s span over ``sweep`` values (:func:`~oscillator.orbits.chain_response.
     frequency_sweep`), and with ``seeds`` every branch (``counts = (sweep, seeds, starts)``:
-    :func:`~oscillator.attractors.chain_frequency.chain_frequency_response`), the folder written
-    (:mod:`oscillator.report.chain_frequency`), the jumps and the failed values said; whether it
-    was one."""
+    :func:`~oscillator.attractors.chain_frequency.chain_frequency_response`), with ``noise`` every
+    orbit's levels and spectra (:func:`~oscillator.orbits.chain_noise.sweep_noise`), the folder
+    written (:mod:`oscillator.report.chain_frequency`), the jumps and the failed values said;
+    whether it was one."""
     from oscillator.io.chains import load_system, system_path
 
     path = system_path(target)
@@ -378,12 +380,32 @@ def frc_system(
         raise
     from oscillator.report.chain_frequency import finish_chain_sweeps, write_chain_sweeps
 
+    heard, interrupted = _sweep_noise(table, chain, name, quiet) if noise else (None, False)
     command = ["oscillator", *sys.argv[1:]]
-    folder = write_chain_sweeps(table, chain, name, claim, command=command, response=response)
+    folder = write_chain_sweeps(table, chain, name, claim, command=command, response=response, noise=heard)
     _said_sweeps(table, chain, name, quiet)
     _said_branches(response, quiet)
-    finished(folder, (lambda: finish_chain_sweeps(folder, table, chain, name, response)) if plots else None)
+    spectra = None if heard is None else heard[1]
+    finished(folder, (lambda: finish_chain_sweeps(folder, table, chain, name, response, spectra)) if plots else None)
+    if interrupted:
+        raise fail(f"interrupted while measuring the noise; the sweeps are in {printable(str(folder))}", 130)
     return True
+
+
+def _sweep_noise(
+    table: pd.DataFrame, chain: FrictionChain, name: str, quiet: bool
+) -> tuple[tuple[pd.DataFrame, pd.DataFrame] | None, bool]:
+    """Every orbit's levels and spectra (``--noise``), and whether Ctrl-C stopped it (the sweeps
+    are written all the same)."""
+    from oscillator.orbits.chain_noise import sweep_noise
+
+    label = f"{printable(chain.title or 'the system')}: noise of the sweeps' orbits"
+    try:
+        return with_progress(functools.partial(sweep_noise, table, chain, name), label, "orbits", quiet), False
+    except KeyboardInterrupt:
+        return None, True
+    except OscillatorError as error:
+        raise fail(message(error), code=1) from None
 
 
 def _swept(

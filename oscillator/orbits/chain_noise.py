@@ -23,6 +23,7 @@ kept beside the spectra in :attr:`ChainNoise.measures`.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -50,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.chain_orbits import ChainOrbit
 
-__all__ = ["NOISE_MEASURES", "ChainNoise", "chain_noise", "smooth_stretches"]
+__all__ = ["NOISE_MEASURES", "ChainNoise", "chain_noise", "smooth_stretches", "sweep_noise"]
 
 #: The kinds of the orbit's measures kept as its noise measures (per stop and contact, then per
 #: friction element: :func:`~oscillator.orbits.chain_response.orbit_measures`).
@@ -171,3 +172,37 @@ def chain_noise(motion: ChainOrbit | ChainResult, harmonics: int = HARMONICS) ->
     if isinstance(motion, ChainOrbit):
         measures = {k: v for k, v in orbit_measures(motion).items() if k.partition(":")[0] in NOISE_MEASURES}
     return ChainNoise(chain, span / chain.period, span, forces, accelerations, measures)
+
+
+def sweep_noise(
+    sweeps: pd.DataFrame,
+    chain: FrictionChain,
+    param: str,
+    harmonics: int = HARMONICS,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The levels and spectra of every orbit a frequency sweep found
+    (:func:`~oscillator.orbits.chain_response.frequency_sweep`'s rows, with ``direction``): each
+    orbit found again from its state at its value (Newton, no transient) and measured over its
+    return.  One row per orbit of ``direction``, the parameter, ``stable`` and
+    :meth:`ChainNoise.columns`; and its :meth:`ChainNoise.spectra` rows with those first.
+    ``progress(done, total)`` is told after each orbit; a failed row is left out."""
+    import pandas as pd
+
+    from oscillator.orbits.chain_orbits import find_chain_orbit
+
+    found = sweeps[sweeps.status != "failed"]
+    rows, spectra = [], []
+    for done, values in enumerate(found.to_dict("records"), start=1):
+        state = np.array([values[name] for name in chain.system.state], dtype=float)
+        point = chain.with_values({param: float(values[param])})
+        heard = chain_noise(find_chain_orbit(point, state, transient=0), harmonics)
+        where = {"direction": values["direction"], param: float(values[param]), "stable": bool(values["stable"])}
+        rows.append(where | heard.columns())
+        spectra.append(heard.spectra().assign(**where))
+        if progress is not None:
+            progress(done, len(found))
+    first = ["direction", param, "stable"]
+    table = pd.DataFrame(rows) if rows else pd.DataFrame({name: [] for name in first})
+    joined = pd.concat(spectra, ignore_index=True) if spectra else pd.DataFrame({name: [] for name in first})
+    return table, joined[[*first, *[c for c in joined.columns if c not in first]]]

@@ -70,14 +70,18 @@ def write_chain_sweeps(
     formats: str = "both",
     command: list[str] | None = None,
     response: ChainFrequencyResponse | None = None,
+    noise: tuple[pd.DataFrame, pd.DataFrame] | None = None,
 ) -> Path:
-    """Write the sweeps' table (and the ``response``'s branches and bifurcations), ``system.toml``
-    and ``run.json`` and put the folder in place; on any failure nothing is left behind.  The
+    """Write the sweeps' table (and the ``response``'s branches and bifurcations, and ``noise``'s
+    levels and spectra: :func:`~oscillator.orbits.chain_noise.sweep_noise`), ``system.toml`` and
+    ``run.json`` and put the folder in place; on any failure nothing is left behind.  The
     folder's path."""
     temporary = claim.temporary
     tables = {"sweeps": table}
     if response is not None:
         tables |= {"branches": response.table(), "bifurcations": response.bifurcations()}
+    if noise is not None:
+        tables |= {"noise": noise[0], "spectra": noise[1]}
     try:
         for name, frame in tables.items():
             if formats in ("csv", "both"):
@@ -172,13 +176,18 @@ def finish_chain_sweeps(
     chain: FrictionChain,
     param: str,
     response: ChainFrequencyResponse | None = None,
+    spectra: pd.DataFrame | None = None,
 ) -> None:
-    """The folder's figure (PNG and SVG), each file written whole."""
+    """The folder's figures (PNG and SVG), each file written whole: the sweeps, and the stable
+    orbits' ``spectra`` where measured."""
     from oscillator.report.figures import save_figure
+    from oscillator.report.noise import SPECTRA_FIGURE, chain_spectra_figure
 
     figures = folder / "figures"
     figures.mkdir(exist_ok=True)
     save_figure(sweep_figure(table, chain, param, response), figures, "frequency")
+    if spectra is not None:
+        save_figure(chain_spectra_figure(spectra, chain, param), figures, SPECTRA_FIGURE)
 
 
 def design_figure(design: ChainDesign, sweeps: Mapping[float, pd.DataFrame] | None = None) -> Figure:

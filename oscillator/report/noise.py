@@ -18,11 +18,19 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from oscillator.attractors.frequency import FrequencyResponse
+    from oscillator.model.chains import FrictionChain
     from oscillator.orbits.chain_noise import ChainNoise
     from oscillator.orbits.noise import Noise
     from oscillator.orbits.spectra import Spectrum
 
-__all__ = ["SPECTRA_FIGURE", "noise_figure", "noise_response_figure", "spectra_response_figure"]
+__all__ = [
+    "SPECTRA_FIGURE",
+    "chain_spectra_figure",
+    "noise_figure",
+    "noise_response_figure",
+    "spectra_map",
+    "spectra_response_figure",
+]
 
 #: The name of a frequency response's spectra figure in its folder's figures/.
 SPECTRA_FIGURE = "frequency-spectra"
@@ -125,32 +133,55 @@ def noise_response_figure(found: FrequencyResponse, table: pd.DataFrame, column:
 
 def spectra_response_figure(found: FrequencyResponse, spectra: pd.DataFrame) -> Figure:
     """Every stable point's spectra (:meth:`FrequencyResponse.noise_tables`) against the
-    parameter: one panel per signal that is not zero throughout, each harmonic a dot at the point's
-    parameter and the harmonic's frequency (logarithmic), coloured by its level, the panel's top
-    60 dB (a Campbell diagram of the response)."""
-    from matplotlib.figure import Figure
-
+    parameter (:func:`spectra_map`)."""
     from oscillator.report.outputs import quantity_label
 
-    stable = spectra[spectra.stable.astype(bool) & (spectra.harmonic > 0) & np.isfinite(spectra.level)]
     names = {"force_right": "contact force, right stop", "force_left": "contact force, m1 on m2's stop"}
     names |= {"acceleration_m1": "acceleration of m1", "acceleration_m2": "acceleration of m2"}
+    title = wrapped_title(found.case, f"the stable orbits' spectra over {found.param}")
+    return spectra_map(spectra, (found.param, quantity_label(found.param)), names, title)
+
+
+def chain_spectra_figure(spectra: pd.DataFrame, chain: FrictionChain, param: str) -> Figure:
+    """Every stable orbit's spectra of a system's frequency sweeps (both ways,
+    :func:`~oscillator.orbits.chain_noise.sweep_noise`) against the parameter (:func:`spectra_map`)."""
+    elements = {element.name: element for element in chain.elements}
+    names = {
+        f"force:{name}": f'{e.type} "{plain_label(name)}": its force on {plain_label(e.on)}'
+        for name, e in elements.items()
+    }
+    names |= {f"acceleration:{mass.name}": f"acceleration of {plain_label(mass.name)}" for mass in chain.masses}
+    what = f"{plain_label(chain.title or 'friction chain')}: the stable orbits' spectra over {plain_label(param)}"
+    unit = chain.unit(param)
+    label = f"{plain_label(param)} ({unit})" if unit else plain_label(param)
+    return spectra_map(spectra, (param, label), names, textwrap.fill(what, 100))
+
+
+def spectra_map(spectra: pd.DataFrame, axis: tuple[str, str], names: dict[str, str], title: str) -> Figure:
+    """Spectra against a parameter (``axis``: its column and its label): one panel per signal
+    that is not zero throughout, each harmonic of each stable point a dot at the point's parameter
+    and the harmonic's frequency (logarithmic), coloured by its level, the panel's top 60 dB (a
+    Campbell diagram of the response)."""
+    from matplotlib.figure import Figure
+
+    param, label = axis
+    stable = spectra[spectra.stable.astype(bool) & (spectra.harmonic > 0) & np.isfinite(spectra.level)]
     shown = [(signal, rows) for signal, rows in stable.groupby("signal", sort=False) if len(rows)]
     fig = Figure(figsize=(8.5, 2.4 * max(len(shown), 1) + 0.8), layout="constrained")
     axes = fig.subplots(max(len(shown), 1), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (signal, rows) in zip(axes, shown, strict=False):
         top = float(rows.level.max())
         style = {"s": 3, "marker": "s", "cmap": "viridis", "vmin": top - 60.0, "vmax": top, "rasterized": True}
-        dots = ax.scatter(rows[found.param], rows.frequency, c=rows.level, **style)
+        dots = ax.scatter(rows[param], rows.frequency, c=rows.level, **style)
         ax.set_yscale("log")
         ax.set_ylabel("frequency (Hz)")
-        ax.set_title(names.get(str(signal), str(signal)), fontsize=9, loc="left")
+        ax.set_title(names.get(str(signal), plain_label(str(signal))), fontsize=9, loc="left")
         unit = "1 N" if str(signal).startswith("force") else "1e-6 m/s^2"
         fig.colorbar(dots, ax=ax, label=f"dB re {unit}", pad=0.01)
     if not shown:
         axes[0].text(0.5, 0.5, "no stable point", transform=axes[0].transAxes, ha="center")
-    axes[-1].set_xlabel(quantity_label(found.param))
-    fig.suptitle(wrapped_title(found.case, f"the stable orbits' spectra over {found.param}"), fontsize=9)
+    axes[-1].set_xlabel(label)
+    fig.suptitle(title, fontsize=9)
     return fig
 
 
