@@ -26,10 +26,11 @@ v_with)`` integrated) over its closed spans move by each span's ends riding thei
 ``integral (grad f . delta(t) + df/dc) dt``, Gauss-Legendre on each solver step (:data:`GAUSS`
 nodes; the state there the quintic through the step's ends): ``dissipated = -W`` (nothing is
 stored over a return), the impact energy and power ``-W`` per closing and per second, the impulse
-and impulse rate ``|I|`` per closing and per second.  The works and energies of the other elements
-and the stick-slip steps' sizes of
-:func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative here yet: their rows
-are left out (a count of stick-slip steps has zero).  A fastest closing speed
+and impulse rate ``|I|`` per closing and per second.  A friction element's largest stick-slip
+step ``|a+ - a-|`` moves as both sides' field at the switch's state (the mode after, the mode
+before), each riding the switch: ``grad a . dy_s + a_t dt_s + da/dc``.  The works and energies of
+the other elements of :func:`~oscillator.orbits.chain_response.orbit_measures` have no derivative
+here yet: their rows are left out (a count of stick-slip steps has zero).  A fastest closing speed
 moves as the gap's rate at that closing, at the closing's moving time.  A peak (``a_max``,
 ``force_max``: :func:`~oscillator.orbits.chain_peaks.peak_places`) moves as the quantity at its
 time: inside a piece its rate is zero there, so ``grad f . delta(t*) + df/dc``; on a switch it
@@ -52,7 +53,7 @@ from oscillator.hybrid.chain_run import closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.model.chains import Element, FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit
-from oscillator.orbits.chain_peaks import Peak, impulses, peak_places, quintic, sides
+from oscillator.orbits.chain_peaks import Peak, impulses, peak_places, quintic, sides, slip_steps
 from oscillator.orbits.chain_response import extremes, measure_names, orbit_measures
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 from oscillator.text import printable
@@ -110,7 +111,7 @@ class ChainSensitivities:
             if measure in measure_names(self.orbit.chain):  # a measure, but one without a derivative yet
                 raise InputError(
                     f"{printable(measure)} has no exact derivative yet (the works and energies of the springs, "
-                    f"dampers, friction and forces, and the stick-slip steps' sizes have none); choose one of {known}",
+                    f"dampers, friction and forces have none); choose one of {known}",
                     field="measure",
                 )
             raise InputError(f"no measure named {printable(measure)}; choose one of {known}", field="measure")
@@ -216,6 +217,43 @@ def _slip_derivative(
         if mode:
             total += np.sign(np.interp(b, t, place) - np.interp(a, t, place)) * (moves(b) - moves(a))
     return total
+
+
+def _slip_step_derivative(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray, element: Element) -> np.ndarray:
+    """The derivative of a friction element's largest stick-slip step ``|a+ - a-|`` (module
+    docstring): both sides' field at the switch's state, in the mode after and the mode before,
+    each moving with the switch (``grad a . dy_s + a_t dt_s + da/dc``)."""
+    run, chain, params = orbit.run, orbit.chain, along.params
+    steps = slip_steps(run)[element.name]
+    if not steps:
+        return np.zeros(len(params))
+    modes, t, states = run.modes(), run.times, run.states
+    row = next(k for k, e in enumerate(chain.elements) if e.name == element.name)
+    turned = np.flatnonzero((modes[:-1, row] == 0.0) != (modes[1:, row] == 0.0))
+    k = int(turned[int(np.argmax(steps))])
+    switch_time, state = float(t[k + 1]), states[k + 1]
+    crossing = min(along.crossings, key=lambda c: abs(c.t - switch_time))
+    n = chain.system.size
+    dy, dt = crossing.state_derivative(moved)[:n], crossing.time_derivative(moved)
+    i = 2 * [m.name for m in chain.masses].index(element.on) + 1  # the mass's velocity row
+    numbers = NumberData(chain, params)
+
+    def side(mode: np.ndarray) -> tuple[float, np.ndarray]:
+        d, ahead, behind = numbers.of(mode)
+        jacobian, partial = np.empty((n, n)), np.empty(n)
+        chain_jacobian(switch_time, state, d, jacobian, partial)
+
+        def value(data: np.ndarray) -> float:
+            out = np.empty(numbers.arrays.size)
+            chain_derivative(switch_time, state, out, data)
+            return float(out[i])
+
+        by_number = np.array([(value(ahead[p]) - value(behind[p])) / (2 * h) for p, h in enumerate(numbers.steps)])
+        return value(d), jacobian[i] @ dy + partial[i] * dt + by_number
+
+    after, before = side(modes[k + 1]), side(modes[k])
+    found: np.ndarray = np.sign(after[0] - before[0]) * (after[1] - before[1])
+    return found
 
 
 def _closing_weights(chain: FrictionChain, element: Element) -> np.ndarray:
@@ -447,6 +485,7 @@ def _measures(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> pd.Data
     found |= _closing_measures(orbit, along, (moved, point, stretch), values)
     for element in (e for e in chain.elements if e.type == "friction"):  # a count: it moves where the orbit changes
         found[f"slip_steps:{element.name}"] = np.zeros(len(params))
+        found[f"slip_step_max:{element.name}"] = _slip_step_derivative(orbit, along, moved, element)
     ordered = {name: found[name] for name in values if name in found}  # in orbit_measures' order
     table = pd.DataFrame.from_dict(ordered, orient="index", columns=[f"d/d{name}" for name in params])
     table.insert(0, "value", [values[name] for name in table.index])
