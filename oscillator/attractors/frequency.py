@@ -132,7 +132,7 @@ class FrequencyResponse(Presented):
         """The noise measures at every branch point (docs/noise.md), one row per point as in
         :attr:`points`: ``branch``, the parameter, ``stable``, ``piece`` and every column of
         :meth:`oscillator.Noise.columns` (levels above ``cutoff`` Hz). Each point's return is
-        integrated again: about 0.02 s a point (measured ad hoc, 88 points in 1.8 s)."""
+        integrated again (16 ms a point: benchmarks/noise.py, 2026-11-29)."""
         return self.noise_tables(harmonics, cutoff)[0]
 
     def noise_tables(
