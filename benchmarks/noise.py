@@ -37,16 +37,6 @@ def direct(times: np.ndarray, period: float, harmonics: int) -> np.ndarray:
     return waves
 
 
-def least(call: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    """The least time of ``repeats`` calls, and the last call's value."""
-    best, value = float("inf"), None
-    for _ in range(repeats):
-        started = time.perf_counter()
-        value = call()
-        best = min(best, time.perf_counter() - started)
-    return best, value
-
-
 def both(call: Callable[[], Any], repeats: int) -> tuple[float, float, Any, Any]:
     """``call`` with the waves before and now, alternating: the least times and the values."""
     products = spectra._waves
@@ -55,11 +45,12 @@ def both(call: Callable[[], Any], repeats: int) -> tuple[float, float, Any, Any]
     for _ in range(repeats):
         for way, waves in (("before", direct), ("now", products)):
             spectra._waves = waves
+            started = time.perf_counter()
             try:
-                elapsed, values[way] = least(call, 1)
+                values[way] = call()
             finally:
                 spectra._waves = products
-            times[way].append(elapsed)
+            times[way].append(time.perf_counter() - started)
     return min(times["before"]), min(times["now"]), values["before"], values["now"]
 
 

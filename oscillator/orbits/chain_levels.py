@@ -79,7 +79,6 @@ class _Signals:
                 element_gradient(t, y, d, row, gradient)
                 grads[k] = gradient
         jacobian, partial = np.empty((self.size, self.size)), np.empty(self.size)
-        chain_derivative(t, y, np.empty(self.length), d)
         chain_jacobian(t, y, d, jacobian, partial)
         grads[len(self.rows) :] = jacobian[1 : 2 * self.masses : 2]
         by_number = np.column_stack(

@@ -41,7 +41,7 @@ from oscillator.model.kernels import jacobian, rates
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.pieces import mode_flags
 from oscillator.orbits.sensitivity import selector_of, tangent_pass
-from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE, NODES
+from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE, quadrature_nodes
 from oscillator.orbits.tangent import field_gradient
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -83,16 +83,9 @@ def _signals(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[np.nda
 
 
 def _nodes(pieces: list[tuple[float, float]], longest: float) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre's nodes and weights on each piece, split so that no stretch is longer than
-    ``longest``."""
-    nodes, weights = np.polynomial.legendre.leggauss(NODES)
-    times, scales = [], []
-    for t0, t1 in pieces:
-        edges = np.linspace(t0, t1, max(1, math.ceil((t1 - t0) / longest)) + 1)
-        half = 0.5 * np.diff(edges)
-        times.append((((edges[:-1] + edges[1:]) * 0.5)[:, None] + half[:, None] * nodes[None, :]).ravel())
-        scales.append((half[:, None] * weights[None, :]).ravel())
-    return np.concatenate(times), np.concatenate(scales)
+    """:func:`~oscillator.orbits.spectra.quadrature_nodes` of every piece, joined."""
+    found = [quadrature_nodes(t0, t1, longest) for t0, t1 in pieces]
+    return np.concatenate([times for times, _ in found]), np.concatenate([scales for _, scales in found])
 
 
 def level_derivatives(found: Sensitivities, cutoff: float = 0.0) -> pd.DataFrame:

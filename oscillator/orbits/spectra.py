@@ -38,6 +38,7 @@ __all__ = [
     "fourier_coefficients",
     "level_db",
     "mean_square_above",
+    "quadrature_nodes",
     "spectra_table",
 ]
 
@@ -54,6 +55,18 @@ NODES = 16
 FORCE_REFERENCE, ACCELERATION_REFERENCE = 1.0, 1e-6
 
 
+def quadrature_nodes(t0: float, t1: float, longest: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre's :data:`NODES` nodes on ``[t0, t1]`` split so that no stretch is longer
+    than ``longest``, and their weights (scaled to the stretches: ``sum weights f(nodes)`` is the
+    integral)."""
+    nodes, weights = np.polynomial.legendre.leggauss(NODES)
+    count = max(1, math.ceil((t1 - t0) / longest))
+    edges = np.linspace(t0, t1, count + 1)
+    half = 0.5 * np.diff(edges)
+    times = ((edges[:-1] + edges[1:]) * 0.5)[:, None] + half[:, None] * nodes[None, :]
+    return times.ravel(), (half[:, None] * weights[None, :]).ravel()
+
+
 def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int) -> np.ndarray:
     """``c_0, ..., c_K`` (``K = harmonics``) of the signal of period ``period`` that is ``f(t)`` on
     each piece ``(t0, t1, f)`` (``f`` takes an array of times) and zero elsewhere (module
@@ -63,20 +76,15 @@ def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int)
     check_count(harmonics, "harmonics", 0, 100_000)
     if not period > 0 or not math.isfinite(period):
         raise InputError(f"period must be a positive number of seconds, got {period!r}", field="period")
-    nodes, weights = np.polynomial.legendre.leggauss(NODES)
     longest = period / max(harmonics, 1)
     total: np.ndarray | float = 0.0
     for t0, t1, f in pieces:
         if not t1 > t0:
             continue
-        count = max(1, math.ceil((t1 - t0) / longest))
-        edges = np.linspace(t0, t1, count + 1)
-        half = 0.5 * np.diff(edges)
-        times = ((edges[:-1] + edges[1:]) * 0.5)[:, None] + half[:, None] * nodes[None, :]
-        scale = np.repeat(half, NODES) * np.tile(weights, count)
-        values = np.asarray(f(times.ravel()), dtype=float)
+        times, scale = quadrature_nodes(t0, t1, longest)
+        values = np.asarray(f(times), dtype=float)
         values = values * (scale if values.ndim == 1 else scale[:, None])
-        total = total + _waves(times.ravel(), period, harmonics) @ values
+        total = total + _waves(times, period, harmonics) @ values
     coefficients: np.ndarray = np.asarray(total, dtype=complex) / period
     if coefficients.ndim == 0:  # no piece: the signal is zero
         coefficients = np.zeros(harmonics + 1, dtype=complex)
