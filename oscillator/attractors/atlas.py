@@ -47,6 +47,7 @@ from oscillator.model.chain_fields import state_of
 from oscillator.model.chains import FrictionChain
 from oscillator.model.parameters import check_count
 from oscillator.orbits.chain_response import measure_names
+from oscillator.orbits.spectra import check_cutoff
 from oscillator.presenting import Presented, presenter
 from oscillator.text import printable, shown
 
@@ -123,6 +124,9 @@ class AtlasSettings:
     engine : str
         The integrator of the starts (:class:`~oscillator.attractors.mapping.AttractorSettings`):
         ``"dop853"``, compiled whole, or ``"cvode"``, the reference.
+    cutoff : float
+        The cut-off in Hz of the response measures ``force_above`` and ``a_above``
+        (:class:`~oscillator.attractors.mapping.AttractorSettings`).
     """
 
     fresh_transient: int = 40
@@ -132,9 +136,11 @@ class AtlasSettings:
     starts: int = 1
     settle: bool = True
     engine: str = "dop853"
+    cutoff: float = 0.0
 
     def __post_init__(self) -> None:
         check_engine(self.engine)
+        check_cutoff(self.cutoff)
         for name, least in (("fresh_transient", 1), ("seed_transient", 1), ("record", 2), ("lyapunov_periods", 1)):
             check_count(getattr(self, name), name, least, 1_000_000)
         check_count(self.starts, "starts", 1, 1000)
@@ -183,12 +189,13 @@ def fresh_starts(case: Subject, count: int) -> np.ndarray:
 class Atlas(Presented):
     """The atlas of a plane: ``table`` has one row per attractor of each point (``row``,
     ``column`` and the two parameters' values first); ``case`` the article's case or a declared
-    system."""
+    system; ``cutoff`` (Hz) that of its measures ``force_above`` and ``a_above``."""
 
     case: Subject
     x: Axis
     y: Axis
     table: pd.DataFrame
+    cutoff: float = 0.0
 
     def plot(self, by: str = "regime") -> Figure:
         """The plane coloured by ``by``: ``regime``, ``period``, ``coexisting``, ``lyapunov``,
@@ -318,7 +325,7 @@ def regime_atlas(
         describe = ChainRefined(settings.lyapunov_periods)
     else:
         x, y = parameter_plane(case, x, y)
-        describe = Measured(settings.lyapunov_periods, responses=responses)
+        describe = Measured(settings.lyapunov_periods, responses=responses, cutoff=settings.cutoff)
     executor = Executor(workers, client, progress)
     mapper = Mapper(
         fresh_starts(case, settings.starts),
@@ -339,7 +346,7 @@ def regime_atlas(
     frame = _table(continued, x.count, responses, case)
     frame.insert(2, x.name, x.values[frame.column.to_numpy()])
     frame.insert(3, y.name, y.values[frame.row.to_numpy()])
-    return Atlas(case, x, y, frame)
+    return Atlas(case, x, y, frame, settings.cutoff)
 
 
 def _table(continued: Continued, columns: int, responses: tuple[str, ...], system: Subject) -> pd.DataFrame:

@@ -63,6 +63,8 @@ class Measured:
     #: Response measures (:data:`~oscillator.orbits.response.COLUMNS`) of each attractor
     #: (:meth:`_responses`).
     responses: tuple[str, ...] = ()
+    #: The cut-off (Hz) of ``force_above`` and ``a_above`` among them.
+    cutoff: float = 0.0
 
     def __call__(self, case: Case, attractor: Attractor) -> Attractor:
         values = {name: MEASURES[name](case, attractor) for name in self.measures}
@@ -84,7 +86,7 @@ class Measured:
         try:
             point, periods = attractor.window()
             begin = dict(zip(case.system.state, (float(v) for v in point), strict=True))
-            columns = response(resolve_case(case, **begin), periods).columns()
+            columns = response(resolve_case(case, **begin), periods, self.cutoff).columns()
         except OscillatorError:
             columns = {}
         return {name: columns.get(name, math.nan) for name in self.responses}

@@ -58,10 +58,11 @@ def largest_exponent(multipliers: np.ndarray, span: float) -> float:
         return float(np.log(np.max(np.abs(multipliers)))) / span
 
 
-def _responses(orbit: Orbit) -> dict[str, float]:
-    """The orbit's response measures by column (none where its return cannot be run again)."""
+def _responses(orbit: Orbit, cutoff: float) -> dict[str, float]:
+    """The orbit's response measures by column, ``force_above`` and ``a_above`` above ``cutoff``
+    Hz (none where its return cannot be run again)."""
     try:
-        return orbit.response().columns()
+        return orbit.response(cutoff).columns()
     except OscillatorError:
         return {}
 
@@ -72,9 +73,11 @@ class Refined:
     Newton from its cycle (multipliers, stability), its largest exponent from them and its
     response measures (:meth:`~oscillator.orbits.shooting.Orbit.response`, in ``measures``); an
     aperiodic one with the QR average of its largest exponent over ``lyapunov_periods`` (0: not
-    computed).  What the refinement met is in the attractor's ``note``."""
+    computed).  What the refinement met is in the attractor's ``note``; ``cutoff`` (Hz) that of
+    the measures ``force_above`` and ``a_above``."""
 
     lyapunov_periods: int = 300
+    cutoff: float = 0.0
 
     def __call__(self, case: Case, attractor: Attractor) -> Attractor:
         period = case.parameters.period
@@ -84,7 +87,7 @@ class Refined:
             except OscillatorError as error:
                 return dataclasses.replace(attractor, forcing_period=period, note=f"not refined: {error}")
             largest = largest_exponent(orbit.multipliers, attractor.period * period)
-            measures = _responses(orbit)
+            measures = _responses(orbit, self.cutoff)
             return dataclasses.replace(
                 attractor, orbit=orbit, lyapunov=largest, forcing_period=period, note=orbit.note, measures=measures
             )
@@ -271,7 +274,7 @@ def assemble(
     :class:`Refined` of ``settings`` by default; on ``executor``, in this process by default),
     each start labelled."""
     described, table, warnings = described_landings(
-        case, settings, landings, describe or Refined(settings.lyapunov_periods), executor
+        case, settings, landings, describe or Refined(settings.lyapunov_periods, settings.cutoff), executor
     )
     return Attractors(case, settings, described, table, warnings)
 

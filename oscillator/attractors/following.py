@@ -268,7 +268,7 @@ def follow_attractors(
         case = resolve_case(case, **overrides)
         array = check_values(case, param, values, tol)
         fresh = check_states(case.initial.y if states is None else states)
-        describe = Refined(settings.lyapunov_periods)
+        describe = Refined(settings.lyapunov_periods, settings.cutoff)
     mapper = Mapper(fresh, settings, settings)
     with executor:
         continued = continue_attractors(

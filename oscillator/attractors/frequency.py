@@ -113,6 +113,7 @@ class FrequencyResponse(Presented):
     sweeps: pd.DataFrame
     case: Case = field(repr=False, compare=False)  #: the case, as given
     period: int = 1  #: forcing periods per return of the branches sought
+    cutoff: float = 0.0  #: the cut-off (Hz) of the measures ``force_above`` and ``a_above``
 
     def nothing_found(self) -> str:
         """What was found where no branch was: the sentence the report and the command say."""
@@ -269,7 +270,7 @@ def frequency_response(
         sweeps = job.sweeps(sweep)
         branches = job.doublings(branches + job.from_sweeps(sweeps, branches))
         points = job.measures(branches)
-    return FrequencyResponse(param, tuple(branches), points, sweeps, base, period)
+    return FrequencyResponse(param, tuple(branches), points, sweeps, base, period, settings.cutoff)
 
 
 def _of_chain(
@@ -410,7 +411,10 @@ class _Job:
                 frames[b] = part[0]
                 continue
             count = len(branch.points)
-            tasks += [(b, measured, branch, first, min(first + CHUNK, count)) for first in range(0, count, CHUNK)]
+            tasks += [
+                (b, measured, branch, first, min(first + CHUNK, count), self.settings.cutoff)
+                for first in range(0, count, CHUNK)
+            ]
         self.tally.add(sum(len(frame) for frame in frames.values()), sum(len(branch.points) for branch in branches))
         chunks: dict[int, list[pd.DataFrame]] = {b: [] for b in range(len(branches)) if b not in frames}
         for b, chunk in self.executor.map(keyed, tasks):

@@ -51,8 +51,9 @@ class FrequencyStore(TableFolder):
     sweep (module docstring)."""
 
     #: 2: each part keyed by its task, every sweep row with every measure's column; 3: the impulses
-    #: and force_rms among the measures (a folder of an earlier format is refused, not read as damaged).
-    FORMAT = 3
+    #: and force_rms among the measures (a folder of an earlier format is refused, not read as damaged);
+    #: 4: force_above and a_above among them.
+    FORMAT = 4
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "frc.json", identity, name=name)

@@ -39,6 +39,7 @@ from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import coefficients
 from oscillator.model.parameters import check_count
 from oscillator.orbits.signature import signature_of
+from oscillator.orbits.spectra import check_cutoff
 from oscillator.orbits.stroboscopic import compile_period_map
 from oscillator.text import shown
 
@@ -87,6 +88,9 @@ class AttractorSettings:
         code (:mod:`oscillator.hybrid.batch`); another engine's name
         (:data:`oscillator.engines.ENGINES`: ``"cvode"``, the reference) runs it through
         :func:`~oscillator.hybrid.simulate.simulate`.
+    cutoff : float
+        The cut-off in Hz of the response measures ``force_above`` and ``a_above`` of each periodic
+        attractor (the RMS of the harmonics above it; 0: every harmonic but the mean, docs/noise.md).
     """
 
     transient: int = 200
@@ -97,9 +101,11 @@ class AttractorSettings:
     lyapunov_periods: int = 300
     settle: bool = True
     engine: str = "dop853"
+    cutoff: float = 0.0
 
     def __post_init__(self) -> None:
         check_count(self.transient, "transient", 1, 1_000_000)
+        check_cutoff(self.cutoff)
         check_engine(self.engine)
         check_count(self.record, "record", 2, 100_000)
         check_count(self.max_period, "max_period", 1, 1000)

@@ -214,11 +214,12 @@ def distinct(case: Case, branches: Sequence[Branch], known: Sequence[Branch]) ->
     return kept
 
 
-def measured(branch: Branch, first: int, last: int) -> pd.DataFrame:
+def measured(branch: Branch, first: int, last: int, cutoff: float = 0.0) -> pd.DataFrame:
     """The response measures of the branch's points ``first`` to ``last - 1``
-    (:func:`~oscillator.orbits.response.branch_responses`), indexed by point."""
+    (:func:`~oscillator.orbits.response.branch_responses`, ``force_above`` and ``a_above`` above
+    ``cutoff`` Hz), indexed by point."""
     part = dataclasses.replace(branch, points=branch.points.iloc[first:last])
-    return branch_responses(part).set_axis(range(first, last))
+    return branch_responses(part, cutoff).set_axis(range(first, last))
 
 
 def on_branch(case: Case, branch: Branch, value: float, state: np.ndarray) -> bool:
@@ -282,7 +283,7 @@ def sweep(case: Case, param: str, values: np.ndarray, settings: AttractorSetting
         row |= dict.fromkeys([*STATE, *COLUMNS], math.nan)  # where no orbit is met: the columns, not a number
         if state is not None:
             begin = dict(zip(STATE, (float(v) for v in state), strict=True))
-            row |= begin | response(resolve_case(at, **begin), period).columns()
+            row |= begin | response(resolve_case(at, **begin), period, settings.cutoff).columns()
         rows.append(row)
         states.append(state)
     table = pd.DataFrame(rows)

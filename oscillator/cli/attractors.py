@@ -54,7 +54,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from oscillator.io.files import FolderClaim
     from oscillator.model.chains import FrictionChain
 
-__all__ = ["attractors", "basins", "finish_basins", "landing_settings", "lyapunov"]
+__all__ = ["analysis_settings", "attractors", "basins", "finish_basins", "landing_settings", "lyapunov"]
 
 
 def axis_of(values: AxisOption, flag: str) -> Axis:
@@ -67,7 +67,7 @@ def axis_of(values: AxisOption, flag: str) -> Axis:
         raise InputError(f"{flag}: {error}", field=flag) from None
 
 
-def landing_settings(**given: int | bool | str | None) -> AttractorSettings:
+def landing_settings(**given: float | bool | str | None) -> AttractorSettings:
     """The settings the options give, the others :class:`AttractorSettings`' defaults."""
     from oscillator.attractors.mapping import AttractorSettings
 
@@ -78,6 +78,14 @@ def landing_settings(**given: int | bool | str | None) -> AttractorSettings:
     except InputError as error:
         flag = f"--{(error.field or '').replace('_', '-')}"
         raise InputError(f"{flag}: {error}", field=flag) from None
+
+
+def analysis_settings(
+    transient: int | None, record: int | None, full_transient: bool, engine: str, cutoff: float | None
+) -> AttractorSettings:
+    """The settings of ``--transient``, ``--record``, ``--full-transient``, ``--engine`` and
+    ``--cutoff`` (:func:`landing_settings`)."""
+    return landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine, cutoff=cutoff)
 
 
 @command(100, "Basins of attraction over a slice of starting states.")

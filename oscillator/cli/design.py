@@ -10,12 +10,13 @@ import typer
 from rich.text import Text
 
 from oscillator.analysis.execution import check_workers
-from oscillator.cli.attractors import landing_settings
+from oscillator.cli.attractors import analysis_settings
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, out, say
 from oscillator.cli.inputs import case_from, refuse_taken
 from oscillator.cli.options import (
     CaseArgument,
+    CutoffOption,
     FullTransientOption,
     LandingEngineOption,
     NoPlotsOption,
@@ -29,6 +30,7 @@ from oscillator.cli.options import (
 )
 from oscillator.cli.resumable import computing, locked, new_folder, outputs, refusing, say_reused, with_progress
 from oscillator.errors import InputError
+from oscillator.model.parameters import check_count
 from oscillator.text import printable
 
 __all__ = ["design"]
@@ -66,6 +68,7 @@ _DEFAULTS: dict[str, object] = {
     "--record": None,
     "--full-transient": False,
     "--engine": "dop853",
+    "--cutoff": None,
     "--workers": None,
     "--scheduler": None,
 }
@@ -123,6 +126,7 @@ def design(
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
+    cutoff: CutoffOption = None,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
@@ -153,12 +157,13 @@ def design(
     """
     with refusing():
         ranges = parse_ranges(vary)
-    given = (constraint, starts, candidates, front, transient, record, full_transient, engine, workers, scheduler)
+    given: tuple[object, ...] = (constraint, starts, candidates, front, transient, record, full_transient, engine)
+    given += (cutoff, workers, scheduler)
     if _of_system(case, set_, ranges, (over, band), objective, out_dir, given, not no_plots, quiet):
         return
     with refusing():
         resolved = case_from(case, None, set_)
-        settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
+        settings = analysis_settings(transient, record, full_transient, engine, cutoff)
         load("oscillator.designing.optimise", notice=True)
         from oscillator.designing.optimise import design_store
         from oscillator.designing.problem import Problem
@@ -166,8 +171,6 @@ def design(
         name, low, high = over
         refuse_taken(set_, dict.fromkeys(ranges, "--vary") | {name: "--over"})
         problem = Problem.of(resolved, ranges, {name: (low, high)}, objective, constraint or [], band, starts)
-        from oscillator.model.parameters import check_count
-
         count = check_count(candidates, "candidates", 1, 100_000)
         check_count(front, "front", 1, 100)
         store = design_store(
@@ -181,9 +184,8 @@ def design(
 
         store.open()
         constraints = [str(c) for c in problem.constraints]
-        options: dict[str, Any] = {"band": band, "starts": starts, "candidates": count, "settings": settings}
-        options["front"] = front
-        options |= {"workers": processes, "client": client, "store": store}
+        options: dict[str, Any] = {"band": band, "starts": starts, "candidates": count, "front": front}
+        options |= {"settings": settings, "workers": processes, "client": client, "store": store}
         run = functools.partial(run_design, resolved, ranges, {name: (low, high)}, objective, constraints, **options)
         found = with_progress(run, f"{resolved.name}: design over {name}", "surveys", quiet)
         store.write_status("computed", feasible=found.best.feasible)

@@ -10,12 +10,13 @@ import typer
 from rich.text import Text
 
 from oscillator.analysis.execution import check_workers
-from oscillator.cli.attractors import landing_settings
+from oscillator.cli.attractors import analysis_settings
 from oscillator.cli.commands import command
 from oscillator.cli.console import fail, load, out, say
 from oscillator.cli.inputs import case_from, refuse_taken
 from oscillator.cli.options import (
     CaseArgument,
+    CutoffOption,
     FullTransientOption,
     LandingEngineOption,
     NoPlotsOption,
@@ -49,6 +50,7 @@ _DEFAULTS: dict[str, object] = {
     "--record": None,
     "--full-transient": False,
     "--engine": "dop853",
+    "--cutoff": None,
     "--workers": None,
     "--scheduler": None,
     "--period": 1,
@@ -76,6 +78,7 @@ def frc(
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
+    cutoff: CutoffOption = None,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
@@ -118,10 +121,9 @@ def frc(
     """
     from oscillator.cli.system import frc_system
 
-    given = (max_points, record, full_transient, engine, workers, scheduler, period, measure)
+    given = (max_points, record, full_transient, engine, cutoff, workers, scheduler, period, measure)
     case_only = [flag for flag, value in zip(_DEFAULTS, given, strict=True) if value != _DEFAULTS[flag]]
-    counts = (sweep, seeds, starts)
-    if frc_system(case, set_, param, counts, transient, out_dir, case_only, not no_plots, quiet, noise):
+    if frc_system(case, set_, param, (sweep, seeds, starts), transient, out_dir, case_only, not no_plots, quiet, noise):
         return
     with refusing():
         resolved = case_from(case, None, set_)
@@ -130,7 +132,7 @@ def frc(
         seeded = 5 if seeds is None else seeds
         options: dict[str, Any] = {"period": period, "seeds": seeded, "sweep": sweep, "max_points": max_points}
         _checked(resolved, (name, low, high), measure, starts, options)
-        settings = landing_settings(transient=transient, record=record, settle=not full_transient, engine=engine)
+        settings = analysis_settings(transient, record, full_transient, engine, cutoff)
         store = _opened(resolved, (name, low, high), starts, settings, options, out_dir)
         count = check_workers(workers, starts=2 * sweep + seeded * starts)  # the landings of sweeps and seeds
         lock, client = locked(store.folder, scheduler)

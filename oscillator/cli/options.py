@@ -53,6 +53,15 @@ FullTransientOption = Annotated[
         help="Run the whole --transient before recording, even where the motion has settled sooner.",
     ),
 ]
+#: ``--cutoff``: the cut-off of the response measures ``force_above`` and ``a_above`` (docs/noise.md).
+CutoffOption = Annotated[
+    float | None,
+    typer.Option(
+        "--cutoff",
+        metavar="HZ",
+        help="The measures force_above and a_above: the RMS of the harmonics above HZ (0: all but the mean).",
+    ),
+]
 #: ``--workers`` and ``--scheduler``: where the many runs run.
 WorkersOption = Annotated[
     int | None,

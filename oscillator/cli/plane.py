@@ -19,6 +19,7 @@ from oscillator.cli.options import (
     LANDING_ENGINES,
     AxisOption,
     CaseArgument,
+    CutoffOption,
     FullTransientOption,
     LandingEngineOption,
     NoPlotsOption,
@@ -78,6 +79,7 @@ def atlas(
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
+    cutoff: CutoffOption = None,
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out_dir: ResumableOutOption = None,
@@ -119,11 +121,13 @@ def atlas(
         refuse_taken(set_, {x_axis.name: "--x", y_axis.name: "--y"})
         from oscillator.attractors.atlas import atlas_settings, atlas_store, check_measures, measures_of
 
-        given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts}
+        given: dict[str, Any] = {"fresh_transient": transient, "record": record, "starts": starts, "cutoff": cutoff}
         chosen = {name: value for name, value in given.items() if value is not None}
         check_engine(engine, LANDING_ENGINES)
         if declared and engine != "dop853":
             raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
+        if declared and cutoff is not None:
+            raise InputError("--cutoff applies to the article's cases' force_above and a_above", field="--cutoff")
         settings = atlas_settings(resolved, **chosen, settle=not full_transient, engine=engine)
         count = check_workers(workers, starts=x_axis.count * y_axis.count * settings.starts)
         folder = out_dir if out_dir is not None else new_folder(stem if stem is not None else title, "atlas")

@@ -183,11 +183,14 @@ def survey(problem: Problem, settings: AttractorSettings, design: np.ndarray) ->
     return Judged.of(problem, design, seen, total, "survey")
 
 
-def follow(problem: Problem, judged: Judged, design: np.ndarray, *, gradients: bool = True) -> Judged:
+def follow(
+    problem: Problem, judged: Judged, design: np.ndarray, *, gradients: bool = True, cutoff: float = 0.0
+) -> Judged:
     """``judged``'s attractors continued to ``design`` by Newton, each with the derivatives of the
     objective's and the constraints' measures in the design's parameters (``gradients``; else
-    only their values, :meth:`~oscillator.Orbit.response`).  An attractor that Newton loses (it
-    ended at a fold or a boundary of its regime) raises the library's error."""
+    only their values, :meth:`~oscillator.Orbit.response`; ``force_above`` and ``a_above`` above
+    ``cutoff`` Hz).  An attractor that Newton loses (it ended at a fold or a boundary of its
+    regime) raises the library's error."""
     from oscillator.orbits.shooting import find_orbit
 
     before = runs()
@@ -200,10 +203,10 @@ def follow(problem: Problem, judged: Judged, design: np.ndarray, *, gradients: b
         overrides: dict[str, Any] = problem.design(design) | {problem.over[0]: s.band}
         orbit = find_orbit(problem.case, guess=s.state, period=s.period, **overrides)
         if not gradients:
-            seen.append(Seen(s.band, s.period, orbit.state, orbit.response().columns()))
+            seen.append(Seen(s.band, s.period, orbit.state, orbit.response(cutoff).columns()))
             continue
-        found = orbit.sensitivities(problem.names)
-        values = found.measures["value"].to_dict()
-        slopes = {m: found.measures.loc[m, [f"d/d{n}" for n in problem.names]].to_numpy(float) for m in measures}
+        table = orbit.sensitivities(problem.names).above(cutoff)
+        values = table["value"].to_dict()
+        slopes = {m: table.loc[m, [f"d/d{n}" for n in problem.names]].to_numpy(float) for m in measures}
         seen.append(Seen(s.band, s.period, orbit.state, values, slopes))
     return Judged.of(problem, design, seen, runs() - before, "followed")

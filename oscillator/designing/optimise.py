@@ -14,7 +14,8 @@ sensitivities, then a check from fresh starts (docs/design.md).
    epigraph form is smooth where each is.
 3. **Check**: the refined design surveyed again from fresh starts.  An attractor the refinement
    did not follow (one born on the way) that is worse is added and the refinement runs again (at
-   most :data:`ROUNDS` times).  The design returned is judged by that survey.
+   most :data:`ROUNDS` times); so it does from the refined design where SLSQP stopped short of
+   convergence (its line search failed: a kink it met on the way).  The design returned is judged by that survey.
 """
 
 from __future__ import annotations
@@ -54,8 +55,11 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["ROUNDS", "Design", "DesignStore", "design", "design_store", "refine"]
 
-#: The most refinements (each followed by a survey that may find a worse attractor).
+#: The most refinements (each followed by a survey that may find a worse attractor, or from where
+#: SLSQP stopped short of convergence).
 ROUNDS = 3
+#: What SLSQP's message says where it converged.
+CONVERGED = "terminated successfully"
 
 
 @dataclass(frozen=True)
@@ -130,8 +134,9 @@ class DesignStore(TableFolder):
     refinement and the check are computed again on resuming (a few percent of the work)."""
 
     #: 2: a survey's table has a failure column; 3: each part keyed by its task; 4: the impulses and
-    #: force_rms among a survey's measures (a folder of an earlier format is refused, not read as damaged).
-    FORMAT = 4
+    #: force_rms among a survey's measures (a folder of an earlier format is refused, not read as damaged);
+    #: 5: force_above and a_above among them.
+    FORMAT = 5
 
     def __init__(self, folder: Path, identity: dict[str, Any], *, name: str = "") -> None:
         super().__init__(folder, "design.json", identity, name=name)
@@ -211,8 +216,8 @@ class _Epigraph:
     """SLSQP's functions on ``z = (u, t)``, ``x = lower + u (upper - lower)``: each design followed
     once (a cache), every design it judged kept."""
 
-    def __init__(self, problem: Problem, base: Judged) -> None:
-        self.problem, self.base = problem, base
+    def __init__(self, problem: Problem, base: Judged, cutoff: float) -> None:
+        self.problem, self.base, self.cutoff = problem, base, cutoff
         self.scale = problem.upper - problem.lower
         self.judged: list[Judged] = []
         self._cache: dict[tuple[float, ...], Judged] = {}
@@ -222,7 +227,7 @@ class _Epigraph:
         key = tuple(u)
         if key not in self._cache:
             base = self.judged[-1] if self.judged else self.base
-            judged = follow(self.problem, base, self.problem.lower + u * self.scale)
+            judged = follow(self.problem, base, self.problem.lower + u * self.scale, cutoff=self.cutoff)
             self._cache[key] = judged
             self.judged.append(judged)
         return self._cache[key]
@@ -252,11 +257,14 @@ class _Epigraph:
         return {"type": "ineq", "fun": lambda z: self._rows(z)[0], "jac": lambda z: self._rows(z)[1]}
 
 
-def refine(problem: Problem, start: Judged, *, max_iterations: int = 50) -> tuple[list[Judged], str]:
-    """SLSQP from ``start`` (module docstring, stage 2): every design judged, and why it stopped."""
+def refine(
+    problem: Problem, start: Judged, *, max_iterations: int = 50, cutoff: float = 0.0
+) -> tuple[list[Judged], str]:
+    """SLSQP from ``start`` (module docstring, stage 2): every design judged, and why it stopped;
+    ``cutoff`` (Hz) that of the measures ``force_above`` and ``a_above``."""
     from scipy.optimize import minimize
 
-    epigraph = _Epigraph(problem, start)
+    epigraph = _Epigraph(problem, start, cutoff)
     u0 = (start.design - problem.lower) / epigraph.scale
     z0 = np.concatenate([u0, [start.objective]])
     bounds = [(0.0, 1.0)] * len(u0) + [(None, None)]
@@ -284,7 +292,7 @@ def _refined(
     and why the refinement stopped; ``spent`` gains their simulations."""
     best, rows, message = start, [], "no refinement"
     for round_ in range(1, ROUNDS + 1):
-        steps, message = refine(problem, best)
+        steps, message = refine(problem, best, cutoff=settings.cutoff)
         spent["refine"] += sum(j.runs for j in steps)
         rows += [_row(problem, j, round=round_) for j in steps]
         refined = min(steps, key=Judged.key) if steps else best
@@ -295,6 +303,7 @@ def _refined(
             refined.violation,
             refined.objective + 1e-6 * abs(refined.objective),
         )
+        settled = settled and CONVERGED in message  # SLSQP stopped short (a line search failed): again from there
         if settled or round_ == ROUNDS:
             return (checked if checked.key() <= start.key() else start), rows, message
         best = Judged.of(problem, refined.design, list(refined.seen) + list(checked.seen), 0, "followed")

@@ -159,12 +159,13 @@ class Branch:
         ``coordinate``), if given."""
         return presenter().plot_branch(self, check_coordinate(coordinate or self.coordinate), sweep_points)
 
-    def responses(self) -> pd.DataFrame:
+    def responses(self, cutoff: float = 0.0) -> pd.DataFrame:
         """The response measures at every point (:func:`oscillator.orbits.response.branch_responses`):
-        against ``Omega``, the branch's frequency response."""
+        against ``Omega``, the branch's frequency response; ``force_above`` and ``a_above`` above
+        ``cutoff`` Hz."""
         from oscillator.orbits.response import branch_responses
 
-        return branch_responses(self)
+        return branch_responses(self, cutoff)
 
     def noise(self, harmonics: int = 200, cutoff: float = 0.0) -> pd.DataFrame:
         """The noise measures at every point (:func:`oscillator.orbits.noise.branch_noise`; levels

@@ -27,13 +27,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_noise import smooth_stretches
 from oscillator.orbits.chain_peaks import quintic, sides
 from oscillator.orbits.chain_sensitivity import GAUSS, moving_point
 from oscillator.orbits.chain_tangents import NumberData
-from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE
+from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE, check_cutoff, harmonics_below
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.chain_sensitivity import ChainSensitivities
@@ -96,8 +95,7 @@ def chain_level_derivatives(found: ChainSensitivities, cutoff: float = 0.0) -> p
     differentiates and their derivatives in its numbers: one row per signal
     (``force_level:<element>``, ``acceleration_level:<mass>``), ``value`` and ``d/d<name>``; a
     signal that is zero all the return has the level ``-inf`` and no derivative (NaN)."""
-    if not isinstance(cutoff, int | float) or isinstance(cutoff, bool) or not (math.isfinite(cutoff) and cutoff >= 0):
-        raise InputError(f"cutoff must be a frequency in Hz, 0 or more, got {cutoff!r}", field="cutoff")
+    cutoff = check_cutoff(cutoff)
     orbit, (along, moved) = found.orbit, found._motion
     run, chain = orbit.run, orbit.chain
     t, states, modes = run.times, run.states, run.modes()
@@ -105,7 +103,7 @@ def chain_level_derivatives(found: ChainSensitivities, cutoff: float = 0.0) -> p
     signals = _Signals(found, at.contacts)
     span = orbit.period * chain.period
     stretch = np.array([-span / chain.Omega if name == "Omega" else 0.0 for name in found.params])
-    k = np.arange(math.floor(cutoff * span * (1 + 1e-12)) + 1)
+    k = np.arange(harmonics_below(cutoff, span) + 1)
     count = len(at.contacts) + len(chain.masses)
     totals = _Totals(count, len(k), len(found.params))
     nodes, weights = np.polynomial.legendre.leggauss(GAUSS)

@@ -35,19 +35,25 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from oscillator.errors import InputError
 from oscillator.model.fields import C3, D1, K3, K6, D, coefficients
 from oscillator.model.kernels import jacobian, rates
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.pieces import mode_flags
 from oscillator.orbits.sensitivity import selector_of, tangent_pass
-from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE, quadrature_nodes
+from oscillator.orbits.spectra import (
+    ACCELERATION_REFERENCE,
+    FORCE_REFERENCE,
+    STRETCHES,
+    check_cutoff,
+    harmonics_below,
+    quadrature_nodes,
+)
 from oscillator.orbits.tangent import field_gradient
 
 if TYPE_CHECKING:  # pragma: no cover
     from oscillator.orbits.sensitivity import Sensitivities
 
-__all__ = ["LEVELS", "level_derivatives"]
+__all__ = ["ABOVE", "LEVELS", "above_derivatives", "level_derivatives"]
 
 #: The levels, in the rows' order: each signal's name, the response measure of its RMS, whether
 #: that RMS is about the mean (the forces') and its decibel reference.
@@ -57,6 +63,15 @@ LEVELS = (
     ("acceleration_level_m1", "a_rms_m1", False, ACCELERATION_REFERENCE),
     ("acceleration_level_m2", "a_rms_m2", False, ACCELERATION_REFERENCE),
 )
+
+
+#: Each level's response measure above a cut-off (:func:`above_derivatives`), by its RMS's.
+ABOVE = {
+    "force_rms_right": "force_above_right",
+    "force_rms_left": "force_above_left",
+    "a_rms_m1": "a_above_m1",
+    "a_rms_m2": "a_above_m2",
+}
 
 
 def _signals(t: float, y: np.ndarray, mode: Mode, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -93,16 +108,59 @@ def level_derivatives(found: Sensitivities, cutoff: float = 0.0) -> pd.DataFrame
     and their derivatives in its parameters: one row per level of :data:`LEVELS`, ``value`` and
     ``d/d<param>``; a signal that is zero all the return (a contact that never closes) has the
     level ``-inf`` and no derivative (NaN)."""
-    if not isinstance(cutoff, int | float) or isinstance(cutoff, bool) or not (math.isfinite(cutoff) and cutoff >= 0):
-        raise InputError(f"cutoff must be a frequency in Hz, 0 or more, got {cutoff!r}", field="cutoff")
+    rows = []
+    for (square, d_square), (_, _, _, reference) in zip(_squares(found, cutoff), LEVELS, strict=True):
+        if square > 0:
+            rows.append([10 * math.log10(square / reference**2), *(10 / math.log(10) * d_square / square)])
+        else:
+            rows.append([-math.inf, *[math.nan] * len(found.params)])
+    return _table(found, [level for level, *_ in LEVELS], rows)
+
+
+def above_derivatives(found: Sensitivities, cutoff: float = 0.0) -> pd.DataFrame:
+    """The response measures ``force_above_right``, ``force_above_left``, ``a_above_m1`` and
+    ``a_above_m2`` above ``cutoff`` Hz (the RMS of every harmonic above it: ``sqrt`` of the mean
+    square the levels take, module docstring) and their derivatives, as rows of
+    :attr:`~oscillator.orbits.sensitivity.Sensitivities.measures`; a signal that is zero all the
+    return has the RMS 0 and the derivative 0 (a contact that does not close, nor nearby)."""
+    rows = []
+    for square, d_square in _squares(found, cutoff):
+        rms = math.sqrt(max(square, 0.0))
+        rows.append([rms, *(d_square / (2 * rms) if rms > 0 else np.zeros(len(found.params)))])
+    return _table(found, [ABOVE[rms] for _, rms, _, _ in LEVELS], rows)
+
+
+def _table(found: Sensitivities, index: list[str], rows: list[list[float]]) -> pd.DataFrame:
+    return pd.DataFrame(rows, index=index, columns=["value", *(f"d/d{name}" for name in found.params)])
+
+
+def _squares(found: Sensitivities, cutoff: float) -> list[tuple[float, np.ndarray]]:
+    """Each signal's (of :data:`LEVELS`) mean square above ``cutoff`` Hz and its derivative."""
+    coefficient, moved = _low_harmonics(found, check_cutoff(cutoff))
+    columns = [f"d/d{name}" for name in found.params]
+    squares = []
+    for s, (_, rms, about_mean, _) in enumerate(LEVELS):
+        r, dr = float(found.measures.loc[rms, "value"]), found.measures.loc[rms, columns].to_numpy(float)
+        low = range(1, coefficient.shape[1]) if about_mean else range(coefficient.shape[1])
+        weights = {j: 1.0 if j == 0 else 2.0 for j in low}  # the mean once, each harmonic twice
+        square = r * r - sum(w * abs(coefficient[s, j]) ** 2 for j, w in weights.items())
+        d_square = 2 * r * dr
+        d_square -= sum(2 * w * (coefficient[s, j].conjugate() * moved[s, j]).real for j, w in weights.items())
+        squares.append((square, d_square))
+    return squares
+
+
+def _low_harmonics(found: Sensitivities, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+    """The four signals' Fourier coefficients ``c_k`` at or below ``cutoff`` Hz, ``(4, K + 1)``,
+    and their derivatives in the parameters, ``(4, K + 1, params)`` (module docstring)."""
     segments, dy, dt_end = found._along
     orbit, names = found.orbit, found.params
     p = orbit.case.parameters
     c, selector = coefficients(p), selector_of(names)
     span = orbit.period * p.period
-    below = math.floor(cutoff * span * (1 + 1e-12))  # the harmonics at or below the cut-off
+    below = harmonics_below(cutoff, span)
     smooth = [(s.t0, s.t1) for s in segments if s.t1 > s.t0]
-    times, scales = _nodes(smooth, span / max(16, below))
+    times, scales = _nodes(smooth, span / max(STRETCHES, below))
     along = tangent_pass(segments, p, names, dy, segments[-1].t1, dt_end, times.tolist())
     k = np.arange(below + 1)
     coefficient = np.zeros((4, below + 1), complex)
@@ -126,23 +184,4 @@ def level_derivatives(found: Sensitivities, cutoff: float = 0.0) -> pd.DataFrame
                 value = _signals(t, y, piece.mode, c)[0]
                 moved += sign * (value[:, None] * wave[None, :])[:, :, None] * tau[None, None, :]
     moved -= coefficient[:, :, None] * (dt_end / span)[None, None, :]
-    return _levels(found, coefficient, moved)
-
-
-def _levels(found: Sensitivities, coefficient: np.ndarray, moved: np.ndarray) -> pd.DataFrame:
-    """The levels and their derivatives from the low harmonics ``c_k`` and their moves, and the
-    RMS values of the response measures with theirs."""
-    columns = [f"d/d{name}" for name in found.params]
-    rows = []
-    for s, (_, rms, about_mean, reference) in enumerate(LEVELS):
-        r, dr = float(found.measures.loc[rms, "value"]), found.measures.loc[rms, columns].to_numpy(float)
-        low = range(1, coefficient.shape[1]) if about_mean else range(coefficient.shape[1])
-        weights = {j: 1.0 if j == 0 else 2.0 for j in low}  # the mean once, each harmonic twice
-        square = r * r - sum(w * abs(coefficient[s, j]) ** 2 for j, w in weights.items())
-        d_square = 2 * r * dr
-        d_square -= sum(2 * w * (coefficient[s, j].conjugate() * moved[s, j]).real for j, w in weights.items())
-        if square > 0:
-            rows.append([10 * math.log10(square / reference**2), *(10 / math.log(10) * d_square / square)])
-        else:
-            rows.append([-math.inf, *[math.nan] * len(columns)])
-    return pd.DataFrame(rows, index=[level for level, *_ in LEVELS], columns=["value", *columns])
+    return coefficient, moved

@@ -49,7 +49,7 @@ from oscillator.model.kernels import rates
 from oscillator.model.parameters import check_count
 from oscillator.model.phase_space import Mode
 from oscillator.orbits.pieces import IntegratedPiece, mode_flags
-from oscillator.orbits.response import branch_points, integrated, left_force, measured
+from oscillator.orbits.response import Response, above, branch_points, integrated, left_force, measured
 from oscillator.orbits.spectra import (
     ACCELERATION_REFERENCE,
     FORCE_REFERENCE,
@@ -67,7 +67,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from oscillator.orbits.branch import Branch
 
-__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise", "point_noise"]
+__all__ = ["HARMONICS", "ContactNoise", "MassNoise", "Noise", "branch_noise", "noise", "point_noise", "response_above"]
 
 
 @dataclass(frozen=True)
@@ -217,12 +217,7 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
     check_count(harmonics, "harmonics", 0, 100_000)
     c = coefficients(case.parameters)
     span = periods * case.parameters.period
-    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
-    segments = [segment for segment in result.segments if segment.t1 > segment.t0]
-    pieces = [(segment, integrated(segment, c, dense=True)) for segment in segments]
-    response = measured(result, periods, [piece for _, piece in pieces])
-    parts: list[Piece] = [(s.t0, s.t1, functools.partial(_signals, piece, s.mode, c)) for s, piece in pieces]
-    found = fourier_coefficients(parts, span, harmonics).reshape(harmonics + 1, 4)  # the four signals at once
+    segments, response, found = _spectra(case, periods, harmonics)
     contacts = {
         name: _contact(name, found[:, k], response.contact[name], (span, periods))
         for k, name in enumerate(("right", "left"))
@@ -233,6 +228,29 @@ def noise(case: Case, periods: int = 1, harmonics: int = HARMONICS) -> Noise:
         steps = _steps(segments, c, i)
         masses[i] = MassNoise(i, spectrum, len(steps), max(steps, default=0.0))
     return Noise(case, periods, span, contacts, masses)
+
+
+def _spectra(case: Case, periods: int, harmonics: int) -> tuple[list[Segment], Response, np.ndarray]:
+    """One run of ``periods`` forcing periods from the case's start: its smooth segments, its
+    response measures and the four signals' Fourier coefficients to ``harmonics``, ``(harmonics +
+    1, 4)`` (:func:`_signals`' columns), from the same pieces integrated again."""
+    c = coefficients(case.parameters)
+    span = periods * case.parameters.period
+    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
+    segments = [segment for segment in result.segments if segment.t1 > segment.t0]
+    pieces = [(segment, integrated(segment, c, dense=True)) for segment in segments]
+    response = measured(result, periods, [piece for _, piece in pieces])
+    parts: list[Piece] = [(s.t0, s.t1, functools.partial(_signals, piece, s.mode, c)) for s, piece in pieces]
+    found = fourier_coefficients(parts, span, harmonics).reshape(harmonics + 1, 4)  # the four signals at once
+    return segments, response, found
+
+
+def response_above(case: Case, periods: int, below: int) -> Response:
+    """The response measures of the case's motion over ``periods`` forcing periods with
+    ``force_above`` and ``a_above`` above the return's ``below``-th harmonic
+    (:func:`oscillator.orbits.response.response` with a cut-off calls it)."""
+    _, response, found = _spectra(case, periods, below)
+    return above(response, found)
 
 
 def branch_noise(branch: Branch, harmonics: int = HARMONICS, cutoff: float = 0.0) -> pd.DataFrame:

@@ -14,6 +14,9 @@ forcing period and ``nT`` the return's length, per mass ``i``:
 * ``v_peak = max |v_i|`` (m/s), at an interior zero of the acceleration or at a switch (the
   acceleration jumps at a contact);
 * ``a_rms = sqrt(1/nT integral a_i^2 dt)`` (m/s^2), ``a_i`` the field of the mode (0 at rest);
+* ``a_above`` (m/s^2): the RMS of the acceleration's harmonics above the cut-off (``cutoff`` Hz, 0
+  by default: ``sqrt(a_rms^2 - abar^2)``, every harmonic but the mean ``abar``, which is the
+  velocity's change over the return divided by ``nT``: 0 on an orbit);
 * ``rest``: the fraction of the return the mass rests;
 
 per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the masses, ``z1 = -d``):
@@ -37,6 +40,10 @@ per contact (``right``: m1 on the stop at ``x1 = d1``; ``left``: between the mas
   - impulse_rate^2)``: by Parseval, its spectrum's every harmonic above 0 Hz, whose level is
   ``20 log10(force_rms / 1 N)`` dB (the noise measures of docs/noise.md that the integrals give
   exactly);
+* ``force_above`` (N): the RMS of the force's harmonics above the cut-off (``cutoff`` Hz):
+  ``sqrt(force_rms^2 - sum_{0 < k/nT <= cutoff} 2 |c_k|^2)``, ``c_k`` its Fourier coefficients
+  (:mod:`oscillator.orbits.noise`); ``force_rms`` at the default cut-off 0; its level is
+  ``20 log10(force_above / 1 N)`` dB, a design's "spectral level above a cut-off";
 
 and per forcing period (J): ``forcing`` (work of ``Q_i sin(Omega t + phi_i)``), ``feedback``
 (work of the constant forces ``-P_i s_i``), ``dampers`` (lost in ``C1, C2, C4, C5``),
@@ -49,7 +56,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -64,6 +71,7 @@ from oscillator.model.events import COLUMN, KINDS, WIDTH, EventKind
 from oscillator.model.fields import C3, K3, D, coefficients
 from oscillator.model.parameters import Parameters, check_count
 from oscillator.orbits.pieces import ARTICLE_PIECE, IntegratedPiece, article_data, integrate_piece, mode_flags
+from oscillator.orbits.spectra import check_cutoff, harmonics_below
 from oscillator.orbits.tangent import INTEGRALS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -80,6 +88,8 @@ __all__ = [
     "MASS_MEASURES",
     "UNITS",
     "Response",
+    "above",
+    "above_note",
     "branch_points",
     "branch_responses",
     "impact_speeds",
@@ -92,7 +102,7 @@ __all__ = [
 ]
 
 #: The measures of each mass and of each contact, in :class:`Response`'s order.
-MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "rest")
+MASS_MEASURES = ("x_max", "x_min", "x_pp", "x_rms", "v_peak", "a_rms", "a_above", "rest")
 CONTACT_MEASURES = (
     "onsets",
     "impact_max",
@@ -105,6 +115,7 @@ CONTACT_MEASURES = (
     "impulse",
     "impulse_rate",
     "force_rms",
+    "force_above",
 )
 ENERGY_MEASURES = ("forcing", "feedback", "dampers", "contact", "friction")
 #: Every measure's column, in :meth:`Response.columns`'s order: ``x_max_m1, ..., impact_max_right,
@@ -116,10 +127,17 @@ COLUMNS = (
 )
 #: The unit of each measure (empty: a fraction or a count per period); energies in J per period.
 UNITS = {"x_max": "m", "x_min": "m", "x_pp": "m", "x_rms": "m", "v_peak": "m/s", "a_rms": "m/s²", "rest": ""}
+UNITS |= {"a_above": "m/s²"}
 UNITS |= {"onsets": "per period", "impact_max": "m/s", "impact_mean": "m/s", "force_peak": "N", "time": ""}
 UNITS |= {"impact_rate": "1/s", "impact_energy": "J", "impact_power": "W", "impulse": "N s", "impulse_rate": "N"}
-UNITS |= {"force_rms": "N"}
+UNITS |= {"force_rms": "N", "force_above": "N"}
 UNITS |= {name: "J per period" for name in ENERGY_MEASURES}
+
+
+def above_note(column: str, cutoff: float) -> str:
+    """``", above 1 Hz"`` for a measure above a cut-off (``force_above_left``, ``a_above_m1``: the
+    cut-off named where it is drawn), ``""`` for another."""
+    return f", above {cutoff:g} Hz" if column.startswith(("force_above", "a_above")) else ""
 
 
 def unit_of(column: str) -> str:
@@ -151,15 +169,35 @@ class Response:
         return flat | {f"energy_{name}": value for name, value in self.energy.items()}
 
 
-def response(case: Case, periods: int = 1) -> Response:
+def response(case: Case, periods: int = 1, cutoff: float = 0.0) -> Response:
     """The response measures of the case's motion from its start over ``periods`` forcing periods
     (module docstring): of an orbit, over its return (:meth:`oscillator.Orbit.response`); of
-    another start, ``response(resolve_case(case, x1=..., v1=..., x2=..., v2=...), periods)``."""
+    another start, ``response(resolve_case(case, x1=..., v1=..., x2=..., v2=...), periods)``.
+    ``force_above`` and ``a_above`` are the RMS of the harmonics above ``cutoff`` Hz."""
     if not isinstance(case, Case):  # a declared system's measures: orbit_measures(find_orbit(chain))
         raise InputError(not_a_case(case), field="case")
     check_count(periods, "periods", 1, 100_000)
+    below = harmonics_below(check_cutoff(cutoff), periods * case.parameters.period)
+    if below:  # the low harmonics from the same run: the noise measures'
+        from oscillator.orbits.noise import response_above
+
+        return response_above(case, periods, below)
     span = periods * case.parameters.period
     return measured(simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True)), periods)
+
+
+def above(found: Response, low: np.ndarray) -> Response:
+    """``found`` with ``force_above`` and ``a_above`` above a cut-off: less the harmonics ``1..K``
+    whose Fourier coefficients are ``low``'s rows ``1..K`` (columns: the right stop's force, the
+    left contact's, m1's and m2's accelerations, :func:`oscillator.orbits.noise.noise`'s)."""
+    removed = 2 * np.sum(np.abs(low[1:]) ** 2, axis=0)
+    contact = {stop: dict(values) for stop, values in found.contact.items()}
+    mass = {i: dict(values) for i, values in found.mass.items()}
+    for k, stop in enumerate(("right", "left")):
+        contact[stop]["force_above"] = math.sqrt(max(contact[stop]["force_rms"] ** 2 - removed[k], 0.0))
+    for i in (1, 2):
+        mass[i]["a_above"] = math.sqrt(max(mass[i]["a_above"] ** 2 - removed[1 + i], 0.0))
+    return replace(found, mass=mass, contact=contact)
 
 
 def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | None = None) -> Response:
@@ -181,6 +219,7 @@ def measured(result: Result, periods: int, solved: Sequence[IntegratedPiece] | N
         contact[stop] |= impacts(contact[stop]["onsets"], lost, pushed, p.period)
         squared = float(totals[FORCE_SQUARE[stop]]) / periods
         contact[stop]["force_rms"] = math.sqrt(max(squared / p.period - (pushed / p.period) ** 2, 0.0))
+        contact[stop]["force_above"] = contact[stop]["force_rms"]  # above 0 Hz; above a cut-off: above()
     return Response(periods, mass, contact, energy)
 
 
@@ -217,12 +256,13 @@ def branch_points(branch: Branch) -> Iterator[tuple[dict[str, Any], Case]]:
         yield {branch.param: values[branch.param], "stable": values["stable"], "piece": values["piece"]}, case
 
 
-def branch_responses(branch: Branch) -> pd.DataFrame:
+def branch_responses(branch: Branch, cutoff: float = 0.0) -> pd.DataFrame:
     """The response measures at every point of a continued branch: one row per point with the
     parameter, ``stable``, ``piece`` and every measure of :meth:`Response.columns` (the
-    frequency response of the branch, when the parameter is ``Omega``).  Each point's orbit is
-    refined by Newton to :data:`REFINE` first, or to where the period map's noise stops it
-    (:func:`~oscillator.orbits.shooting.newton`'s ``floor``), and measured on Newton's last run;
+    frequency response of the branch, when the parameter is ``Omega``; ``force_above`` and
+    ``a_above`` above ``cutoff`` Hz).  Each point's orbit is refined by Newton to :data:`REFINE`
+    first, or to where the period map's noise stops it (:func:`~oscillator.orbits.shooting.newton`'s
+    ``floor``), and measured on Newton's last run (with a cut-off, on a run from Newton's point);
     it stays as it is where Newton fails (a grazing or sliding point)."""
     import pandas as pd
 
@@ -234,10 +274,14 @@ def branch_responses(branch: Branch) -> pd.DataFrame:
         state = np.array(case.initial.y, dtype=float)
         try:
             tight = tightened(case, {})
-            _, image, _ = newton(tight, branch.section, state, branch.period, tol=REFINE, max_iterations=20, floor=True)
-            measures = measured(image.result, branch.period)
+            y, image, _ = newton(tight, branch.section, state, branch.period, tol=REFINE, max_iterations=20, floor=True)
+            if cutoff:  # the low harmonics need the pieces' dense output: a run from Newton's point
+                refined = resolve_case(case, **dict(zip(case.system.state, (float(v) for v in y), strict=True)))
+                measures = response(refined, branch.period, cutoff)
+            else:
+                measures = measured(image.result, branch.period)
         except OscillatorError:
-            measures = response(case, branch.period)
+            measures = response(case, branch.period, cutoff)
         rows.append(row | measures.columns())
     return pd.DataFrame(rows)
 
@@ -307,6 +351,7 @@ def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, fl
     squares = sum(float(piece.integrals[_SQUARES + mass - 1]) for piece in pieces)
     accelerations = sum(float(piece.integrals[_SQUARES + 1 + mass]) for piece in pieces)
     high, low = max(ends), min(ends)
+    mean = (pieces[-1].segment.y1[column + 1] - pieces[0].segment.y0[column + 1]) / span  # of a_i: dv_i/nT
     return {
         "x_max": float(high),
         "x_min": float(low),
@@ -314,6 +359,7 @@ def _mass_measures(pieces: list[_Piece], mass: int, span: float) -> dict[str, fl
         "x_rms": math.sqrt(max(squares, 0.0) / span),
         "v_peak": float(max(piece.speed[mass - 1] for piece in pieces)),
         "a_rms": math.sqrt(max(accelerations, 0.0) / span),
+        "a_above": math.sqrt(max(accelerations / span - mean**2, 0.0)),
         "rest": rest / span,
     }
 

@@ -254,7 +254,10 @@ def measure_derivatives(
         rates["force_rms"] = _fluctuation(
             _fraction(ends.integral(FORCE_SQUARE[stop]), span, dspan), rates["impulse_rate"]
         )
+        rates["force_above"] = rates["force_rms"]  # above 0 Hz; above a cut-off: Sensitivities.above
         found |= {f"{name}_{stop}": value for name, value in rates.items()}
+    for mass in (1, 2):  # on an orbit the acceleration's mean, the velocity's change, is 0
+        found[f"a_above_m{mass}"] = found[f"a_rms_m{mass}"]
     rows = {column: [found[column][0], *np.asarray(found[column][1], dtype=float)] for column in COLUMNS}
     return pd.DataFrame.from_dict(rows, orient="index", columns=["value", *(f"d/d{name}" for name in names)])
 

@@ -439,6 +439,18 @@ class Sensitivities:
 
         return level_derivatives(self, cutoff)
 
+    def above(self, cutoff: float = 0.0) -> pd.DataFrame:
+        """:attr:`measures` with ``force_above_right``, ``force_above_left``, ``a_above_m1`` and
+        ``a_above_m2`` above ``cutoff`` Hz (the RMS of every harmonic above it) and their exact
+        derivatives (:func:`oscillator.orbits.level_derivatives.above_derivatives`)."""
+        from oscillator.orbits.level_derivatives import above_derivatives
+
+        table = self.measures.copy()
+        if cutoff:
+            found = above_derivatives(self, cutoff)
+            table.loc[found.index] = found
+        return table
+
     def of(self, measure: str) -> pd.Series:
         """The derivatives of one measure (``impact_max_right``, ...) in each parameter."""
         if measure not in self.measures.index:

@@ -149,12 +149,13 @@ class Orbit:
         t_end = self.section + self.period * self.case.parameters.period
         return dataclasses.replace(self.case, initial=initial, t_end=t_end, expected=(), keep_events_from=None)
 
-    def response(self) -> Response:
+    def response(self, cutoff: float = 0.0) -> Response:
         """The orbit's response measures over one return (:func:`oscillator.orbits.response.response`:
-        peaks, RMS values, rests, contacts, impact velocities, contact forces, energies)."""
+        peaks, RMS values, rests, contacts, impact velocities, contact forces, energies; the forces'
+        and accelerations' RMS above ``cutoff`` Hz)."""
         from oscillator.orbits.response import response
 
-        return response(self.one_period(), self.period)
+        return response(self.one_period(), self.period, cutoff)
 
     def noise(self, harmonics: int = 200) -> Noise:
         """The orbit's noise measures over one return (:func:`oscillator.orbits.noise.noise`: per

@@ -7,9 +7,10 @@ smooth piece of an orbit, zero between contacts) has the coefficients
     c_k = 1/P integral_0^P f(t) exp(-2 pi i k t / P) dt,   k = 0, 1, ..., K,
 
 computed here by Gauss-Legendre quadrature on each piece, split so that no sub-interval is longer
-than the highest harmonic's period: with :data:`NODES` nodes a sub-interval integrates a
-polynomial of degree ``2 NODES - 1`` exactly (and the harmonic's half turn on each side of its
-middle to about 1e-30), so a smooth piece's coefficients are exact to rounding, however the signal
+than the highest harmonic's period, nor than a :data:`STRETCHES`-th of ``P``: with :data:`NODES`
+nodes a sub-interval integrates a polynomial of degree ``2 NODES - 1`` exactly (and the
+harmonic's half turn on each side of its middle to about 1e-30), so a smooth piece's coefficients
+are exact to rounding, however the signal
 jumps between pieces (a sampled FFT would alias the jumps).  The
 mean square is ``|c_0|^2 + 2 sum_k |c_k|^2`` (Parseval), the harmonic ``k`` at ``k / P`` Hz.
 """
@@ -25,6 +26,7 @@ import numpy as np
 
 from oscillator.errors import InputError
 from oscillator.model.parameters import check_count
+from oscillator.text import shown
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -32,10 +34,13 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "HARMONICS",
     "NODES",
+    "STRETCHES",
     "Piece",
     "Spectrum",
     "a_weighting",
+    "check_cutoff",
     "fourier_coefficients",
+    "harmonics_below",
     "level_db",
     "mean_square_above",
     "quadrature_nodes",
@@ -51,6 +56,9 @@ HARMONICS = 200
 
 #: Gauss-Legendre nodes per sub-interval.
 NODES = 16
+#: The fewest stretches a period is split into: no stretch longer than a sixteenth of it, nor than
+#: the highest harmonic's period (a few harmonics of a long piece are as exact as many).
+STRETCHES = 16
 #: The decibel references: of a force level, 1 N; of an acceleration level, 1e-6 m/s^2 (ISO 1683).
 FORCE_REFERENCE, ACCELERATION_REFERENCE = 1.0, 1e-6
 
@@ -76,7 +84,7 @@ def fourier_coefficients(pieces: Sequence[Piece], period: float, harmonics: int)
     check_count(harmonics, "harmonics", 0, 100_000)
     if not period > 0 or not math.isfinite(period):
         raise InputError(f"period must be a positive number of seconds, got {period!r}", field="period")
-    longest = period / max(harmonics, 1)
+    longest = period / max(harmonics, STRETCHES)
     total: np.ndarray | float = 0.0
     for t0, t1, f in pieces:
         if not t1 > t0:
@@ -117,6 +125,19 @@ def a_weighting(frequency: np.ndarray) -> np.ndarray:
         ra = (12194.0**2 * f2**2) / ((f2 + 20.6**2) * np.sqrt((f2 + 107.7**2) * (f2 + 737.9**2)) * (f2 + 12194.0**2))
         gain: np.ndarray = 20.0 * np.log10(ra) + 2.0
     return gain
+
+
+def check_cutoff(cutoff: object, field: str = "cutoff") -> float:
+    """``cutoff``, a frequency in Hz of 0 or more, or the error that names ``field``."""
+    if not isinstance(cutoff, int | float) or isinstance(cutoff, bool) or not (math.isfinite(cutoff) and cutoff >= 0):
+        raise InputError(f"{field} must be a frequency in Hz, 0 or more, got {shown(cutoff)}", field=field)
+    return float(cutoff)
+
+
+def harmonics_below(cutoff: float, span: float) -> int:
+    """How many harmonics of a return of ``span`` seconds lie above 0 Hz and at or below ``cutoff``
+    Hz: harmonic ``k`` is at ``k / span`` Hz."""
+    return math.floor(cutoff * span * (1 + 1e-12))
 
 
 def mean_square_above(

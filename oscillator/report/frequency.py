@@ -13,7 +13,7 @@ import numpy as np
 
 from oscillator.errors import InputError
 from oscillator.orbits.branch import Bifurcation
-from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS
+from oscillator.orbits.response import CONTACT_MEASURES, ENERGY_MEASURES, MASS_MEASURES, UNITS, above_note
 from oscillator.report import markup as mk
 from oscillator.report.orbits import bifurcation_style, modified_blocks
 from oscillator.report.outputs import color_of, quantity_label, wrapped_title
@@ -83,7 +83,9 @@ def frequency_figure(found: FrequencyResponse, measure: str = "x_pp") -> Figure:
         _branches(ax, found, column)
         _sweeps(ax, found, column)
         unit = UNITS[measure.removeprefix("energy_")] or "fraction of the period"
-        ax.set_ylabel(f"{measure} of {of} ({unit})" if of else f"{measure} ({unit})", fontsize=9)
+        unit += above_note(measure, found.cutoff)
+        label = f"{measure} of {of}" if of else measure
+        ax.set_ylabel(f"{label}{' ' if len(label) + len(unit) < 48 else chr(10)}({unit})", fontsize=9)
         ax.grid(alpha=0.3)
         ax.ticklabel_format(useOffset=False)
     axes[-1].set_xlabel(quantity_label(found.param))
@@ -275,7 +277,8 @@ def write_frequency(
         figures += [(SPECTRA_FIGURE, functools.partial(spectra_response_figure, found, noise[1]))] if plots else []
     _, branches = branches_on_disk(found.param, list(found.branches))
     with atomic_path(folder / RESPONSE) as temporary:  # NaN kept as JSON's NaN, as the parts keep it
-        temporary.write_text(json.dumps({"measure": measure, "branches": branches}, indent=1), encoding="utf-8")
+        info = {"measure": measure, "branches": branches, "cutoff": found.cutoff}
+        temporary.write_text(json.dumps(info, indent=1), encoding="utf-8")
     title = f"{found.case.name}: frequency response"
     blocks = frequency_blocks(found, measures if plots else []) + noise_blocks(found, noise, plots)
     return write_folder(folder, tables, figures, blocks, title)
@@ -355,6 +358,7 @@ def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:
     try:
         info = json.loads(read_untrusted(where, what="frequency-response file", field=RESPONSE, limit=64 << 20))
         measure, meta = info["measure"], info["branches"]
+        cutoff = float(info["cutoff"]) if "cutoff" in info else 0.0  # a folder of before the cut-off: 0 Hz
     except (ValueError, KeyError, TypeError, RecursionError) as error:
         raise InputError(f"{printable(str(where))} is damaged ({error}); {_REMAKE}", field=RESPONSE) from None
     if measure not in MEASURES:
@@ -374,7 +378,7 @@ def read_frequency(folder: Path) -> tuple[FrequencyResponse, str]:
     )
     if not sweeps["direction"].isin(("up", "down")).all():
         raise InputError(f"{printable(str(folder))}/sweeps.parquet is damaged (a direction); {_REMAKE}", field="folder")
-    found = FrequencyResponse(param, tuple(branches), points_from_disk(table), sweeps, case, period)
+    found = FrequencyResponse(param, tuple(branches), points_from_disk(table), sweeps, case, period, cutoff)
     return found, measure
 
 

@@ -107,7 +107,7 @@ def _write_atlas(found: Atlas, folder: Path) -> list[str]:
     from oscillator.report.attractors import name_of
     from oscillator.report.plane import write_atlas
 
-    _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y), name_of(found.case))
+    _marker(folder, "atlas.json", identity(found.case, x=found.x, y=found.y, cutoff=found.cutoff), name_of(found.case))
     return write_atlas(found, folder)
 
 

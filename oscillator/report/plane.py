@@ -62,10 +62,10 @@ def atlas_measures(atlas: Atlas) -> dict[str, str]:
     table has (a chain's has no fixed impact velocity) and the response measures it was computed
     with (their largest value over a point's attractors)."""
     from oscillator.orbits.chain_response import measure_unit
-    from oscillator.orbits.response import unit_of
+    from oscillator.orbits.response import above_note, unit_of
 
     unit = measure_unit if isinstance(atlas.case, FrictionChain) else unit_of
-    units = {name: f" ({unit(name)})" if unit(name) else "" for name in atlas.measures}
+    units = {name: f" ({unit(name)}{above_note(name, atlas.cutoff)})" if unit(name) else "" for name in atlas.measures}
     fixed = {by: what for by, what in ATLAS_MEASURES.items() if by in atlas.table}
     return fixed | {name: f"largest {name} over the attractors{units[name]}" for name in atlas.measures}
 
@@ -292,11 +292,13 @@ def read_atlas(folder: Path, case: Case | FrictionChain | None = None) -> Atlas:
         info = json.loads(read_untrusted(folder / "atlas.json", what="atlas file", field="folder", limit=1_000_000))
         identity = info["identity"]
         x, y = (Axis(**identity[name]) for name in ("x", "y"))
+        held = identity["settings"] if "settings" in identity else identity  # computed, or saved (Atlas.save)
+        cutoff = float(held["cutoff"]) if "cutoff" in held else 0.0  # an atlas of before the cut-off: 0 Hz
         table = pd.read_parquet(folder / "atlas.parquet")
         case = case if case is not None else folder_system(folder, "atlas.json")
     except (OSError, ValueError, KeyError, TypeError, OscillatorError) as error:
         raise InputError(f"{shown_folder} holds no finished atlas ({error})", field="folder") from None
-    found = Atlas(case, x, y, table)
+    found = Atlas(case, x, y, table, cutoff)
     try:
         found.grid()  # every point in its cell, or the table is damaged
     except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
