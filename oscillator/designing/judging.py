@@ -62,18 +62,20 @@ class Seen:
         return math.inf if not math.isfinite(value) else float(value)
 
 
-def seen_table(seen: list[Seen]) -> pd.DataFrame:
-    """``seen`` as a table: ``band, period, x1, v1, x2, v2`` and every response measure (``nan``
-    where unmeasured), one row per attractor (a design store's part)."""
+def seen_table(seen: list[Seen], **extra: str) -> pd.DataFrame:
+    """``seen`` as a table: ``band, period, x1, v1, x2, v2``, every response measure (``nan``
+    where unmeasured) and ``failure``, one row per attractor (a design store's part); ``extra``
+    columns after them, each one value for every row."""
     from oscillator.orbits.response import COLUMNS
 
     rows = [
         {"band": s.band, "period": s.period, **dict(zip(_STATE, s.state, strict=True))}
         | {name: float(s.measures.get(name, math.nan)) for name in COLUMNS}
         | {"failure": s.failure}
+        | extra
         for s in seen
     ]
-    return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS, "failure"])
+    return pd.DataFrame(rows, columns=["band", "period", *_STATE, *COLUMNS, "failure", *extra])
 
 
 def seen_columns() -> dict[str, str]:

@@ -15,8 +15,9 @@ A period-``N`` orbit is a fixed point of ``P``, found by Newton's method ``y <- 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, overload
 
@@ -101,7 +102,8 @@ class Orbit:
     iterations : int
         Newton steps taken.
     events : DataFrame
-        The event table over one period of the orbit.
+        The event table over one period of the orbit (built from its rows, ``event_records``,
+        when first asked for: most orbits an analysis finds are never shown event by event).
     history : tuple of float
         The residual before each Newton step and after the last.
     resting : tuple of int
@@ -128,11 +130,21 @@ class Orbit:
     stable: bool
     residual: float
     iterations: int
-    events: pd.DataFrame
+    #: The event table, or its rows (:attr:`oscillator.Result.event_rows`) until :attr:`events` is asked for.
+    event_records: pd.DataFrame | np.ndarray = field(repr=False, compare=False)
     history: tuple[float, ...] = ()
     resting: tuple[int, ...] = ()
     discontinuous: tuple[str, ...] = ()
     note: str = ""
+
+    @functools.cached_property
+    def events(self) -> pd.DataFrame:
+        """The event table over one period of the orbit."""
+        if isinstance(self.event_records, np.ndarray):
+            from oscillator.io.tables import events_frame
+
+            return events_frame(self.event_records)
+        return self.event_records
 
     @property
     def signature(self) -> tuple[tuple[int, EventKind], ...]:
@@ -462,7 +474,7 @@ def orbit_of(case: Case, section: float, state: np.ndarray, image: PeriodMap, hi
         stable=verdict_of(image.monodromy, resting),
         residual=history[-1],
         iterations=len(history) - 1,
-        events=image.events,
+        event_records=image.events if image.result.event_rows is None else image.result.event_rows,
         history=tuple(history),
         resting=resting,
         discontinuous=discontinuities(case, image),

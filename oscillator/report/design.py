@@ -39,12 +39,11 @@ def band_responses(found: Design, count: int | None = None) -> pd.DataFrame:
     name, low, high = problem.over
     margin = 0.25 * (high - low)
     values = np.linspace(low - margin, high + margin, count)
-    frames = []
+    seen: dict[str, list[Seen]] = {"before": [], "after": []}
     for label, judged in (("before", found.start), ("after", found.best)):
         for value in values:
-            seen, _ = survey_task(problem, settings, tuple(judged.design), float(value))
-            frame = seen_table(seen).assign(design=label)
-            frames.append(frame)
+            seen[label] += survey_task(problem, settings, tuple(judged.design), float(value))[0]
+    frames = [seen_table(attractors, design=label) for label, attractors in seen.items()]  # one table a design
     return pd.concat(frames, ignore_index=True).rename(columns={"band": name})
 
 
@@ -52,12 +51,13 @@ def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
     """The objective(s) and each constrained measure against the band's parameter, every attractor,
     before (the global search's best, grey) and after (the design found); the band shaded, each
     constraint's bound dashed."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     problem = found.problem
     name, low, high = problem.over
     measures = problem.measures  # the objectives, then the constrained measures, each once
-    fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.8 * len(measures) + 0.6), sharex=True, squeeze=False)
+    fig = Figure(figsize=(8, 2.8 * len(measures) + 0.6), layout="tight")
+    axes = fig.subplots(len(measures), 1, sharex=True, squeeze=False)
     for ax, measure in zip(axes[:, 0], measures, strict=True):
         ax.axvspan(low, high, color="0.92", zorder=0, label="operating band")
         for label, style in (
@@ -79,7 +79,6 @@ def design_figure(found: Design, responses: pd.DataFrame) -> Figure:
     shown = f"{float(responses[name].min()):g} to {float(responses[name].max()):g}" if len(responses) else "-"
     what = f"the measures judged before and after, {name} from {shown}; the operating band [{low:g}, {high:g}] shaded"
     fig.suptitle(wrapped_title(problem.case, what), fontsize=9)
-    fig.tight_layout()
     return fig
 
 
@@ -110,11 +109,12 @@ def search_figure(found: Design) -> Figure:
     """The global search's candidates in the plane of the first two varied parameters (or the
     worst objective against the one), coloured by their worst objective (infeasible: grey
     crosses), the refinement's path and the design found."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     problem, table = found.problem, found.candidates
     names = problem.names
-    fig, ax = plt.subplots(figsize=(6.5, 5))
+    fig = Figure(figsize=(6.5, 5), layout="tight")
+    ax = fig.subplots()
     feasible = table[table.violation == 0]
     infeasible = table[table.violation > 0]
     history = found.history[found.history.how == "followed"] if len(found.history) else found.history
@@ -139,18 +139,18 @@ def search_figure(found: Design) -> Figure:
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax.set_title(wrapped_title(problem.case, "the global search and the refinement"), fontsize=9)
-    fig.tight_layout()
     return fig
 
 
 def front_figure(found: Design) -> Figure:
     """The two worst cases of every candidate (grey; infeasible: crosses) and the Pareto front's
     refined designs (joined), each labelled with its parameters."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     problem, table, front = found.problem, found.candidates, found.front
     (second,) = problem.also
-    fig, ax = plt.subplots(figsize=(8.5, 5))
+    fig = Figure(figsize=(8.5, 5), layout="tight")
+    ax = fig.subplots()
     feasible, infeasible = table[table.violation == 0], table[table.violation > 0]
     ax.scatter(feasible.second, feasible.objective, color="0.6", label="candidates")
     ax.scatter(infeasible.second, infeasible.objective, color="0.6", marker="x", label="breaks a constraint")
@@ -180,7 +180,6 @@ def front_figure(found: Design) -> Figure:
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax.set_title(wrapped_title(problem.case, "the Pareto front of the two worst cases"), fontsize=9)
-    fig.tight_layout()
     return fig
 
 

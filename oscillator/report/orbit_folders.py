@@ -381,7 +381,7 @@ def orbit_of(data: object, case: Case, events: pd.DataFrame, damaged: Callable[[
         stable=data["stable"],
         residual=float(numbers("residual", ())),
         iterations=int(numbers("iterations", ())),
-        events=events,
+        event_records=events,
         history=tuple(float(v) for v in numbers("history", (len(history),))),
         resting=tuple(resting),
         discontinuous=tuple(discontinuous),
