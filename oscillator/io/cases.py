@@ -502,26 +502,38 @@ def resolve_case(
         check_setting(key)
         group = next(group for group, names in _OVERRIDABLE if key in names)
         groups[group][key] = value
-    resolved = dataclasses.replace(
-        case,
-        parameters=dataclasses.replace(case.parameters, **groups["parameters"]),
-        initial=dataclasses.replace(case.initial, **groups["initial"]),
-        options=dataclasses.replace(case.options, **groups["options"]),
-        t_end=case.t_end + (groups["initial"]["t0"] - case.initial.t0 if "t0" in groups["initial"] else 0.0)
-        if t_end is None
-        else t_end,
-        keep_events_from=case.keep_events_from if keep_events_from is None else keep_events_from,
+    # each group rebuilt (and checked) only where it changes: the hot paths change one parameter
+    parameters = (
+        dataclasses.replace(case.parameters, **groups["parameters"]) if groups["parameters"] else case.parameters
     )
+    initial = dataclasses.replace(case.initial, **groups["initial"]) if groups["initial"] else case.initial
+    options = dataclasses.replace(case.options, **groups["options"]) if groups["options"] else case.options
+    parts = {"parameters": parameters, "initial": initial}
     changes = tuple(
-        f"{name} {getattr(old, name):.10g} → {getattr(new, name):.10g}"
-        for old, new in ((case.parameters, resolved.parameters), (case.initial, resolved.initial))
-        for name in old.names()
-        if getattr(new, name) != getattr(old, name)
+        f"{name} {getattr(case_part, name):.10g} → {getattr(parts[group], name):.10g}"
+        for group, case_part in (("parameters", case.parameters), ("initial", case.initial))
+        for name in case_part.names()
+        if name in groups[group] and getattr(parts[group], name) != getattr(case_part, name)
     )
+    if t_end is None:  # a new start without an end keeps the run's length
+        t_end = case.t_end + (initial.t0 - case.initial.t0 if "t0" in groups["initial"] else 0.0)
+    t_end = real_argument(t_end, "run.t_end")  # checked before the expected events are compared with it
+    expected: tuple[ExpectedEvent, ...] = ()
     if changes:
-        return dataclasses.replace(resolved, expected=(), modified=(*case.modified, *changes))
-    kept = tuple(e for e in resolved.expected if (t := _expected_time(e)) is None or t <= resolved.t_end)
-    return dataclasses.replace(resolved, expected=kept)
+        modified = (*case.modified, *changes)
+    else:
+        expected = tuple(e for e in case.expected if (t := _expected_time(e)) is None or t <= t_end)
+        modified = case.modified
+    return dataclasses.replace(
+        case,
+        parameters=parameters,
+        initial=initial,
+        options=options,
+        t_end=t_end,
+        keep_events_from=case.keep_events_from if keep_events_from is None else keep_events_from,
+        expected=expected,
+        modified=modified,
+    )
 
 
 def _expected_time(expected: ExpectedEvent) -> float | None:
