@@ -141,6 +141,15 @@ def test_a_cut_off_that_is_not_a_frequency_is_refused_naming_it(call):
             "frc docs/systems/impacts.toml --param Omega 1 1.6 --cutoff 1",
             "--cutoff",
         ),
+        (
+            "attractors docs/systems/impacts.toml --param Omega --from 1.6 --to 1.0 --steps 2 --cutoff 1",
+            "--cutoff applies to the article's cases",
+        ),
+        (
+            "basins docs/systems/blade-damper.toml --x x:blade -2 2 2 --y v:blade -2 2 2 --cutoff 1",
+            "--cutoff applies to the article's cases",
+        ),
+        ("basins instance-1 --x x1 2 4 2 --y v1 -2 2 2 --cutoff -2", "--cutoff: cutoff must be a frequency in Hz"),
     ],
 )
 def test_the_commands_refuse_a_bad_or_inapplicable_cut_off_before_any_work(tmp_path, capsys, arguments, words):
@@ -214,3 +223,22 @@ def test_an_atlas_colours_by_the_measure_above_its_cut_off_names_it_and_keeps_it
     found.save(tmp_path / "atlas")
     again = osc.read_run(tmp_path / "atlas")
     assert again.cutoff == 1.0 and again.table["force_above_left"].equals(found.table["force_above_left"])
+
+
+def test_the_basins_command_measures_its_attractors_above_its_cut_off(tmp_path, orbit):
+    """``oscillator basins ... --cutoff 1``: the period-1 attractor's row in attractors.parquet has
+    the orbit's measures above 1 Hz (1e-8)."""
+    import pandas as pd
+
+    from oscillator.cli.app import main
+
+    arguments = "basins instance-1 --set d=1 --set d1=3.5 --set Omega=1.6 --x x1 2 4 2 --y v1 -2 2 2"
+    arguments += " --transient 100 --record 8 --cutoff 1 --no-plots --quiet"
+    with pytest.raises(SystemExit) as done:
+        main([*arguments.split(), "--out", str(tmp_path / "b")])
+    assert done.value.code == 0
+    table = pd.read_parquet(tmp_path / "b" / "attractors.parquet")
+    expected = orbit.response(1.0).columns()
+    row = table[table.period == 1].iloc[0]
+    for name in ABOVE:
+        assert row[name] == pytest.approx(expected[name], rel=1e-8), name

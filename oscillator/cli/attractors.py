@@ -19,8 +19,10 @@ from oscillator.cli.console import fail, load, message, out, progress_bar, say, 
 from oscillator.cli.inputs import case_from, check_engine, refuse_taken
 from oscillator.cli.options import (
     LANDING_ENGINES,
+    NO_CUTOFF,
     AxisOption,
     CaseArgument,
+    CutoffOption,
     FullTransientOption,
     LandingEngineOption,
     NoPlotsOption,
@@ -104,6 +106,7 @@ def basins(
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
+    cutoff: CutoffOption = None,
     max_period: Annotated[
         int | None, typer.Option("--max-period", metavar="N", help="The longest period looked for (default 16).")
     ] = None,
@@ -137,7 +140,7 @@ def basins(
     with refusing():
         x_axis, y_axis = axis_of(x, "--x"), axis_of(y, "--y")
         chosen = {"transient": transient, "record": record, "max_period": max_period, "engine": engine}
-        settings = landing_settings(**chosen, settle=not full_transient)
+        settings = landing_settings(**chosen, cutoff=cutoff, settle=not full_transient)
     from oscillator.cli.system_attractors import basins_system
 
     if basins_system(case, (x_axis, y_axis), settings, (workers, scheduler, out_dir), set_, no_plots, quiet):
@@ -304,6 +307,7 @@ def attractors(
     record: RecordOption = None,
     full_transient: FullTransientOption = False,
     engine: LandingEngineOption = "dop853",
+    cutoff: CutoffOption = None,
     coordinate: Annotated[
         str | None,
         typer.Option(
@@ -345,7 +349,8 @@ def attractors(
     with refusing():
         resolved, stem, title = subject_of(case, set_)
         refuse_taken(set_, {param: "--param"} | {axis[0]: option for axis, option in ((x, "--x"), (y, "--y")) if axis})
-        given = {"transient": transient, "record": record, "settle": not full_transient, "engine": engine}
+        given: dict[str, Any] = {"transient": transient, "record": record, "settle": not full_transient}
+        given |= {"engine": engine, "cutoff": cutoff}
         name = stem if stem is not None else title  # the default folder's
         plan = _open_following(resolved, param, (start, stop, steps), (x, y), tol, given, coordinate, out_dir, name)
         values, states, settings, store, coordinate = plan
@@ -408,6 +413,8 @@ def _open_following(
     declared = isinstance(case, FrictionChain)
     if declared and given["engine"] != "dop853":
         raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
+    if declared and given["cutoff"] is not None:
+        raise InputError(NO_CUTOFF, field="--cutoff")
     if isinstance(steps, bool) or not 2 <= steps <= 10_000:
         raise InputError(f"--steps must be a whole number from 2 to 10000, got {steps!r}", field="--steps")
     if (x is None) != (y is None):

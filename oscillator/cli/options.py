@@ -62,6 +62,8 @@ CutoffOption = Annotated[
         help="The measures force_above and a_above: the RMS of the harmonics above HZ (0: all but the mean).",
     ),
 ]
+#: Why a system file refuses ``--cutoff``.
+NO_CUTOFF = "--cutoff applies to the article's cases' force_above and a_above"
 #: ``--workers`` and ``--scheduler``: where the many runs run.
 WorkersOption = Annotated[
     int | None,

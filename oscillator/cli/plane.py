@@ -17,6 +17,7 @@ from oscillator.cli.console import fail, load, message, out, progress_bar, say
 from oscillator.cli.inputs import check_engine, refuse_taken
 from oscillator.cli.options import (
     LANDING_ENGINES,
+    NO_CUTOFF,
     AxisOption,
     CaseArgument,
     CutoffOption,
@@ -127,7 +128,7 @@ def atlas(
         if declared and engine != "dop853":
             raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
         if declared and cutoff is not None:
-            raise InputError("--cutoff applies to the article's cases' force_above and a_above", field="--cutoff")
+            raise InputError(NO_CUTOFF, field="--cutoff")
         settings = atlas_settings(resolved, **chosen, settle=not full_transient, engine=engine)
         count = check_workers(workers, starts=x_axis.count * y_axis.count * settings.starts)
         folder = out_dir if out_dir is not None else new_folder(stem if stem is not None else title, "atlas")

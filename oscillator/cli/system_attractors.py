@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from oscillator.analysis.execution import check_workers
 from oscillator.cli.console import load
+from oscillator.cli.options import NO_CUTOFF
 from oscillator.cli.resumable import computing, locked, new_folder, refusing, with_progress
 from oscillator.cli.system import changed
 from oscillator.errors import InputError
@@ -60,6 +61,8 @@ def basins_system(
 
         if settings.engine != "dop853":
             raise InputError("--engine applies to the article's cases: a system runs on CVODE", field="--engine")
+        if settings.cutoff:
+            raise InputError(NO_CUTOFF, field="--cutoff")
         chain_grid(chain, x, y)
         folder = out_dir if out_dir is not None else new_folder(stem, "basins")
         store = basin_store(folder, chain, x, y, settings)
