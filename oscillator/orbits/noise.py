@@ -42,6 +42,7 @@ from oscillator.compiled import njit
 from oscillator.errors import InputError
 from oscillator.hybrid.record import Segment
 from oscillator.hybrid.recording import SaveAt
+from oscillator.hybrid.result import Result
 from oscillator.hybrid.simulate import simulate
 from oscillator.io.cases import Case, not_a_case
 from oscillator.model.fields import D1, K6, coefficients
@@ -234,9 +235,16 @@ def _spectra(case: Case, periods: int, harmonics: int) -> tuple[list[Segment], R
     """One run of ``periods`` forcing periods from the case's start: its smooth segments, its
     response measures and the four signals' Fourier coefficients to ``harmonics``, ``(harmonics +
     1, 4)`` (:func:`_signals`' columns), from the same pieces integrated again."""
-    c = coefficients(case.parameters)
     span = periods * case.parameters.period
-    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
+    return _spectra_of(
+        simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True)), periods, harmonics
+    )
+
+
+def _spectra_of(result: Result, periods: int, harmonics: int) -> tuple[list[Segment], Response, np.ndarray]:
+    """:func:`_spectra` of a run of ``periods`` forcing periods that kept its segments."""
+    c = coefficients(result.case.parameters)
+    span = periods * result.case.parameters.period
     segments = [segment for segment in result.segments if segment.t1 > segment.t0]
     pieces = [(segment, integrated(segment, c, dense=True)) for segment in segments]
     response = measured(result, periods, [piece for _, piece in pieces])
@@ -245,11 +253,11 @@ def _spectra(case: Case, periods: int, harmonics: int) -> tuple[list[Segment], R
     return segments, response, found
 
 
-def response_above(case: Case, periods: int, below: int) -> Response:
-    """The response measures of the case's motion over ``periods`` forcing periods with
+def response_above(result: Result, periods: int, below: int) -> Response:
+    """The response measures of a run of ``periods`` forcing periods that kept its segments, with
     ``force_above`` and ``a_above`` above the return's ``below``-th harmonic
-    (:func:`oscillator.orbits.response.response` with a cut-off calls it)."""
-    _, response, found = _spectra(case, periods, below)
+    (:func:`oscillator.orbits.response.measured_above` calls it)."""
+    _, response, found = _spectra_of(result, periods, below)
     return above(response, found)
 
 

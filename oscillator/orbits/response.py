@@ -97,6 +97,7 @@ __all__ = [
     "integrated",
     "left_force",
     "measured",
+    "measured_above",
     "response",
     "unit_of",
 ]
@@ -177,13 +178,21 @@ def response(case: Case, periods: int = 1, cutoff: float = 0.0) -> Response:
     if not isinstance(case, Case):  # a declared system's measures: orbit_measures(find_orbit(chain))
         raise InputError(not_a_case(case), field="case")
     check_count(periods, "periods", 1, 100_000)
-    below = harmonics_below(check_cutoff(cutoff), periods * case.parameters.period)
-    if below:  # the low harmonics from the same run: the noise measures'
-        from oscillator.orbits.noise import response_above
-
-        return response_above(case, periods, below)
+    check_cutoff(cutoff)
     span = periods * case.parameters.period
-    return measured(simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True)), periods)
+    result = simulate(case, t_end=case.initial.t0 + span, save=SaveAt(steps=False, segments=True))
+    return measured_above(result, periods, cutoff)
+
+
+def measured_above(result: Result, periods: int, cutoff: float) -> Response:
+    """:func:`measured`, with ``force_above`` and ``a_above`` above ``cutoff`` Hz: the low harmonics
+    from the same run's pieces, integrated again with their dense output (the noise measures')."""
+    below = harmonics_below(cutoff, periods * result.case.parameters.period)
+    if not below:
+        return measured(result, periods)
+    from oscillator.orbits.noise import response_above
+
+    return response_above(result, periods, below)
 
 
 def above(found: Response, low: np.ndarray) -> Response:
@@ -262,24 +271,21 @@ def branch_responses(branch: Branch, cutoff: float = 0.0) -> pd.DataFrame:
     frequency response of the branch, when the parameter is ``Omega``; ``force_above`` and
     ``a_above`` above ``cutoff`` Hz).  Each point's orbit is refined by Newton to :data:`REFINE`
     first, or to where the period map's noise stops it (:func:`~oscillator.orbits.shooting.newton`'s
-    ``floor``), and measured on Newton's last run (with a cut-off, on a run from Newton's point);
+    ``floor``), and measured on Newton's last run;
     it stays as it is where Newton fails (a grazing or sliding point)."""
     import pandas as pd
 
     from oscillator.errors import OscillatorError
     from oscillator.orbits.shooting import newton, tightened
 
+    check_cutoff(cutoff)
     rows = []
     for row, case in branch_points(branch):
         state = np.array(case.initial.y, dtype=float)
         try:
             tight = tightened(case, {})
-            y, image, _ = newton(tight, branch.section, state, branch.period, tol=REFINE, max_iterations=20, floor=True)
-            if cutoff:  # the low harmonics need the pieces' dense output: a run from Newton's point
-                refined = resolve_case(case, **dict(zip(case.system.state, (float(v) for v in y), strict=True)))
-                measures = response(refined, branch.period, cutoff)
-            else:
-                measures = measured(image.result, branch.period)
+            _, image, _ = newton(tight, branch.section, state, branch.period, tol=REFINE, max_iterations=20, floor=True)
+            measures = measured_above(image.result, branch.period, cutoff)
         except OscillatorError:
             measures = response(case, branch.period, cutoff)
         rows.append(row | measures.columns())
