@@ -162,3 +162,21 @@ def test_a_private_scratch_folder_refuses_one_others_can_write(tmp_path, monkeyp
     assert folder == tmp_path / f"probe-{os.getuid()}" and oct(folder.stat().st_mode & 0o777) == "0o700"
     folder.chmod(0o777)
     assert private_scratch("probe") is None
+
+
+def test_a_slice_assigned_from_another_shape_raises_numbas_plain_message():
+    """A kernel's slice assignment between shapes that differ is still a ValueError, with numba's
+    plain message: the one naming both shapes is not compiled (oscillator.compiled)."""
+    import numpy as np
+
+    from oscillator.compiled import njit
+
+    @njit
+    def assign(into, values):
+        into[:2] = values
+
+    with pytest.raises(ValueError, match=r"^cannot assign slice from input of different size$"):
+        assign(np.zeros(4), np.zeros(3))
+    into = np.zeros(4)
+    assign(into, np.array([1.0, 2.0]))
+    assert into.tolist() == [1.0, 2.0, 0.0, 0.0]

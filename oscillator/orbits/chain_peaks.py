@@ -273,8 +273,17 @@ def _rows_at(
     n, size = len(t), field.size
     rates, seconds = np.empty((n, size)), np.empty((n, size))
     forces, force_rates = np.empty((n, len(contacts))), np.empty((n, len(contacts)))
-    _field_at_rows(
-        t, np.ascontiguousarray(states), datas, which, contacts, field.arrays.size, rates, seconds, forces, force_rates
+    _field_at_rows(  # contiguous arrays: one compiled version (a strided time column compiled another, 3 s cold)
+        np.ascontiguousarray(t),
+        np.ascontiguousarray(states),
+        datas,
+        which,
+        contacts,
+        field.arrays.size,
+        rates,
+        seconds,
+        forces,
+        force_rates,
     )
     return _Rows(rates, seconds, forces, force_rates)
 
