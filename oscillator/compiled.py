@@ -117,9 +117,8 @@ def _plain_shape_errors() -> None:
 
     The CPU message formats both shapes; numba compiles that formatting (``str`` of integers,
     joined) in every process that compiles a kernel assigning a slice from an array, once a pair
-    of dimensions (``python benchmarks/compile.py``: the kernels compiled cold, 99.0 s -> 87.1 s
-    with this and the chains' one compiled version of ``_field_at_rows``).  It is the message of a
-    bug in a kernel, and stays a ``ValueError``."""
+    of dimensions (measured by ``python benchmarks/compile.py``: docs/performance.md, Start-up).
+    It is the message of a bug in a kernel, and stays a ``ValueError``."""
     from numba.np import arrayobj
 
     cpu = getattr(arrayobj, "ol_raise_with_shape_context_cpu", None)

@@ -273,7 +273,7 @@ def _rows_at(
     n, size = len(t), field.size
     rates, seconds = np.empty((n, size)), np.empty((n, size))
     forces, force_rates = np.empty((n, len(contacts))), np.empty((n, len(contacts)))
-    _field_at_rows(  # contiguous arrays: one compiled version (a strided time column compiled another, 3 s cold)
+    _field_at_rows(  # contiguous arrays: one compiled version (a strided time column compiled a second one)
         np.ascontiguousarray(t),
         np.ascontiguousarray(states),
         datas,
