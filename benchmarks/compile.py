@@ -2,8 +2,8 @@
 in order, in one fresh process (the command's kernels, the compiled landing's, the period map's,
 the friction chains'), as the test suite compiles them before its workers start
 (``tests/conftest.py``).  With ``--against DIR`` (a checkout of an earlier commit, ``git worktree
-add DIR REV``) the same in a fresh process on that code, alternating, each with an empty cache of
-its own; the date, the cores and the load average before each printed beside.
+add DIR REV``) the same on that code (:mod:`checkouts`: fresh processes, alternating, the least of
+the repeats), each process with an empty cache of its own.
 
 Usage: python benchmarks/compile.py [--against DIR] [--repeats N]
 """
@@ -12,18 +12,18 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import json
 import os
-import subprocess
-import sys
-import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from checkouts import ROOT, alternating, fastest, timed
 
-#: The compiles, in order, each timed; the last line printed is their seconds as JSON.
-_SCRIPT = """
-import json, sys, time
+#: The compiles, in order, each timed, in a process whose numba cache is a new empty folder (set
+#: before numba is imported); its last line is ``{name: [seconds, None]}``.
+_CALLS = """
+import json, os, sys, tempfile, time
+empty = tempfile.TemporaryDirectory()
+os.environ["NUMBA_CACHE_DIR"] = empty.name
+os.environ["OSCILLATOR_COMPILE_NOTICE"] = "0"
 root = sys.argv[1]
 sys.path[:0] = [root, root + "/tests"]
 import oscillator
@@ -51,23 +51,10 @@ seconds = {}
 for name, step in steps.items():
     started = time.perf_counter()
     step()
-    seconds[name] = time.perf_counter() - started
+    seconds[name] = (time.perf_counter() - started, None)
+empty.cleanup()
 print(json.dumps(seconds))
 """
-
-
-def cold(root: Path, scratch: Path) -> dict[str, float]:
-    """The seconds of each compile on the code at ``root``, numba's cache empty."""
-    cache = Path(tempfile.mkdtemp(dir=scratch))
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "OSCILLATOR_COMPILE_NOTICE": "0"}
-    print(f"    {root}: load average before {os.getloadavg()[0]:.2f}", flush=True)
-    done = subprocess.run(
-        [sys.executable, "-c", _SCRIPT, str(root)], env=env, cwd=scratch, capture_output=True, text=True
-    )
-    if done.returncode != 0:
-        sys.exit(f"the compile on {root} failed:\n{done.stderr[-3000:]}")
-    seconds: dict[str, float] = json.loads(done.stdout.strip().splitlines()[-1])
-    return seconds
 
 
 def main() -> None:
@@ -75,23 +62,19 @@ def main() -> None:
     parser.add_argument("--against", type=Path, help="a checkout of an earlier commit to compare with")
     parser.add_argument("--repeats", type=int, default=1, help="runs of each code, alternating (default 1)")
     options = parser.parse_args()
-    trees = [ROOT] if options.against is None else [options.against.resolve(), ROOT]
     started = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
-    print(f"{started}, {len(os.sched_getaffinity(0))} cores, numba's cache empty for each run")
-    runs: dict[Path, list[dict[str, float]]] = {tree: [] for tree in trees}
-    with tempfile.TemporaryDirectory() as scratch:
-        for _ in range(options.repeats):
-            for tree in trees:
-                runs[tree].append(cold(tree, Path(scratch)))
-    print(f"load average at the end {os.getloadavg()[0]:.2f}; the least of {options.repeats} run(s) each, seconds:")
-    names = list(runs[ROOT][0])
-    print(f"{'compiled':<24}" + "".join(f"{str(tree)[-28:]:>30}" for tree in trees))
-    for name in [*names, "in all"]:
-        cells = []
-        for tree in trees:
-            values = [sum(run.values()) if name == "in all" else run[name] for run in runs[tree]]
-            cells.append(f"{min(values):>30.1f}")
-        print(f"{name:<24}" + "".join(cells))
+    print(f"{started}, {len(os.sched_getaffinity(0))} cores, load {os.getloadavg()[0]:.2f}, numba's cache empty")
+    if options.against is None:
+        runs = {"now": [timed(ROOT, _CALLS) for _ in range(options.repeats)]}
+    else:
+        runs = alternating(options.against, _CALLS, repeats=options.repeats)
+    print(f"load at the end {os.getloadavg()[0]:.2f}; the least of {options.repeats} run(s) each, seconds:")
+    print(f"{'compiled':<24}" + "".join(f"{label:>10}" for label in runs))
+    names = list(runs["now"][0])
+    for name in names:
+        print(f"{name:<24}" + "".join(f"{fastest(each, name):>10.1f}" for each in runs.values()))
+    totals = [min(sum(seconds for seconds, _ in run.values()) for run in each) for each in runs.values()]
+    print(f"{'in all':<24}" + "".join(f"{total:>10.1f}" for total in totals))
 
 
 if __name__ == "__main__":
