@@ -8,7 +8,10 @@ each); the answers must be the same.
    x_max:blade --band 5``, the library call: ``chain_design(..., sweep=5)``);
 2. its frequency sweep over the band at F = 0.5 N, 11 values (each orbit by Newton with the exact
    monodromy, its measures);
-3. 200 period maps of its orbit at Omega = 1.1 with their tangent pass (what a Newton step takes).
+3. 200 period maps of its orbit at Omega = 1.1 with their tangent pass (what a Newton step takes);
+4. the calibration of docs/calibration.md's command (``oscillator calibrate
+   docs/systems/rattler.toml docs/measured/rattler-response.csv ...``, the library call
+   ``calibrate(...)``): every residual's orbit with its measures' exact derivatives.
 
 Paths: period maps and their tangents only, no table read unless a measure needs it (trajectory
 off for a user: nothing is written).
@@ -49,6 +52,18 @@ def sweep():
     return table["x_max:blade"].tolist()
 
 
+def calibration():
+    from pathlib import Path
+
+    from oscillator import calibrate
+    from oscillator.io.measurements import read_measurements
+
+    rattler = load_system(sys.argv[3]).with_values({"floor.mu_k": 0.08, "floor.mu_s": 0.2, "stop.K": 30.0})
+    vary = {"floor.mu_k": (0.02, 0.14), "floor.mu_s": (0.14, 0.4), "stop.K": (10.0, 200.0)}
+    found = calibrate(rattler, read_measurements(Path(sys.argv[4])), vary)
+    return found.estimate.tolist()
+
+
 def maps():
     for _ in range(200):
         image = chain_period_map(loaded, loaded.t0, orbit.state)
@@ -59,12 +74,13 @@ def maps():
 import oscillator
 assert oscillator.__file__.startswith(sys.argv[1]), oscillator.__file__
 """
-_CALLS = script(_BODY, ("design", "sweep", "maps"))
+_CALLS = script(_BODY, ("design", "sweep", "maps", "calibration"))
 
 LABELS = {
     "design": "docs/systems.md's damper design (chain_design, sweep=5)",
     "sweep": "its frequency sweep at F = 0.5 N, 11 values",
     "maps": "200 period maps with their tangent pass",
+    "calibration": "docs/calibration.md's calibration of the rattler (calibrate)",
 }
 
 
@@ -74,8 +90,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     print(f"benchmarks/chain_paths.py, {dt.datetime.now():%Y-%m-%d %H:%M}, load {os.getloadavg()[0]:.2f}")
-    system = str(ROOT / "docs" / "systems" / "blade-damper.toml")
-    runs = alternating(args.against, _CALLS, system, repeats=args.repeats)
+    files = [ROOT / "docs" / "systems" / "blade-damper.toml", ROOT / "docs" / "systems" / "rattler.toml"]
+    files.append(ROOT / "docs" / "measured" / "rattler-response.csv")
+    runs = alternating(args.against, _CALLS, *map(str, files), repeats=args.repeats)
     for name, label in LABELS.items():
         before, now = fastest(runs["before"], name), fastest(runs["now"], name)
         same = runs["before"][0][name][1] == runs["now"][0][name][1]

@@ -29,7 +29,7 @@ import pandas as pd
 
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.orbits.chain_noise import smooth_stretches
-from oscillator.orbits.chain_peaks import quintic, sides
+from oscillator.orbits.chain_peaks import nodes_of, sides
 from oscillator.orbits.chain_sensitivity import GAUSS, moving_point
 from oscillator.orbits.chain_tangents import NumberData
 from oscillator.orbits.spectra import ACCELERATION_REFERENCE, FORCE_REFERENCE, check_cutoff, harmonics_below
@@ -107,19 +107,18 @@ def chain_level_derivatives(found: ChainSensitivities, cutoff: float = 0.0) -> p
     count = len(at.contacts) + len(chain.masses)
     totals = _Totals(count, len(k), len(found.params))
     nodes, weights = np.polynomial.legendre.leggauss(GAUSS)
+    where = (nodes + 1.0) / 2.0
     when = {c.t: c.time_derivative(moved) for c in along.crossings}
     for first, last in smooth_stretches(t, modes):
-        for step in range(first, last + 1):
-            h = float(t[step + 1] - t[step])
-            ends = (
-                *(states[step], at.left.rates[step], at.left.seconds[step]),
-                *(states[step + 1], at.right.rates[step], at.right.seconds[step]),
-            )
-            for s, weight in zip((nodes + 1.0) / 2.0, weights, strict=True):
-                time, y = float(t[step] + s * h), quintic(float(s), h, ends)
-                value = signals.values(time, y, signals.data(modes[step])[0], modes[step, at.contacts] != 0.0)
-                change = signals.moves(time, y, modes[step], point(time)[: chain.system.size])
-                totals.add(value, change, time, 0.5 * h * weight, (span, k, stretch))
+        steps = np.arange(first, last + 1)  # the stretch's nodes, their states and moves at once
+        times, states_at = nodes_of(run, at, steps, where)
+        deltas = point(times.ravel())[:, : chain.system.size]
+        scales = (0.5 * np.diff(t)[steps][:, None] * weights).ravel()
+        data, closed = signals.data(modes[first])[0], modes[first, at.contacts] != 0.0
+        nodal = zip(times.ravel().tolist(), states_at.reshape(-1, states.shape[1]), deltas, scales, strict=True)
+        for time, y, delta, scale in nodal:
+            change = signals.moves(time, y, modes[first], delta)
+            totals.add(signals.values(time, y, data, closed), change, time, scale, (span, k, stretch))
         for time, y, step, side in ((t[first], states[first], first, -1.0), (t[last + 1], states[last + 1], last, 1.0)):
             shift = stretch if time == orbit.section + span else when.get(float(time), np.zeros(len(stretch)))
             if time == orbit.section:

@@ -37,6 +37,7 @@ __all__ = [
     "Peak",
     "Sides",
     "impulses",
+    "nodes_of",
     "peak_places",
     "peaks",
     "quintic",
@@ -126,11 +127,26 @@ def within(run: ChainResult, at: Sides, steps: tuple[int, int], times: np.ndarra
     times = np.asarray(times, dtype=float)
     k = np.clip(np.searchsorted(t, times, side="right") - 1, first, last)
     h = (t[k + 1] - t[k])[:, None]
-    ends = (states[k], at.left.rates[k], at.left.seconds[k], states[k + 1], at.right.rates[k], at.right.seconds[k])
-    y = quintic((times[:, None] - t[k][:, None]) / h, h, ends)
+    y = quintic((times[:, None] - t[k][:, None]) / h, h, _step_ends(states, at, k))
     which = np.zeros(len(y), dtype=np.int64)
     found = _rows_at(at.field, times, y, at.data[first][None, :], which, np.asarray(at.contacts, np.int64))
     return found.rates, found.forces
+
+
+def nodes_of(run: ChainResult, at: Sides, steps: np.ndarray, where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The times at the fractions ``where`` (0 to 1) of each of the run's ``steps`` (the step
+    from ``t[k]`` to ``t[k + 1]`` for each ``k``) and the quintic's states there through each
+    step's ends: arrays ``(steps, where)`` and ``(steps, where, state)``."""
+    t = run.times
+    h = t[steps + 1] - t[steps]
+    times = t[steps][:, None] + where[None, :] * h[:, None]
+    ends = tuple(end[:, None, :] for end in _step_ends(run.states, at, steps))
+    return times, quintic(where[None, :, None], h[:, None, None], ends)
+
+
+def _step_ends(states: np.ndarray, at: Sides, k: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The ends of the steps ``k`` (from row ``k`` to ``k + 1``) as :func:`quintic` takes them."""
+    return (states[k], at.left.rates[k], at.left.seconds[k], states[k + 1], at.right.rates[k], at.right.seconds[k])
 
 
 def peaks(run: ChainResult, at: Sides | None = None) -> dict[str, float]:

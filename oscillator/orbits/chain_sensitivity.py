@@ -53,7 +53,7 @@ from oscillator.hybrid.chain_run import closed_spans, mode_spans, stuck_spans
 from oscillator.model.chain_fields import chain_derivative, chain_jacobian, element_force, element_gradient
 from oscillator.model.chains import Element, FrictionChain
 from oscillator.orbits.chain_orbits import ChainOrbit
-from oscillator.orbits.chain_peaks import Peak, impulses, peak_places, quintic, sides, slip_steps
+from oscillator.orbits.chain_peaks import Peak, impulses, nodes_of, peak_places, sides, slip_steps
 from oscillator.orbits.chain_response import extremes, measure_names, orbit_measures
 from oscillator.orbits.chain_tangents import ChainPass, NumberData, check_names, tangent_pass
 from oscillator.text import printable
@@ -323,7 +323,9 @@ def _peak_derivative(
 
 
 def _contact_integrals(
-    orbit: ChainOrbit, along: ChainPass, motion: tuple[np.ndarray, Callable[[float], np.ndarray], np.ndarray]
+    orbit: ChainOrbit,
+    along: ChainPass,
+    motion: tuple[np.ndarray, Callable[[float | np.ndarray], np.ndarray], np.ndarray],
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Each stop's and contact's derivatives of its force's integral over the return and of its
     work, the integral of its power ``F (v_on - v_with)`` (module docstring); ``motion``:
@@ -339,28 +341,22 @@ def _contact_integrals(
     start, span = orbit.section, orbit.period * chain.period
     when = {c.t: c.time_derivative(moved) for c in along.crossings}
     nodes, weights = np.polynomial.legendre.leggauss(GAUSS)
+    where = (nodes + 1.0) / 2.0
     found, packed = {}, {}
     for row in at.contacts:
         element = chain.elements[row]
         rel = _closing_weights(chain, element)
         closed = np.flatnonzero((modes[:-1, row] != 0.0) & (np.diff(t) > 0.0))
         total = np.zeros((2, len(along.params)))
-        for k in closed.tolist():
-            key = modes[k].tobytes()
+        times, states_at = nodes_of(run, at, closed, where)  # every closed step's nodes at once
+        deltas = point(times.ravel()).reshape(*times.shape, *moved.shape)
+        scales = 0.5 * (t[closed + 1] - t[closed])[:, None] * weights[None, :]
+        for k, step in enumerate(closed.tolist()):
+            key = modes[step].tobytes()
             if key not in packed:
-                packed[key] = numbers.of(modes[k])
-            h, data = float(t[k + 1] - t[k]), packed[key]
-            ends = (
-                states[k],
-                at.left.rates[k],
-                at.left.seconds[k],
-                states[k + 1],
-                at.right.rates[k],
-                at.right.seconds[k],
-            )
-            for s, weight in zip((nodes + 1.0) / 2.0, weights, strict=True):
-                y = quintic(float(s), h, ends)
-                total += 0.5 * h * weight * _integrands_moved(float(t[k] + s * h), y, point, data, (row, rel), numbers)
+                packed[key] = numbers.of(modes[step])
+            for time, y, delta, scale in zip(times[k].tolist(), states_at[k], deltas[k], scales[k], strict=True):
+                total += scale * _integrands_moved(time, y, delta, packed[key], (row, rel), numbers)
         for a, b in closed_spans(run, element.name, start, span):  # the ends, each on its closed side
             for time, side in ((a, -1.0), (b, 1.0)):
                 moves = (
@@ -377,20 +373,20 @@ def _contact_integrals(
 def _integrands_moved(
     t: float,
     y: np.ndarray,
-    point: Callable[[float], np.ndarray],
+    moved: np.ndarray,
     data: tuple[np.ndarray, np.ndarray, np.ndarray],
     element: tuple[int, np.ndarray],
     numbers: NumberData,
 ) -> np.ndarray:
     """How a closed element's force and power at ``(t, y)`` move in each number (two rows): the
-    state moving by ``point(t)``, the data ``(d, ahead, behind)`` by each number's step;
+    state moving by ``moved`` (``delta(t)``), the data ``(d, ahead, behind)`` by each number's step;
     ``element``: its row and its relative velocity's weights ``rel`` (``v_on - v_with = rel . y``)."""
     row, rel = element
     d, ahead, behind = data
     n = len(rel)
     grad = np.empty(n)
     element_gradient(t, y, d, row, grad)
-    delta = point(t)[:n]
+    delta = moved[:n]
     force = element_force(t, y, d, row)
     by_number = np.array(
         [
@@ -405,7 +401,7 @@ def _integrands_moved(
 def _closing_measures(
     orbit: ChainOrbit,
     along: ChainPass,
-    motion: tuple[np.ndarray, Callable[[float], np.ndarray], np.ndarray],
+    motion: tuple[np.ndarray, Callable[[float | np.ndarray], np.ndarray], np.ndarray],
     values: dict[str, float],
 ) -> dict[str, np.ndarray]:
     """Each stop's and contact's work, dissipated energy, impact rate, energy and power, impulse
@@ -428,16 +424,17 @@ def _closing_measures(
     return found
 
 
-def moving_point(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> Callable[[float], np.ndarray]:
+def moving_point(orbit: ChainOrbit, along: ChainPass, moved: np.ndarray) -> Callable[[float | np.ndarray], np.ndarray]:
     """``delta(t)``: how the orbit's state at the time ``t`` moves in each number (``Phi(t)
-    dy*/dc + Psi(t)``; at the section, ``dy*/dc``)."""
+    dy*/dc + Psi(t)``; at the section, ``dy*/dc``); at an array of times, one ``delta`` a time
+    (the first axis)."""
     n, span = orbit.chain.system.size, orbit.period * orbit.chain.period
 
-    def point(t: float) -> np.ndarray:
-        if t in (orbit.section, orbit.section + span):  # the section: the orbit's own start
+    def point(t: float | np.ndarray) -> np.ndarray:
+        if np.ndim(t) == 0 and t in (orbit.section, orbit.section + span):  # the section: the orbit's own start
             return moved
         block = along.at(t)
-        found: np.ndarray = block[:, :n] @ moved + block[:, n:]
+        found: np.ndarray = block[..., :n] @ moved + block[..., n:]
         return found
 
     return point

@@ -73,6 +73,8 @@ __all__ = [
 
 #: The step of the field's differences in a number, relative to the number (at least 1).
 STEP = 1e-6
+#: A piece's tangents ``[Phi | Psi]`` at a time, or at an array of times (one block a time).
+Tangent = Callable[[float | np.ndarray], np.ndarray]
 #: The tangent equations' tolerances (DOP853).
 RTOL, ATOL = 1e-11, 1e-12
 #: The event kinds whose time the element's second root function sets when it leaves to the left
@@ -133,7 +135,7 @@ class ChainPass:
     params: tuple[str, ...]
     end: np.ndarray
     crossings: tuple[Crossing, ...]
-    pieces: tuple[tuple[float, float, Callable[[float], np.ndarray]], ...]
+    pieces: tuple[tuple[float, float, Tangent], ...]
 
     @property
     def monodromy(self) -> np.ndarray:
@@ -150,12 +152,26 @@ class ChainPass:
         """The smallest :attr:`Crossing.margin` (``inf`` without a switch)."""
         return min((c.margin for c in self.crossings), default=float("inf"))
 
-    def at(self, t: float) -> np.ndarray:
-        """``[Phi | Psi]`` at ``t`` (the piece that ends at a switch time: before it)."""
+    def at(self, t: float | np.ndarray) -> np.ndarray:
+        """``[Phi | Psi]`` at ``t`` (the piece that ends at a switch time: before it); at an array
+        of times, one block a time (the first axis)."""
+        if np.ndim(t) != 0:
+            return self._at_times(np.asarray(t, dtype=float))
         for start, stop, tangent in self.pieces:
             if start <= t <= stop:
                 return tangent(t)
         raise ValueError(f"t = {t!r} s is outside the run")
+
+    def _at_times(self, times: np.ndarray) -> np.ndarray:
+        found, left = np.empty((len(times), *self.end.shape)), np.ones(len(times), dtype=bool)
+        for start, stop, tangent in self.pieces:
+            inside = left & (times >= start) & (times <= stop)
+            if inside.any():
+                found[inside] = tangent(times[inside])
+                left &= ~inside
+        if left.any():
+            raise ValueError(f"t = {times[left][0]!r} s is outside the run")
+        return found
 
 
 def _direction(chain: FrictionChain, arrays: ChainArrays, name: str) -> ChainArrays:
@@ -285,13 +301,13 @@ def tangent_pass(run: ChainResult, params: Sequence[str] = (), *, rtol: float = 
     modes, switches = run.modes(), _Switches.of(run)
     block = np.hstack([np.eye(n), np.zeros((n, k))])
     changes = [0, *(np.flatnonzero((modes[1:] != modes[:-1]).any(axis=1)) + 1).tolist(), len(t)]
-    pieces: list[tuple[float, float, Callable[[float], np.ndarray]]] = []
+    pieces: list[tuple[float, float, Tangent]] = []
     crossings = []
     affine = not params and _affine(data.arrays)
     for a, b in itertools.pairwise(changes):
         span = (float(t[a]), float(t[b - 1]))
         if span[1] <= span[0]:
-            tangent: Callable[[float], np.ndarray] = functools.partial(_held, block.copy())
+            tangent: Tangent = functools.partial(_held, block.copy())
         elif affine:  # a constant Jacobian in the mode: the exponential, exact
             jacobian, rate = np.empty((n, n)), np.empty(n)
             chain_jacobian(span[0], states[a], data.of(modes[a])[0], jacobian, rate)
@@ -320,18 +336,20 @@ def _affine(arrays: ChainArrays) -> bool:
     return not bool(cubic.any())
 
 
-def _held(block: np.ndarray, t: float) -> np.ndarray:
-    return block
+def _held(block: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    return block if np.ndim(t) == 0 else np.repeat(block[None], np.size(t), axis=0)
 
 
-def _exponential(start: float, jacobian: np.ndarray, block: np.ndarray, t: float) -> np.ndarray:
+def _exponential(start: float, jacobian: np.ndarray, block: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    if np.ndim(t) != 0:
+        return np.stack([_exponential(start, jacobian, block, float(s)) for s in np.asarray(t)])
     moved: np.ndarray = scipy.linalg.expm(jacobian * (t - start)) @ block
     return moved
 
 
 def _along_piece(
     data: NumberData, mode: np.ndarray, span: tuple[float, float], start: np.ndarray, block: np.ndarray, rtol: float
-) -> Callable[[float], np.ndarray]:
+) -> Tangent:
     """The tangent equations over one piece in ``mode``: the block at any time of it (the dense
     solution's)."""
     numbers = chain_data(*data.of(mode), data.steps)
@@ -339,9 +357,9 @@ def _along_piece(
     big = np.concatenate([start, block.ravel()])
     solution = integrate_piece(CHAIN_PIECE, numbers, span, big, rtol=rtol, atol=rtol * ATOL / RTOL, dense=True)
 
-    def tangent(t: float) -> np.ndarray:
-        moved: np.ndarray = solution(t)[n:].reshape(shape)
-        return moved
+    def tangent(t: float | np.ndarray) -> np.ndarray:
+        moved: np.ndarray = solution(t)[n:]
+        return moved.reshape(shape) if np.ndim(t) == 0 else np.moveaxis(moved.reshape(*shape, -1), -1, 0)
 
     return tangent
 
@@ -352,7 +370,7 @@ def _ended(
     params: tuple[str, ...],
     block: np.ndarray,
     crossings: tuple[Crossing, ...],
-    pieces: tuple[tuple[float, float, Callable[[float], np.ndarray]], ...],
+    pieces: tuple[tuple[float, float, Tangent], ...],
     mode: np.ndarray,
 ) -> ChainPass:
     """The pass's end: ``dP/dOmega`` takes ``f(t1) dt1/dOmega`` (``t1 = s + N 2 pi/Omega``)."""
