@@ -20,6 +20,7 @@ from oscillator.model.chains import FrictionChain
 from oscillator.orbits.chain_orbits import chain_period_map, find_chain_orbit
 from oscillator.orbits.chain_response import orbit_measures
 from oscillator.orbits.chain_sensitivity import chain_sensitivities
+from oscillator.orbits.chain_tangents import tangent_pass
 from test_chain_orbits import OMEGA, linear_chain
 from test_sensitivities import richardson
 
@@ -106,6 +107,21 @@ def test_the_exact_monodromy_equals_the_period_maps_differences(case):
     scale = np.abs(differences).max()
     assert np.abs(orbit.monodromy - differences).max() <= 1e-6 * scale
     assert orbit.stable and np.abs(orbit.multipliers).max() < 1.0
+
+
+def test_the_tangents_at_many_times_are_those_at_each_time(case):
+    """The tangents at an array of times (the sensitivities' Gauss nodes, one call a piece) are
+    the blocks at each time alone, across pieces and at their switches, with numbers and without
+    (a chain affine in its state: the exponential of each mode's Jacobian); a time outside the run
+    is refused."""
+    orbit, _, params = case
+    run = chain_period_map(orbit.chain, orbit.section, orbit.state)
+    t = run.times
+    times = np.concatenate([t, (t[:-1] + t[1:]) / 2])
+    for along in (tangent_pass(run, params), tangent_pass(run)):
+        assert np.array_equal(along.at(times), np.stack([along.at(float(s)) for s in times]))
+        with pytest.raises(ValueError, match="outside the run"):
+            along.at(np.array([t[0], t[-1] + 1.0]))
 
 
 def test_sensitivities_in_element_fields_equal_richardson_differences(case):
