@@ -220,10 +220,12 @@ def test_a_both_ways_sweep_draws_each_way_and_hides_neither(tmp_path):
 
 
 def test_a_figure_laid_out_once_is_saved_as_matplotlib_saves_it_and_left_as_it_was(tmp_path):
-    """save_figure lays a figure out once for its two files: the PNG is matplotlib's own
-    ``bbox_inches="tight"`` file pixel for pixel, the SVG the same size, and the figure keeps its
-    layout engine and resolution."""
+    """save_figure lays a figure out once for its two files and then draws it once for each (three
+    draws, where matplotlib draws again before each file a figure with a layout engine): the PNG is
+    matplotlib's own ``bbox_inches="tight"`` file pixel for pixel, the SVG the same size, and the
+    figure keeps its layout engine and resolution."""
     import matplotlib.image
+    from matplotlib.figure import Figure
 
     result = simulate("instance-3")
     case = result.case
@@ -234,7 +236,12 @@ def test_a_figure_laid_out_once_is_saved_as_matplotlib_saves_it_and_left_as_it_w
 
     fig = drawn()
     engine, dpi = fig.get_layout_engine(), fig.get_dpi()
-    save_figure(fig, tmp_path, "ours")
+    draws = []
+    draw = Figure.draw
+    with pytest.MonkeyPatch.context() as patched:
+        patched.setattr(Figure, "draw", lambda self, renderer: draws.append(renderer) or draw(self, renderer))
+        save_figure(fig, tmp_path, "ours")
+    assert len(draws) == 3
     assert fig.get_layout_engine() is engine and fig.get_dpi() == dpi
     reference = drawn()
     for suffix in ("png", "svg"):

@@ -456,7 +456,10 @@ def _laid_out(fig: Figure, tight: bool) -> Bbox | None:
     renderer = FigureCanvasAgg(fig).get_renderer()  # type: ignore[no-untyped-call]
     fig.draw_without_rendering()  # the layout engine places the axes
     box = fig.get_tightbbox(renderer).padded(mpl.rcParams["savefig.pad_inches"]) if tight else None
-    fig.set_layout_engine("none")
+    # no engine at all: matplotlib draws a figure with one (even "none"'s placeholder) once more
+    # before each file, only to run it
+    with mpl.rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        fig.set_layout_engine(None)
     return box
 
 
