@@ -226,15 +226,12 @@ def on_branch(case: Case, branch: Branch, value: float, state: np.ndarray) -> bo
     """Whether the orbit through ``state`` at ``value`` lies on ``branch``: from the state between
     two consecutive points of one piece that bracket ``value``, Newton at ``value`` reaches
     ``state`` (within :data:`SAME_ORBIT`)."""
-    points = branch.points
-    params = points[branch.param].to_numpy(float)
-    states = points[list(STATE)].to_numpy(float)
-    pieces = points["piece"].to_numpy()
-    at = resolve_case(case, **{branch.param: value})
-    for k in range(len(points) - 1):
+    params, states, pieces = branch.columns
+    low, high = np.minimum(params[:-1], params[1:]), np.maximum(params[:-1], params[1:])
+    bracketing = np.flatnonzero((pieces[:-1] == pieces[1:]) & (low <= value) & (value <= high))
+    at = resolve_case(case, **{branch.param: value}) if len(bracketing) else case
+    for k in bracketing.tolist():
         a, b = params[k], params[k + 1]
-        if pieces[k] != pieces[k + 1] or not min(a, b) <= value <= max(a, b):
-            continue
         weight = 0.0 if a == b else (value - a) / (b - a)
         if _same(orbit_state(at, branch.period, states[k] + weight * (states[k + 1] - states[k])), state):
             return True

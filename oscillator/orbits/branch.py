@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -138,6 +139,13 @@ class Branch:
     message: str = ""
     reason: Reason | None = None
     case: Case | None = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The points' parameter values, states at the section and pieces, as arrays (read once:
+        the frequency response asks whether an orbit is on a branch thousands of times)."""
+        points = self.points
+        return points[self.param].to_numpy(float), points[list(STATE)].to_numpy(float), points["piece"].to_numpy()
 
     @property
     def coordinate(self) -> str:
