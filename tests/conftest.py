@@ -33,18 +33,38 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+#: The package's notice of a first compile (``oscillator.compiled.NOTICE_VARIABLE``), off while the
+#: tests compile the kernels before their workers start (:func:`pytest_configure` says it instead).
+NOTICE = "OSCILLATOR_COMPILE_NOTICE"
+
+
 def pytest_configure(config):
     """On a fresh install (numba's cache empty), the kernels compiled once, before the test workers
     start (this runs in pytest-xdist's controller first): both workers compiled all of them at once
     (CI's default run: 217 s, against 162 s with the cache filled).  The compiled landing's kernels
     too, and the compiled period map's, as the analyses compile them before their own workers
-    (``before_workers``), and the friction chains' in a second process meanwhile."""
-    from oscillator.compiled import CACHE, kernels_cached
-
-    if hasattr(config, "workerinput") or not CACHE or kernels_cached():
+    (``before_workers``), and the friction chains' in a second process meanwhile.  It says so
+    itself: the package's own notice ("once ... later runs ...") speaks of one command's kernels."""
+    if hasattr(config, "workerinput"):
+        return
+    told = NOTICE in os.environ
+    os.environ.setdefault(NOTICE, "0")
+    try:
+        from oscillator.compiled import CACHE, kernels_cached
+    finally:
+        if not told:
+            del os.environ[NOTICE]
+    if not CACHE or kernels_cached():
         return
     import subprocess
     import sys
+
+    print(
+        "tests: numba's cache is empty (a fresh install): compiling every kernel the tests use before the test "
+        "workers start; the next runs load them",
+        file=sys.stderr,
+        flush=True,
+    )
 
     from oscillator.attractors.mapping import _compile_landing
     from oscillator.cli.console import compile_kernels
