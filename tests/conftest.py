@@ -33,8 +33,9 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-#: The package's notice of a first compile (``oscillator.compiled.NOTICE_VARIABLE``), off while the
-#: tests compile the kernels before their workers start (:func:`pytest_configure` says it instead).
+#: The package's notice of a first compile (``oscillator.compiled.NOTICE_VARIABLE``, written out:
+#: importing that module says the notice), off while the tests compile the kernels before their
+#: workers start (:func:`pytest_configure` says it instead).
 NOTICE = "OSCILLATOR_COMPILE_NOTICE"
 
 

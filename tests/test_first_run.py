@@ -172,3 +172,12 @@ def test_a_python_programs_first_simulation_says_that_it_compiles(tmp_path):
     assert first.returncode == 0 and first.stderr.count(COMPILING) == 1, first.stderr
     second = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=tmp_path)
     assert second.returncode == 0 and second.stderr == "" and second.stdout == first.stdout
+
+
+def test_the_tests_silence_the_packages_own_compile_notice_by_its_name():
+    """tests/conftest.py writes the notice's variable out (importing oscillator.compiled says the
+    notice): the two names are one."""
+    from conftest import NOTICE
+    from oscillator.compiled import NOTICE_VARIABLE
+
+    assert NOTICE == NOTICE_VARIABLE
