@@ -12,9 +12,12 @@
 
 Each is the command itself (``--no-plots``), in a fresh process, warm (the kernels compiled first).
 
-With ``--against DIR`` (a checkout of earlier code), instead: the default atlas with ``--starts 3``
-on that code and on this, alternating, the least of 2 each, and whether the tables are the same
-(the attractors' states and exponents to within what they moved).
+With ``--against DIR`` (a checkout of earlier code), instead, on that code and on this,
+alternating, the least of 2 each: the pools' start (the basins command at 10 x 10 on two workers,
+one pool in a fresh process; and three ``find_basins`` calls at 8 x 8 on two workers in one Python
+session, each its own pool, as a notebook makes them), then (unless ``--no-atlas``) the default
+atlas with ``--starts 3`` and whether the tables are the same (the attractors' states and
+exponents to within what they moved).
 
 Usage: python benchmarks/pool.py [--cells 10 30 45] [--no-atlas] [--against DIR]
 """
@@ -66,10 +69,55 @@ def atlas(chunk: int, folder: Path, code: Path | None = None) -> float:
     return timed(arguments, chunk, code)
 
 
-def against(code: Path, root: Path, repeats: int = 2) -> None:
-    """The default atlas with ``--starts 3`` on the code at ``code`` and on this code, alternating,
-    the least of ``repeats`` each, and whether the two tables are the same."""
+#: Three pools in one session: ``find_basins`` at 8 x 8 on two workers, three times; the seconds of each.
+SESSION = r"""
+import os, sys, time
+import oscillator
+from oscillator.analysis.axes import Axis
+code = os.environ.get("POOL_BENCHMARK_CODE")
+assert code is None or oscillator.__file__.startswith(code), (oscillator.__file__, code)
+case = oscillator.resolve_case("instance-1", Q2=71.165)
+for _ in range(3):
+    started = time.perf_counter()
+    oscillator.find_basins(case, Axis("x2", 2, 7, 8), Axis("v2", -5, 5, 8), workers=2)
+    print(time.perf_counter() - started)
+"""
+
+
+def session(code: Path | None = None) -> list[float]:
+    env = {**os.environ, "PYTHONPATH": str(code), "POOL_BENCHMARK_CODE": str(code)} if code is not None else None
+    done = subprocess.run([sys.executable, "-c", SESSION], check=True, capture_output=True, text=True, env=env,
+                          cwd=code)  # fmt: skip
+    return [float(line) for line in done.stdout.split()]
+
+
+def pools(code: Path, root: Path, repeats: int = 2) -> None:
+    """The pools' start on the code at ``code`` and on this code, alternating, the least of
+    ``repeats`` each."""
+    fresh: dict[str, list[float]] = {"before": [], "now": []}
+    calls: dict[str, list[list[float]]] = {"before": [], "now": []}
+    for k in range(repeats):
+        fresh["before"].append(basins(10, 2, root / f"pool-before-{k}", code))
+        fresh["now"].append(basins(10, 2, root / f"pool-now-{k}"))
+        calls["before"].append(session(code))
+        calls["now"].append(session())
+    before, now = min(fresh["before"]), min(fresh["now"])
+    print(f"basins 10 x 10, 2 workers, a fresh process: {before:.2f} s -> {now:.2f} s ({before / now:.2f}x)")
+    for label in ("before", "now"):
+        best = [min(times[k] for times in calls[label]) for k in range(3)]
+        print(
+            f"  find_basins 8 x 8 on 2 workers, three in one session, {label}: " + ", ".join(f"{t:.2f} s" for t in best)
+        )
+
+
+def against(code: Path, root: Path, repeats: int = 2, atlas_too: bool = True) -> None:
+    """The pools' start (:func:`pools`), then the default atlas with ``--starts 3`` on the code at
+    ``code`` and on this code, alternating, the least of ``repeats`` each, and whether the two
+    tables are the same."""
     basins(5, 1, root / "warm-before", code), basins(5, 1, root / "warm-now")  # the kernels compiled first
+    pools(code, root, repeats)
+    if not atlas_too:
+        return
     times: dict[str, list[float]] = {"before": [], "now": []}
     for k in range(repeats):
         times["before"].append(atlas(8, root / f"before-{k}", code))
@@ -104,7 +152,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
         if options.against is not None:
-            against(options.against.resolve(), root)
+            against(options.against.resolve(), root, atlas_too=not options.no_atlas)
             print(f"load at the end {os.getloadavg()[0]:.2f}")
             return
         basins(5, 1, root / "warm")  # the kernels compiled (or loaded) before anything is timed

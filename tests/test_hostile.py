@@ -357,16 +357,23 @@ def test_ctrl_c_to_a_whole_sweep_is_one_line_without_worker_tracebacks(work, del
         assert stderr.count("\n") == 1 and stderr.startswith("error: interrupted"), stderr
 
 
-def _children(pid: int) -> list[int]:
-    found = []
+def _descendants(pid: int) -> list[int]:
+    """Every process below ``pid``: its children (the resource tracker, the fork server) and
+    theirs (the workers, forked by the fork server)."""
+    parents = {}
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
                 fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
             except OSError:
                 continue
-            if int(fields[1]) == pid:
-                found.append(int(entry.name))
+            parents[int(entry.name)] = int(fields[1])
+    found, below = [], [pid]
+    while below:
+        parent = below.pop()
+        children = [child for child, of in parents.items() if of == parent]
+        found += children
+        below += children
     return found
 
 
@@ -385,8 +392,8 @@ def test_a_killed_sweep_leaves_no_worker_behind(work):
     deadline = time.monotonic() + TIMEOUT
     while time.monotonic() < deadline and not list((work / "s").glob("parts/*.summary.parquet")):
         time.sleep(0.1)
-    children = _children(process.pid)
-    assert len(children) >= 2, children  # the workers and the resource tracker
+    children = _descendants(process.pid)
+    assert len(children) >= 3, children  # the two workers and the resource tracker (and a fork server)
     process.kill()
     process.wait()
     deadline = time.monotonic() + TIMEOUT

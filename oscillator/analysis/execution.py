@@ -6,10 +6,10 @@ analysis's entry and passed down, runs them (:func:`run_tasks` for one batch) an
 results as they finish, whatever runs them:
 
 * ``workers == 1`` (or a single task): one after another, in this process;
-* a local pool of ``spawn``-ed processes, at most ``4 workers`` tasks in flight so that memory
-  stays flat; the workers ignore Ctrl-C and exit if this process dies
-  (:mod:`oscillator.io.signals`), and on an interrupt or an error here they are stopped at once,
-  so nothing outlives the caller;
+* a local pool of processes forked from multiprocessing's fork server (spawned without one), at
+  most ``4 workers`` tasks in flight so that memory stays flat; the workers ignore Ctrl-C and exit
+  if this process dies (:mod:`oscillator.io.signals`), and on an interrupt or an error here they
+  are stopped at once, so nothing outlives the caller;
 * a Dask client: the ``shared`` arguments scattered once to every worker, one future a task.
 
 The function is called as ``function(*shared, *task, **keywords)``.
@@ -22,6 +22,7 @@ import contextlib
 import multiprocessing
 import numbers
 import os
+import sys
 import time
 import urllib.parse
 from collections.abc import Callable, Iterable, Iterator
@@ -54,7 +55,7 @@ MAX_WORKERS_PER_CORE = 4
 _UNGUARDED_SCRIPT = 86
 _UNGUARDED_MESSAGE = (
     "workers: the worker processes stopped as they started, because the script runs its work when it is "
-    "imported: each worker imports the script again (processes are started with spawn). Put the code that "
+    "imported: each worker imports the script again (as multiprocessing starts them). Put the code that "
     'runs with workers > 1 under `if __name__ == "__main__":`, or run with workers=1'
 )
 
@@ -215,8 +216,24 @@ def _prepared() -> None:
             _PREPARED.add(prepare)
 
 
+#: How local workers start: forked from multiprocessing's fork server, a process started afresh
+#: (not forked from this one, whose threads a fork would copy half-way) that imports the first
+#: pool's task module once; each worker then starts with the package loaded, where a spawned one
+#: imported it again (seconds of CPU a worker, for every pool).  Spawned where there is no fork
+#: server (Windows).
+START_METHOD = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def _preload(function: Callable[..., Any]) -> None:
+    """The fork server, when the first pool starts it, imports ``function``'s module (a later
+    pool's workers import what else they need themselves)."""
+    module = getattr(function, "__module__", None)
+    if START_METHOD == "forkserver" and module and module != "__main__":
+        multiprocessing.get_context("forkserver").set_forkserver_preload([module])
+
+
 class Pool:
-    """A local pool of ``spawn``-ed worker processes, for several batches of tasks in turn.
+    """A local pool of worker processes (:data:`START_METHOD`), for several batches of tasks in turn.
 
     The workers ignore Ctrl-C and exit if this process dies (:mod:`oscillator.io.signals`); when
     the block is left by an interrupt or an error they are stopped at once, so nothing outlives
@@ -225,17 +242,20 @@ class Pool:
     def __init__(self, workers: int) -> None:
         if getattr(multiprocessing.current_process(), "_inheriting", False):
             # This is a worker importing a script that has no `if __name__ == "__main__":` guard:
-            # end it quietly, and let the parent say why (multiprocessing would raise here).
-            raise SystemExit(_UNGUARDED_SCRIPT)
+            # end it quietly, and let the parent say why (multiprocessing would raise here).  Its
+            # status must reach the parent: a fork server's child exits 1 on a SystemExit.
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(_UNGUARDED_SCRIPT)
         self.workers = workers
         _prepared()  # the kernels compiled here once, before the workers start and load them
         quiet_resource_tracker()
         with interrupts_ignored():  # the workers are born ignoring SIGINT: the parent alone handles it
             self._executor = cf.ProcessPoolExecutor(
                 max_workers=workers,
-                mp_context=multiprocessing.get_context("spawn"),
+                mp_context=multiprocessing.get_context(START_METHOD),
                 initializer=prepare_worker,
-                initargs=(os.getpid(),),
+                initargs=(os.getpid(), dict(os.environ)),
             )
 
     def __enter__(self) -> Pool:
@@ -262,6 +282,7 @@ class Pool:
         while the caller does other work).  The tasks go in chunks of :func:`chunk_size` (the
         shared arguments are sent once a chunk, not once a task).  The first chunks are sent at
         the call, the rest as the results are taken."""
+        _preload(function)
         size = chunk_size(len(tasks), self.workers)
         chunks = [(function, shared, keywords, tasks[k : k + size]) for k in range(0, len(tasks), size)]
         limit = len(chunks) if at_once else 4 * self.workers

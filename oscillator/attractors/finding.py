@@ -220,10 +220,10 @@ def find_attractors(
     settings : AttractorSettings, optional
         Transient, recorded periods, tolerances (the defaults of :class:`AttractorSettings`).
     workers : int or None
-        Local processes (1: this process; None: one per core; at most 4 per core).  They are
-        started with ``spawn``, which imports the calling script again in each: in a script, call
-        with ``workers > 1`` under ``if __name__ == "__main__":`` (without it the call raises
-        :class:`~oscillator.errors.InputError` saying so).
+        Local processes (1: this process; None: one per core; at most 4 per core).  Each imports
+        the calling script again as it starts (multiprocessing's ``forkserver``, or ``spawn``
+        without it): in a script, call with ``workers > 1`` under ``if __name__ == "__main__":``
+        (without it the call raises :class:`~oscillator.errors.InputError` saying so).
     client : dask.distributed.Client, optional
         Run the starts on this Dask cluster instead.
     progress : callable, optional

@@ -11,7 +11,8 @@
   cannot print a traceback.
 * :func:`prepare_worker` runs first in each worker: it ignores SIGINT (the parent alone decides
   what an interrupt does, and stops the workers) and exits when the parent dies, so that a
-  killed sweep leaves no orphan processes behind.
+  killed sweep leaves no orphan processes behind (nor the fork server, which lives as long as
+  its workers).
 * :func:`quiet_resource_tracker` starts multiprocessing's resource tracker so that, when a
   killed sweep leaves the pool's semaphores to it, it removes them without a warning on the
   user's terminal.
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import signal
 import threading
 import time
@@ -101,14 +103,36 @@ def interrupts_ignored() -> Iterator[None]:
 
 
 def _watch_parent(parent: int) -> None:
+    """Exit as soon as process ``parent`` has: a worker forked by the fork server is that server's
+    child, and the server lives as long as its workers do, so the worker watches the pool's parent
+    itself (a process descriptor, readable once the process has exited; where there is none, its
+    pid looked up every :data:`_WATCH_INTERVAL`)."""
+    try:
+        handle = os.pidfd_open(parent)
+    except ProcessLookupError:
+        os._exit(1)
+    except (AttributeError, OSError):  # not Linux, or a kernel before 5.3
+        handle = None
+    if handle is not None:
+        select.select([handle], [], [])
+        os._exit(1)
     while True:
-        if os.getppid() != parent:
+        try:
+            os.kill(parent, 0)
+        except ProcessLookupError:
+            os._exit(1)
+        except PermissionError:  # alive, another user's (the pid was reused): the parent is gone
             os._exit(1)
         time.sleep(_WATCH_INTERVAL)
 
 
-def prepare_worker(parent: int) -> None:
-    """A worker's initializer: ignore SIGINT, and exit as soon as process ``parent`` is gone."""
+def prepare_worker(parent: int, environment: dict[str, str]) -> None:
+    """A worker's initializer: ignore SIGINT, exit as soon as process ``parent`` (the pool's) is
+    gone, and take ``environment`` (the parent's when the pool started: a worker forked by the fork
+    server has the server's, from the first pool)."""
+    if os.environ != environment:
+        os.environ.clear()
+        os.environ.update(environment)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_watch_parent, args=(parent,), name="parent-watch", daemon=True).start()
 
