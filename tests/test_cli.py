@@ -154,7 +154,7 @@ def test_check_refuses_a_changed_case_but_takes_solver_options():
 
 def test_a_changed_case_is_not_scored_against_the_article(tmp_path):
     folder = tmp_path / "changed"
-    result = invoke("run", "instance-1", "--t-end", "3", "--set", "Omega=1.7", "--out", folder)
+    result = invoke("run", "instance-1", "--t-end", "3", "--set", "Omega=1.7", "--no-plots", "--out", folder)
     assert result.exit_code == 0, result.stderr
     assert "modified case (Omega 1.6 → 1.7): the expected times of the case as written are not compared" in (
         result.stdout

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import shutil
 from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -18,8 +19,10 @@ from oscillator.analysis.axes import STATE
 from oscillator.analysis.sweeps import read_sweep
 from oscillator.cli.app import app
 from oscillator.errors import InputError
-from oscillator.exploring.app import Explorer
 from oscillator.exploring.maps import picture_of
+
+if TYPE_CHECKING:
+    from oscillator.exploring.app import Explorer
 
 
 @pytest.fixture(scope="module")
@@ -32,6 +35,8 @@ def sweep_folder(tmp_path_factory):
 
 
 def _click(picture, x: float, y: float, periods: int = 10) -> Explorer:
+    from oscillator.exploring.app import Explorer  # Panel and Bokeh: imported where a test needs them
+
     explorer = Explorer(picture.case, periods, picture=picture)
     explorer._tap(SimpleNamespace(x=x, y=y))  # what Bokeh's Tap event carries: the data coordinates
     return explorer
