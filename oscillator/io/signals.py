@@ -114,7 +114,9 @@ def _watch_parent(parent: int) -> None:
     except (AttributeError, OSError):  # not Linux, or a kernel before 5.3
         handle = None
     if handle is not None:
-        select.select([handle], [], [])
+        watch = select.poll()  # not select(): a descriptor numbered past 1024 would not fit
+        watch.register(handle, select.POLLIN)
+        watch.poll()
         os._exit(1)
     while True:
         try:
