@@ -121,9 +121,7 @@ def _watch_parent(parent: int) -> None:
     while True:
         try:
             os.kill(parent, 0)
-        except ProcessLookupError:
-            os._exit(1)
-        except PermissionError:  # alive, another user's (the pid was reused): the parent is gone
+        except (ProcessLookupError, PermissionError):  # gone, or its pid reused by another user's process
             os._exit(1)
         time.sleep(_WATCH_INTERVAL)
 
